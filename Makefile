@@ -1,0 +1,104 @@
+# ctcsim - build, test and benchmark.
+#
+#   make deps    install missing Debian packages (as root), or print the apt-get line to run
+#   make         build the library into build/
+#   make test    build and run the unit tests, then again under AddressSanitizer + UBSan
+#   make bench   build with optimisation and run the benchmarks
+#   make clean   remove build/
+#
+# Overridable: CC, OPT (optimisation flags), BUILD (output folder), EXTRA_CFLAGS, EXTRA_LDFLAGS.
+
+CC ?= cc
+OPT ?= -O2
+BUILD ?= build
+SANITIZE ?=
+
+WARN := -Wall -Wextra -Wshadow -Wstrict-prototypes -Werror
+CFLAGS := -std=c11 $(WARN) $(OPT) -g -D_POSIX_C_SOURCE=200809L -Isrc $(EXTRA_CFLAGS)
+LDFLAGS := $(EXTRA_LDFLAGS)
+LDLIBS := -lm
+ifeq ($(SANITIZE),1)
+CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+LDFLAGS += -fsanitize=address,undefined
+endif
+
+# Debian packages the build and the tests need
+DEB_PACKAGES := gcc make libc6-dev libcriterion-dev
+
+LIB_SRC := $(wildcard src/*.c)
+LIB_OBJ := $(LIB_SRC:src/%.c=$(BUILD)/obj/%.o)
+LIB := $(BUILD)/libctcsim.a
+TEST_SRC := $(wildcard tests/unit/test_*.c)
+TEST_BIN := $(TEST_SRC:tests/unit/%.c=$(BUILD)/tests/%)
+SUPPORT_SRC := $(wildcard tests/support/*.c)
+SUPPORT_OBJ := $(SUPPORT_SRC:tests/support/%.c=$(BUILD)/obj/support/%.o)
+BENCH_SRC := $(wildcard bench/*.c)
+BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
+
+.PHONY: all deps test check check-asan bench clean
+.DELETE_ON_ERROR:
+
+all: $(LIB)
+
+$(BUILD)/obj/%.o: src/%.c
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -MMD -MP -c $< -o $@
+
+$(BUILD)/obj/support/%.o: tests/support/%.c
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -Itests/support -MMD -MP -c $< -o $@
+
+$(LIB): $(LIB_OBJ)
+	@mkdir -p $(@D)
+	rm -f $@
+	ar rcs $@ $^
+
+$(BUILD)/tests/%: tests/unit/%.c $(SUPPORT_OBJ) $(LIB)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -Itests/support -MMD -MP $< $(SUPPORT_OBJ) $(LIB) -o $@ $(LDFLAGS) \
+		-lcriterion $(LDLIBS)
+
+$(BUILD)/bench/%: bench/%.c $(SUPPORT_OBJ) $(LIB)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -Itests/support -MMD -MP $< $(SUPPORT_OBJ) $(LIB) -o $@ $(LDFLAGS) $(LDLIBS)
+
+# installs what is missing: apt-get as root (updating the package lists first when there are
+# none, or when a package is not found), otherwise prints the command to run and fails
+deps:
+	@missing=""; \
+	for p in $(DEB_PACKAGES); do \
+		dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" \
+			|| missing="$$missing $$p"; \
+	done; \
+	[ -z "$$missing" ] && exit 0; \
+	if [ "$$(id -u)" != 0 ]; then \
+		echo "ctcsim needs these Debian packages:$$missing"; \
+		echo "install them with: sudo apt-get install -y$$missing"; \
+		exit 1; \
+	fi; \
+	export DEBIAN_FRONTEND=noninteractive; \
+	if ! ls /var/lib/apt/lists/*_Packages* >/dev/null 2>&1; then apt-get update; fi; \
+	apt-get install -y --no-install-recommends $$missing \
+		|| { apt-get update && apt-get install -y --no-install-recommends $$missing; }
+
+# runs the suite as built in $(BUILD)
+check: $(TEST_BIN)
+	@sh tests/run.sh $(TEST_BIN)
+
+check-asan:
+	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan SANITIZE=1 OPT=-O1 check
+
+test: deps
+	@$(MAKE) --no-print-directory check
+	@echo "== again under AddressSanitizer + UndefinedBehaviorSanitizer"
+	@$(MAKE) --no-print-directory check-asan
+
+bench: deps
+	@$(MAKE) --no-print-directory BUILD=$(BUILD)/bench-o3 OPT="-O3 -march=native -DNDEBUG" \
+		$(BUILD)/bench-o3/bench/bench_dynamics
+	$(BUILD)/bench-o3/bench/bench_dynamics
+
+clean:
+	rm -rf $(BUILD)
+
+-include $(LIB_OBJ:.o=.d) $(SUPPORT_OBJ:.o=.d) $(TEST_BIN:=.d) $(BENCH_BIN:=.d)

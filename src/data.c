@@ -1,0 +1,76 @@
+/*
+ * data.c - allocation of the per-simulation state (data.h): every array sized once from the model.
+ */
+#include "data.h"
+
+#include <stdlib.h>
+
+ctc_data *ctc_data_new(const ctc_model *m)
+{
+    ctc_data *d = calloc(1, sizeof *d);
+    if (d == NULL) return NULL;
+    size_t n = (size_t)m->nbodies, dim = (size_t)m->dim;
+    size_t nt = n > 1 ? n - 1 : 1;
+    d->dim = m->dim;
+    d->hsize = (int)(3 * dim * dim + 2 * dim);
+    d->singular_joint = -1;
+
+    d->xpos = calloc(n * 3, sizeof(double));
+    d->xrot = calloc(n * 9, sizeof(double));
+    d->xcom = calloc(n * 3, sizeof(double));
+    d->omega = calloc(n * 3, sizeof(double));
+    d->xvel = calloc(n * 3, sizeof(double));
+    d->jnt_P = calloc(n * 3 * dim, sizeof(double));
+    d->jnt_D = calloc(n * dim * dim, sizeof(double));
+    d->jnt_beta = calloc(n * dim, sizeof(double));
+    d->hr = calloc(n * 6, sizeof(double));
+    d->hbody = calloc(n * (size_t)d->hsize, sizeof(double));
+    d->hfwd = calloc(nt * (size_t)d->hsize, sizeof(double));
+    d->hinv = calloc(nt * (size_t)d->hsize, sizeof(double));
+    d->fwd_G = calloc(n * dim * dim, sizeof(double));
+    d->fwd_z = calloc(n * dim, sizeof(double));
+    d->inv_G = calloc(n * dim * dim, sizeof(double));
+    d->inv_z = calloc(n * dim, sizeof(double));
+    d->csize = (int)(dim * dim + 2 * dim + 3);
+    d->icomp = calloc((2 * n - 1) * (size_t)d->csize, sizeof(double));
+    d->inv_e = calloc(n * dim, sizeof(double));
+    d->tload = calloc((2 * n - 1) * 2 * dim, sizeof(double));
+    d->jnt_load = calloc(n * dim, sizeof(double));
+    d->jnt_load_inv = calloc(n * dim, sizeof(double));
+    if (d->xpos == NULL || d->xrot == NULL || d->xcom == NULL || d->omega == NULL ||
+        d->xvel == NULL || d->jnt_P == NULL || d->jnt_D == NULL || d->jnt_beta == NULL ||
+        d->hr == NULL || d->hbody == NULL || d->hfwd == NULL || d->hinv == NULL ||
+        d->fwd_G == NULL || d->fwd_z == NULL || d->inv_G == NULL || d->inv_z == NULL || d->icomp == NULL || d->inv_e == NULL ||
+        d->tload == NULL || d->jnt_load == NULL || d->jnt_load_inv == NULL) {
+        ctc_data_free(d);
+        return NULL;
+    }
+    return d;
+}
+
+void ctc_data_free(ctc_data *d)
+{
+    if (d == NULL) return;
+    free(d->xpos);
+    free(d->xrot);
+    free(d->xcom);
+    free(d->omega);
+    free(d->xvel);
+    free(d->jnt_P);
+    free(d->jnt_D);
+    free(d->jnt_beta);
+    free(d->hr);
+    free(d->hbody);
+    free(d->hfwd);
+    free(d->hinv);
+    free(d->fwd_G);
+    free(d->fwd_z);
+    free(d->inv_G);
+    free(d->inv_z);
+    free(d->icomp);
+    free(d->inv_e);
+    free(d->tload);
+    free(d->jnt_load);
+    free(d->jnt_load_inv);
+    free(d);
+}

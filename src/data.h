@@ -1,0 +1,77 @@
+/*
+ * data.h - the mutable state of one simulation: kinematics, handle equations and tree scratch.
+ *
+ * A ctc_data is allocated once from a model (ctc_data_new) and reused for every evaluation, so
+ * nothing is allocated in the step loop. One ctc_data belongs to one thread at a time; many may
+ * be made from one model. Vectors of motion and force have the model's dim: 3 in planar form
+ * (omega_z, v_x, v_y) / (tau_z, f_x, f_y) in the plane's coordinates, 6 in spatial form
+ * (angular; linear) in world coordinates (DESIGN.md section 2). Accelerations are classical: the
+ * angular acceleration and the linear acceleration of the handle point itself.
+ *
+ * Handle equations of a body or an assembly (paper Eq. 10-11, 22-23, 32-33):
+ *     A1 = h11 F1 + h12 F2 + h13,    A2 = h12^T F1 + h22 F2 + h23
+ * with F_i the load applied on it at handle i; h11 and h22 are symmetric and h21 = h12^T, so one
+ * record stores h11, h12, h22 (dim x dim each, row-major), h13 and h23 (dim each). The records
+ * are indexed by assembly index (model.h): bodies share one set (paper Eq. 42-43), the internal
+ * nodes of the forward and the inverse passes have one set each.
+ */
+#ifndef CTC_DATA_H
+#define CTC_DATA_H
+
+#include "model.h"
+
+typedef struct ctc_data {
+    int dim;    /* 3 or 6, as the model's */
+    int hsize;  /* doubles in one handle-equation record: 3 dim^2 + 2 dim */
+
+    /* kinematics, from ctc_kinematics; world frame, or the plane's (x, y, n) frame in planar form */
+    double *xpos;  /* (n x 3) origin of body k's frame = its handle 1 = joint k's centre, m */
+    double *xrot;  /* (n x 9) orientation of body k, maps body to world coordinates */
+    double *xcom;  /* (n x 3) centre of mass, m */
+    double *omega; /* (n x 3) angular velocity, rad/s */
+    double *xvel;  /* (n x 3) velocity of the frame origin, m/s */
+
+    /* joint k's maps, world (plane) coordinates: A1(body k) = A2(body k-1) + P qdd + beta */
+    double *jnt_P;    /* (n x 3 x dim) column c at [(3k + c) dim]; nv columns, orthonormal */
+    double *jnt_D;    /* (n x dim x dim) column c at [(dim k + c) dim]; dim - nv columns */
+    double *jnt_beta; /* (n x dim) velocity-product term */
+
+    /* body handle equations, from ctc_handles */
+    double *hr;    /* (n x 6) r1, r2: handle positions relative to the centre of mass, m */
+    double *hbody; /* (n x hsize) */
+
+    /* GDCA tree records and joint solutions */
+    double *hfwd;     /* (ntree x hsize) forward assemblies */
+    double *hinv;     /* (ntree x hsize) inverse assemblies */
+    double *fwd_G;    /* (n x dim^2) joint k: W = D (D^T K D)^-1 D^T */
+    double *fwd_z;    /* (n x dim)   joint k: W Y + P f */
+    double *inv_G;    /* (n x dim^2) joint k: X = K^-1 (mobility form of the inverse) */
+    double *inv_z;    /* (n x dim)   joint k: X Y' (mobility form) */
+    int csize;        /* doubles in one composite record: dim^2 + 2 dim + 3 */
+    double *icomp;    /* ((2n - 1) x csize) inverse assemblies in composite form (gdca_inverse.c):
+                         I (dim x dim), w (dim), c (dim), r12 (3) */
+    double *inv_e;    /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */
+    double *tload;    /* ((2n - 1) x 2 dim) per assembly during a disassembly: F1 and F2
+                         (forward, mobility inverse) or A1 and F2 (composite inverse) */
+
+    /* results */
+    double *jnt_load;     /* (n x dim) load on body k at joint k from the forward pass, N m / N */
+    double *jnt_load_inv; /* (n x dim) the same from the inverse pass */
+    int singular_joint;   /* -1, or a joint whose matrix K was not positive definite */
+} ctc_data;
+
+/* Allocates a data block sized for m; NULL when out of memory. Free with ctc_data_free. */
+ctc_data *ctc_data_new(const ctc_model *m);
+
+/* Frees d; NULL is allowed. */
+void ctc_data_free(ctc_data *d);
+
+/* The record of assembly index a: a body's (a < n), or internal node a - n's of the forward
+ * (inverse = 0) or inverse (inverse = 1) pass. */
+static inline double *ctc_data_handles(const ctc_model *m, const ctc_data *d, int a, int inverse)
+{
+    if (a < m->nbodies) return d->hbody + (size_t)a * d->hsize;
+    return (inverse ? d->hinv : d->hfwd) + (size_t)(a - m->nbodies) * d->hsize;
+}
+
+#endif

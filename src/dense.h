@@ -1,0 +1,145 @@
+/*
+ * dense.h - small dense matrix kernels of runtime size (at most 6), for the GDCA tree passes.
+ *
+ * The GDCA passes are written once for both forms and instantiated with a constant dimension
+ * (3 planar, 6 spatial) by wrappers marked CTC_SPECIALISE, which inline every kernel below so the
+ * compiler sees constant loop bounds and unrolls them. Matrices are row-major; "sym" results
+ * are computed in the upper triangle and mirrored, so they are exactly symmetric. Outputs never
+ * alias inputs unless a function says so. Nothing here allocates.
+ */
+#ifndef CTC_DENSE_H
+#define CTC_DENSE_H
+
+#include <math.h>
+
+#define CTC_DENSE_MAX 6
+
+/* inline every call inside the function, so kernels specialise on constant sizes */
+#define CTC_SPECIALISE __attribute__((flatten))
+
+/* y = A x, A (r x c) */
+static inline void ctc_dense_mulv(int r, int c, const double *a, const double *x, double *y)
+{
+    for (int i = 0; i < r; i++) {
+        double s = 0;
+        for (int j = 0; j < c; j++) s += a[i * c + j] * x[j];
+        y[i] = s;
+    }
+}
+
+/* y = A^T x, A (r x c), y (c) */
+static inline void ctc_dense_tmulv(int r, int c, const double *a, const double *x, double *y)
+{
+    for (int j = 0; j < c; j++) y[j] = 0;
+    for (int i = 0; i < r; i++) {
+        for (int j = 0; j < c; j++) y[j] += a[i * c + j] * x[i];
+    }
+}
+
+/* C = A B, A (n x n), B (n x n) */
+static inline void ctc_dense_mul(int n, const double *a, const double *b, double *c)
+{
+    for (int i = 0; i < n; i++) {
+        for (int j = 0; j < n; j++) {
+            double s = 0;
+            for (int k = 0; k < n; k++) s += a[i * n + k] * b[k * n + j];
+            c[i * n + j] = s;
+        }
+    }
+}
+
+/* C = A B^T, A (n x n), B (n x n) */
+static inline void ctc_dense_mul_nt(int n, const double *a, const double *b, double *c)
+{
+    for (int i = 0; i < n; i++) {
+        for (int j = 0; j < n; j++) {
+            double s = 0;
+            for (int k = 0; k < n; k++) s += a[i * n + k] * b[j * n + k];
+            c[i * n + j] = s;
+        }
+    }
+}
+
+/* C = A^T B, A (n x n), B (n x n) */
+static inline void ctc_dense_mul_tn(int n, const double *a, const double *b, double *c)
+{
+    for (int i = 0; i < n; i++) {
+        for (int j = 0; j < n; j++) {
+            double s = 0;
+            for (int k = 0; k < n; k++) s += a[k * n + i] * b[k * n + j];
+            c[i * n + j] = s;
+        }
+    }
+}
+
+/* S = S0 - A B^T, known to be symmetric: upper triangle computed, mirrored. S may alias S0. */
+static inline void ctc_dense_sym_sub_nt(int n, const double *s0, const double *a, const double *b,
+                                        double *s)
+{
+    for (int i = 0; i < n; i++) {
+        for (int j = i; j < n; j++) {
+            double t = 0;
+            for (int k = 0; k < n; k++) t += a[i * n + k] * b[j * n + k];
+            double v = s0[i * n + j] - t;
+            s[i * n + j] = v;
+            s[j * n + i] = v;
+        }
+    }
+}
+
+/* S = S0 - A B, known to be symmetric: upper triangle computed, mirrored. S may alias S0. */
+static inline void ctc_dense_sym_sub(int n, const double *s0, const double *a, const double *b,
+                                     double *s)
+{
+    for (int i = 0; i < n; i++) {
+        for (int j = i; j < n; j++) {
+            double t = 0;
+            for (int k = 0; k < n; k++) t += a[i * n + k] * b[k * n + j];
+            double v = s0[i * n + j] - t;
+            s[i * n + j] = v;
+            s[j * n + i] = v;
+        }
+    }
+}
+
+/* In-place Cholesky factorisation A = L L^T of the symmetric positive definite A (n x n); the
+ * lower triangle receives L (the upper is left as it was). Returns 0, or -1 if a pivot is not
+ * positive (A not numerically positive definite). */
+static inline int ctc_dense_cholesky(int n, double *a)
+{
+    for (int j = 0; j < n; j++) {
+        double d = a[j * n + j];
+        for (int k = 0; k < j; k++) d -= a[j * n + k] * a[j * n + k];
+        if (!(d > 0)) return -1;
+        d = sqrt(d);
+        a[j * n + j] = d;
+        for (int i = j + 1; i < n; i++) {
+            double s = a[i * n + j];
+            for (int k = 0; k < j; k++) s -= a[i * n + k] * a[j * n + k];
+            a[i * n + j] = s / d;
+        }
+    }
+    return 0;
+}
+
+/* Solves L y = b in place (b := L^-1 b), L lower triangular (n x n) from ctc_dense_cholesky. */
+static inline void ctc_dense_lsolve(int n, const double *l, double *b)
+{
+    for (int i = 0; i < n; i++) {
+        double s = b[i];
+        for (int k = 0; k < i; k++) s -= l[i * n + k] * b[k];
+        b[i] = s / l[i * n + i];
+    }
+}
+
+/* Solves L^T x = y in place (y := L^-T y). */
+static inline void ctc_dense_ltsolve(int n, const double *l, double *y)
+{
+    for (int i = n - 1; i >= 0; i--) {
+        double s = y[i];
+        for (int k = i + 1; k < n; k++) s -= l[k * n + i] * y[k];
+        y[i] = s / l[i * n + i];
+    }
+}
+
+#endif

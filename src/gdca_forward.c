@@ -1,0 +1,140 @@
+/*
+ * gdca_forward.c - forward dynamics by GDCA (paper section 3; DESIGN.md section 4).
+ *
+ * The driving forces f are known, so at joint j the load on the right part is
+ * F = D lambda + P f with the constraint multipliers lambda unknown. Eliminating the joint
+ * acceleration with D^T (Eq. 15) gives
+ *     C = D^T K D,  W = D C^-1 D^T,  K = h11^R + h22^L,
+ *     Y = h23^L - h13^R + beta - K P f,   F = W (h21^L F1 - h12^R F2 + Y) + P f,
+ * which gdca_tree.h turns into the assembled record. At the root, joint 0 joins the ground (at
+ * rest, no record: h22 = h23 = 0) to the whole chain, whose free end carries F2 = 0. In the
+ * disassembly each node's joint load gives its acceleration
+ *     qdd = P^T (A1^R - A2^L - beta),
+ *     A1^R = h11^R F + h12^R F2 + h13^R,   A2^L = h21^L F1 - h22^L F + h23^L.
+ */
+#include "gdca.h"
+
+#include "gdca_tree.h"
+
+/* G = W and z = W Y + P f of joint j between left (NULL: ground) and right */
+static inline void forward_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
+                                 const double *right, const double *f, const int dim)
+{
+    const int nv = m->jnt_nv[j];
+    const double *P = d->jnt_P + 3 * dim * j, *fj = f + m->jnt_vadr[j];
+    double *g = d->fwd_G + dim * dim * j, *z = d->fwd_z + dim * j;
+    double k[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX], pf[CTC_DENSE_MAX];
+    double kpf[CTC_DENSE_MAX];
+
+    gdca_joint_K(dim, left, right, k);
+    if (gdca_projected_inverse(dim, k, d->jnt_D + dim * dim * j, dim - nv, g) != 0 &&
+        d->singular_joint < 0) {
+        d->singular_joint = j;
+    }
+    for (int i = 0; i < dim; i++) pf[i] = 0;
+    for (int c = 0; c < nv; c++) {
+        for (int i = 0; i < dim; i++) pf[i] += P[c * dim + i] * fj[c];
+    }
+    ctc_dense_mulv(dim, dim, k, pf, kpf);
+    gdca_joint_Y0(dim, left, right, d->jnt_beta + dim * j, y);
+    for (int i = 0; i < dim; i++) y[i] -= kpf[i];
+    ctc_dense_mulv(dim, dim, g, y, z);
+    for (int i = 0; i < dim; i++) z[i] += pf[i];
+}
+
+/* qdd_j = P^T (A1^R - A2^L - beta) written into qacc */
+static inline void forward_qacc(const ctc_model *m, const ctc_data *d, int j, const double *a1r,
+                                const double *a2l, double *qacc, const int dim)
+{
+    const double *P = d->jnt_P + 3 * dim * j, *beta = d->jnt_beta + dim * j;
+    for (int c = 0; c < m->jnt_nv[j]; c++) {
+        double s = 0;
+        for (int i = 0; i < dim; i++) s += P[c * dim + i] * (a1r[i] - a2l[i] - beta[i]);
+        qacc[m->jnt_vadr[j] + c] = s;
+    }
+}
+
+static inline void forward_pass(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
+                                const int dim)
+{
+    const int n = m->nbodies, hs = d->hsize;
+    d->singular_joint = -1;
+
+    /* assembly, children before parents */
+    for (int i = 0; i < m->ntree; i++) {
+        const ctc_tree_node *node = &m->tree[i];
+        const double *left = ctc_data_handles(m, d, node->left, 0);
+        const double *right = ctc_data_handles(m, d, node->right, 0);
+        int j = node->joint;
+        forward_joint(m, d, j, left, right, f, dim);
+        gdca_assemble(dim, left, right, d->fwd_G + dim * dim * j, d->fwd_z + dim * j,
+                      d->hfwd + (size_t)i * hs);
+    }
+
+    /* root: the ground joint 0 with the free end's load F2 = 0 */
+    const double *root = ctc_data_handles(m, d, m->root, 0);
+    double *tl = d->tload + (size_t)m->root * 2 * dim, a1[CTC_DENSE_MAX];
+    static const double rest[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+    forward_joint(m, d, 0, NULL, root, f, dim);
+    for (int i = 0; i < dim; i++) {
+        tl[i] = d->fwd_z[i];
+        tl[dim + i] = 0;
+        d->jnt_load[i] = tl[i];
+    }
+    ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
+    for (int i = 0; i < dim; i++) a1[i] += root[H13(dim) + i];
+    forward_qacc(m, d, 0, a1, rest, qacc, dim);
+
+    /* disassembly, parents before children */
+    for (int i = m->ntree - 1; i >= 0; i--) {
+        const ctc_tree_node *node = &m->tree[i];
+        const double *left = ctc_data_handles(m, d, node->left, 0);
+        const double *right = ctc_data_handles(m, d, node->right, 0);
+        const double *f1 = d->tload + (size_t)(n + i) * 2 * dim, *f2 = f1 + dim;
+        int j = node->joint;
+        double *fj = d->jnt_load + dim * j, a1r[CTC_DENSE_MAX], a2l[CTC_DENSE_MAX];
+        double t[CTC_DENSE_MAX];
+        gdca_joint_load(dim, left, right, d->fwd_G + dim * dim * j, d->fwd_z + dim * j, f1, f2,
+                        fj);
+
+        /* A1^R = h11^R F + h12^R F2 + h13^R,  A2^L = h21^L F1 - h22^L F + h23^L */
+        ctc_dense_mulv(dim, dim, right + H11(dim), fj, a1r);
+        ctc_dense_mulv(dim, dim, right + H12(dim), f2, t);
+        for (int r = 0; r < dim; r++) a1r[r] += t[r] + right[H13(dim) + r];
+        ctc_dense_tmulv(dim, dim, left + H12(dim), f1, a2l);
+        ctc_dense_mulv(dim, dim, left + H22(dim), fj, t);
+        for (int r = 0; r < dim; r++) a2l[r] += left[H23(dim) + r] - t[r];
+        forward_qacc(m, d, j, a1r, a2l, qacc, dim);
+
+        /* the children's terminal loads: L carries (F1, -F), R carries (F, F2) */
+        double *tlL = d->tload + (size_t)node->left * 2 * dim;
+        double *tlR = d->tload + (size_t)node->right * 2 * dim;
+        for (int r = 0; r < dim; r++) {
+            tlL[r] = f1[r];
+            tlL[dim + r] = -fj[r];
+            tlR[r] = fj[r];
+            tlR[dim + r] = f2[r];
+        }
+    }
+}
+
+static CTC_SPECIALISE void forward_planar(const ctc_model *m, ctc_data *d, const double *f,
+                                          double *qacc)
+{
+    forward_pass(m, d, f, qacc, 3);
+}
+
+static CTC_SPECIALISE void forward_spatial(const ctc_model *m, ctc_data *d, const double *f,
+                                           double *qacc)
+{
+    forward_pass(m, d, f, qacc, 6);
+}
+
+void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
+{
+    if (m->form == CTC_FORM_PLANAR) {
+        forward_planar(m, d, f, qacc);
+    } else {
+        forward_spatial(m, d, f, qacc);
+    }
+}

@@ -1,0 +1,256 @@
+/*
+ * gdca_inverse.c - inverse dynamics for computed torque control by iGDCA, in composite form
+ * (paper section 4; DESIGN.md section 4).
+ *
+ * In the inverse problem every joint acceleration is commanded (u = qdd_d - w, Eq. 19), so each
+ * assembly of the tree moves as a rigid composite whose internal motion is known. Its handle
+ * equations (Eq. 32-33) therefore factor through one composite spatial inertia I about its
+ * handle 1, a bias load w, the handle-to-handle vector r12 and an acceleration offset c:
+ *
+ *     I A1 + w = F1 + T(r12)^T F2,         A2 = T(r12) A1 + c,
+ *     i.e.  psi11 = I^-1,  psi12 = I^-1 T^T,  psi22 = T I^-1 T^T,  psi13 = -I^-1 w,
+ *           psi23 = T psi13 + c,
+ *
+ * with the rigid transfer T(r) = [1 0; -[r]x 1] (A at a point r further on: a + alpha x r; its
+ * transpose moves a load's moment: tau + r x f). Eliminating the joint load between L and R
+ * (A1^R = A2^L + P u + beta = T(r12^L) A1 + e, e = c^L + P u + beta) gives the assembly
+ *
+ *     I = I^L + T^T I^R T,   w = w^L + T^T (I^R e + w^R),   r12 = r12^L + r12^R,
+ *     c = T(r12^R) e + c^R,                                         T = T(r12^L),
+ *
+ * which is the paper's Eq. 34-39 rewritten by the Woodbury identity: composite inertias add,
+ * where the literal form (gdca_inverse_mobility.c) subtracts mobilities of very different size
+ * and loses digits on long chains. The root takes A1 = P u + beta from the ground (Eq. 44-46)
+ * and F2 = 0 at the free end; the disassembly passes (A1, F2) down and recovers each joint load
+ *     F = I^R A1^R + w^R - T(r12^R)^T F2,     driving force f = P^T F   (Eq. 51-52).
+ * A body's record: I = T(rho)^T M_c T(rho), w = T(rho)^T (M_c kappa - b), rho = c_m - handle 1,
+ * kappa = (0; w x (w x rho)), b = (-w x I_c w; m g), c = (0; w x (w x r12)).
+ */
+#include "gdca.h"
+
+#include "dense.h"
+#include "spatial.h"
+
+/* offsets in a composite record */
+#define CI(dim) 0
+#define CW(dim) ((dim) * (dim))
+#define CC(dim) ((dim) * (dim) + (dim))
+#define CR(dim) ((dim) * (dim) + 2 * (dim))
+
+/* the rigid transfer T(r) as a dense dim x dim matrix */
+static inline void transfer_matrix(int dim, const double r[3], double *t)
+{
+    for (int i = 0; i < dim * dim; i++) t[i] = (i % (dim + 1) == 0) ? 1.0 : 0.0;
+    if (dim == 3) {
+        t[3] = -r[1];
+        t[6] = r[0];
+    } else { /* lower-left block -[r]x */
+        t[6 * 3 + 1] = r[2];
+        t[6 * 3 + 2] = -r[1];
+        t[6 * 4 + 0] = -r[2];
+        t[6 * 4 + 2] = r[0];
+        t[6 * 5 + 0] = r[1];
+        t[6 * 5 + 1] = -r[0];
+    }
+}
+
+/* out = T(r) a: the acceleration a handle r further on (rigid part) */
+static inline void transfer_motion(int dim, const double r[3], const double *a, double *out)
+{
+    if (dim == 3) {
+        out[0] = a[0];
+        out[1] = a[1] - r[1] * a[0];
+        out[2] = a[2] + r[0] * a[0];
+    } else {
+        double t[3];
+        ctc_v3_cross(t, a, r);
+        ctc_v3_copy(out, a);
+        ctc_v3_add(out + 3, a + 3, t);
+    }
+}
+
+/* out = T(r)^T f: a load at a point r further on, as a load at this point */
+static inline void transfer_force(int dim, const double r[3], const double *f, double *out)
+{
+    if (dim == 3) {
+        out[0] = f[0] - r[1] * f[1] + r[0] * f[2];
+        out[1] = f[1];
+        out[2] = f[2];
+    } else {
+        double t[3];
+        ctc_v3_cross(t, r, f + 3);
+        ctc_v3_add(out, f, t);
+        ctc_v3_copy(out + 3, f + 3);
+    }
+}
+
+/* out = T^T s T for symmetric s (dim x dim); out may alias nothing */
+static inline void congruence(int dim, const double *t, const double *s, double *out)
+{
+    double st[CTC_DENSE_MAX * CTC_DENSE_MAX];
+    ctc_dense_mul(dim, s, t, st);
+    for (int i = 0; i < dim; i++) {
+        for (int j = i; j < dim; j++) {
+            double x = 0;
+            for (int k = 0; k < dim; k++) x += t[k * dim + i] * st[k * dim + j];
+            out[i * dim + j] = x;
+            out[j * dim + i] = x;
+        }
+    }
+}
+
+/* body k's composite record from the kinematics and handle offsets in d */
+static inline void body_record(const ctc_model *m, const ctc_data *d, int k, double *rec,
+                               const int dim)
+{
+    const double *r1 = d->hr + 6 * k, *r2 = r1 + 3, *w = d->omega + 3 * k;
+    double *c = rec + CC(dim), *r12 = rec + CR(dim);
+    double rho[3], mc[36] = {0}, load[6], t[36];
+    ctc_v3_scale(rho, r1, -1.0);
+    ctc_v3_sub(r12, r2, r1);
+
+    if (dim == 3) {
+        const ctc_planar_body *b = &m->planar[k];
+        const double *g = m->plane_gravity;
+        double w2 = w[2] * w[2];
+        mc[0] = b->inertia;
+        mc[4] = mc[8] = b->mass;
+        load[0] = 0;
+        load[1] = b->mass * (-w2 * rho[0] - g[0]);
+        load[2] = b->mass * (-w2 * rho[1] - g[1]);
+        c[0] = 0;
+        c[1] = -w2 * r12[0];
+        c[2] = -w2 * r12[1];
+    } else {
+        const ctc_body_spec *b = &m->bodies[k];
+        double iw[9], wr[3], wwr[3], iww[3];
+        ctc_m3_rotate_sym(iw, d->xrot + 9 * k, b->inertia);
+        for (int i = 0; i < 3; i++) {
+            for (int j = 0; j < 3; j++) mc[6 * i + j] = iw[3 * i + j];
+            mc[6 * (i + 3) + i + 3] = b->mass;
+        }
+        /* M_c kappa - b = (w x I w; m (w x (w x rho) - g)) */
+        ctc_m3_mulv(iww, iw, w);
+        ctc_v3_cross(load, w, iww);
+        ctc_v3_cross(wr, w, rho);
+        ctc_v3_cross(wwr, w, wr);
+        ctc_v3_sub(load + 3, wwr, m->gravity);
+        ctc_v3_scale(load + 3, load + 3, b->mass);
+        ctc_v3_cross(wr, w, r12);
+        ctc_v3_set(c, 0, 0, 0);
+        ctc_v3_cross(c + 3, w, wr);
+    }
+    transfer_matrix(dim, rho, t);
+    congruence(dim, t, mc, rec + CI(dim));
+    transfer_force(dim, rho, load, rec + CW(dim));
+}
+
+static inline double *record(const ctc_data *d, int a)
+{
+    return d->icomp + (size_t)a * d->csize;
+}
+
+static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u, double *f,
+                                const int dim)
+{
+    const int n = m->nbodies;
+    d->singular_joint = -1; /* nothing is inverted in this form */
+
+    /* body records */
+    for (int k = 0; k < n; k++) body_record(m, d, k, record(d, k), dim);
+
+    /* assembly, children before parents */
+    for (int i = 0; i < m->ntree; i++) {
+        const ctc_tree_node *node = &m->tree[i];
+        const double *L = record(d, node->left), *R = record(d, node->right);
+        double *N = record(d, n + i), *e = d->inv_e + dim * node->joint;
+        const double *P = d->jnt_P + 3 * dim * node->joint, *beta = d->jnt_beta + dim * node->joint;
+        const double *uj = u + m->jnt_vadr[node->joint];
+        double t[CTC_DENSE_MAX * CTC_DENSE_MAX], s[CTC_DENSE_MAX * CTC_DENSE_MAX];
+        double ie[CTC_DENSE_MAX], tf[CTC_DENSE_MAX];
+
+        /* e = c^L + P u + beta */
+        for (int r = 0; r < dim; r++) e[r] = L[CC(dim) + r] + beta[r];
+        for (int col = 0; col < m->jnt_nv[node->joint]; col++) {
+            for (int r = 0; r < dim; r++) e[r] += P[col * dim + r] * uj[col];
+        }
+
+        /* I = I^L + T^T I^R T,  w = w^L + T^T (I^R e + w^R) */
+        transfer_matrix(dim, L + CR(dim), t);
+        congruence(dim, t, R + CI(dim), s);
+        for (int r = 0; r < dim * dim; r++) N[CI(dim) + r] = L[CI(dim) + r] + s[r];
+        ctc_dense_mulv(dim, dim, R + CI(dim), e, ie);
+        for (int r = 0; r < dim; r++) ie[r] += R[CW(dim) + r];
+        transfer_force(dim, L + CR(dim), ie, tf);
+        for (int r = 0; r < dim; r++) N[CW(dim) + r] = L[CW(dim) + r] + tf[r];
+
+        /* c = T(r12^R) e + c^R,  r12 = r12^L + r12^R */
+        transfer_motion(dim, R + CR(dim), e, tf);
+        for (int r = 0; r < dim; r++) N[CC(dim) + r] = tf[r] + R[CC(dim) + r];
+        ctc_v3_add(N + CR(dim), L + CR(dim), R + CR(dim));
+    }
+
+    /* root: A1 = P u + beta of the ground joint, F1 = I A1 + w (free end: F2 = 0) */
+    const double *root = record(d, m->root);
+    double *tl = d->tload + (size_t)m->root * 2 * dim, *load0 = d->jnt_load_inv;
+    for (int r = 0; r < dim; r++) tl[r] = d->jnt_beta[r];
+    for (int col = 0; col < m->jnt_nv[0]; col++) {
+        for (int r = 0; r < dim; r++) tl[r] += d->jnt_P[col * dim + r] * u[col];
+    }
+    for (int r = 0; r < dim; r++) tl[dim + r] = 0;
+    ctc_dense_mulv(dim, dim, root + CI(dim), tl, load0);
+    for (int r = 0; r < dim; r++) load0[r] += root[CW(dim) + r];
+
+    /* disassembly, parents before children: F = I^R A1^R + w^R - T(r12^R)^T F2 */
+    for (int i = m->ntree - 1; i >= 0; i--) {
+        const ctc_tree_node *node = &m->tree[i];
+        const double *L = record(d, node->left), *R = record(d, node->right);
+        const double *a1 = d->tload + (size_t)(n + i) * 2 * dim, *f2 = a1 + dim;
+        double *tlL = d->tload + (size_t)node->left * 2 * dim;
+        double *tlR = d->tload + (size_t)node->right * 2 * dim;
+        double *load = d->jnt_load_inv + dim * node->joint, tf[CTC_DENSE_MAX];
+        const double *e = d->inv_e + dim * node->joint;
+
+        transfer_motion(dim, L + CR(dim), a1, tlR); /* A1^R */
+        for (int r = 0; r < dim; r++) tlR[r] += e[r];
+        ctc_dense_mulv(dim, dim, R + CI(dim), tlR, load);
+        transfer_force(dim, R + CR(dim), f2, tf);
+        for (int r = 0; r < dim; r++) {
+            load[r] += R[CW(dim) + r] - tf[r];
+            tlR[dim + r] = f2[r];
+            tlL[r] = a1[r];
+            tlL[dim + r] = -load[r];
+        }
+    }
+
+    /* driving forces f = P^T F of every joint */
+    for (int j = 0; j < n; j++) {
+        const double *P = d->jnt_P + 3 * dim * j, *load = d->jnt_load_inv + dim * j;
+        for (int col = 0; col < m->jnt_nv[j]; col++) {
+            double x = 0;
+            for (int r = 0; r < dim; r++) x += P[col * dim + r] * load[r];
+            f[m->jnt_vadr[j] + col] = x;
+        }
+    }
+}
+
+static CTC_SPECIALISE void inverse_planar(const ctc_model *m, ctc_data *d, const double *u,
+                                          double *f)
+{
+    inverse_pass(m, d, u, f, 3);
+}
+
+static CTC_SPECIALISE void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u,
+                                           double *f)
+{
+    inverse_pass(m, d, u, f, 6);
+}
+
+void ctc_gdca_inverse(const ctc_model *m, ctc_data *d, const double *u, double *f)
+{
+    if (m->form == CTC_FORM_PLANAR) {
+        inverse_planar(m, d, u, f);
+    } else {
+        inverse_spatial(m, d, u, f);
+    }
+}

@@ -1,0 +1,124 @@
+/*
+ * gdca_inverse_mobility.c - the paper's iGDCA in its literal mobility form (paper section 4).
+ *
+ * Kept as the reference implementation of Eq. 26-54 and measured against the composite form
+ * (gdca_inverse.c) in the tests and benchmarks. It shares the body records with the forward pass
+ * (Eq. 42-43), but each assembled mobility of a rigid composite is a small difference of its
+ * parts' larger ones (Eq. 34, 38), so its error grows with that ratio: about eps cond(M) on
+ * long chains, 2e-10 already on Featherstone's 16-body coil.
+ *
+ * The joint accelerations are commanded (u = qdd_d - w, Eq. 19), so the acceleration constraint
+ * A1^R = A2^L + P u + beta needs no projection and the whole joint load F (constraint and drive)
+ * is the unknown (Eq. 26-31):
+ *     X = K^-1,  K = h11^R + h22^L (symmetric positive definite: Cholesky),
+ *     Y' = h23^L - h13^R + beta + P u,   F = X (h21^L F1 - h12^R F2 + Y'),
+ * assembled by the shared rule of gdca_tree.h (Eq. 34-39). At the root the ground joint gives
+ * F1 = (h11)^-1 (P u + beta - h13) (Eq. 46). The disassembly recovers each joint's load and its
+ * driving force f = P^T F (Eq. 51-52: D^T P = 0, P^T P = 1).
+ */
+#include "gdca.h"
+
+#include "gdca_tree.h"
+
+/* G = X and z = X Y' of joint j between left (NULL: ground) and right */
+static inline void inverse_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
+                                 const double *right, const double *u, const int dim)
+{
+    const double *P = d->jnt_P + 3 * dim * j, *uj = u + m->jnt_vadr[j];
+    double *g = d->inv_G + dim * dim * j, *z = d->inv_z + dim * j;
+    double k[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX];
+
+    gdca_joint_K(dim, left, right, k);
+    if (gdca_projected_inverse(dim, k, NULL, dim, g) != 0 && d->singular_joint < 0) {
+        d->singular_joint = j;
+    }
+    gdca_joint_Y0(dim, left, right, d->jnt_beta + dim * j, y);
+    for (int c = 0; c < m->jnt_nv[j]; c++) {
+        for (int i = 0; i < dim; i++) y[i] += P[c * dim + i] * uj[c];
+    }
+    ctc_dense_mulv(dim, dim, g, y, z);
+}
+
+/* f_j = P^T F */
+static inline void inverse_drive(const ctc_model *m, const ctc_data *d, int j, const double *load,
+                                 double *f, const int dim)
+{
+    const double *P = d->jnt_P + 3 * dim * j;
+    for (int c = 0; c < m->jnt_nv[j]; c++) {
+        double s = 0;
+        for (int i = 0; i < dim; i++) s += P[c * dim + i] * load[i];
+        f[m->jnt_vadr[j] + c] = s;
+    }
+}
+
+static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u, double *f,
+                                const int dim)
+{
+    const int n = m->nbodies, hs = d->hsize;
+    d->singular_joint = -1;
+
+    /* assembly, children before parents */
+    for (int i = 0; i < m->ntree; i++) {
+        const ctc_tree_node *node = &m->tree[i];
+        const double *left = ctc_data_handles(m, d, node->left, 1);
+        const double *right = ctc_data_handles(m, d, node->right, 1);
+        int j = node->joint;
+        inverse_joint(m, d, j, left, right, u, dim);
+        gdca_assemble(dim, left, right, d->inv_G + dim * dim * j, d->inv_z + dim * j,
+                      d->hinv + (size_t)i * hs);
+    }
+
+    /* root: ground joint 0, free end F2 = 0 */
+    const double *root = ctc_data_handles(m, d, m->root, 1);
+    double *tl = d->tload + (size_t)m->root * 2 * dim;
+    inverse_joint(m, d, 0, NULL, root, u, dim);
+    for (int i = 0; i < dim; i++) {
+        tl[i] = d->inv_z[i];
+        tl[dim + i] = 0;
+        d->jnt_load_inv[i] = tl[i];
+    }
+    inverse_drive(m, d, 0, tl, f, dim);
+
+    /* disassembly, parents before children */
+    for (int i = m->ntree - 1; i >= 0; i--) {
+        const ctc_tree_node *node = &m->tree[i];
+        const double *left = ctc_data_handles(m, d, node->left, 1);
+        const double *right = ctc_data_handles(m, d, node->right, 1);
+        const double *f1 = d->tload + (size_t)(n + i) * 2 * dim, *f2 = f1 + dim;
+        int j = node->joint;
+        double *fj = d->jnt_load_inv + dim * j;
+        gdca_joint_load(dim, left, right, d->inv_G + dim * dim * j, d->inv_z + dim * j, f1, f2,
+                        fj);
+        inverse_drive(m, d, j, fj, f, dim);
+
+        double *tlL = d->tload + (size_t)node->left * 2 * dim;
+        double *tlR = d->tload + (size_t)node->right * 2 * dim;
+        for (int r = 0; r < dim; r++) {
+            tlL[r] = f1[r];
+            tlL[dim + r] = -fj[r];
+            tlR[r] = fj[r];
+            tlR[dim + r] = f2[r];
+        }
+    }
+}
+
+static CTC_SPECIALISE void inverse_planar(const ctc_model *m, ctc_data *d, const double *u,
+                                          double *f)
+{
+    inverse_pass(m, d, u, f, 3);
+}
+
+static CTC_SPECIALISE void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u,
+                                           double *f)
+{
+    inverse_pass(m, d, u, f, 6);
+}
+
+void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u, double *f)
+{
+    if (m->form == CTC_FORM_PLANAR) {
+        inverse_planar(m, d, u, f);
+    } else {
+        inverse_spatial(m, d, u, f);
+    }
+}

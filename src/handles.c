@@ -1,0 +1,125 @@
+/*
+ * handles.c - body handle equations (handles.h), written out by component.
+ *
+ * Spatial: with S_i = -[r_i]x (S_i x = x x r_i) and G_i = S_i I^-1, the blocks are
+ *     h_ij = [ I^-1   G_j^T ;  G_i   G_i S_j^T + 1/m ],   row a of G_i S_j^T = (row a of G_i) x r_j
+ *     h_i3 = ( a0 ;  a0 x r_i + g + w x (w x r_i) ),     a0 = I^-1 (-w x I w)
+ * Planar: h_ij = [1/J, -y_j/J, x_j/J; -y_i/J, y_i y_j/J + 1/m, -y_i x_j/J;
+ *                 x_i/J, -x_i y_j/J, x_i x_j/J + 1/m],   h_i3 = (0, g_x - w^2 x_i, g_y - w^2 y_i).
+ */
+#include "handles.h"
+
+#include "spatial.h"
+
+static void planar_block(double *h, const double ri[2], const double rj[2], double ij, double im)
+{
+    h[0] = ij;
+    h[1] = -rj[1] * ij;
+    h[2] = rj[0] * ij;
+    h[3] = -ri[1] * ij;
+    h[4] = ri[1] * rj[1] * ij + im;
+    h[5] = -ri[1] * rj[0] * ij;
+    h[6] = ri[0] * ij;
+    h[7] = -ri[0] * rj[1] * ij;
+    h[8] = ri[0] * rj[0] * ij + im;
+}
+
+static void handles_planar(const ctc_model *m, ctc_data *d)
+{
+    const double *g = m->plane_gravity;
+    for (int k = 0; k < m->nbodies; k++) {
+        const ctc_planar_body *b = &m->planar[k];
+        const double *c = d->xcom + 3 * k;
+        const double *next = k + 1 < m->nbodies ? d->xpos + 3 * (k + 1) : c;
+        double *hr = d->hr + 6 * k;
+        double r1[2] = {d->xpos[3 * k] - c[0], d->xpos[3 * k + 1] - c[1]};
+        double r2[2] = {next[0] - c[0], next[1] - c[1]};
+        ctc_v3_set(hr, r1[0], r1[1], 0);
+        ctc_v3_set(hr + 3, r2[0], r2[1], 0);
+
+        double *h = d->hbody + (size_t)k * d->hsize;
+        double ij = 1.0 / b->inertia, im = 1.0 / b->mass, w2 = d->omega[3 * k + 2];
+        w2 *= w2;
+        planar_block(h, r1, r1, ij, im);     /* h11 */
+        planar_block(h + 9, r1, r2, ij, im); /* h12 */
+        planar_block(h + 18, r2, r2, ij, im); /* h22 */
+        ctc_v3_set(h + 27, 0, g[0] - w2 * r1[0], g[1] - w2 * r1[1]);
+        ctc_v3_set(h + 30, 0, g[0] - w2 * r2[0], g[1] - w2 * r2[1]);
+    }
+}
+
+/* h = [ iw  G_j^T ; G_i  G_i S_j^T + 1/m ] (6x6 row-major) */
+static void spatial_block(double *h, const double iw[9], const double gi[9], const double gj[9],
+                          const double rj[3], double im)
+{
+    for (int a = 0; a < 3; a++) {
+        double row[3];
+        ctc_v3_cross(row, &gi[3 * a], rj);
+        for (int b = 0; b < 3; b++) {
+            h[6 * a + b] = iw[3 * a + b];
+            h[6 * a + 3 + b] = gj[3 * b + a];
+            h[6 * (a + 3) + b] = gi[3 * a + b];
+            h[6 * (a + 3) + 3 + b] = row[b] + (a == b ? im : 0.0);
+        }
+    }
+}
+
+static void handles_spatial(const ctc_model *m, ctc_data *d)
+{
+    for (int k = 0; k < m->nbodies; k++) {
+        const ctc_body_spec *body = &m->bodies[k];
+        const double *rot = d->xrot + 9 * k, *w = d->omega + 3 * k, *c = d->xcom + 3 * k;
+        const double *next = k + 1 < m->nbodies ? d->xpos + 3 * (k + 1) : c;
+        double *r1 = d->hr + 6 * k, *r2 = d->hr + 6 * k + 3;
+        ctc_v3_sub(r1, d->xpos + 3 * k, c);
+        ctc_v3_sub(r2, next, c);
+
+        /* inverse inertia in world axes; G_i = S_i I^-1, column j = (row j of I^-1) x r_i */
+        double iw[9], g1[9], g2[9], t[3];
+        ctc_m3_rotate_sym(iw, rot, &m->body_inertia_inv[9 * k]);
+        for (int j = 0; j < 3; j++) {
+            double c1[3], c2[3];
+            ctc_v3_cross(c1, &iw[3 * j], r1);
+            ctc_v3_cross(c2, &iw[3 * j], r2);
+            for (int a = 0; a < 3; a++) {
+                g1[3 * a + j] = c1[a];
+                g2[3 * a + j] = c2[a];
+            }
+        }
+        double *h = d->hbody + (size_t)k * d->hsize;
+        double im = 1.0 / body->mass;
+        spatial_block(h, iw, g1, g1, r1, im);      /* h11 */
+        spatial_block(h + 36, iw, g1, g2, r2, im); /* h12 */
+        spatial_block(h + 72, iw, g2, g2, r2, im); /* h22 */
+
+        /* gyroscopic term: a0 = I^-1 (-w x I w), I w = R I_b R^T w */
+        double wb[3], iwb[3], iww[3], gyro[3], a0[3];
+        ctc_m3_tmulv(wb, rot, w);
+        ctc_m3_mulv(iwb, body->inertia, wb);
+        ctc_m3_mulv(iww, rot, iwb);
+        ctc_v3_cross(gyro, iww, w); /* = -w x I w */
+        ctc_m3_mulv(a0, iw, gyro);
+
+        /* h_i3 = (a0; a0 x r_i + g + w x (w x r_i)) */
+        double *h13 = h + 108, *h23 = h + 114;
+        for (int i = 0; i < 2; i++) {
+            const double *r = i ? r2 : r1;
+            double *hi = i ? h23 : h13, wr[3], wwr[3];
+            ctc_v3_copy(hi, a0);
+            ctc_v3_cross(t, a0, r);
+            ctc_v3_cross(wr, w, r);
+            ctc_v3_cross(wwr, w, wr);
+            ctc_v3_add(hi + 3, t, m->gravity);
+            ctc_v3_add(hi + 3, hi + 3, wwr);
+        }
+    }
+}
+
+void ctc_handles(const ctc_model *m, ctc_data *d)
+{
+    if (m->form == CTC_FORM_PLANAR) {
+        handles_planar(m, d);
+    } else {
+        handles_spatial(m, d);
+    }
+}

@@ -1,0 +1,24 @@
+/*
+ * handles.h - the body-level handle equations, computed once per state (paper Eq. 8-13, 42-43).
+ *
+ * For body k with mass m, centre of mass c, inertia I_c and inverse I_c^-1 (world frame),
+ * angular velocity w, handle i at r_i = handle - c (handle 1 = joint k, handle 2 = joint k+1;
+ * the tip body's handle 2 is its centre of mass, where no load acts):
+ *
+ *     A_i = sum_j h_ij F_j + h_i3,     h_ij = T_i M^-1 T_j^T,
+ *     h_i3 = T_i M^-1 b + (0; w x (w x r_i)),     b = (-w x I_c w; m g)
+ *     T_i = [1 0; -[r_i]x 1],   M = diag(I_c, m 1)
+ *
+ * In planar form T_i = [1 0 0; -r_y 1 0; r_x 0 1], M = diag(J, m, m) and w x (w x r) = -w^2 r.
+ * The same records serve the inverse and the forward passes (the paper's psi = eta, Eq. 42-43),
+ * and do not depend on the driving forces.
+ */
+#ifndef CTC_HANDLES_H
+#define CTC_HANDLES_H
+
+#include "data.h"
+
+/* Fills d->hr and d->hbody from the kinematics in d (ctc_kinematics first). Allocates nothing. */
+void ctc_handles(const ctc_model *m, ctc_data *d);
+
+#endif

@@ -1,0 +1,180 @@
+/*
+ * kinematics.c - the kinematics pass (kinematics.h), one loop from base to tip per form.
+ *
+ * A body's origin velocity is the velocity of the coincident point of its parent plus the
+ * relative velocity along a sliding axis: v_k = v_(k-1) + w_(k-1) x (p_k - p_(k-1)) + u qd.
+ */
+#include "kinematics.h"
+
+#include <string.h>
+
+#include "spatial.h"
+
+static void kinematics_planar(const ctc_model *m, ctc_data *d, const double *q, const double *v)
+{
+    double theta = 0, cp = 1, sp = 0, wp = 0; /* the parent's angle, cos, sin, omega */
+    double pp[2] = {0, 0}, vp[2] = {0, 0};    /* the parent's origin and its velocity */
+
+    for (int k = 0; k < m->nbodies; k++) {
+        const ctc_planar_body *b = &m->planar[k];
+        ctc_joint_type type = m->joints[k].type;
+        const double *qk = q + m->jnt_qadr[k], *vk = v + m->jnt_vadr[k];
+        double *P = d->jnt_P + 3 * 3 * k, *D = d->jnt_D + 9 * k, *beta = d->jnt_beta + 3 * k;
+
+        /* joint centre, and the axis in the plane's coordinates */
+        double p[2] = {pp[0] + cp * b->loc[0] - sp * b->loc[1],
+                       pp[1] + sp * b->loc[0] + cp * b->loc[1]};
+        double u[2] = {cp * b->axis[0] - sp * b->axis[1], sp * b->axis[0] + cp * b->axis[1]};
+        double w = wp, slide = 0;
+        memset(P, 0, 9 * sizeof(double));
+        memset(D, 0, 9 * sizeof(double));
+        beta[0] = beta[1] = beta[2] = 0;
+
+        switch (type) {
+        case CTC_JOINT_REVOLUTE:
+            theta += b->sign * qk[0];
+            w += b->sign * vk[0];
+            P[0] = b->sign;
+            D[1] = 1;     /* column 0: (0, 1, 0) */
+            D[3 + 2] = 1; /* column 1: (0, 0, 1) */
+            break;
+        case CTC_JOINT_PRISMATIC:
+            p[0] += u[0] * qk[0];
+            p[1] += u[1] * qk[0];
+            slide = vk[0];
+            P[1] = u[0];
+            P[2] = u[1];
+            D[0] = 1;
+            D[3 + 1] = -u[1];
+            D[3 + 2] = u[0];
+            beta[1] = -2 * wp * u[1] * vk[0];
+            beta[2] = 2 * wp * u[0] * vk[0];
+            break;
+        default: /* fixed: the builder admits no other joint in planar form */
+            D[0] = D[4] = D[8] = 1;
+            break;
+        }
+
+        /* pose and velocity */
+        double c = cos(theta), s = sin(theta);
+        double *xp = d->xpos + 3 * k, *xr = d->xrot + 9 * k, *xc = d->xcom + 3 * k;
+        double *om = d->omega + 3 * k, *xv = d->xvel + 3 * k;
+        ctc_v3_set(xp, p[0], p[1], 0);
+        xr[0] = c, xr[1] = -s, xr[2] = 0;
+        xr[3] = s, xr[4] = c, xr[5] = 0;
+        xr[6] = 0, xr[7] = 0, xr[8] = 1;
+        ctc_v3_set(xc, p[0] + c * b->com[0] - s * b->com[1], p[1] + s * b->com[0] + c * b->com[1],
+                   0);
+        ctc_v3_set(om, 0, 0, w);
+        ctc_v3_set(xv, vp[0] - wp * (p[1] - pp[1]) + u[0] * slide,
+                   vp[1] + wp * (p[0] - pp[0]) + u[1] * slide, 0);
+
+        cp = c, sp = s, wp = w;
+        pp[0] = p[0], pp[1] = p[1];
+        vp[0] = xv[0], vp[1] = xv[1];
+    }
+}
+
+static void kinematics_spatial(const ctc_model *m, ctc_data *d, const double *q, const double *v)
+{
+    static const double zero[3] = {0, 0, 0};
+    static const double eye[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+
+    for (int k = 0; k < m->nbodies; k++) {
+        const ctc_joint_spec *j = &m->joints[k];
+        const double *qk = q + m->jnt_qadr[k], *vk = v + m->jnt_vadr[k];
+        const double *rp = k ? d->xrot + 9 * (k - 1) : eye;
+        const double *pp = k ? d->xpos + 3 * (k - 1) : zero;
+        const double *wp = k ? d->omega + 3 * (k - 1) : zero;
+        const double *vp = k ? d->xvel + 3 * (k - 1) : zero;
+        double *xp = d->xpos + 3 * k, *xr = d->xrot + 9 * k;
+        double *om = d->omega + 3 * k, *xv = d->xvel + 3 * k;
+        double *P = d->jnt_P + 18 * k, *D = d->jnt_D + 36 * k, *beta = d->jnt_beta + 6 * k;
+        double u[3], n1[3], n2[3], rel[9], t[3], wrel[3] = {0, 0, 0}, slide[3] = {0, 0, 0};
+
+        /* joint centre and axis in world coordinates */
+        ctc_m3_mulv(t, rp, j->location);
+        ctc_v3_add(xp, pp, t);
+        ctc_m3_mulv(u, rp, j->axis);
+        ctc_m3_mulv(n1, rp, &m->jnt_perp[6 * k]);
+        ctc_m3_mulv(n2, rp, &m->jnt_perp[6 * k + 3]);
+        memset(P, 0, 18 * sizeof(double));
+        memset(D, 0, 36 * sizeof(double));
+        memset(beta, 0, 6 * sizeof(double));
+
+        switch (j->type) {
+        case CTC_JOINT_REVOLUTE:
+            ctc_m3_axis_angle(rel, j->axis, qk[0]);
+            ctc_m3_mul(xr, rp, rel);
+            ctc_v3_scale(wrel, u, vk[0]);
+            ctc_v3_copy(P, u);
+            ctc_v3_copy(D, n1);
+            ctc_v3_copy(D + 6, n2);
+            D[12 + 3] = D[18 + 4] = D[24 + 5] = 1;
+            break;
+        case CTC_JOINT_PRISMATIC:
+            memcpy(xr, rp, 9 * sizeof(double));
+            ctc_v3_addscl(xp, xp, u, qk[0]);
+            ctc_v3_scale(slide, u, vk[0]);
+            ctc_v3_copy(P + 3, u);
+            D[0] = D[6 + 1] = D[12 + 2] = 1;
+            ctc_v3_copy(D + 18 + 3, n1);
+            ctc_v3_copy(D + 24 + 3, n2);
+            break;
+        case CTC_JOINT_CYLINDRICAL:
+            ctc_m3_axis_angle(rel, j->axis, qk[0]);
+            ctc_m3_mul(xr, rp, rel);
+            ctc_v3_addscl(xp, xp, u, qk[1]);
+            ctc_v3_scale(wrel, u, vk[0]);
+            ctc_v3_scale(slide, u, vk[1]);
+            ctc_v3_copy(P, u);
+            ctc_v3_copy(P + 6 + 3, u);
+            ctc_v3_copy(D, n1);
+            ctc_v3_copy(D + 6, n2);
+            ctc_v3_copy(D + 12 + 3, n1);
+            ctc_v3_copy(D + 18 + 3, n2);
+            break;
+        case CTC_JOINT_SPHERICAL:
+            ctc_m3_from_quat(rel, qk);
+            ctc_m3_mul(xr, rp, rel);
+            ctc_m3_mulv(wrel, xr, vk);
+            for (int c = 0; c < 3; c++) { /* P columns: the child's axes */
+                P[6 * c] = xr[c];
+                P[6 * c + 1] = xr[3 + c];
+                P[6 * c + 2] = xr[6 + c];
+            }
+            D[3] = D[6 + 4] = D[12 + 5] = 1;
+            break;
+        case CTC_JOINT_FIXED:
+            memcpy(xr, rp, 9 * sizeof(double));
+            for (int c = 0; c < 6; c++) D[6 * c + c] = 1;
+            break;
+        }
+
+        /* velocities: omega = w_p + omega_rel, v = v_p + w_p x (p - p_p) + u sd */
+        ctc_v3_add(om, wp, wrel);
+        double dp[3];
+        ctc_v3_sub(dp, xp, pp);
+        ctc_v3_cross(t, wp, dp);
+        ctc_v3_add(xv, vp, t);
+        ctc_v3_add(xv, xv, slide);
+
+        /* beta = (w_p x omega_rel; 2 w_p x slide velocity) */
+        ctc_v3_cross(beta, wp, wrel);
+        ctc_v3_cross(beta + 3, wp, slide);
+        ctc_v3_scale(beta + 3, beta + 3, 2.0);
+
+        /* centre of mass */
+        ctc_m3_mulv(t, xr, m->bodies[k].com);
+        ctc_v3_add(d->xcom + 3 * k, xp, t);
+    }
+}
+
+void ctc_kinematics(const ctc_model *m, ctc_data *d, const double *q, const double *v)
+{
+    if (m->form == CTC_FORM_PLANAR) {
+        kinematics_planar(m, d, q, v);
+    } else {
+        kinematics_spatial(m, d, q, v);
+    }
+}

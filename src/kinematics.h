@@ -1,0 +1,30 @@
+/*
+ * kinematics.h - the kinematics pass: poses, velocities and each joint's maps P, D and beta.
+ *
+ * From base to tip, for the state (q, v), computes each body's frame (origin = handle 1, the
+ * centre of joint k), orientation, centre of mass, angular velocity and origin velocity, and each
+ * joint's free-motion map P (orthonormal columns), its orthogonal complement D and the
+ * velocity-product term beta of the acceleration constraint (paper Eq. 14, DESIGN.md section 4):
+ *
+ *     A1(body k) = A2(body k-1) + P qdd_k + beta_k,
+ *
+ * where A2(body k-1) is the acceleration of the material point of body k-1 at joint k's centre.
+ * With w = omega(k-1) the parent's angular velocity and u the axis in world coordinates:
+ *     revolute     P = (u; 0)             beta = (w x u qd; 0)
+ *     prismatic    P = (0; u)             beta = (0; 2 w x u qd)          (Coriolis)
+ *     cylindrical  P = [(u; 0), (0; u)]   beta = (w x u qd0; 2 w x u qd1)
+ *     spherical    P = (R_k; 0)           beta = (w x omega_rel; 0)   omega_rel = R_k v_k
+ *     fixed        P = none               beta = 0
+ * Planar form: the same in the plane's coordinates (omega_z, v_x, v_y); beta vanishes for
+ * revolute joints there.
+ */
+#ifndef CTC_KINEMATICS_H
+#define CTC_KINEMATICS_H
+
+#include "data.h"
+
+/* Computes the kinematics of state q (nq, rad / m / quaternions) and v (nv, rad/s / m/s) into
+ * d's kinematics and joint arrays (data.h). Assumes a validated model; allocates nothing. */
+void ctc_kinematics(const ctc_model *m, ctc_data *d, const double *q, const double *v);
+
+#endif

@@ -1,0 +1,542 @@
+/*
+ * model.c - building, validating and describing a serial chain (model.h).
+ *
+ * The builder copies the spec, checks every number (finite, masses positive, inertias symmetric,
+ * positive semidefinite and satisfying the triangle inequality of principal moments, axes of
+ * non-zero length), decides the form (planar when every joint moves in one plane and gravity lies
+ * in it, DESIGN.md section 3), precomputes what the kinematics and handle passes need per body,
+ * and lays out the balanced binary assembly tree of GDCA (paper section 3, Fig. 3): bodies
+ * [first, last] split at the middle, depth ceil(log2 n), nodes stored by height so that the nodes
+ * of one height are independent of each other.
+ */
+#include "model.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "spatial.h"
+
+/* relative tolerance under which a principal moment counts as zero, and axes as (anti)parallel */
+#define INERTIA_ZERO_REL 1e-12
+#define AXIS_ALIGN_TOL 1e-12
+
+int ctc_joint_nq(ctc_joint_type t)
+{
+    switch (t) {
+    case CTC_JOINT_REVOLUTE:
+    case CTC_JOINT_PRISMATIC:
+        return 1;
+    case CTC_JOINT_CYLINDRICAL:
+        return 2;
+    case CTC_JOINT_SPHERICAL:
+        return 4;
+    case CTC_JOINT_FIXED:
+        return 0;
+    }
+    return 0;
+}
+
+int ctc_joint_nv(ctc_joint_type t)
+{
+    return t == CTC_JOINT_SPHERICAL ? 3 : ctc_joint_nq(t);
+}
+
+const char *ctc_joint_type_name(ctc_joint_type t)
+{
+    switch (t) {
+    case CTC_JOINT_REVOLUTE:
+        return "revolute";
+    case CTC_JOINT_PRISMATIC:
+        return "prismatic";
+    case CTC_JOINT_CYLINDRICAL:
+        return "cylindrical";
+    case CTC_JOINT_SPHERICAL:
+        return "spherical";
+    case CTC_JOINT_FIXED:
+        return "fixed";
+    }
+    return "unknown";
+}
+
+const char *ctc_form_name(ctc_form f)
+{
+    switch (f) {
+    case CTC_FORM_AUTO:
+        return "auto";
+    case CTC_FORM_PLANAR:
+        return "planar";
+    case CTC_FORM_SPATIAL:
+        return "spatial";
+    }
+    return "unknown";
+}
+
+static int all_finite(const double *x, int n, int *bad)
+{
+    for (int i = 0; i < n; i++) {
+        if (!isfinite(x[i])) {
+            *bad = i;
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static int is_joint_type(int t)
+{
+    return t >= CTC_JOINT_REVOLUTE && t <= CTC_JOINT_FIXED;
+}
+
+static int joint_has_axis(ctc_joint_type t)
+{
+    return t == CTC_JOINT_REVOLUTE || t == CTC_JOINT_PRISMATIC || t == CTC_JOINT_CYLINDRICAL;
+}
+
+/* Checks one body's numbers; writes its principal moments (ascending) into eig. */
+static ctc_status check_body(const ctc_body_spec *b, int k, double eig[3], char *err,
+                             size_t errlen)
+{
+    int bad;
+    if (!isfinite(b->mass)) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "body %d: mass is not finite", k);
+    }
+    if (!(b->mass > 0)) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "body %d: mass must be positive (got %g kg)", k,
+                        b->mass);
+    }
+    if (!all_finite(b->com, 3, &bad)) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "body %d: com[%d] is not finite", k, bad);
+    }
+    if (!all_finite(b->inertia, 9, &bad)) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "body %d: inertia[%d][%d] is not finite", k,
+                        bad / 3, bad % 3);
+    }
+
+    /* symmetric, to rounding */
+    const double *in = b->inertia;
+    double scale = 0;
+    for (int i = 0; i < 9; i++) scale = fmax(scale, fabs(in[i]));
+    for (int i = 0; i < 3; i++) {
+        for (int j = i + 1; j < 3; j++) {
+            if (fabs(in[3 * i + j] - in[3 * j + i]) > 1e-9 * scale) {
+                return ctc_fail(CTC_EINVAL, err, errlen,
+                                "body %d: inertia is not symmetric (inertia[%d][%d] = %g, "
+                                "inertia[%d][%d] = %g)",
+                                k, i, j, in[3 * i + j], j, i, in[3 * j + i]);
+            }
+        }
+    }
+
+    /* principal moments: none negative, not all zero, triangle inequality */
+    ctc_sym3_eigenvalues(in, eig);
+    double tol = INERTIA_ZERO_REL * eig[2];
+    if (!(eig[2] > 0)) {
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "body %d: inertia is zero; a body needs a positive moment of inertia "
+                        "(give a radius, length or explicit inertia)",
+                        k);
+    }
+    if (eig[0] < -tol) {
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "body %d: inertia is not positive definite (principal moment %g kg m^2)",
+                        k, eig[0]);
+    }
+    if (eig[0] + eig[1] < eig[2] * (1.0 - 1e-9)) {
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "body %d: inertia violates the triangle inequality (principal moments "
+                        "%g + %g < %g kg m^2)",
+                        k, eig[0], eig[1], eig[2]);
+    }
+    return CTC_OK;
+}
+
+static ctc_status check_joint(const ctc_joint_spec *j, int k, char *err, size_t errlen)
+{
+    int bad;
+    if (!is_joint_type((int)j->type)) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "joint %d: unknown joint type %d", k,
+                        (int)j->type);
+    }
+    if (!all_finite(j->location, 3, &bad)) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "joint %d: location[%d] is not finite", k, bad);
+    }
+    if (joint_has_axis(j->type)) {
+        if (!all_finite(j->axis, 3, &bad)) {
+            return ctc_fail(CTC_EINVAL, err, errlen, "joint %d: axis[%d] is not finite", k, bad);
+        }
+        if (!(ctc_v3_norm(j->axis) > 1e-12)) {
+            return ctc_fail(CTC_EINVAL, err, errlen, "joint %d: axis has zero length", k);
+        }
+    }
+    return CTC_OK;
+}
+
+/* Chooses the plane normal n a planar chain would move in (unit, largest component positive):
+ * the first revolute axis; else the normal of two prismatic axes, or of one and gravity. */
+static void plane_normal(const ctc_model *m, double n[3])
+{
+    const double *u = NULL;
+    ctc_v3_set(n, 0, 0, 1);
+    for (int k = 0; k < m->nbodies; k++) {
+        const ctc_joint_spec *j = &m->joints[k];
+        if (j->type == CTC_JOINT_REVOLUTE) {
+            ctc_v3_copy(n, j->axis);
+            u = NULL;
+            break;
+        }
+        if (j->type != CTC_JOINT_PRISMATIC) continue;
+        if (u == NULL) {
+            u = j->axis;
+            continue;
+        }
+        double c[3];
+        ctc_v3_cross(c, u, j->axis);
+        if (ctc_v3_norm(c) > AXIS_ALIGN_TOL) {
+            ctc_v3_scale(n, c, 1.0 / ctc_v3_norm(c));
+            u = NULL;
+            break;
+        }
+    }
+    if (u != NULL) { /* only parallel prismatic axes: use gravity, else any normal */
+        double c[3], n2[3];
+        ctc_v3_cross(c, u, m->gravity);
+        if (ctc_v3_norm(c) > AXIS_ALIGN_TOL * ctc_v3_norm(m->gravity)) {
+            ctc_v3_scale(n, c, 1.0 / ctc_v3_norm(c));
+        } else {
+            ctc_v3_normals(u, n, n2);
+        }
+    }
+    int big = 0;
+    for (int i = 1; i < 3; i++) {
+        if (fabs(n[i]) > fabs(n[big])) big = i;
+    }
+    if (n[big] < 0) ctc_v3_scale(n, n, -1.0);
+}
+
+/* Returns 1 if the chain moves in the plane normal to n; otherwise 0 and why in why. */
+static int chain_is_planar(const ctc_model *m, const double n[3], char *why, size_t whylen)
+{
+    for (int k = 0; k < m->nbodies; k++) {
+        const ctc_joint_spec *j = &m->joints[k];
+        double c[3];
+        switch (j->type) {
+        case CTC_JOINT_REVOLUTE:
+            ctc_v3_cross(c, j->axis, n);
+            if (ctc_v3_norm(c) > AXIS_ALIGN_TOL) {
+                ctc_fail(CTC_EINVAL, why, whylen,
+                         "joint %d: revolute axis is not normal to the plane of motion", k);
+                return 0;
+            }
+            break;
+        case CTC_JOINT_PRISMATIC:
+            if (fabs(ctc_v3_dot(j->axis, n)) > AXIS_ALIGN_TOL) {
+                ctc_fail(CTC_EINVAL, why, whylen,
+                         "joint %d: prismatic axis is not in the plane of motion", k);
+                return 0;
+            }
+            break;
+        case CTC_JOINT_CYLINDRICAL:
+        case CTC_JOINT_SPHERICAL:
+            ctc_fail(CTC_EINVAL, why, whylen, "joint %d: a %s joint moves out of any plane", k,
+                     ctc_joint_type_name(j->type));
+            return 0;
+        case CTC_JOINT_FIXED:
+            break;
+        }
+    }
+    if (fabs(ctc_v3_dot(m->gravity, n)) > AXIS_ALIGN_TOL * ctc_v3_norm(m->gravity)) {
+        ctc_fail(CTC_EINVAL, why, whylen, "gravity is not in the plane of motion");
+        return 0;
+    }
+    return 1;
+}
+
+/* Fills the plane's basis and each body's planar data (form PLANAR). */
+static ctc_status setup_planar(ctc_model *m, const double n[3], char *err, size_t errlen)
+{
+    double *e1 = m->plane_e1, *e2 = m->plane_e2;
+    ctc_v3_copy(m->plane_n, n);
+
+    /* e1: the world axis after n's largest component, made normal to n; e2 = n x e1 */
+    int big = 0;
+    for (int i = 1; i < 3; i++) {
+        if (fabs(n[i]) > fabs(n[big])) big = i;
+    }
+    double a[3] = {0, 0, 0};
+    a[(big + 1) % 3] = 1.0;
+    ctc_v3_addscl(e1, a, n, -ctc_v3_dot(a, n));
+    ctc_v3_scale(e1, e1, 1.0 / ctc_v3_norm(e1));
+    ctc_v3_cross(e2, n, e1);
+    m->plane_gravity[0] = ctc_v3_dot(m->gravity, e1);
+    m->plane_gravity[1] = ctc_v3_dot(m->gravity, e2);
+
+    m->planar = calloc((size_t)m->nbodies, sizeof *m->planar);
+    if (m->planar == NULL) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    for (int k = 0; k < m->nbodies; k++) {
+        const ctc_body_spec *b = &m->bodies[k];
+        const ctc_joint_spec *j = &m->joints[k];
+        ctc_planar_body *p = &m->planar[k];
+        double in[3];
+        ctc_m3_mulv(in, b->inertia, n);
+        p->mass = b->mass;
+        p->inertia = ctc_v3_dot(n, in);
+        if (!(p->inertia > INERTIA_ZERO_REL * fabs(b->inertia[0] + b->inertia[4] + b->inertia[8]))) {
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "body %d: no moment of inertia about the plane normal", k);
+        }
+        p->com[0] = ctc_v3_dot(b->com, e1);
+        p->com[1] = ctc_v3_dot(b->com, e2);
+        p->loc[0] = ctc_v3_dot(j->location, e1);
+        p->loc[1] = ctc_v3_dot(j->location, e2);
+        p->axis[0] = ctc_v3_dot(j->axis, e1);
+        p->axis[1] = ctc_v3_dot(j->axis, e2);
+        p->sign = ctc_v3_dot(j->axis, n) < 0 ? -1.0 : 1.0;
+    }
+    return CTC_OK;
+}
+
+/* Builds the subtree of bodies [first, last] into tmp (post-order); returns its assembly index
+ * in tmp's numbering (n + position in tmp) or the body index for a leaf. */
+static int build_subtree(ctc_model *m, ctc_tree_node *tmp, int *count, int first, int last)
+{
+    if (first == last) return first;
+    int mid = first + (last - first + 1) / 2; /* right part starts here */
+    int left = build_subtree(m, tmp, count, first, mid - 1);
+    int right = build_subtree(m, tmp, count, mid, last);
+    int hl = left < m->nbodies ? 0 : tmp[left - m->nbodies].height;
+    int hr = right < m->nbodies ? 0 : tmp[right - m->nbodies].height;
+    ctc_tree_node *node = &tmp[*count];
+    node->left = left;
+    node->right = right;
+    node->joint = mid;
+    node->first = first;
+    node->last = last;
+    node->height = 1 + (hl > hr ? hl : hr);
+    return m->nbodies + (*count)++;
+}
+
+/* Lays out the tree with nodes sorted by height (stable), children before parents. */
+static ctc_status build_tree(ctc_model *m, char *err, size_t errlen)
+{
+    int n = m->nbodies;
+    m->ntree = n - 1;
+    m->height = 0;
+    m->root = 0;
+    while ((1 << m->height) < n) m->height++;
+    m->height_start = calloc((size_t)m->height + 2, sizeof *m->height_start);
+    m->tree = calloc((size_t)(n > 1 ? n - 1 : 1), sizeof *m->tree);
+    ctc_tree_node *tmp = calloc((size_t)(n > 1 ? n - 1 : 1), sizeof *tmp);
+    int *where = calloc((size_t)(n > 1 ? n - 1 : 1), sizeof *where);
+    if (m->height_start == NULL || m->tree == NULL || tmp == NULL || where == NULL) {
+        free(tmp);
+        free(where);
+        return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    }
+    int count = 0;
+    int root = build_subtree(m, tmp, &count, 0, n - 1);
+
+    /* counting sort by height; height_start[h] ends height h */
+    for (int i = 0; i < count; i++) m->height_start[tmp[i].height]++;
+    for (int h = 1; h <= m->height + 1; h++) m->height_start[h] += m->height_start[h - 1];
+    int *fill = calloc((size_t)m->height + 2, sizeof *fill);
+    if (fill == NULL) {
+        free(tmp);
+        free(where);
+        return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    }
+    for (int i = 0; i < count; i++) {
+        int h = tmp[i].height;
+        where[i] = m->height_start[h - 1] + fill[h]++;
+    }
+    for (int i = 0; i < count; i++) {
+        ctc_tree_node node = tmp[i];
+        if (node.left >= n) node.left = n + where[node.left - n];
+        if (node.right >= n) node.right = n + where[node.right - n];
+        m->tree[where[i]] = node;
+    }
+    m->root = root < n ? root : n + where[root - n];
+    free(fill);
+    free(tmp);
+    free(where);
+    return CTC_OK;
+}
+
+ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *err, size_t errlen)
+{
+    ctc_status st;
+    int bad;
+    *out = NULL;
+    if (spec == NULL) return ctc_fail(CTC_EINVAL, err, errlen, "chain: no spec given");
+    int n = spec->nbodies;
+    if (n < 1 || n > CTC_MAX_BODIES) {
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "chain: number of bodies must be between 1 and %d (got %d)",
+                        CTC_MAX_BODIES, n);
+    }
+    if (spec->bodies == NULL || spec->joints == NULL) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "chain: bodies and joints must be given");
+    }
+    if (!all_finite(spec->gravity, 3, &bad)) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "gravity[%d] is not finite", bad);
+    }
+    if (spec->form != CTC_FORM_AUTO && spec->form != CTC_FORM_PLANAR &&
+        spec->form != CTC_FORM_SPATIAL) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "chain: unknown form %d", (int)spec->form);
+    }
+
+    ctc_model *m = calloc(1, sizeof *m);
+    if (m == NULL) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    m->nbodies = n;
+    ctc_v3_copy(m->gravity, spec->gravity);
+    m->bodies = malloc((size_t)n * sizeof *m->bodies);
+    m->joints = malloc((size_t)n * sizeof *m->joints);
+    m->jnt_qadr = malloc((size_t)n * sizeof(int));
+    m->jnt_vadr = malloc((size_t)n * sizeof(int));
+    m->jnt_nq = malloc((size_t)n * sizeof(int));
+    m->jnt_nv = malloc((size_t)n * sizeof(int));
+    m->body_inertia_inv = calloc((size_t)n * 9, sizeof(double));
+    m->jnt_perp = calloc((size_t)n * 6, sizeof(double));
+    double *moments = malloc((size_t)n * 3 * sizeof(double));
+    if (m->bodies == NULL || m->joints == NULL || m->jnt_qadr == NULL || m->jnt_vadr == NULL ||
+        m->jnt_nq == NULL || m->jnt_nv == NULL || m->body_inertia_inv == NULL ||
+        m->jnt_perp == NULL || moments == NULL) {
+        st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+        goto fail;
+    }
+    memcpy(m->bodies, spec->bodies, (size_t)n * sizeof *m->bodies);
+    memcpy(m->joints, spec->joints, (size_t)n * sizeof *m->joints);
+
+    /* validate each body and joint; count coordinates; normalise axes */
+    for (int k = 0; k < n; k++) {
+        if ((st = check_joint(&m->joints[k], k, err, errlen)) != CTC_OK) goto fail;
+        if ((st = check_body(&m->bodies[k], k, &moments[3 * k], err, errlen)) != CTC_OK) {
+            goto fail;
+        }
+        ctc_joint_spec *j = &m->joints[k];
+        if (joint_has_axis(j->type)) {
+            ctc_v3_scale(j->axis, j->axis, 1.0 / ctc_v3_norm(j->axis));
+            ctc_v3_normals(j->axis, &m->jnt_perp[6 * k], &m->jnt_perp[6 * k + 3]);
+        } else {
+            ctc_v3_set(j->axis, 0, 0, 0);
+        }
+        m->jnt_qadr[k] = m->nq;
+        m->jnt_vadr[k] = m->nv;
+        m->jnt_nq[k] = ctc_joint_nq(j->type);
+        m->jnt_nv[k] = ctc_joint_nv(j->type);
+        m->nq += m->jnt_nq[k];
+        m->nv += m->jnt_nv[k];
+    }
+
+    /* choose the form: model only what the scene needs */
+    double normal[3];
+    char why[160] = "";
+    plane_normal(m, normal);
+    int planar = chain_is_planar(m, normal, why, sizeof why);
+    if (spec->form == CTC_FORM_PLANAR && !planar) {
+        st = ctc_fail(CTC_EINVAL, err, errlen, "chain: planar form requested but %s", why);
+        goto fail;
+    }
+    m->form = (planar && spec->form != CTC_FORM_SPATIAL) ? CTC_FORM_PLANAR : CTC_FORM_SPATIAL;
+    m->dim = m->form == CTC_FORM_PLANAR ? 3 : 6;
+
+    if (m->form == CTC_FORM_PLANAR) {
+        if ((st = setup_planar(m, normal, err, errlen)) != CTC_OK) goto fail;
+    } else {
+        /* spatial: every body's 6x6 inertia must be invertible */
+        for (int k = 0; k < n; k++) {
+            const double *e = &moments[3 * k];
+            if (e[0] <= INERTIA_ZERO_REL * e[2]) {
+                st = ctc_fail(CTC_EINVAL, err, errlen,
+                              "body %d: 6x6 inertia is singular (a principal moment is %g kg m^2); "
+                              "a body without inertia about an axis, such as a slender rod, is "
+                              "allowed only in a planar scene",
+                              k, e[0]);
+                goto fail;
+            }
+            /* inverse by cofactors; well conditioned enough after the check above */
+            const double *a = m->bodies[k].inertia;
+            double *inv = &m->body_inertia_inv[9 * k];
+            double c00 = a[4] * a[8] - a[5] * a[7], c01 = a[5] * a[6] - a[3] * a[8],
+                   c02 = a[3] * a[7] - a[4] * a[6];
+            double det = a[0] * c00 + a[1] * c01 + a[2] * c02;
+            inv[0] = c00 / det;
+            inv[1] = (a[2] * a[7] - a[1] * a[8]) / det;
+            inv[2] = (a[1] * a[5] - a[2] * a[4]) / det;
+            inv[3] = c01 / det;
+            inv[4] = (a[0] * a[8] - a[2] * a[6]) / det;
+            inv[5] = (a[2] * a[3] - a[0] * a[5]) / det;
+            inv[6] = c02 / det;
+            inv[7] = (a[1] * a[6] - a[0] * a[7]) / det;
+            inv[8] = (a[0] * a[4] - a[1] * a[3]) / det;
+        }
+    }
+
+    if ((st = build_tree(m, err, errlen)) != CTC_OK) goto fail;
+    free(moments);
+    *out = m;
+    return CTC_OK;
+
+fail:
+    free(moments);
+    ctc_model_free(m);
+    return st;
+}
+
+void ctc_model_free(ctc_model *m)
+{
+    if (m == NULL) return;
+    free(m->bodies);
+    free(m->joints);
+    free(m->jnt_qadr);
+    free(m->jnt_vadr);
+    free(m->jnt_nq);
+    free(m->jnt_nv);
+    free(m->body_inertia_inv);
+    free(m->jnt_perp);
+    free(m->planar);
+    free(m->tree);
+    free(m->height_start);
+    free(m);
+}
+
+void ctc_model_q_zero(const ctc_model *m, double *q)
+{
+    for (int i = 0; i < m->nq; i++) q[i] = 0;
+    for (int k = 0; k < m->nbodies; k++) {
+        if (m->joints[k].type == CTC_JOINT_SPHERICAL) q[m->jnt_qadr[k]] = 1.0;
+    }
+}
+
+void ctc_model_q_rate(const ctc_model *m, const double *q, const double *v, double *qdot)
+{
+    for (int k = 0; k < m->nbodies; k++) {
+        const double *qk = q + m->jnt_qadr[k];
+        const double *vk = v + m->jnt_vadr[k];
+        double *dk = qdot + m->jnt_qadr[k];
+        if (m->joints[k].type != CTC_JOINT_SPHERICAL) {
+            for (int i = 0; i < m->jnt_nv[k]; i++) dk[i] = vk[i];
+            continue;
+        }
+        /* quat' = 0.5 quat (x) (0, w), w in the child frame */
+        double w = qk[0], x = qk[1], y = qk[2], z = qk[3];
+        dk[0] = 0.5 * (-x * vk[0] - y * vk[1] - z * vk[2]);
+        dk[1] = 0.5 * (w * vk[0] + y * vk[2] - z * vk[1]);
+        dk[2] = 0.5 * (w * vk[1] + z * vk[0] - x * vk[2]);
+        dk[3] = 0.5 * (w * vk[2] + x * vk[1] - y * vk[0]);
+    }
+}
+
+void ctc_model_q_normalize(const ctc_model *m, double *q)
+{
+    for (int k = 0; k < m->nbodies; k++) {
+        if (m->joints[k].type != CTC_JOINT_SPHERICAL) continue;
+        double *qk = q + m->jnt_qadr[k];
+        double nrm = sqrt(qk[0] * qk[0] + qk[1] * qk[1] + qk[2] * qk[2] + qk[3] * qk[3]);
+        if (nrm > 0) {
+            for (int i = 0; i < 4; i++) qk[i] /= nrm;
+        } else {
+            qk[0] = 1, qk[1] = qk[2] = qk[3] = 0;
+        }
+    }
+}

@@ -1,0 +1,160 @@
+/*
+ * model.h - rigid bodies, joints and a serial chain on a fixed base: the constant model.
+ *
+ * A model is built once from a ctc_chain_spec, validated, and is read-only afterwards, so any
+ * number of threads may share it. Everything that changes with the state lives in ctc_data
+ * (data.h).
+ *
+ * Conventions (SI units, radians; see DESIGN.md section 2):
+ *  - Bodies are numbered 0..n-1 from the base; joint k connects body k-1 (the ground for k = 0) to
+ *    body k. Body k's handle 1 is its inboard joint k, handle 2 its outboard joint k+1.
+ *  - Each body has a frame. Its origin is the centre of joint k and, when all joint coordinates
+ *    are zero, its axes are parallel to its parent's, hence to the world's. A joint's axis and
+ *    location are given in the parent's frame (the world's for joint 0); a body's centre of mass
+ *    and inertia in its own frame.
+ *  - Joint coordinates are relative (child to parent), positive by the right-hand rule about the
+ *    joint axis:
+ *      revolute     nq = nv = 1: angle q about the axis.
+ *      prismatic    nq = nv = 1: displacement q along the axis.
+ *      cylindrical  nq = nv = 2: (angle about, displacement along) the axis.
+ *      spherical    nq = 4, nv = 3: unit quaternion (w, x, y, z) of the child's orientation
+ *                   relative to the parent; velocity = the child's angular velocity relative to
+ *                   the parent, in the child's frame. The axis is ignored.
+ *      fixed        nq = nv = 0.
+ *    The generalised force of a coordinate is its conjugate: the torque about the axis, the force
+ *    along it, or for a spherical joint the torque vector in the child's frame, each applied by
+ *    the parent on the child.
+ *  - Planar form: when every joint moves in one plane (revolute axes normal to it, prismatic axes
+ *    in it; fixed joints allowed) and gravity lies in that plane, the model is computed with
+ *    planar 3-vectors (omega_z, v_x, v_y) in the plane's coordinates. The plane's normal n is the
+ *    first revolute axis (sign chosen so its largest component is positive), so a chain with +z
+ *    axes is computed in the x-y plane itself.
+ */
+#ifndef CTC_MODEL_H
+#define CTC_MODEL_H
+
+#include <stddef.h>
+
+#include "status.h"
+
+#define CTC_MAX_BODIES 1000000
+#define CTC_JOINT_MAX_NV 3 /* spherical */
+#define CTC_JOINT_MAX_NQ 4 /* spherical (quaternion) */
+
+typedef enum ctc_joint_type {
+    CTC_JOINT_REVOLUTE,
+    CTC_JOINT_PRISMATIC,
+    CTC_JOINT_CYLINDRICAL,
+    CTC_JOINT_SPHERICAL,
+    CTC_JOINT_FIXED,
+} ctc_joint_type;
+
+/* Which algebra the dynamics use. */
+typedef enum ctc_form {
+    CTC_FORM_AUTO = 0, /* spec only: planar when the chain is planar, else spatial */
+    CTC_FORM_PLANAR,   /* 3-vectors and 3x3 matrices in the plane of motion */
+    CTC_FORM_SPATIAL,  /* 6-vectors and 6x6 matrices */
+} ctc_form;
+
+typedef struct ctc_body_spec {
+    double mass;       /* kg, > 0 */
+    double com[3];     /* m, centre of mass in the body frame */
+    double inertia[9]; /* kg m^2, about the centre of mass, body-frame axes, row-major, symmetric */
+} ctc_body_spec;
+
+typedef struct ctc_joint_spec {
+    ctc_joint_type type;
+    double axis[3];     /* parent frame; any length > 0 (normalised by the builder); unused for
+                           spherical and fixed joints */
+    double location[3]; /* m, the joint's centre in the parent frame (world for joint 0) */
+} ctc_joint_spec;
+
+typedef struct ctc_chain_spec {
+    int nbodies;                  /* n >= 1 */
+    const ctc_body_spec *bodies;  /* (n) */
+    const ctc_joint_spec *joints; /* (n) joint k joins body k-1 (ground for k = 0) to body k */
+    double gravity[3];            /* m/s^2, world frame (e.g. 0, -9.81, 0) */
+    ctc_form form;                /* AUTO (recommended), or force PLANAR / SPATIAL */
+} ctc_chain_spec;
+
+/* One internal node of the balanced binary assembly tree. An "assembly index" a < n names body a
+ * (a leaf); a >= n names internal node a - n. */
+typedef struct ctc_tree_node {
+    int left;   /* assembly index of the left (inboard) part */
+    int right;  /* assembly index of the right (outboard) part */
+    int joint;  /* the joint that joins them: the first body of the right part */
+    int first;  /* bodies first..last make up this node */
+    int last;
+    int height; /* 1 + the larger of the children's heights; leaves have height 0 */
+} ctc_tree_node;
+
+/* Planar data of one body and its inboard joint, in the plane's coordinates (form PLANAR only). */
+typedef struct ctc_planar_body {
+    double mass;       /* kg */
+    double inertia;    /* kg m^2, about the centre of mass and the plane normal */
+    double com[2];     /* m, centre of mass in the body frame */
+    double loc[2];     /* m, inboard joint centre in the parent frame */
+    double axis[2];    /* prismatic: unit axis in the parent frame */
+    double sign;       /* revolute: +1 if the axis is along +n, -1 if along -n */
+} ctc_planar_body;
+
+typedef struct ctc_model {
+    int nbodies; /* n */
+    int nq;      /* number of position coordinates */
+    int nv;      /* number of velocity coordinates = number of driving forces */
+    ctc_form form; /* PLANAR or SPATIAL, as chosen by the builder */
+    int dim;       /* 3 (planar) or 6 (spatial): size of a motion or force vector */
+    double gravity[3]; /* m/s^2, world */
+
+    /* the plane (form PLANAR): world vector = x e1 + y e2 + z n */
+    double plane_e1[3], plane_e2[3], plane_n[3];
+    double plane_gravity[2]; /* gravity in plane coordinates */
+
+    ctc_body_spec *bodies;   /* (n) as given */
+    ctc_joint_spec *joints;  /* (n) as given, axes normalised */
+    int *jnt_qadr;           /* (n) index of joint k's first position coordinate in q */
+    int *jnt_vadr;           /* (n) index of joint k's first velocity coordinate in v */
+    int *jnt_nq;             /* (n) */
+    int *jnt_nv;             /* (n) */
+
+    double *body_inertia_inv; /* (n x 9) inverse inertia about the CoM, body frame (spatial) */
+    double *jnt_perp;         /* (n x 6) two unit vectors normal to joint k's axis, parent frame */
+    ctc_planar_body *planar;  /* (n) form PLANAR, else NULL */
+
+    int ntree;            /* n - 1 internal nodes */
+    ctc_tree_node *tree;  /* (ntree) ordered by height: children before parents, root last */
+    int height;           /* root height = ceil(log2 n) */
+    int *height_start;    /* (height + 2) nodes of height h are tree[height_start[h-1] ..
+                             height_start[h] - 1] for h >= 1; height_start[0] = 0 */
+    int root;             /* assembly index of the whole chain */
+} ctc_model;
+
+/* Builds and validates a model from spec. On success returns CTC_OK and *out owns a new model
+ * (free with ctc_model_free); otherwise *out is NULL and err (errlen bytes, may be NULL) says
+ * which item is wrong and why, e.g. "body 2: mass must be positive (got -1)". The spec is copied;
+ * the caller keeps ownership of it. */
+ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *err, size_t errlen);
+
+/* Frees a model; NULL is allowed. No ctc_data made from it may be used afterwards. */
+void ctc_model_free(ctc_model *m);
+
+/* Number of position / velocity coordinates of a joint type. */
+int ctc_joint_nq(ctc_joint_type t);
+int ctc_joint_nv(ctc_joint_type t);
+
+/* Name of a joint type ("revolute", ...) and of a form ("planar", "spatial", "auto"). */
+const char *ctc_joint_type_name(ctc_joint_type t);
+const char *ctc_form_name(ctc_form f);
+
+/* Writes the reference configuration (all angles and displacements 0, identity quaternions)
+ * into q (nq). */
+void ctc_model_q_zero(const ctc_model *m, double *q);
+
+/* Position-coordinate rate qdot (nq) from q (nq) and velocities v (nv): equal to v except for
+ * spherical joints, whose quaternion rate is 0.5 * quat (x) (0, v). */
+void ctc_model_q_rate(const ctc_model *m, const double *q, const double *v, double *qdot);
+
+/* Renormalises every spherical joint's quaternion in q (nq) in place (after integration). */
+void ctc_model_q_normalize(const ctc_model *m, double *q);
+
+#endif

@@ -1,0 +1,188 @@
+/*
+ * chains.c - deterministic chains and states for tests and benchmarks (chains.h).
+ */
+#include "chains.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+#include "shapes.h"
+#include "spatial.h"
+
+static uint64_t splitmix64(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+double test_uniform(uint64_t *rng, double lo, double hi)
+{
+    return lo + (hi - lo) * (double)(splitmix64(rng) >> 11) * 0x1.0p-53;
+}
+
+static void random_unit(uint64_t *rng, double u[3])
+{
+    double n;
+    do {
+        ctc_v3_set(u, test_uniform(rng, -1, 1), test_uniform(rng, -1, 1),
+                   test_uniform(rng, -1, 1));
+        n = ctc_v3_norm(u);
+    } while (n < 0.1 || n > 1.0);
+    ctc_v3_scale(u, u, 1.0 / n);
+}
+
+void test_random_inertia(uint64_t *rng, double lo, double hi, double inertia[9])
+{
+    double e[3], rot[9], axis[3], diag[9] = {0};
+    do {
+        for (int i = 0; i < 3; i++) e[i] = test_uniform(rng, lo, hi);
+    } while (e[0] + e[1] < e[2] || e[0] + e[2] < e[1] || e[1] + e[2] < e[0]);
+    diag[0] = e[0], diag[4] = e[1], diag[8] = e[2];
+    random_unit(rng, axis);
+    ctc_m3_axis_angle(rot, axis, test_uniform(rng, -CTC_PI, CTC_PI));
+    ctc_m3_rotate_sym(inertia, rot, diag);
+}
+
+static test_chain *chain_alloc(int n)
+{
+    test_chain *c = calloc(1, sizeof *c);
+    if (c == NULL) abort();
+    c->bodies = calloc((size_t)n, sizeof *c->bodies);
+    c->joints = calloc((size_t)n, sizeof *c->joints);
+    if (c->bodies == NULL || c->joints == NULL) abort();
+    c->spec.nbodies = n;
+    c->spec.bodies = c->bodies;
+    c->spec.joints = c->joints;
+    return c;
+}
+
+void test_chain_free(test_chain *c)
+{
+    if (c == NULL) return;
+    free(c->bodies);
+    free(c->joints);
+    free(c);
+}
+
+test_chain *test_chain_random_spatial(int n, uint64_t seed, unsigned type_mask)
+{
+    uint64_t rng = seed;
+    test_chain *c = chain_alloc(n);
+    ctc_v3_set(c->spec.gravity, 0, 0, -9.81);
+    c->spec.form = CTC_FORM_SPATIAL;
+    for (int k = 0; k < n; k++) {
+        ctc_joint_spec *j = &c->joints[k];
+        int t;
+        do {
+            t = (int)(splitmix64(&rng) % 5);
+        } while (!(type_mask & (1u << t)));
+        j->type = (ctc_joint_type)t;
+        random_unit(&rng, j->axis);
+        for (int i = 0; i < 3; i++) j->location[i] = k ? test_uniform(&rng, -0.5, 0.5) : 0.0;
+        ctc_body_spec *b = &c->bodies[k];
+        b->mass = exp(test_uniform(&rng, log(0.1), log(10.0)));
+        for (int i = 0; i < 3; i++) b->com[i] = test_uniform(&rng, -0.3, 0.3);
+        test_random_inertia(&rng, 0.01, 0.2, b->inertia);
+    }
+    return c;
+}
+
+test_chain *test_chain_random_planar(int n, uint64_t seed, int prismatic, int rods)
+{
+    uint64_t rng = seed;
+    test_chain *c = chain_alloc(n);
+    ctc_v3_set(c->spec.gravity, 0, -9.81, 0);
+    c->spec.form = CTC_FORM_AUTO;
+    for (int k = 0; k < n; k++) {
+        ctc_joint_spec *j = &c->joints[k];
+        ctc_body_spec *b = &c->bodies[k];
+        double mass = exp(test_uniform(&rng, log(0.1), log(10.0)));
+        double ang = test_uniform(&rng, -CTC_PI, CTC_PI), len = test_uniform(&rng, 0.2, 1.5);
+        double end[3] = {len * sin(ang), -len * cos(ang), 0};
+        if (prismatic && test_uniform(&rng, 0, 1) < 0.3) {
+            double a = test_uniform(&rng, -CTC_PI, CTC_PI);
+            j->type = CTC_JOINT_PRISMATIC;
+            ctc_v3_set(j->axis, cos(a), sin(a), 0);
+        } else {
+            j->type = CTC_JOINT_REVOLUTE;
+            ctc_v3_set(j->axis, 0, 0, test_uniform(&rng, 0, 1) < 0.5 ? -1.0 : 1.0);
+        }
+        if (rods) {
+            ctc_shape_rod(mass, end, b, NULL, 0);
+        } else {
+            b->mass = mass;
+            ctc_v3_set(b->com, end[0] / 2, end[1] / 2, test_uniform(&rng, -0.1, 0.1));
+            test_random_inertia(&rng, 0.01, 0.2, b->inertia);
+        }
+        /* the next joint sits at this body's far end */
+        if (k + 1 < n) ctc_v3_copy(c->joints[k + 1].location, end);
+    }
+    ctc_v3_set(c->joints[0].location, 0, 0, 0);
+    return c;
+}
+
+test_chain *test_chain_rod_pendulum(int n, double length, double mass)
+{
+    test_chain *c = chain_alloc(n);
+    ctc_v3_set(c->spec.gravity, 0, -9.81, 0);
+    c->spec.form = CTC_FORM_AUTO;
+    double end[3] = {0, -length, 0};
+    for (int k = 0; k < n; k++) {
+        c->joints[k].type = CTC_JOINT_REVOLUTE;
+        ctc_v3_set(c->joints[k].axis, 0, 0, 1);
+        ctc_v3_set(c->joints[k].location, 0, k ? -length : 0, 0);
+        ctc_shape_rod(mass, end, &c->bodies[k], NULL, 0);
+    }
+    return c;
+}
+
+test_chain *test_chain_coil(int n)
+{
+    test_chain *c = chain_alloc(n);
+    ctc_v3_set(c->spec.gravity, 0, 0, -9.81);
+    c->spec.form = CTC_FORM_AUTO;
+    double len = 1.0 / n, twist = 5 * CTC_PI / n;
+    double link[3] = {len, 0, 0}, centre[3] = {len / 2, 0, 0};
+    for (int k = 0; k < n; k++) {
+        ctc_joint_spec *j = &c->joints[k];
+        j->type = CTC_JOINT_REVOLUTE;
+        /* axis twisted by k * twist about the link direction x, in the body frames */
+        ctc_v3_set(j->axis, 0, cos(k * twist), sin(k * twist));
+        ctc_v3_set(j->location, k ? len : 0, 0, 0);
+        ctc_shape_cylinder(1.0 / n, len / 20, len, link, centre, &c->bodies[k], NULL, 0);
+    }
+    return c;
+}
+
+void test_random_state(const ctc_model *m, uint64_t *rng, double vmax, double *q, double *v)
+{
+    for (int k = 0; k < m->nbodies; k++) {
+        double *qk = q + m->jnt_qadr[k];
+        switch (m->joints[k].type) {
+        case CTC_JOINT_REVOLUTE:
+            qk[0] = test_uniform(rng, -CTC_PI, CTC_PI);
+            break;
+        case CTC_JOINT_PRISMATIC:
+            qk[0] = test_uniform(rng, -0.5, 0.5);
+            break;
+        case CTC_JOINT_CYLINDRICAL:
+            qk[0] = test_uniform(rng, -CTC_PI, CTC_PI);
+            qk[1] = test_uniform(rng, -0.5, 0.5);
+            break;
+        case CTC_JOINT_SPHERICAL: {
+            double n2 = 0;
+            for (int i = 0; i < 4; i++) {
+                qk[i] = test_uniform(rng, -1, 1);
+                n2 += qk[i] * qk[i];
+            }
+            for (int i = 0; i < 4; i++) qk[i] /= sqrt(n2);
+            break;
+        }
+        case CTC_JOINT_FIXED:
+            break;
+        }
+    }
+    for (int i = 0; i < m->nv; i++) v[i] = test_uniform(rng, -vmax, vmax);
+}

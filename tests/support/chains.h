@@ -1,0 +1,55 @@
+/*
+ * chains.h - test and benchmark chains: random planar and spatial chains, Featherstone's coil,
+ * rod pendulums, and random states. Deterministic for a given seed (splitmix64).
+ *
+ * A test_chain owns its body and joint arrays; spec points into them. Free with
+ * test_chain_free (NULL allowed).
+ */
+#ifndef CTC_TEST_CHAINS_H
+#define CTC_TEST_CHAINS_H
+
+#include <stdint.h>
+
+#include "model.h"
+
+typedef struct test_chain {
+    ctc_chain_spec spec;
+    ctc_body_spec *bodies;
+    ctc_joint_spec *joints;
+} test_chain;
+
+/* joint types a random spatial chain may draw from (bit 1 << ctc_joint_type) */
+#define TEST_ALL_JOINTS 0x1fu
+
+/* uniform random number in [lo, hi) */
+double test_uniform(uint64_t *rng, double lo, double hi);
+
+/* A random full-rank inertia about the CoM: principal moments in [lo, hi] kg m^2 satisfying the
+ * triangle inequality, in random principal axes. */
+void test_random_inertia(uint64_t *rng, double lo, double hi, double inertia[9]);
+
+/* Spatial chain of n bodies: joint types drawn from type_mask, random unit axes, locations up to
+ * 0.5 m away, masses 0.1-10 kg, full-rank inertias, gravity (0, 0, -9.81), form SPATIAL. */
+test_chain *test_chain_random_spatial(int n, uint64_t seed, unsigned type_mask);
+
+/* Planar chain of n bodies in the x-y plane: revolute joints about +z or -z (and prismatic joints
+ * in the plane when prismatic != 0), gravity (0, -9.81, 0), masses 0.1-10 kg. rods != 0 gives
+ * uniform slender rods (singular 3-D inertia); otherwise full-rank inertias. form is AUTO. */
+test_chain *test_chain_random_planar(int n, uint64_t seed, int prismatic, int rods);
+
+/* n-link planar pendulum of uniform rods of the given length and mass hanging along -y from
+ * revolute joints about +z. */
+test_chain *test_chain_rod_pendulum(int n, double length, double mass);
+
+/* Featherstone's coil: n bodies, each a thin cylinder of length 1/n, mass 1/n and radius
+ * 1/(20 n) along its link; joint k+1 sits at the link's end, its axis twisted by 5 pi / n about
+ * the link from joint k's. Gravity (0, 0, -9.81). */
+test_chain *test_chain_coil(int n);
+
+void test_chain_free(test_chain *c);
+
+/* Random state: q (nq) angles in [-pi, pi], displacements in [-0.5, 0.5] m, random unit
+ * quaternions; v (nv) in [-vmax, vmax]. */
+void test_random_state(const ctc_model *m, uint64_t *rng, double vmax, double *q, double *v);
+
+#endif

@@ -1,0 +1,15 @@
+/*
+ * linalg.h - dense helpers for tests and benchmarks (not the library's hot path).
+ */
+#ifndef CTC_TEST_LINALG_H
+#define CTC_TEST_LINALG_H
+
+/* Estimated 2-norm condition number of the symmetric positive definite M (n x n, row-major):
+ * power iteration for the largest eigenvalue, inverse iteration (Cholesky) for the smallest.
+ * Returns INFINITY if M is not numerically positive definite. */
+double test_cond_spd(const double *m, int n);
+
+/* Largest |a_i - b_i| over max |b_i| (or over 1 when b is all zero). */
+double test_rel_err(const double *a, const double *b, int n);
+
+#endif

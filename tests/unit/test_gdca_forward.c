@@ -1,0 +1,246 @@
+/*
+ * test_gdca_forward.c - GDCA forward dynamics against the articulated-body oracle and closed forms.
+ *
+ * Tolerance: 1e-10 relative to the largest acceleration, widened to 1e-14 cond(M) for chains whose
+ * mass matrix is ill conditioned (any forward-dynamics method loses that much; see the oracle's
+ * own round trip).
+ */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+
+#include "chains.h"
+#include "ctc.h"
+#include "linalg.h"
+#include "oracle.h"
+#include "spatial.h"
+
+static double tolerance(double cond)
+{
+    return fmax(1e-10, 1e-14 * cond);
+}
+
+static ctc_model *build(const ctc_chain_spec *spec)
+{
+    char err[256] = "";
+    ctc_model *m = NULL;
+    ctc_status st = ctc_model_build(spec, &m, err, sizeof err);
+    cr_assert_eq(st, CTC_OK, "build failed: %s", err);
+    return m;
+}
+
+/* qacc of GDCA vs ABA at `trials` random states; returns the largest error / tolerance */
+static double forward_vs_aba(const ctc_model *m, uint64_t seed, int trials)
+{
+    ctc_data *d = ctc_data_new(m);
+    ctc_oracle *o = ctc_oracle_new(m);
+    int nv = m->nv;
+    double *q = calloc((size_t)m->nq, sizeof(double)), *v = calloc((size_t)nv + 1, sizeof(double));
+    double *f = calloc((size_t)nv + 1, sizeof(double)), *a = calloc((size_t)nv + 1, sizeof(double));
+    double *ref = calloc((size_t)nv + 1, sizeof(double));
+    double *mass = calloc((size_t)nv * nv + 1, sizeof(double));
+    double worst = 0;
+    cr_assert(d && o && q && v && f && a && ref && mass);
+    uint64_t rng = seed;
+    for (int t = 0; t < trials; t++) {
+        test_random_state(m, &rng, 2.0, q, v);
+        for (int i = 0; i < nv; i++) f[i] = test_uniform(&rng, -5, 5);
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        ctc_gdca_forward(m, d, f, a);
+        cr_assert_eq(d->singular_joint, -1);
+        ctc_oracle_aba(m, o, q, v, f, ref);
+        ctc_oracle_mass_matrix(m, o, q, mass);
+        double cond = nv ? test_cond_spd(mass, nv) : 1.0;
+        double err = test_rel_err(a, ref, nv);
+        cr_assert(err <= tolerance(cond), "n=%d trial %d: error %.3g > tolerance %.3g (cond %.3g)",
+                  m->nbodies, t, err, tolerance(cond), cond);
+        worst = fmax(worst, err / tolerance(cond));
+    }
+    free(q), free(v), free(f), free(a), free(ref), free(mass);
+    ctc_oracle_free(o);
+    ctc_data_free(d);
+    return worst;
+}
+
+static const int sizes[] = {1, 2, 3, 7, 16, 64, 257};
+#define NSIZES ((int)(sizeof sizes / sizeof sizes[0]))
+
+Test(gdca_forward, matches_aba_on_random_planar_rod_chains)
+{
+    for (int i = 0; i < NSIZES; i++) {
+        test_chain *c = test_chain_random_planar(sizes[i], 100 + (uint64_t)i, 0, 1);
+        ctc_model *m = build(&c->spec);
+        cr_assert_eq(m->form, CTC_FORM_PLANAR);
+        forward_vs_aba(m, 7 + (uint64_t)i, sizes[i] > 100 ? 1 : 3);
+        ctc_model_free(m);
+        test_chain_free(c);
+    }
+}
+
+Test(gdca_forward, matches_aba_on_random_planar_chains_with_prismatic_joints)
+{
+    for (int i = 0; i < NSIZES; i++) {
+        test_chain *c = test_chain_random_planar(sizes[i], 200 + (uint64_t)i, 1, 0);
+        ctc_model *m = build(&c->spec);
+        cr_assert_eq(m->form, CTC_FORM_PLANAR);
+        forward_vs_aba(m, 8 + (uint64_t)i, sizes[i] > 100 ? 1 : 3);
+        ctc_model_free(m);
+        test_chain_free(c);
+    }
+}
+
+Test(gdca_forward, matches_aba_on_random_spatial_chains_of_every_joint_type)
+{
+    for (int i = 0; i < NSIZES; i++) {
+        test_chain *c = test_chain_random_spatial(sizes[i], 300 + (uint64_t)i, TEST_ALL_JOINTS);
+        ctc_model *m = build(&c->spec);
+        cr_assert_eq(m->form, CTC_FORM_SPATIAL);
+        forward_vs_aba(m, 9 + (uint64_t)i, sizes[i] > 100 ? 1 : 3);
+        ctc_model_free(m);
+        test_chain_free(c);
+    }
+}
+
+Test(gdca_forward, matches_aba_on_each_joint_type_alone)
+{
+    for (int t = 0; t < 5; t++) {
+        test_chain *c = test_chain_random_spatial(5, 400 + (uint64_t)t, 1u << t);
+        ctc_model *m = build(&c->spec);
+        forward_vs_aba(m, 10 + (uint64_t)t, 3);
+        ctc_model_free(m);
+        test_chain_free(c);
+    }
+}
+
+Test(gdca_forward, matches_aba_on_featherstones_coil, .timeout = 120)
+{
+    const int n[] = {16, 256, 1024};
+    for (int i = 0; i < 3; i++) {
+        test_chain *c = test_chain_coil(n[i]);
+        ctc_model *m = build(&c->spec);
+        cr_assert_eq(m->form, CTC_FORM_SPATIAL);
+        forward_vs_aba(m, 11, 1);
+        ctc_model_free(m);
+        test_chain_free(c);
+    }
+}
+
+Test(gdca_forward, planar_and_spatial_forms_agree)
+{
+    for (int i = 0; i < 5; i++) {
+        test_chain *c = test_chain_random_planar(sizes[i], 500 + (uint64_t)i, 1, 0);
+        ctc_model *mp = build(&c->spec);
+        c->spec.form = CTC_FORM_SPATIAL;
+        ctc_model *ms = build(&c->spec);
+        cr_assert_eq(mp->form, CTC_FORM_PLANAR);
+        cr_assert_eq(ms->form, CTC_FORM_SPATIAL);
+        ctc_data *dp = ctc_data_new(mp), *ds = ctc_data_new(ms);
+        int nv = mp->nv;
+        double q[16], v[16], f[16], ap[16], as[16];
+        uint64_t rng = 12 + (uint64_t)i;
+        test_random_state(mp, &rng, 2.0, q, v);
+        for (int k = 0; k < nv; k++) f[k] = test_uniform(&rng, -5, 5);
+        ctc_kinematics(mp, dp, q, v);
+        ctc_handles(mp, dp);
+        ctc_gdca_forward(mp, dp, f, ap);
+        ctc_kinematics(ms, ds, q, v);
+        ctc_handles(ms, ds);
+        ctc_gdca_forward(ms, ds, f, as);
+        double err = test_rel_err(ap, as, nv);
+        cr_assert(err < 1e-11, "n=%d: planar vs spatial %.3g", sizes[i], err);
+        ctc_data_free(dp), ctc_data_free(ds);
+        ctc_model_free(mp), ctc_model_free(ms);
+        test_chain_free(c);
+    }
+}
+
+/* single rod pendulum: qdd = (tau - m g (L/2) sin q) / (m L^2 / 3) */
+Test(gdca_forward, single_rod_pendulum_matches_closed_form)
+{
+    const double mass = 2.5, len = 0.8, g = 9.81;
+    test_chain *c = test_chain_rod_pendulum(1, len, mass);
+    ctc_model *m = build(&c->spec);
+    ctc_data *d = ctc_data_new(m);
+    for (int t = 0; t < 20; t++) {
+        double q = -3 + 0.3 * t, v = 1.5 - 0.2 * t, tau = 0.7 * t - 4, a;
+        ctc_kinematics(m, d, &q, &v);
+        ctc_handles(m, d);
+        ctc_gdca_forward(m, d, &tau, &a);
+        double expect = (tau - mass * g * len / 2 * sin(q)) / (mass * len * len / 3);
+        cr_assert_float_eq(a, expect, 1e-12 * fmax(1, fabs(expect)), "q=%g: %.17g vs %.17g", q,
+                           a, expect);
+    }
+    ctc_data_free(d);
+    ctc_model_free(m);
+    test_chain_free(c);
+}
+
+/* the textbook two-link arm with uniform rods, relative angles from the downward vertical */
+static void double_pendulum_terms(const double l[2], const double m[2], const double q[2],
+                                  const double v[2], double mass[4], double bias[2])
+{
+    const double g = 9.81, lc1 = l[0] / 2, lc2 = l[1] / 2;
+    const double i1 = m[0] * l[0] * l[0] / 12, i2 = m[1] * l[1] * l[1] / 12;
+    double c2 = cos(q[1]), s2 = sin(q[1]);
+    mass[0] = i1 + i2 + m[0] * lc1 * lc1 + m[1] * (l[0] * l[0] + lc2 * lc2 + 2 * l[0] * lc2 * c2);
+    mass[1] = mass[2] = i2 + m[1] * (lc2 * lc2 + l[0] * lc2 * c2);
+    mass[3] = i2 + m[1] * lc2 * lc2;
+    double h = m[1] * l[0] * lc2 * s2;
+    bias[0] = -h * (2 * v[0] * v[1] + v[1] * v[1]) +
+              g * (m[0] * lc1 * sin(q[0]) + m[1] * (l[0] * sin(q[0]) + lc2 * sin(q[0] + q[1])));
+    bias[1] = h * v[0] * v[0] + g * m[1] * lc2 * sin(q[0] + q[1]);
+}
+
+Test(gdca_forward, planar_double_pendulum_matches_textbook_equations)
+{
+    const double l[2] = {1.0, 0.6}, mb[2] = {1.0, 2.0};
+    test_chain *c = test_chain_rod_pendulum(2, 1.0, 1.0);
+    double end[3] = {0, -l[1], 0};
+    ctc_shape_rod(mb[1], end, &c->bodies[1], NULL, 0);
+    ctc_model *m = build(&c->spec);
+    ctc_data *d = ctc_data_new(m);
+    uint64_t rng = 13;
+    for (int t = 0; t < 50; t++) {
+        double q[2], v[2], f[2], a[2], mass[4], bias[2];
+        for (int i = 0; i < 2; i++) {
+            q[i] = test_uniform(&rng, -CTC_PI, CTC_PI);
+            v[i] = test_uniform(&rng, -3, 3);
+            f[i] = test_uniform(&rng, -10, 10);
+        }
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        ctc_gdca_forward(m, d, f, a);
+        double_pendulum_terms(l, mb, q, v, mass, bias);
+        double r0 = f[0] - bias[0], r1 = f[1] - bias[1];
+        double det = mass[0] * mass[3] - mass[1] * mass[2];
+        double expect[2] = {(mass[3] * r0 - mass[1] * r1) / det, (mass[0] * r1 - mass[2] * r0) / det};
+        cr_assert(test_rel_err(a, expect, 2) < 1e-12, "trial %d: (%.17g, %.17g) vs (%.17g, %.17g)",
+                  t, a[0], a[1], expect[0], expect[1]);
+    }
+    ctc_data_free(d);
+    ctc_model_free(m);
+    test_chain_free(c);
+}
+
+Test(gdca_forward, joint_loads_balance_gravity_of_a_chain_at_rest)
+{
+    /* hanging straight down at rest with zero torque: the load at joint k carries the weight of
+     * bodies k..n-1, no moment, and nothing accelerates */
+    test_chain *c = test_chain_rod_pendulum(6, 0.5, 1.5);
+    ctc_model *m = build(&c->spec);
+    ctc_data *d = ctc_data_new(m);
+    double q[6] = {0}, v[6] = {0}, f[6] = {0}, a[6];
+    ctc_kinematics(m, d, q, v);
+    ctc_handles(m, d);
+    ctc_gdca_forward(m, d, f, a);
+    for (int k = 0; k < 6; k++) {
+        cr_assert(fabs(a[k]) < 1e-12);
+        const double *load = d->jnt_load + 3 * k;
+        cr_assert(fabs(load[0]) < 1e-12 && fabs(load[1]) < 1e-12);
+        cr_assert_float_eq(load[2], 1.5 * 9.81 * (6 - k), 1e-11);
+    }
+    ctc_data_free(d);
+    ctc_model_free(m);
+    test_chain_free(c);
+}

@@ -1,0 +1,173 @@
+/*
+ * test_rnea.c - the oracle's recursive Newton-Euler inverse dynamics (src/rnea.c) against closed
+ * forms (rod pendulum, slider, Lagrangian double pendulum), against Lagrange's equations worked
+ * from world-frame energies on random spatial chains, and against merged bodies for fixed joints.
+ */
+#include <criterion/criterion.h>
+#include <math.h>
+
+#include "oracle.h"
+#include "oracle_fixture.h"
+
+Test(rnea, matches_closed_form_rod_pendulum)
+{
+    /* tau = m L^2/3 qdd + m g L/2 sin q for a rod hung from a revolute z joint */
+    const double mass = 2.0, len = 1.5;
+    fx_chain c;
+    fx_rod_chain(1, &mass, &len, &c);
+    ctc_model *m;
+    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+    double worst = 0.0;
+
+    for (int i = 0; i <= 24; i++) {
+        double q = -FX_PI + i * (2.0 * FX_PI / 24.0), v = 0.7 * i - 3.0, a = 1.3 - 0.4 * i, tau;
+        double want = mass * len * len / 3.0 * a + mass * FX_G * 0.5 * len * sin(q);
+        ctc_oracle_rnea(m, o, &q, &v, &a, &tau);
+        double err = fabs(tau - want) / fmax(1.0, fabs(want));
+        worst = fmax(worst, err);
+        cr_assert_leq(err, 1e-13, "q = %g: tau = %.17g, closed form %.17g", q, tau, want);
+    }
+    cr_log_info("rnea rod pendulum: worst relative error %.2e (tolerance 1e-13)", worst);
+    ctc_oracle_free(o);
+    ctc_model_free(m);
+}
+
+Test(rnea, matches_closed_form_prismatic_slider)
+{
+    /* tau = m (qdd - g . a): along +y, and along a tilted axis */
+    const double axes[2][3] = {{0.0, 1.0, 0.0}, {1.0, 1.0, 0.0}};
+    for (int t = 0; t < 2; t++) {
+        fx_chain c = {.n = 1, .gravity = {0.0, -FX_G, 0.0}};
+        c.bodies[0] = (ctc_body_spec){
+            .mass = 3.0, .com = {0.1, 0.2, -0.1}, .inertia = {0.2, 0, 0, 0, 0.3, 0, 0, 0, 0.4}};
+        c.joints[0] = (ctc_joint_spec){.type = CTC_JOINT_PRISMATIC,
+                                       .axis = {axes[t][0], axes[t][1], axes[t][2]},
+                                       .location = {0.3, -0.2, 0.1}};
+        ctc_model *m;
+        ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+        double ga = -FX_G * axes[t][1] / sqrt(axes[t][0] * axes[t][0] + axes[t][1] * axes[t][1]);
+
+        for (int i = 0; i <= 10; i++) {
+            double q = 0.1 * i - 0.5, v = 0.3 * i - 1.0, a = 2.0 - 0.5 * i, tau;
+            double want = 3.0 * (a - ga);
+            ctc_oracle_rnea(m, o, &q, &v, &a, &tau);
+            cr_assert_leq(fabs(tau - want), 1e-13 * fmax(1.0, fabs(want)),
+                          "axis %d: tau = %.17g, closed form %.17g", t, tau, want);
+        }
+        ctc_oracle_free(o);
+        ctc_model_free(m);
+    }
+}
+
+Test(rnea, matches_lagrangian_double_pendulum)
+{
+    const double mass[2] = {1.3, 0.7}, len[2] = {1.1, 0.8};
+    fx_chain c;
+    fx_rod_chain(2, mass, len, &c);
+    ctc_model *m;
+    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+    fx_rng rng = {11};
+    double worst = 0.0;
+
+    for (int s = 0; s < 200; s++) {
+        double q[2], v[2], a[2], tau[2], want[2], mm[4];
+        fx_random_state(&rng, m, q, v, a);
+        fx_double_pendulum(mass, len, q, v, a, mm, want);
+        ctc_oracle_rnea(m, o, q, v, a, tau);
+        double err = fx_max_abs_diff(2, tau, want) / fmax(1.0, fx_max_abs(2, want));
+        worst = fmax(worst, err);
+        cr_assert_leq(err, 1e-13, "sample %d: tau = (%.17g, %.17g), Lagrangian (%.17g, %.17g)",
+                      s, tau[0], tau[1], want[0], want[1]);
+    }
+    cr_log_info("rnea double pendulum: worst relative error %.2e (tolerance 1e-13)", worst);
+    ctc_oracle_free(o);
+    ctc_model_free(m);
+}
+
+Test(rnea, matches_lagrange_equations_on_random_spatial_chains)
+{
+    /* tau = d/dt dT/dxdot - dT/dx + dV/dx from world-frame energies, central step 1e-5 */
+    const int sizes[] = {1, 2, 3, 5, 7, 16};
+    fx_rng rng = {2024};
+    double worst = 0.0;
+
+    for (size_t si = 0; si < sizeof(sizes) / sizeof(sizes[0]); si++) {
+        for (int seed = 0; seed < 4; seed++) {
+            fx_chain c;
+            fx_random_chain(&rng, sizes[si], &c);
+            ctc_model *m;
+            ctc_oracle *o = fx_make(&c, CTC_FORM_SPATIAL, &m);
+            double q[FX_MAX_NQ], v[FX_MAX_NV], a[FX_MAX_NV], tau[FX_MAX_NV], want[FX_MAX_NV];
+
+            fx_random_state(&rng, m, q, v, a);
+            ctc_oracle_rnea(m, o, q, v, a, tau);
+            fx_lagrange_inverse(m, q, v, a, 1e-5, want);
+            double err = fx_max_abs_diff(m->nv, tau, want) / fmax(1.0, fx_max_abs(m->nv, want));
+            worst = fmax(worst, err);
+            cr_assert_leq(err, 1e-7, "n = %d, seed %d: relative error %.3e", sizes[si], seed, err);
+            ctc_oracle_free(o);
+            ctc_model_free(m);
+        }
+    }
+    cr_log_info("rnea vs Lagrange: worst relative error %.2e (tolerance 1e-7)", worst);
+}
+
+Test(rnea, fixed_joint_equals_merged_body)
+{
+    /* the fixed joint at the base, in the middle and at the tip of a 5-body chain */
+    fx_rng rng = {77};
+    double worst = 0.0;
+
+    for (int w = 0; w < 5; w++) {
+        fx_chain cf, cm;
+        fx_fixed_and_merged(&rng, 5, w, &cf, &cm);
+        ctc_model *mf, *mm;
+        ctc_oracle *of = fx_make(&cf, CTC_FORM_SPATIAL, &mf);
+        ctc_oracle *om = fx_make(&cm, CTC_FORM_SPATIAL, &mm);
+        double q[FX_MAX_NQ], v[FX_MAX_NV], a[FX_MAX_NV], tf[FX_MAX_NV], tm[FX_MAX_NV];
+
+        cr_assert_eq(mf->nq, mm->nq);
+        cr_assert_eq(mf->nv, mm->nv);
+        fx_random_state(&rng, mf, q, v, a);
+        ctc_oracle_rnea(mf, of, q, v, a, tf);
+        ctc_oracle_rnea(mm, om, q, v, a, tm);
+        double err = fx_max_abs_diff(mf->nv, tf, tm) / fmax(1.0, fx_max_abs(mf->nv, tm));
+        worst = fmax(worst, err);
+        cr_assert_leq(err, 1e-12, "fixed joint %d: relative difference %.3e", w, err);
+        ctc_oracle_free(of);
+        ctc_oracle_free(om);
+        ctc_model_free(mf);
+        ctc_model_free(mm);
+    }
+    cr_log_info("rnea fixed vs merged: worst relative difference %.2e (tolerance 1e-12)", worst);
+}
+
+Test(rnea, normalises_spherical_quaternions)
+{
+    /* scaling every quaternion by 2.5 changes nothing */
+    fx_rng rng = {5};
+    fx_chain c;
+    fx_random_chain(&rng, 7, &c);
+    ctc_model *m;
+    ctc_oracle *o = fx_make(&c, CTC_FORM_SPATIAL, &m);
+    double q[FX_MAX_NQ], v[FX_MAX_NV], a[FX_MAX_NV], t1[FX_MAX_NV], t2[FX_MAX_NV];
+
+    fx_random_state(&rng, m, q, v, a);
+    ctc_oracle_rnea(m, o, q, v, a, t1);
+    for (int k = 0; k < m->nbodies; k++) {
+        if (m->joints[k].type == CTC_JOINT_SPHERICAL) {
+            for (int i = 0; i < 4; i++) {
+                q[m->jnt_qadr[k] + i] *= 2.5;
+            }
+        }
+    }
+    ctc_oracle_rnea(m, o, q, v, a, t2);
+    cr_assert_leq(fx_max_abs_diff(m->nv, t1, t2), 1e-13 * fmax(1.0, fx_max_abs(m->nv, t1)));
+    ctc_oracle_free(o);
+    ctc_model_free(m);
+}
+
+Test(rnea, free_accepts_null)
+{
+    ctc_oracle_free(NULL);
+}
