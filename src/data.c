@@ -27,9 +27,9 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->hbody = calloc(n * (size_t)d->hsize, sizeof(double));
     d->hfwd = calloc(nt * (size_t)d->hsize, sizeof(double));
     d->hinv = calloc(nt * (size_t)d->hsize, sizeof(double));
-    d->fwd_G = calloc(n * dim * dim, sizeof(double));
+    d->fwd_E = calloc(n * dim * dim, sizeof(double));
     d->fwd_z = calloc(n * dim, sizeof(double));
-    d->inv_G = calloc(n * dim * dim, sizeof(double));
+    d->inv_E = calloc(n * dim * dim, sizeof(double));
     d->inv_z = calloc(n * dim, sizeof(double));
     d->csize = (int)(dim * dim + 2 * dim + 3);
     d->icomp = calloc((2 * n - 1) * (size_t)d->csize, sizeof(double));
@@ -40,8 +40,9 @@ ctc_data *ctc_data_new(const ctc_model *m)
     if (d->xpos == NULL || d->xrot == NULL || d->xcom == NULL || d->omega == NULL ||
         d->xvel == NULL || d->jnt_P == NULL || d->jnt_D == NULL || d->jnt_beta == NULL ||
         d->hr == NULL || d->hbody == NULL || d->hfwd == NULL || d->hinv == NULL ||
-        d->fwd_G == NULL || d->fwd_z == NULL || d->inv_G == NULL || d->inv_z == NULL || d->icomp == NULL || d->inv_e == NULL ||
-        d->tload == NULL || d->jnt_load == NULL || d->jnt_load_inv == NULL) {
+        d->fwd_E == NULL || d->fwd_z == NULL || d->inv_E == NULL || d->inv_z == NULL ||
+        d->icomp == NULL || d->inv_e == NULL || d->tload == NULL || d->jnt_load == NULL ||
+        d->jnt_load_inv == NULL) {
         ctc_data_free(d);
         return NULL;
     }
@@ -63,9 +64,9 @@ void ctc_data_free(ctc_data *d)
     free(d->hbody);
     free(d->hfwd);
     free(d->hinv);
-    free(d->fwd_G);
+    free(d->fwd_E);
     free(d->fwd_z);
-    free(d->inv_G);
+    free(d->inv_E);
     free(d->inv_z);
     free(d->icomp);
     free(d->inv_e);

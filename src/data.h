@@ -21,10 +21,11 @@
 #include "model.h"
 
 typedef struct ctc_data {
-    int dim;    /* 3 or 6, as the model's */
-    int hsize;  /* doubles in one handle-equation record: 3 dim^2 + 2 dim */
+    int dim;   /* 3 or 6, as the model's */
+    int hsize; /* doubles in one handle-equation record: 3 dim^2 + 2 dim */
 
-    /* kinematics, from ctc_kinematics; world frame, or the plane's (x, y, n) frame in planar form */
+    /* kinematics, from ctc_kinematics; world frame, or the plane's (x, y, n) frame in planar form
+     */
     double *xpos;  /* (n x 3) origin of body k's frame = its handle 1 = joint k's centre, m */
     double *xrot;  /* (n x 9) orientation of body k, maps body to world coordinates */
     double *xcom;  /* (n x 3) centre of mass, m */
@@ -41,18 +42,18 @@ typedef struct ctc_data {
     double *hbody; /* (n x hsize) */
 
     /* GDCA tree records and joint solutions */
-    double *hfwd;     /* (ntree x hsize) forward assemblies */
-    double *hinv;     /* (ntree x hsize) inverse assemblies */
-    double *fwd_G;    /* (n x dim^2) joint k: W = D (D^T K D)^-1 D^T */
-    double *fwd_z;    /* (n x dim)   joint k: W Y + P f */
-    double *inv_G;    /* (n x dim^2) joint k: X = K^-1 (mobility form of the inverse) */
-    double *inv_z;    /* (n x dim)   joint k: X Y' (mobility form) */
-    int csize;        /* doubles in one composite record: dim^2 + 2 dim + 3 */
-    double *icomp;    /* ((2n - 1) x csize) inverse assemblies in composite form (gdca_inverse.c):
-                         I (dim x dim), w (dim), c (dim), r12 (3) */
-    double *inv_e;    /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */
-    double *tload;    /* ((2n - 1) x 2 dim) per assembly during a disassembly: F1 and F2
-                         (forward, mobility inverse) or A1 and F2 (composite inverse) */
+    double *hfwd;  /* (ntree x hsize) forward assemblies */
+    double *hinv;  /* (ntree x hsize) inverse assemblies */
+    double *fwd_E; /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
+    double *fwd_z; /* (n x dim)   joint k: W Y + P f */
+    double *inv_E; /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
+    double *inv_z; /* (n x dim)   joint k: X Y' (mobility form) */
+    int csize;     /* doubles in one composite record: dim^2 + 2 dim + 3 */
+    double *icomp; /* ((2n - 1) x csize) inverse assemblies in composite form (gdca_inverse.c):
+                      I (dim x dim), w (dim), c (dim), r12 (3) */
+    double *inv_e; /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */
+    double *tload; /* ((2n - 1) x 2 dim) per assembly during a disassembly: F1 and F2
+                      (forward, mobility inverse) or A1 and F2 (composite inverse) */
 
     /* results */
     double *jnt_load;     /* (n x dim) load on body k at joint k from the forward pass, N m / N */

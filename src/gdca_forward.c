@@ -16,18 +16,18 @@
 
 #include "gdca_tree.h"
 
-/* G = W and z = W Y + P f of joint j between left (NULL: ground) and right */
+/* the factor E of W = E E^T and z = W Y + P f of joint j between left (NULL: ground) and right */
 static inline void forward_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
                                  const double *right, const double *f, const int dim)
 {
     const int nv = m->jnt_nv[j];
     const double *P = d->jnt_P + 3 * dim * j, *fj = f + m->jnt_vadr[j];
-    double *g = d->fwd_G + dim * dim * j, *z = d->fwd_z + dim * j;
+    double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
     double k[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX], pf[CTC_DENSE_MAX];
     double kpf[CTC_DENSE_MAX];
 
     gdca_joint_K(dim, left, right, k);
-    if (gdca_projected_inverse(dim, k, d->jnt_D + dim * dim * j, dim - nv, g) != 0 &&
+    if (gdca_joint_factor(dim, k, d->jnt_D + dim * dim * j, dim - nv, e) != 0 &&
         d->singular_joint < 0) {
         d->singular_joint = j;
     }
@@ -38,7 +38,7 @@ static inline void forward_joint(const ctc_model *m, ctc_data *d, int j, const d
     ctc_dense_mulv(dim, dim, k, pf, kpf);
     gdca_joint_Y0(dim, left, right, d->jnt_beta + dim * j, y);
     for (int i = 0; i < dim; i++) y[i] -= kpf[i];
-    ctc_dense_mulv(dim, dim, g, y, z);
+    gdca_factor_apply(dim, dim - nv, e, y, z);
     for (int i = 0; i < dim; i++) z[i] += pf[i];
 }
 
@@ -67,8 +67,8 @@ static inline void forward_pass(const ctc_model *m, ctc_data *d, const double *f
         const double *right = ctc_data_handles(m, d, node->right, 0);
         int j = node->joint;
         forward_joint(m, d, j, left, right, f, dim);
-        gdca_assemble(dim, left, right, d->fwd_G + dim * dim * j, d->fwd_z + dim * j,
-                      d->hfwd + (size_t)i * hs);
+        gdca_assemble(dim, dim - m->jnt_nv[j], left, right, d->fwd_E + dim * dim * j,
+                      d->fwd_z + dim * j, d->hfwd + (size_t)i * hs);
     }
 
     /* root: the ground joint 0 with the free end's load F2 = 0 */
@@ -94,8 +94,8 @@ static inline void forward_pass(const ctc_model *m, ctc_data *d, const double *f
         int j = node->joint;
         double *fj = d->jnt_load + dim * j, a1r[CTC_DENSE_MAX], a2l[CTC_DENSE_MAX];
         double t[CTC_DENSE_MAX];
-        gdca_joint_load(dim, left, right, d->fwd_G + dim * dim * j, d->fwd_z + dim * j, f1, f2,
-                        fj);
+        gdca_joint_load(dim, dim - m->jnt_nv[j], left, right, d->fwd_E + dim * dim * j,
+                        d->fwd_z + dim * j, f1, f2, fj);
 
         /* A1^R = h11^R F + h12^R F2 + h13^R,  A2^L = h21^L F1 - h22^L F + h23^L */
         ctc_dense_mulv(dim, dim, right + H11(dim), fj, a1r);

@@ -20,23 +20,23 @@
 
 #include "gdca_tree.h"
 
-/* G = X and z = X Y' of joint j between left (NULL: ground) and right */
+/* the factor E of X = E E^T = K^-1 and z = X Y' of joint j between left (NULL: ground) and right */
 static inline void inverse_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
                                  const double *right, const double *u, const int dim)
 {
     const double *P = d->jnt_P + 3 * dim * j, *uj = u + m->jnt_vadr[j];
-    double *g = d->inv_G + dim * dim * j, *z = d->inv_z + dim * j;
+    double *e = d->inv_E + dim * dim * j, *z = d->inv_z + dim * j;
     double k[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX];
 
     gdca_joint_K(dim, left, right, k);
-    if (gdca_projected_inverse(dim, k, NULL, dim, g) != 0 && d->singular_joint < 0) {
+    if (gdca_joint_factor(dim, k, NULL, dim, e) != 0 && d->singular_joint < 0) {
         d->singular_joint = j;
     }
     gdca_joint_Y0(dim, left, right, d->jnt_beta + dim * j, y);
     for (int c = 0; c < m->jnt_nv[j]; c++) {
         for (int i = 0; i < dim; i++) y[i] += P[c * dim + i] * uj[c];
     }
-    ctc_dense_mulv(dim, dim, g, y, z);
+    gdca_factor_apply(dim, dim, e, y, z);
 }
 
 /* f_j = P^T F */
@@ -64,7 +64,7 @@ static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u
         const double *right = ctc_data_handles(m, d, node->right, 1);
         int j = node->joint;
         inverse_joint(m, d, j, left, right, u, dim);
-        gdca_assemble(dim, left, right, d->inv_G + dim * dim * j, d->inv_z + dim * j,
+        gdca_assemble(dim, dim, left, right, d->inv_E + dim * dim * j, d->inv_z + dim * j,
                       d->hinv + (size_t)i * hs);
     }
 
@@ -87,7 +87,7 @@ static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u
         const double *f1 = d->tload + (size_t)(n + i) * 2 * dim, *f2 = f1 + dim;
         int j = node->joint;
         double *fj = d->jnt_load_inv + dim * j;
-        gdca_joint_load(dim, left, right, d->inv_G + dim * dim * j, d->inv_z + dim * j, f1, f2,
+        gdca_joint_load(dim, dim, left, right, d->inv_E + dim * dim * j, d->inv_z + dim * j, f1, f2,
                         fj);
         inverse_drive(m, d, j, fj, f, dim);
 

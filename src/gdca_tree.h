@@ -4,8 +4,9 @@
  * At a joint between a left assembly L (its handle 2) and a right assembly R (its handle 1), both
  * passes solve the joint load in the form
  *     F = G (h21^L F1^L - h12^R F2^R) + z                      (DESIGN.md section 4, Eq. 27)
- * (forward: G = W = D (D^T K D)^-1 D^T, z = W Y + P f; inverse: G = X = K^-1, z = X Y', with
- * K = h11^R + h22^L), so the assembled record of L:R is the same function of (G, z):
+ * (forward: G = W = D (D^T K D)^-1 D^T, z = W Y + P f; mobility inverse: G = X = K^-1,
+ * z = X Y', with K = h11^R + h22^L), so the assembled record of L:R is the same function of
+ * (G, z); G is symmetric positive semidefinite and is kept as its factor E, G = E E^T:
  *     h11 = h11^L - h12^L G h21^L     h12 = h12^L G h12^R     h13 = h13^L - h12^L z
  *     h22 = h22^R - h21^R G h12^R                             h23 = h23^R + h21^R z
  * (Eq. 34-39). All functions take the dimension as an argument and are meant to be inlined into
@@ -40,19 +41,16 @@ static inline void gdca_joint_Y0(int dim, const double *left, const double *righ
     }
 }
 
-/* G = D C^-1 D^T with C = D^T K D, for D (dim x nc, column c at d[c dim]) with orthonormal
- * columns, or D = identity when d is NULL (then G = K^-1). K (dim x dim) symmetric positive
- * definite. Returns 0, or -1 if C is not positive definite (G then NaN). */
-static inline int gdca_projected_inverse(int dim, const double *k, const double *d, int nc,
-                                         double *g)
+/* The factor E (dim x nc, row-major with row stride nc) of G = E E^T = D (D^T K D)^-1 D^T, for D
+ * (dim x nc, column c at d[c dim]) with orthonormal columns, or D = identity when d is NULL (then
+ * E E^T = K^-1). With D^T K D = L L^T (Cholesky), E = D L^-T: row r of E solves L e = (row r of
+ * D)^T. K (dim x dim) symmetric positive definite. Returns 0, or -1 if D^T K D is not positive
+ * definite (E is then NaN). G itself is never formed: every product with it goes through E. */
+static inline int gdca_joint_factor(int dim, const double *k, const double *d, int nc, double *e)
 {
     double c[CTC_DENSE_MAX * CTC_DENSE_MAX], kd[CTC_DENSE_MAX * CTC_DENSE_MAX];
-    double e[CTC_DENSE_MAX * CTC_DENSE_MAX];
 
-    if (nc == 0) { /* the joint constrains nothing: no load can pass */
-        for (int i = 0; i < dim * dim; i++) g[i] = 0;
-        return 0;
-    }
+    if (nc == 0) return 0; /* the joint constrains nothing: no load can pass */
     /* C = D^T K D; with D = I it is K */
     if (d == NULL) {
         for (int i = 0; i < dim * dim; i++) c[i] = k[i];
@@ -70,40 +68,68 @@ static inline int gdca_projected_inverse(int dim, const double *k, const double 
         }
     }
     if (ctc_dense_cholesky(nc, c) != 0) {
-        for (int i = 0; i < dim * dim; i++) g[i] = NAN;
+        for (int i = 0; i < dim * nc; i++) e[i] = NAN;
         return -1;
     }
-    /* E = D L^-T: row r of E solves L e = (row r of D)^T; G = E E^T */
     for (int r = 0; r < dim; r++) {
         double *er = e + r * nc;
-        for (int c0 = 0; c0 < nc; c0++) {
-            er[c0] = d ? d[c0 * dim + r] : (double)(c0 == r);
-        }
+        for (int c0 = 0; c0 < nc; c0++) er[c0] = d ? d[c0 * dim + r] : (double)(c0 == r);
         ctc_dense_lsolve(nc, c, er);
-    }
-    for (int a = 0; a < dim; a++) {
-        for (int b = a; b < dim; b++) {
-            double s = 0;
-            for (int i = 0; i < nc; i++) s += e[a * nc + i] * e[b * nc + i];
-            g[a * dim + b] = s;
-            g[b * dim + a] = s;
-        }
     }
     return 0;
 }
 
-/* The record of L:R (out) from the records of L and R and the joint's G and z (Eq. 34-39). */
-static inline void gdca_assemble(int dim, const double *left, const double *right,
-                                 const double *g, const double *z, double *out)
+/* out = G x = E (E^T x), x and out (dim); out may not alias x */
+static inline void gdca_factor_apply(int dim, int nc, const double *e, const double *x, double *out)
+{
+    double t[CTC_DENSE_MAX];
+    ctc_dense_tmulv(dim, nc, e, x, t);
+    ctc_dense_mulv(dim, nc, e, t, out);
+}
+
+/* The record of L:R (out) from the records of L and R and the joint's factor E (G = E E^T) and
+ * z (Eq. 34-39): with A = h12^L E and B = h21^R E,
+ *     h11 = h11^L - A A^T,   h12 = A B^T,   h22 = h22^R - B B^T,
+ *     h13 = h13^L - h12^L z,   h23 = h23^R + h21^R z. */
+static inline void gdca_assemble_nc(int dim, int nc, const double *left, const double *right,
+                                    const double *e, const double *z, double *out)
 {
     double a[CTC_DENSE_MAX * CTC_DENSE_MAX], b[CTC_DENSE_MAX * CTC_DENSE_MAX];
     const double *l12 = left + H12(dim), *r12 = right + H12(dim);
 
-    ctc_dense_mul(dim, l12, g, a);    /* A = h12^L G */
-    ctc_dense_mul_tn(dim, r12, g, b); /* B = h21^R G = (h12^R)^T G */
-    ctc_dense_sym_sub_nt(dim, left + H11(dim), a, l12, out + H11(dim)); /* h11^L - A h21^L */
-    ctc_dense_mul(dim, a, r12, out + H12(dim));                          /* A h12^R */
-    ctc_dense_sym_sub(dim, right + H22(dim), b, r12, out + H22(dim));  /* h22^R - B h12^R */
+    /* A = h12^L E, B = (h12^R)^T E, each dim x nc */
+    for (int i = 0; i < dim; i++) {
+        for (int c = 0; c < nc; c++) {
+            double sa = 0, sb = 0;
+            for (int k = 0; k < dim; k++) {
+                sa += l12[i * dim + k] * e[k * nc + c];
+                sb += r12[k * dim + i] * e[k * nc + c];
+            }
+            a[i * nc + c] = sa;
+            b[i * nc + c] = sb;
+        }
+    }
+    /* symmetric blocks: upper triangle, mirrored */
+    for (int i = 0; i < dim; i++) {
+        for (int j = i; j < dim; j++) {
+            double s11 = 0, s22 = 0;
+            for (int c = 0; c < nc; c++) {
+                s11 += a[i * nc + c] * a[j * nc + c];
+                s22 += b[i * nc + c] * b[j * nc + c];
+            }
+            out[H11(dim) + i * dim + j] = out[H11(dim) + j * dim + i] =
+                left[H11(dim) + i * dim + j] - s11;
+            out[H22(dim) + i * dim + j] = out[H22(dim) + j * dim + i] =
+                right[H22(dim) + i * dim + j] - s22;
+        }
+    }
+    for (int i = 0; i < dim; i++) {
+        for (int j = 0; j < dim; j++) {
+            double s12 = 0;
+            for (int c = 0; c < nc; c++) s12 += a[i * nc + c] * b[j * nc + c];
+            out[H12(dim) + i * dim + j] = s12;
+        }
+    }
 
     double t[CTC_DENSE_MAX];
     ctc_dense_mulv(dim, dim, l12, z, t); /* h13 = h13^L - h12^L z */
@@ -112,17 +138,46 @@ static inline void gdca_assemble(int dim, const double *left, const double *righ
     for (int i = 0; i < dim; i++) out[H23(dim) + i] = right[H23(dim) + i] + t[i];
 }
 
-/* The joint load F = G (h21^L F1 - h12^R F2) + z from the terminal loads F1 (on L's handle 1)
+/* gdca_assemble_nc with nc made a constant in each branch, so that the loops unroll */
+static inline void gdca_assemble(int dim, int nc, const double *left, const double *right,
+                                 const double *e, const double *z, double *out)
+{
+    switch (nc) {
+    case 1:
+        gdca_assemble_nc(dim, 1, left, right, e, z, out);
+        break;
+    case 2:
+        gdca_assemble_nc(dim, 2, left, right, e, z, out);
+        break;
+    case 3:
+        gdca_assemble_nc(dim, 3, left, right, e, z, out);
+        break;
+    case 4:
+        gdca_assemble_nc(dim, 4, left, right, e, z, out);
+        break;
+    case 5:
+        gdca_assemble_nc(dim, 5, left, right, e, z, out);
+        break;
+    case 6:
+        gdca_assemble_nc(dim, 6, left, right, e, z, out);
+        break;
+    default:
+        gdca_assemble_nc(dim, 0, left, right, e, z, out);
+        break;
+    }
+}
+
+/* The joint load F = E E^T (h21^L F1 - h12^R F2) + z from the terminal loads F1 (on L's handle 1)
  * and F2 (on R's handle 2) of the assembly L:R (Eq. 27). */
-static inline void gdca_joint_load(int dim, const double *left, const double *right,
-                                   const double *g, const double *z, const double *f1,
+static inline void gdca_joint_load(int dim, int nc, const double *left, const double *right,
+                                   const double *e, const double *z, const double *f1,
                                    const double *f2, double *f)
 {
     double s[CTC_DENSE_MAX], t[CTC_DENSE_MAX];
     ctc_dense_tmulv(dim, dim, left + H12(dim), f1, s);
     ctc_dense_mulv(dim, dim, right + H12(dim), f2, t);
     for (int i = 0; i < dim; i++) s[i] -= t[i];
-    ctc_dense_mulv(dim, dim, g, s, f);
+    gdca_factor_apply(dim, nc, e, s, f);
     for (int i = 0; i < dim; i++) f[i] += z[i];
 }
 

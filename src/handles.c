@@ -40,8 +40,8 @@ static void handles_planar(const ctc_model *m, ctc_data *d)
         double *h = d->hbody + (size_t)k * d->hsize;
         double ij = 1.0 / b->inertia, im = 1.0 / b->mass, w2 = d->omega[3 * k + 2];
         w2 *= w2;
-        planar_block(h, r1, r1, ij, im);     /* h11 */
-        planar_block(h + 9, r1, r2, ij, im); /* h12 */
+        planar_block(h, r1, r1, ij, im);      /* h11 */
+        planar_block(h + 9, r1, r2, ij, im);  /* h12 */
         planar_block(h + 18, r2, r2, ij, im); /* h22 */
         ctc_v3_set(h + 27, 0, g[0] - w2 * r1[0], g[1] - w2 * r1[1]);
         ctc_v3_set(h + 30, 0, g[0] - w2 * r2[0], g[1] - w2 * r2[1]);

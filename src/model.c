@@ -94,8 +94,7 @@ static int joint_has_axis(ctc_joint_type t)
 }
 
 /* Checks one body's numbers; writes its principal moments (ascending) into eig. */
-static ctc_status check_body(const ctc_body_spec *b, int k, double eig[3], char *err,
-                             size_t errlen)
+static ctc_status check_body(const ctc_body_spec *b, int k, double eig[3], char *err, size_t errlen)
 {
     int bad;
     if (!isfinite(b->mass)) {
@@ -139,8 +138,8 @@ static ctc_status check_body(const ctc_body_spec *b, int k, double eig[3], char 
     }
     if (eig[0] < -tol) {
         return ctc_fail(CTC_EINVAL, err, errlen,
-                        "body %d: inertia is not positive definite (principal moment %g kg m^2)",
-                        k, eig[0]);
+                        "body %d: inertia is not positive definite (principal moment %g kg m^2)", k,
+                        eig[0]);
     }
     if (eig[0] + eig[1] < eig[2] * (1.0 - 1e-9)) {
         return ctc_fail(CTC_EINVAL, err, errlen,
@@ -281,7 +280,8 @@ static ctc_status setup_planar(ctc_model *m, const double n[3], char *err, size_
         ctc_m3_mulv(in, b->inertia, n);
         p->mass = b->mass;
         p->inertia = ctc_v3_dot(n, in);
-        if (!(p->inertia > INERTIA_ZERO_REL * fabs(b->inertia[0] + b->inertia[4] + b->inertia[8]))) {
+        if (!(p->inertia >
+              INERTIA_ZERO_REL * fabs(b->inertia[0] + b->inertia[4] + b->inertia[8]))) {
             return ctc_fail(CTC_EINVAL, err, errlen,
                             "body %d: no moment of inertia about the plane normal", k);
         }
@@ -371,8 +371,8 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
     int n = spec->nbodies;
     if (n < 1 || n > CTC_MAX_BODIES) {
         return ctc_fail(CTC_EINVAL, err, errlen,
-                        "chain: number of bodies must be between 1 and %d (got %d)",
-                        CTC_MAX_BODIES, n);
+                        "chain: number of bodies must be between 1 and %d (got %d)", CTC_MAX_BODIES,
+                        n);
     }
     if (spec->bodies == NULL || spec->joints == NULL) {
         return ctc_fail(CTC_EINVAL, err, errlen, "chain: bodies and joints must be given");
@@ -412,6 +412,12 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
         if ((st = check_joint(&m->joints[k], k, err, errlen)) != CTC_OK) goto fail;
         if ((st = check_body(&m->bodies[k], k, &moments[3 * k], err, errlen)) != CTC_OK) {
             goto fail;
+        }
+        double *in = m->bodies[k].inertia; /* symmetric to 1e-9: make it exact */
+        for (int a = 0; a < 3; a++) {
+            for (int b = a + 1; b < 3; b++) {
+                in[3 * a + b] = in[3 * b + a] = 0.5 * (in[3 * a + b] + in[3 * b + a]);
+            }
         }
         ctc_joint_spec *j = &m->joints[k];
         if (joint_has_axis(j->type)) {

@@ -27,8 +27,9 @@
  *  - Planar form: when every joint moves in one plane (revolute axes normal to it, prismatic axes
  *    in it; fixed joints allowed) and gravity lies in that plane, the model is computed with
  *    planar 3-vectors (omega_z, v_x, v_y) in the plane's coordinates. The plane's normal n is the
- *    first revolute axis (sign chosen so its largest component is positive), so a chain with +z
- *    axes is computed in the x-y plane itself.
+ *    first revolute axis; without one, the normal of two non-parallel prismatic axes, or of a
+ *    prismatic axis and gravity, or any normal of a lone prismatic axis; its sign is chosen so its
+ *    largest component is positive, so a chain with +z or -z axes moves in the x-y plane itself.
  */
 #ifndef CTC_MODEL_H
 #define CTC_MODEL_H
@@ -80,53 +81,53 @@ typedef struct ctc_chain_spec {
 /* One internal node of the balanced binary assembly tree. An "assembly index" a < n names body a
  * (a leaf); a >= n names internal node a - n. */
 typedef struct ctc_tree_node {
-    int left;   /* assembly index of the left (inboard) part */
-    int right;  /* assembly index of the right (outboard) part */
-    int joint;  /* the joint that joins them: the first body of the right part */
-    int first;  /* bodies first..last make up this node */
+    int left;  /* assembly index of the left (inboard) part */
+    int right; /* assembly index of the right (outboard) part */
+    int joint; /* the joint that joins them: the first body of the right part */
+    int first; /* bodies first..last make up this node */
     int last;
     int height; /* 1 + the larger of the children's heights; leaves have height 0 */
 } ctc_tree_node;
 
 /* Planar data of one body and its inboard joint, in the plane's coordinates (form PLANAR only). */
 typedef struct ctc_planar_body {
-    double mass;       /* kg */
-    double inertia;    /* kg m^2, about the centre of mass and the plane normal */
-    double com[2];     /* m, centre of mass in the body frame */
-    double loc[2];     /* m, inboard joint centre in the parent frame */
-    double axis[2];    /* prismatic: unit axis in the parent frame */
-    double sign;       /* revolute: +1 if the axis is along +n, -1 if along -n */
+    double mass;    /* kg */
+    double inertia; /* kg m^2, about the centre of mass and the plane normal */
+    double com[2];  /* m, centre of mass in the body frame */
+    double loc[2];  /* m, inboard joint centre in the parent frame */
+    double axis[2]; /* prismatic: unit axis in the parent frame */
+    double sign;    /* revolute: +1 if the axis is along +n, -1 if along -n */
 } ctc_planar_body;
 
 typedef struct ctc_model {
-    int nbodies; /* n */
-    int nq;      /* number of position coordinates */
-    int nv;      /* number of velocity coordinates = number of driving forces */
-    ctc_form form; /* PLANAR or SPATIAL, as chosen by the builder */
-    int dim;       /* 3 (planar) or 6 (spatial): size of a motion or force vector */
+    int nbodies;       /* n */
+    int nq;            /* number of position coordinates */
+    int nv;            /* number of velocity coordinates = number of driving forces */
+    ctc_form form;     /* PLANAR or SPATIAL, as chosen by the builder */
+    int dim;           /* 3 (planar) or 6 (spatial): size of a motion or force vector */
     double gravity[3]; /* m/s^2, world */
 
     /* the plane (form PLANAR): world vector = x e1 + y e2 + z n */
     double plane_e1[3], plane_e2[3], plane_n[3];
     double plane_gravity[2]; /* gravity in plane coordinates */
 
-    ctc_body_spec *bodies;   /* (n) as given */
-    ctc_joint_spec *joints;  /* (n) as given, axes normalised */
-    int *jnt_qadr;           /* (n) index of joint k's first position coordinate in q */
-    int *jnt_vadr;           /* (n) index of joint k's first velocity coordinate in v */
-    int *jnt_nq;             /* (n) */
-    int *jnt_nv;             /* (n) */
+    ctc_body_spec *bodies;  /* (n) as given, inertias symmetrised */
+    ctc_joint_spec *joints; /* (n) as given, axes normalised (zero for spherical and fixed) */
+    int *jnt_qadr;          /* (n) index of joint k's first position coordinate in q */
+    int *jnt_vadr;          /* (n) index of joint k's first velocity coordinate in v */
+    int *jnt_nq;            /* (n) */
+    int *jnt_nv;            /* (n) */
 
     double *body_inertia_inv; /* (n x 9) inverse inertia about the CoM, body frame (spatial) */
     double *jnt_perp;         /* (n x 6) two unit vectors normal to joint k's axis, parent frame */
     ctc_planar_body *planar;  /* (n) form PLANAR, else NULL */
 
-    int ntree;            /* n - 1 internal nodes */
-    ctc_tree_node *tree;  /* (ntree) ordered by height: children before parents, root last */
-    int height;           /* root height = ceil(log2 n) */
-    int *height_start;    /* (height + 2) nodes of height h are tree[height_start[h-1] ..
-                             height_start[h] - 1] for h >= 1; height_start[0] = 0 */
-    int root;             /* assembly index of the whole chain */
+    int ntree;           /* n - 1 internal nodes */
+    ctc_tree_node *tree; /* (ntree) ordered by height: children before parents, root last */
+    int height;          /* root height = ceil(log2 n) */
+    int *height_start;   /* (height + 2) nodes of height h are tree[height_start[h-1] ..
+                            height_start[h] - 1] for h >= 1; height_start[0] = 0 */
+    int root;            /* assembly index of the whole chain */
 } ctc_model;
 
 /* Builds and validates a model from spec. On success returns CTC_OK and *out owns a new model

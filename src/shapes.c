@@ -71,8 +71,7 @@ ctc_status ctc_shape_box(double mass, const double size[3], const double centre[
 }
 
 ctc_status ctc_shape_cylinder(double mass, double radius, double length, const double axis[3],
-                              const double centre[3], ctc_body_spec *out, char *err,
-                              size_t errlen)
+                              const double centre[3], ctc_body_spec *out, char *err, size_t errlen)
 {
     ctc_status st = check_mass("cylinder", mass, err, errlen);
     if (st != CTC_OK) return st;

@@ -24,7 +24,6 @@ ctc_status ctc_shape_box(double mass, const double size[3], const double centre[
 /* Uniform solid cylinder of the given radius and length, its axis along axis (any length > 0),
  * centred at centre: m r^2 / 2 about the axis, m (3 r^2 + L^2) / 12 about any diameter. */
 ctc_status ctc_shape_cylinder(double mass, double radius, double length, const double axis[3],
-                              const double centre[3], ctc_body_spec *out, char *err,
-                              size_t errlen);
+                              const double centre[3], ctc_body_spec *out, char *err, size_t errlen);
 
 #endif

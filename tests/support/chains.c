@@ -26,8 +26,7 @@ static void random_unit(uint64_t *rng, double u[3])
 {
     double n;
     do {
-        ctc_v3_set(u, test_uniform(rng, -1, 1), test_uniform(rng, -1, 1),
-                   test_uniform(rng, -1, 1));
+        ctc_v3_set(u, test_uniform(rng, -1, 1), test_uniform(rng, -1, 1), test_uniform(rng, -1, 1));
         n = ctc_v3_norm(u);
     } while (n < 0.1 || n > 1.0);
     ctc_v3_scale(u, u, 1.0 / n);

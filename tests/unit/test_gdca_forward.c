@@ -168,8 +168,8 @@ Test(gdca_forward, single_rod_pendulum_matches_closed_form)
         ctc_handles(m, d);
         ctc_gdca_forward(m, d, &tau, &a);
         double expect = (tau - mass * g * len / 2 * sin(q)) / (mass * len * len / 3);
-        cr_assert_float_eq(a, expect, 1e-12 * fmax(1, fabs(expect)), "q=%g: %.17g vs %.17g", q,
-                           a, expect);
+        cr_assert_float_eq(a, expect, 1e-12 * fmax(1, fabs(expect)), "q=%g: %.17g vs %.17g", q, a,
+                           expect);
     }
     ctc_data_free(d);
     ctc_model_free(m);
@@ -214,7 +214,8 @@ Test(gdca_forward, planar_double_pendulum_matches_textbook_equations)
         double_pendulum_terms(l, mb, q, v, mass, bias);
         double r0 = f[0] - bias[0], r1 = f[1] - bias[1];
         double det = mass[0] * mass[3] - mass[1] * mass[2];
-        double expect[2] = {(mass[3] * r0 - mass[1] * r1) / det, (mass[0] * r1 - mass[2] * r0) / det};
+        double expect[2] = {(mass[3] * r0 - mass[1] * r1) / det,
+                            (mass[0] * r1 - mass[2] * r0) / det};
         cr_assert(test_rel_err(a, expect, 2) < 1e-12, "trial %d: (%.17g, %.17g) vs (%.17g, %.17g)",
                   t, a[0], a[1], expect[0], expect[1]);
     }

@@ -203,7 +203,8 @@ Test(gdca_inverse, planar_double_pendulum_matches_textbook_equations)
         double fm[2];
         ctc_gdca_inverse_mobility(m, d, u, fm);
         double lc1 = l1 / 2, lc2 = l2 / 2, i1 = m1 * l1 * l1 / 12, i2 = m2 * l2 * l2 / 12;
-        double m11 = i1 + i2 + m1 * lc1 * lc1 + m2 * (l1 * l1 + lc2 * lc2 + 2 * l1 * lc2 * cos(q[1]));
+        double m11 =
+            i1 + i2 + m1 * lc1 * lc1 + m2 * (l1 * l1 + lc2 * lc2 + 2 * l1 * lc2 * cos(q[1]));
         double m12 = i2 + m2 * (lc2 * lc2 + l1 * lc2 * cos(q[1])), m22 = i2 + m2 * lc2 * lc2;
         double h = m2 * l1 * lc2 * sin(q[1]);
         double expect[2] = {

@@ -12,7 +12,13 @@
  *  - the acceleration constraint A1(k) = A2(k-1) + P qdd + beta: along q(t) with v(t) = v + t qdd,
  *    second differences of the poses give the angular accelerations (the skew part of
  *    Rddot R^T, since [w]x^2 is symmetric), the acceleration of body k's origin and that of the
- *    material point of body k-1 that sits at body k's origin at t = 0.
+ *    material point of body k-1 that sits at body k's origin at t = 0;
+ *  - planar chains forced to spatial form, also rotated into a tilted plane: the planar
+ *    quantities read through the model's plane basis (e1, e2, n) as the spatial ones.
+ * Differences use the five-point stencils with h = 1e-3 (error O(h^4) plus rounding ~1e-9 for
+ * second differences); observed errors are ~1e-10 against tolerances of 1e-8 (velocities) and
+ * 1e-6 (accelerations), relative to the largest quantity compared. Random chains have 7 bodies;
+ * the tests assert that every joint type (planar: prismatic, fixed, revolute about -z) occurs.
  */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -173,15 +179,36 @@ static void joint_P_times(const ctc_model *m, const ctc_data *d, int k, const do
     }
 }
 
-/* builds the random chains of the tests; covers[t] counts joints of type t */
-static test_chain *random_chain(int spatial, uint64_t seed, int covers[5])
+/* The random chains of the tests, 7 bodies: spatial with all joint types, or planar in the x-y
+ * plane with revolute joints about +-z and prismatic joints. Odd seeds move the ground joint off
+ * the origin (in the plane for planar chains); planar chains of seeds divisible by 3 get a fixed
+ * joint 2. covers[t] counts joints of type t, covers[5] revolute joints about -z. */
+static test_chain *random_chain(int spatial, uint64_t seed, int covers[6])
 {
     test_chain *c = spatial ? test_chain_random_spatial(7, seed, TEST_ALL_JOINTS)
                             : test_chain_random_planar(7, seed, 1, 0);
-    for (int k = 0; k < c->spec.nbodies; k++) covers[c->joints[k].type]++;
+    if (seed % 2) ctc_v3_set(c->joints[0].location, 0.3, -0.2, spatial ? 0.25 : 0.0);
+    if (!spatial && seed % 3 == 0) c->joints[2].type = CTC_JOINT_FIXED;
+    for (int k = 0; k < c->spec.nbodies; k++) {
+        covers[c->joints[k].type]++;
+        if (c->joints[k].type == CTC_JOINT_REVOLUTE && c->joints[k].axis[2] < 0) covers[5]++;
+    }
     return c;
 }
 
+/* asserts that the chains drawn covered what they should */
+static void check_coverage(int spatial, const int covers[6])
+{
+    if (spatial) {
+        for (int t = 0; t < 5; t++) {
+            cr_assert_gt(covers[t], 0, "no %s joint drawn", ctc_joint_type_name((ctc_joint_type)t));
+        }
+    } else {
+        cr_assert_gt(covers[CTC_JOINT_PRISMATIC], 0, "no prismatic joint drawn");
+        cr_assert_gt(covers[CTC_JOINT_FIXED], 0, "no fixed joint drawn");
+        cr_assert_gt(covers[5], 0, "no revolute joint about -z drawn");
+    }
+}
 
 /* pack(A1(body k)) - pack(A2(body k-1)) from the stencil, A2 of the material point of body k-1
  * at body k's origin at t = 0 (zero for the ground); w, scale: a derivative's stencil */
@@ -342,7 +369,7 @@ Test(kinematics, double_pendulum_in_spatial_form_matches_planar_form)
 
 static double check_velocities(int spatial)
 {
-    int covers[5] = {0};
+    int covers[6] = {0};
     double worst = 0;
     for (uint64_t seed = 1; seed <= NSEEDS; seed++) {
         test_chain *c = random_chain(spatial, seed, covers);
@@ -380,11 +407,7 @@ static double check_velocities(int spatial)
         kin_free(&f);
         test_chain_free(c);
     }
-    if (spatial) {
-        for (int t = 0; t < 5; t++) cr_assert_gt(covers[t], 0, "no %s joint drawn", ctc_joint_type_name(t));
-    } else {
-        cr_assert_gt(covers[CTC_JOINT_PRISMATIC], 0, "no prismatic joint drawn");
-    }
+    check_coverage(spatial, covers);
     return worst;
 }
 
@@ -405,7 +428,7 @@ Test(kinematics, velocities_match_finite_differences_on_random_planar_chains)
 /* P, D orthonormal, D^T P = 0, and V1(k) - V2(k-1) = P v_k (finite differences) */
 static void check_joint_maps(int spatial, double *worst_ortho, double *worst_vel)
 {
-    int covers[5] = {0};
+    int covers[6] = {0};
     *worst_ortho = *worst_vel = 0;
     for (uint64_t seed = 1; seed <= NSEEDS; seed++) {
         test_chain *c = random_chain(spatial, seed, covers);
@@ -453,15 +476,15 @@ static void check_joint_maps(int spatial, double *worst_ortho, double *worst_vel
             for (int i = 0; i < dim; i++) {
                 double e = fabs(v1[i] - v2[i] - pv[i]) / scale;
                 *worst_vel = fmax(*worst_vel, e);
-                cr_assert_leq(e, 1e-8,
-                              "seed %d joint %d (%s) component %d: V1 - V2 = %.12g, P v = %.12g",
-                              (int)seed, k, ctc_joint_type_name(m->joints[k].type), i,
-                              v1[i] - v2[i], pv[i]);
+                cr_assert_leq(
+                    e, 1e-8, "seed %d joint %d (%s) component %d: V1 - V2 = %.12g, P v = %.12g",
+                    (int)seed, k, ctc_joint_type_name(m->joints[k].type), i, v1[i] - v2[i], pv[i]);
             }
         }
         kin_free(&f);
         test_chain_free(c);
     }
+    check_coverage(spatial, covers);
 }
 
 Test(kinematics, joint_maps_are_orthonormal_and_map_joint_velocity_on_spatial_chains)
@@ -485,7 +508,7 @@ Test(kinematics, joint_maps_are_orthonormal_and_map_joint_velocity_on_planar_cha
 /* A1(k) - A2(k-1) - P qdd = beta, accelerations by second differences along the motion */
 static double check_acceleration_constraint(int spatial)
 {
-    int covers[5] = {0};
+    int covers[6] = {0};
     double worst = 0;
     for (uint64_t seed = 1; seed <= NSEEDS; seed++) {
         test_chain *c = random_chain(spatial, seed, covers);
@@ -520,6 +543,7 @@ static double check_acceleration_constraint(int spatial)
         kin_free(&f);
         test_chain_free(c);
     }
+    check_coverage(spatial, covers);
     return worst;
 }
 
@@ -540,7 +564,7 @@ Test(kinematics, planar_chains_agree_in_planar_and_spatial_form)
     /* a chain in the x-y plane, forced to spatial form: the same poses, velocities, P columns and
        beta, planar (a, b, c) reading spatial (0, 0, a, b, c, 0); the CoM is compared in the plane
        only (planar form drops its out-of-plane offset) */
-    int covers[5] = {0};
+    int covers[6] = {0};
     double worst = 0;
     for (uint64_t seed = 1; seed <= NSEEDS; seed++) {
         test_chain *c = random_chain(0, seed, covers);
@@ -563,7 +587,8 @@ Test(kinematics, planar_chains_agree_in_planar_and_spatial_form)
             e = fmax(e, max_abs_diff(3, dp->omega + 3 * k, ds->omega + 3 * k));
             e = fmax(e, max_abs_diff(3, dp->xvel + 3 * k, ds->xvel + 3 * k));
             for (int i = 0; i < fp.m->jnt_nv[k]; i++) {
-                const double *pp = dp->jnt_P + 3 * (3 * k + i), *pspat = ds->jnt_P + 6 * (3 * k + i);
+                const double *pp = dp->jnt_P + 3 * (3 * k + i),
+                             *pspat = ds->jnt_P + 6 * (3 * k + i);
                 double emb[6] = {0, 0, pp[0], pp[1], pp[2], 0};
                 e = fmax(e, max_abs_diff(6, emb, pspat));
             }
@@ -578,5 +603,94 @@ Test(kinematics, planar_chains_agree_in_planar_and_spatial_form)
         kin_free(&fs);
         test_chain_free(c);
     }
+    check_coverage(0, covers);
     cr_log_info("planar vs spatial form: worst difference %.2e (tolerance 1e-13)", worst);
+}
+
+Test(kinematics, planar_form_in_a_tilted_plane_reads_as_spatial_form)
+{
+    /* a random planar chain rotated as a whole by R (axes, locations, CoMs, inertias, gravity):
+       its plane is tilted, and with B = [e1 e2 n] from the model the planar quantities must read
+       as the spatial form's world ones: position x e1 + y e2, rotation B R_planar B^T, angular
+       velocity omega_z n, joint vectors (a, b, c) -> (a n; b e1 + c e2) */
+    int covers[6] = {0};
+    double worst = 0;
+    uint64_t rng = 77;
+    for (uint64_t seed = 1; seed <= NSEEDS; seed++) {
+        test_chain *c = random_chain(0, seed, covers);
+        double axis[3], rot[9], t[3];
+        ctc_v3_set(axis, test_uniform(&rng, -1, 1), test_uniform(&rng, -1, 1), 0.5);
+        ctc_v3_scale(axis, axis, 1.0 / ctc_v3_norm(axis));
+        ctc_m3_axis_angle(rot, axis, test_uniform(&rng, 0.3, 2.8));
+        for (int k = 0; k < c->spec.nbodies; k++) {
+            ctc_m3_mulv(t, rot, c->joints[k].axis);
+            ctc_v3_copy(c->joints[k].axis, t);
+            ctc_m3_mulv(t, rot, c->joints[k].location);
+            ctc_v3_copy(c->joints[k].location, t);
+            ctc_m3_mulv(t, rot, c->bodies[k].com);
+            ctc_v3_copy(c->bodies[k].com, t);
+            double in[9];
+            ctc_m3_rotate_sym(in, rot, c->bodies[k].inertia);
+            memcpy(c->bodies[k].inertia, in, sizeof in);
+        }
+        ctc_m3_mulv(t, rot, c->spec.gravity);
+        ctc_v3_copy(c->spec.gravity, t);
+
+        kin_fixture fp = kin_make(&c->spec);
+        c->spec.form = CTC_FORM_SPATIAL;
+        kin_fixture fs = kin_make(&c->spec);
+        cr_assert_eq(fp.m->form, CTC_FORM_PLANAR, "seed %d: the rotated chain is not planar",
+                     (int)seed);
+        const double *e1 = fp.m->plane_e1, *e2 = fp.m->plane_e2, *n = fp.m->plane_n;
+        double bm[9] = {e1[0], e2[0], n[0], e1[1], e2[1], n[1], e1[2], e2[2], n[2]};
+        double q[MAXQ], v[MAXV];
+        test_random_state(fp.m, &rng, 2.0, q, v);
+        ctc_kinematics(fp.m, fp.d, q, v);
+        ctc_kinematics(fs.m, fs.d, q, v);
+        const ctc_data *dp = fp.d, *ds = fs.d;
+
+        for (int k = 0; k < fp.m->nbodies; k++) {
+            double x[3], r[9], tmp[9];
+            /* position, CoM (in-plane part), velocity */
+            ctc_m3_mulv(x, bm, dp->xpos + 3 * k);
+            double e = max_abs_diff(3, x, ds->xpos + 3 * k);
+            e = fmax(e, fabs(ctc_v3_dot(ds->xcom + 3 * k, e1) - dp->xcom[3 * k]));
+            e = fmax(e, fabs(ctc_v3_dot(ds->xcom + 3 * k, e2) - dp->xcom[3 * k + 1]));
+            ctc_m3_mulv(x, bm, dp->xvel + 3 * k);
+            e = fmax(e, max_abs_diff(3, x, ds->xvel + 3 * k));
+            /* orientation and angular velocity */
+            ctc_m3_mul(tmp, bm, dp->xrot + 9 * k);
+            for (int i = 0; i < 3; i++) {
+                for (int j = 0; j < 3; j++) {
+                    r[3 * i + j] = tmp[3 * i] * bm[3 * j] + tmp[3 * i + 1] * bm[3 * j + 1] +
+                                   tmp[3 * i + 2] * bm[3 * j + 2];
+                }
+            }
+            e = fmax(e, max_abs_diff(9, r, ds->xrot + 9 * k));
+            ctc_v3_scale(x, n, dp->omega[3 * k + 2]);
+            e = fmax(e, max_abs_diff(3, x, ds->omega + 3 * k));
+            /* P columns and beta */
+            for (int i = 0; i <= fp.m->jnt_nv[k]; i++) {
+                const double *pv =
+                    i < fp.m->jnt_nv[k] ? dp->jnt_P + 3 * (3 * k + i) : dp->jnt_beta + 3 * k;
+                const double *sv =
+                    i < fp.m->jnt_nv[k] ? ds->jnt_P + 6 * (3 * k + i) : ds->jnt_beta + 6 * k;
+                double emb[6];
+                ctc_v3_scale(emb, n, pv[0]);
+                for (int j = 0; j < 3; j++) emb[3 + j] = pv[1] * e1[j] + pv[2] * e2[j];
+                e = fmax(e, max_abs_diff(6, emb, sv));
+            }
+            worst = fmax(worst, e);
+            cr_assert_leq(e, 1e-13,
+                          "seed %d body %d: planar form in a tilted plane differs from "
+                          "spatial form by %.3e",
+                          (int)seed, k, e);
+        }
+        kin_free(&fp);
+        kin_free(&fs);
+        test_chain_free(c);
+    }
+    check_coverage(0, covers);
+    cr_log_info("tilted plane, planar vs spatial form: worst difference %.2e (tolerance 1e-13)",
+                worst);
 }

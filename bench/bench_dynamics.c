@@ -1,0 +1,169 @@
+/*
+ * bench_dynamics.c - the cost of one CTC right-hand side: GDCA against the serial oracle pair.
+ *
+ * For planar rod chains and spatial revolute chains of n = 2 ... 4096 bodies, times
+ *   ctc   = kinematics + body handles + iGDCA (composite form) + GDCA forward, the work of one
+ *           right-hand side of a CTC simulation (f = iGDCA(q, v, u), qdd = GDCA(q, v, f));
+ *   pair  = the oracle's RNEA + ABA on the same state (each does its own kinematics);
+ * and, to show where the time goes, each stage of ctc alone and the paper's mobility-form iGDCA.
+ * Batches of each are interleaved so that machine noise hits all of them alike; the figures are
+ * medians over the batches, per evaluation, and the ratio is ctc / pair from the same run.
+ * Usage: bench_dynamics [max_n] [batches]
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "chains.h"
+#include "ctc.h"
+#include "oracle.h"
+
+enum { T_CTC, T_PAIR, T_KIN, T_INV, T_FWD, T_MOB, NT };
+
+typedef struct bench_case {
+    const ctc_model *m;
+    ctc_data *d;
+    ctc_oracle *o;
+    double *q, *v, *u, *f, *a;
+} bench_case;
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static volatile double sink;
+
+static void run_once(bench_case *c, int what)
+{
+    const ctc_model *m = c->m;
+    switch (what) {
+    case T_CTC:
+        ctc_kinematics(m, c->d, c->q, c->v);
+        ctc_handles(m, c->d);
+        ctc_gdca_inverse(m, c->d, c->u, c->f);
+        ctc_gdca_forward(m, c->d, c->f, c->a);
+        break;
+    case T_PAIR:
+        ctc_oracle_rnea(m, c->o, c->q, c->v, c->u, c->f);
+        ctc_oracle_aba(m, c->o, c->q, c->v, c->f, c->a);
+        break;
+    case T_KIN:
+        ctc_kinematics(m, c->d, c->q, c->v);
+        ctc_handles(m, c->d);
+        break;
+    case T_INV:
+        ctc_gdca_inverse(m, c->d, c->u, c->f);
+        break;
+    case T_FWD:
+        ctc_gdca_forward(m, c->d, c->f, c->a);
+        break;
+    case T_MOB:
+        ctc_gdca_inverse_mobility(m, c->d, c->u, c->f);
+        break;
+    }
+    sink += c->a[0] + c->f[0];
+}
+
+static int cmp_double(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return (a > b) - (a < b);
+}
+
+/* median seconds per evaluation of each timing, from interleaved batches */
+static void measure(bench_case *c, int batches, double med[NT])
+{
+    /* a batch of reps evaluations lasts about 2 ms for the slowest timing */
+    run_once(c, T_CTC);
+    run_once(c, T_PAIR);
+    double t0 = now();
+    int probe = 0;
+    while (now() - t0 < 2e-3 || probe < 1) {
+        run_once(c, T_CTC);
+        run_once(c, T_PAIR);
+        probe++;
+    }
+    int reps = probe > 1 ? probe : 1;
+    double *samples = malloc(sizeof(double) * (size_t)batches * NT);
+    for (int b = 0; b < batches; b++) {
+        for (int w = 0; w < NT; w++) {
+            double s = now();
+            for (int r = 0; r < reps; r++) run_once(c, w);
+            samples[w * batches + b] = (now() - s) / reps;
+            /* the stage timings assume the state's kinematics are in place */
+            if (w == T_PAIR) run_once(c, T_KIN);
+        }
+    }
+    for (int w = 0; w < NT; w++) {
+        qsort(samples + w * batches, (size_t)batches, sizeof(double), cmp_double);
+        med[w] = samples[w * batches + batches / 2];
+    }
+    free(samples);
+}
+
+static void bench_chain(const char *label, test_chain *chain, int batches)
+{
+    char err[256];
+    ctc_model *m = NULL;
+    if (ctc_model_build(&chain->spec, &m, err, sizeof err) != CTC_OK) {
+        fprintf(stderr, "%s: %s\n", label, err);
+        exit(1);
+    }
+    bench_case c = {.m = m, .d = ctc_data_new(m), .o = ctc_oracle_new(m)};
+    size_t nq = (size_t)m->nq, nv = (size_t)m->nv;
+    c.q = calloc(nq, sizeof(double));
+    c.v = calloc(nv, sizeof(double));
+    c.u = calloc(nv, sizeof(double));
+    c.f = calloc(nv, sizeof(double));
+    c.a = calloc(nv, sizeof(double));
+    uint64_t rng = 1;
+    test_random_state(m, &rng, 1.0, c.q, c.v);
+    for (size_t i = 0; i < nv; i++) c.u[i] = test_uniform(&rng, -1, 1);
+
+    double med[NT];
+    measure(&c, batches, med);
+    int n = m->nbodies;
+    printf("| %-7s | %5d | %10.2f | %10.2f | %5.2f | %7.1f | %7.1f | %8.2f | %8.2f | %8.2f | %8.2f "
+           "|\n",
+           label, n, 1e6 * med[T_CTC], 1e6 * med[T_PAIR], med[T_CTC] / med[T_PAIR],
+           1e9 * med[T_CTC] / n, 1e9 * med[T_PAIR] / n, 1e6 * med[T_KIN], 1e6 * med[T_INV],
+           1e6 * med[T_FWD], 1e6 * med[T_MOB]);
+    fflush(stdout);
+    free(c.q), free(c.v), free(c.u), free(c.f), free(c.a);
+    ctc_oracle_free(c.o);
+    ctc_data_free(c.d);
+    ctc_model_free(m);
+}
+
+int main(int argc, char **argv)
+{
+    int max_n = argc > 1 ? atoi(argv[1]) : 4096;
+    int batches = argc > 2 ? atoi(argv[2]) : 15;
+    if (max_n < 2 || batches < 1) {
+        fprintf(stderr, "usage: bench_dynamics [max_n >= 2] [batches >= 1]\n");
+        return 2;
+    }
+    printf("One CTC right-hand side: ctc = kinematics + handles + iGDCA + GDCA; pair = oracle "
+           "RNEA + ABA.\nMedians of %d interleaved batches; times in microseconds, per body in "
+           "nanoseconds.\n\n",
+           batches);
+    printf("| chain   |     n | ctc (us)   | pair (us)  | ratio | ctc/n ns | pair/n ns | "
+           "kin+handles | iGDCA | GDCA fwd | iGDCA mobility |\n");
+    printf("| ------- | ----: | ---------: | ---------: | ----: | ------: | ------: | -------: | "
+           "-------: | -------: | -------: |\n");
+    for (int n = 2; n <= max_n; n *= 2) {
+        test_chain *c = test_chain_random_planar(n, 7, 0, 1);
+        bench_chain("planar", c, batches);
+        test_chain_free(c);
+    }
+    for (int n = 2; n <= max_n; n *= 2) {
+        test_chain *c = test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE);
+        bench_chain("spatial", c, batches);
+        test_chain_free(c);
+    }
+    return sink == 12345.678 ? 1 : 0;
+}

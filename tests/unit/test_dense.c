@@ -1,0 +1,242 @@
+/*
+ * test_dense.c - the small dense kernels of src/dense.h against plain triple-loop products
+ * written here, and the Cholesky solve against the systems it was made from.
+ */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <string.h>
+
+#include "chains.h"
+#include "dense.h"
+
+#define N CTC_DENSE_MAX
+
+static void random_matrix(uint64_t *rng, int r, int c, double *a)
+{
+    for (int i = 0; i < r * c; i++) a[i] = test_uniform(rng, -1, 1);
+}
+
+/* C = A B (plain), A (n x n) */
+static void plain_mul(int n, const double *a, const double *b, double *c)
+{
+    for (int i = 0; i < n; i++) {
+        for (int j = 0; j < n; j++) {
+            double s = 0;
+            for (int k = 0; k < n; k++) s += a[i * n + k] * b[k * n + j];
+            c[i * n + j] = s;
+        }
+    }
+}
+
+static void transpose(int n, const double *a, double *t)
+{
+    for (int i = 0; i < n; i++) {
+        for (int j = 0; j < n; j++) t[j * n + i] = a[i * n + j];
+    }
+}
+
+static double max_abs_diff(int n, const double *a, const double *b)
+{
+    double s = 0;
+    for (int i = 0; i < n; i++) s = fmax(s, fabs(a[i] - b[i]));
+    return s;
+}
+
+static double max_abs(int n, const double *a)
+{
+    double s = 0;
+    for (int i = 0; i < n; i++) s = fmax(s, fabs(a[i]));
+    return s;
+}
+
+/* random SPD A = B B^T + c 1, c in [0.01, 1] (condition number up to a few hundred) */
+static void random_spd(uint64_t *rng, int n, double *a)
+{
+    double b[N * N], bt[N * N];
+    random_matrix(rng, n, n, b);
+    transpose(n, b, bt);
+    plain_mul(n, b, bt, a);
+    double c = test_uniform(rng, 0.01, 1.0);
+    for (int i = 0; i < n; i++) a[i * n + i] += c;
+}
+
+Test(dense, cholesky_solves_random_spd_systems)
+{
+    /* A x = b through L L^T: x to 1e-12 relative; L L^T reproduces A to 1e-14; the upper
+       triangle is left as it was */
+    uint64_t rng = 1;
+    double worst = 0;
+    for (int n = 1; n <= N; n++) {
+        for (int t = 0; t < 200; t++) {
+            double a[N * N], l[N * N], x[N], b[N];
+            random_spd(&rng, n, a);
+            random_matrix(&rng, n, 1, x);
+            for (int i = 0; i < n; i++) {
+                b[i] = 0;
+                for (int j = 0; j < n; j++) b[i] += a[i * n + j] * x[j];
+            }
+            memcpy(l, a, sizeof(double) * (size_t)(n * n));
+            cr_assert_eq(ctc_dense_cholesky(n, l), 0, "n = %d, trial %d: not factored", n, t);
+            for (int i = 0; i < n; i++) {
+                for (int j = i + 1; j < n; j++) {
+                    cr_assert_eq(l[i * n + j], a[i * n + j], "upper triangle changed");
+                }
+            }
+            for (int i = 0; i < n; i++) {
+                for (int j = 0; j <= i; j++) {
+                    double s = 0;
+                    for (int k = 0; k <= j; k++) s += l[i * n + k] * l[j * n + k];
+                    cr_assert_leq(fabs(s - a[i * n + j]), 1e-14 * max_abs(n * n, a),
+                                  "n = %d: (L L^T)[%d][%d] = %.17g, A = %.17g", n, i, j, s,
+                                  a[i * n + j]);
+                }
+            }
+            ctc_dense_lsolve(n, l, b);
+            ctc_dense_ltsolve(n, l, b);
+            double e = max_abs_diff(n, b, x) / max_abs(n, x);
+            worst = fmax(worst, e);
+            cr_assert_leq(e, 1e-12, "n = %d, trial %d: solution error %.3e", n, t, e);
+        }
+    }
+    cr_log_info("cholesky solves: worst relative error %.2e (tolerance 1e-12)", worst);
+}
+
+Test(dense, lsolve_and_ltsolve_invert_l_and_its_transpose)
+{
+    /* L y = b and L^T z = b checked by multiplying back */
+    uint64_t rng = 2;
+    for (int n = 1; n <= N; n++) {
+        double a[N * N], b[N], y[N], z[N];
+        random_spd(&rng, n, a);
+        cr_assert_eq(ctc_dense_cholesky(n, a), 0);
+        random_matrix(&rng, n, 1, b);
+        memcpy(y, b, sizeof y);
+        memcpy(z, b, sizeof z);
+        ctc_dense_lsolve(n, a, y);
+        ctc_dense_ltsolve(n, a, z);
+        for (int i = 0; i < n; i++) {
+            double ly = 0, ltz = 0;
+            for (int k = 0; k <= i; k++) ly += a[i * n + k] * y[k];
+            for (int k = i; k < n; k++) ltz += a[k * n + i] * z[k];
+            cr_assert_leq(fabs(ly - b[i]), 1e-12, "n = %d: (L y)[%d] = %.17g, b = %.17g", n, i, ly,
+                          b[i]);
+            cr_assert_leq(fabs(ltz - b[i]), 1e-12, "n = %d: (L^T z)[%d] = %.17g, b = %.17g", n, i,
+                          ltz, b[i]);
+        }
+    }
+}
+
+Test(dense, cholesky_rejects_indefinite_and_singular_matrices)
+{
+    /* exact cases (every pivot computed without rounding) */
+    const double indef2[4] = {1, 0, 0, -1};
+    const double indef3[9] = {2, 1, 0, 1, -3, 0, 0, 0, 1};
+    const double neg1[1] = {-2};
+    const double zero1[1] = {0};
+    const double sing2[4] = {1, 2, 2, 4};                /* v v^T, v = (1, 2) */
+    const double sing3[9] = {1, 0, 1, 0, 1, 1, 1, 1, 2}; /* rank 2: last pivot 0 */
+    const double saddle[4] = {0, 1, 1, 0};
+    const double nan2[4] = {1, 0, 0, NAN};
+    struct {
+        const char *name;
+        int n;
+        const double *a;
+    } cases[] = {{"indefinite 2x2", 2, indef2}, {"indefinite 3x3", 3, indef3},
+                 {"negative 1x1", 1, neg1},     {"zero 1x1", 1, zero1},
+                 {"singular 2x2", 2, sing2},    {"singular 3x3", 3, sing3},
+                 {"saddle 2x2", 2, saddle},     {"NaN pivot", 2, nan2}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        double a[N * N];
+        memcpy(a, cases[c].a, sizeof(double) * (size_t)(cases[c].n * cases[c].n));
+        cr_assert_eq(ctc_dense_cholesky(cases[c].n, a), -1, "%s: accepted", cases[c].name);
+    }
+
+    /* random matrices with one negative eigenvalue: Q diag(-1, 1, ...) Q^T */
+    uint64_t rng = 3;
+    for (int n = 1; n <= N; n++) {
+        double b[N * N], bt[N * N], d[N * N] = {0}, t[N * N], a[N * N];
+        random_matrix(&rng, n, n, b); /* a congruence B D B^T keeps the inertia of D */
+        transpose(n, b, bt);
+        for (int i = 0; i < n; i++) d[i * n + i] = i == 0 ? -1.0 : 1.0;
+        plain_mul(n, b, d, t);
+        plain_mul(n, t, bt, a);
+        cr_assert_eq(ctc_dense_cholesky(n, a), -1, "n = %d: indefinite matrix accepted", n);
+    }
+}
+
+Test(dense, products_match_plain_loops)
+{
+    /* mulv/tmulv on rectangular matrices, mul, mul_nt = A B^T, mul_tn = A^T B, exact to rounding */
+    uint64_t rng = 4;
+    for (int n = 1; n <= N; n++) {
+        double a[N * N], b[N * N], at[N * N], bt[N * N], got[N * N], want[N * N];
+        random_matrix(&rng, n, n, a);
+        random_matrix(&rng, n, n, b);
+        transpose(n, a, at);
+        transpose(n, b, bt);
+        ctc_dense_mul(n, a, b, got);
+        plain_mul(n, a, b, want);
+        cr_assert_leq(max_abs_diff(n * n, got, want), 1e-15, "n = %d: mul", n);
+        ctc_dense_mul_nt(n, a, b, got);
+        plain_mul(n, a, bt, want);
+        cr_assert_leq(max_abs_diff(n * n, got, want), 1e-15, "n = %d: mul_nt", n);
+        ctc_dense_mul_tn(n, a, b, got);
+        plain_mul(n, at, b, want);
+        cr_assert_leq(max_abs_diff(n * n, got, want), 1e-15, "n = %d: mul_tn", n);
+    }
+
+    /* a 2 x 3 example worked by hand */
+    const double r[6] = {1, 2, 3, 4, 5, 6}, x3[3] = {1, -1, 2}, x2[2] = {2, -1};
+    double y2[2], y3[3];
+    ctc_dense_mulv(2, 3, r, x3, y2);
+    cr_assert(y2[0] == 5 && y2[1] == 11, "mulv: (%g %g), want (5 11)", y2[0], y2[1]);
+    ctc_dense_tmulv(2, 3, r, x2, y3);
+    cr_assert(y3[0] == -2 && y3[1] == -1 && y3[2] == 0, "tmulv: (%g %g %g), want (-2 -1 0)", y3[0],
+              y3[1], y3[2]);
+}
+
+Test(dense, symmetric_updates_match_plain_products)
+{
+    /* S0 - A B^T with A = X, B = X C (C symmetric) and S0 - A B with A = X C, B = X^T: both
+       products are X C X^T, symmetric; the result matches the plain product to rounding and is
+       exactly symmetric, also when S aliases S0 */
+    uint64_t rng = 5;
+    for (int n = 1; n <= N; n++) {
+        double x[N * N], xt[N * N], c[N * N], xc[N * N], s0[N * N], want[N * N], got[N * N];
+        double prod[N * N];
+        random_matrix(&rng, n, n, x);
+        transpose(n, x, xt);
+        for (int i = 0; i < n; i++) {
+            for (int j = i; j < n; j++) {
+                c[i * n + j] = c[j * n + i] = test_uniform(&rng, -1, 1);
+                s0[i * n + j] = s0[j * n + i] = test_uniform(&rng, -1, 1);
+            }
+        }
+        plain_mul(n, x, c, xc);
+        plain_mul(n, xc, xt, prod);
+        for (int i = 0; i < n * n; i++) want[i] = s0[i] - prod[i];
+
+        for (int variant = 0; variant < 4; variant++) {
+            int nt = variant < 2, in_place = variant % 2;
+            if (in_place) {
+                memcpy(got, s0, sizeof got);
+            } else {
+                memset(got, 0, sizeof got);
+            }
+            const double *src = in_place ? got : s0;
+            if (nt) {
+                ctc_dense_sym_sub_nt(n, src, x, xc, got);
+            } else {
+                ctc_dense_sym_sub(n, src, xc, xt, got);
+            }
+            double e = max_abs_diff(n * n, got, want);
+            cr_assert_leq(e, 1e-14, "n = %d, %s%s: differs by %.3e", n,
+                          nt ? "sym_sub_nt" : "sym_sub", in_place ? " in place" : "", e);
+            for (int i = 0; i < n; i++) {
+                for (int j = 0; j < n; j++) {
+                    cr_assert_eq(got[i * n + j], got[j * n + i], "n = %d: not symmetric", n);
+                }
+            }
+        }
+    }
+}
