@@ -33,8 +33,7 @@ void ctc_oracle_aba(const ctc_model *m, ctc_oracle *o, const double *q, const do
         const double *vk = o->vel + 6 * (size_t)k;
         double h[6];
 
-        memcpy(o->art_inertia + 36 * (size_t)k, o->inertia + 36 * (size_t)k,
-               36 * sizeof(double));
+        memcpy(o->art_inertia + 36 * (size_t)k, o->inertia + 36 * (size_t)k, 36 * sizeof(double));
         plk_mat6_vec(o->inertia + 36 * (size_t)k, vk, h);
         plk_cross_force(vk, h, o->art_bias + 6 * (size_t)k);
     }

@@ -106,15 +106,7 @@ static inline void forward_pass(const ctc_model *m, ctc_data *d, const double *f
         for (int r = 0; r < dim; r++) a2l[r] += left[H23(dim) + r] - t[r];
         forward_qacc(m, d, j, a1r, a2l, qacc, dim);
 
-        /* the children's terminal loads: L carries (F1, -F), R carries (F, F2) */
-        double *tlL = d->tload + (size_t)node->left * 2 * dim;
-        double *tlR = d->tload + (size_t)node->right * 2 * dim;
-        for (int r = 0; r < dim; r++) {
-            tlL[r] = f1[r];
-            tlL[dim + r] = -fj[r];
-            tlR[r] = fj[r];
-            tlR[dim + r] = f2[r];
-        }
+        gdca_pass_loads(dim, d->tload, node, f1, f2, fj);
     }
 }
 

@@ -90,15 +90,7 @@ static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u
         gdca_joint_load(dim, dim, left, right, d->inv_E + dim * dim * j, d->inv_z + dim * j, f1, f2,
                         fj);
         inverse_drive(m, d, j, fj, f, dim);
-
-        double *tlL = d->tload + (size_t)node->left * 2 * dim;
-        double *tlR = d->tload + (size_t)node->right * 2 * dim;
-        for (int r = 0; r < dim; r++) {
-            tlL[r] = f1[r];
-            tlL[dim + r] = -fj[r];
-            tlR[r] = fj[r];
-            tlR[dim + r] = f2[r];
-        }
+        gdca_pass_loads(dim, d->tload, node, f1, f2, fj);
     }
 }
 

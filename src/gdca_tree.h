@@ -15,7 +15,10 @@
 #ifndef CTC_GDCA_TREE_H
 #define CTC_GDCA_TREE_H
 
+#include <stddef.h>
+
 #include "dense.h"
+#include "model.h"
 
 /* offsets of the blocks of a handle-equation record (data.h) */
 #define H11(dim) 0
@@ -50,7 +53,7 @@ static inline int gdca_joint_factor(int dim, const double *k, const double *d, i
 {
     double c[CTC_DENSE_MAX * CTC_DENSE_MAX], kd[CTC_DENSE_MAX * CTC_DENSE_MAX];
 
-    if (nc == 0) return 0; /* the joint constrains nothing: no load can pass */
+    if (nc == 0) return 0; /* a joint that constrains nothing carries no constraint load */
     /* C = D^T K D; with D = I it is K */
     if (d == NULL) {
         for (int i = 0; i < dim * dim; i++) c[i] = k[i];
@@ -179,6 +182,20 @@ static inline void gdca_joint_load(int dim, int nc, const double *left, const do
     for (int i = 0; i < dim; i++) s[i] -= t[i];
     gdca_factor_apply(dim, nc, e, s, f);
     for (int i = 0; i < dim; i++) f[i] += z[i];
+}
+
+/* The children's terminal loads in tload ((2n - 1) x 2 dim, by assembly index): the left part
+ * carries (F1, -F), the right part (F, F2), F being the load on the right part at the joint. */
+static inline void gdca_pass_loads(int dim, double *tload, const ctc_tree_node *node,
+                                   const double *f1, const double *f2, const double *f)
+{
+    double *tl = tload + (size_t)node->left * 2 * dim, *tr = tload + (size_t)node->right * 2 * dim;
+    for (int r = 0; r < dim; r++) {
+        tl[r] = f1[r];
+        tl[dim + r] = -f[r];
+        tr[r] = f[r];
+        tr[dim + r] = f2[r];
+    }
 }
 
 #endif

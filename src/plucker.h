@@ -58,8 +58,8 @@ static inline void plk_rot_axis_angle(const double a[3], double angle, double r[
  * coordinates into the reference frame's: x_ref = R x_rot */
 static inline void plk_rot_quat(const double quat[4], double r[9])
 {
-    double nrm = sqrt(quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2]
-                      + quat[3] * quat[3]);
+    double nrm =
+        sqrt(quat[0] * quat[0] + quat[1] * quat[1] + quat[2] * quat[2] + quat[3] * quat[3]);
     double w = quat[0] / nrm, x = quat[1] / nrm, y = quat[2] / nrm, z = quat[3] / nrm;
 
     r[0] = 1.0 - 2.0 * (y * y + z * z);
@@ -99,8 +99,8 @@ static inline void plk_mat6_vec(const double a[36], const double b[6], double ou
 {
     for (int i = 0; i < 6; i++) {
         const double *ai = a + 6 * i;
-        out[i] = ai[0] * b[0] + ai[1] * b[1] + ai[2] * b[2] + ai[3] * b[3] + ai[4] * b[4]
-                 + ai[5] * b[5];
+        out[i] =
+            ai[0] * b[0] + ai[1] * b[1] + ai[2] * b[2] + ai[3] * b[3] + ai[4] * b[4] + ai[5] * b[5];
     }
 }
 
@@ -119,8 +119,7 @@ static inline void plk_mat6t_vec(const double a[36], const double b[6], double o
 }
 
 /* acc += X^T I X: a body inertia I (6x6) in frame B seen from frame A, with X = B_X_A */
-static inline void plk_congruence_add(const double x[36], const double inertia[36],
-                                      double acc[36])
+static inline void plk_congruence_add(const double x[36], const double inertia[36], double acc[36])
 {
     double ix[36]; /* I X */
 
@@ -185,8 +184,8 @@ static inline void plk_body_inertia(double mass, const double c[3], const double
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < 3; j++) {
             /* ([c]x [c]x^T)_ij = sum_k cx_ik cx_jk */
-            double cc = cx[3 * i] * cx[3 * j] + cx[3 * i + 1] * cx[3 * j + 1]
-                        + cx[3 * i + 2] * cx[3 * j + 2];
+            double cc = cx[3 * i] * cx[3 * j] + cx[3 * i + 1] * cx[3 * j + 1] +
+                        cx[3 * i + 2] * cx[3 * j + 2];
             out[6 * i + j] = ic[3 * i + j] + mass * cc;
             out[6 * i + j + 3] = mass * cx[3 * i + j];
             out[6 * (i + 3) + j] = mass * cx[3 * j + i];

@@ -21,6 +21,18 @@ static ctc_status check_mass(const char *shape, double mass, char *err, size_t e
     return CTC_OK;
 }
 
+/* CTC_OK if the filled spec's numbers are finite; otherwise the dimensions overflowed */
+static ctc_status check_result(const char *shape, const ctc_body_spec *b, char *err, size_t errlen)
+{
+    for (int i = 0; i < 9; i++) {
+        if (!isfinite(b->inertia[i])) {
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "%s: inertia overflows (mass or dimensions too large)", shape);
+        }
+    }
+    return CTC_OK;
+}
+
 /* inertia = a (1 - e e^T) + b e e^T for unit e: the tensor of a body symmetric about e */
 static void axisymmetric(double inertia[9], const double e[3], double transverse, double axial)
 {
@@ -45,7 +57,7 @@ ctc_status ctc_shape_rod(double mass, const double end[3], ctc_body_spec *out, c
     out->mass = mass;
     ctc_v3_scale(out->com, end, 0.5);
     axisymmetric(out->inertia, e, mass * len * len / 12.0, 0.0);
-    return CTC_OK;
+    return check_result("rod", out, err, errlen);
 }
 
 ctc_status ctc_shape_box(double mass, const double size[3], const double centre[3],
@@ -55,8 +67,8 @@ ctc_status ctc_shape_box(double mass, const double size[3], const double centre[
     if (st != CTC_OK) return st;
     for (int i = 0; i < 3; i++) {
         if (!isfinite(size[i]) || !(size[i] > 0)) {
-            return ctc_fail(CTC_EINVAL, err, errlen, "box: size[%d] must be positive (got %g)", i,
-                            size[i]);
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "box: size[%d] must be positive and finite (got %g)", i, size[i]);
         }
     }
     if (!finite3(centre)) return ctc_fail(CTC_EINVAL, err, errlen, "box: centre is not finite");
@@ -67,7 +79,7 @@ ctc_status ctc_shape_box(double mass, const double size[3], const double centre[
     out->inertia[0] = mass * (b2 + c2) / 12.0;
     out->inertia[4] = mass * (a2 + c2) / 12.0;
     out->inertia[8] = mass * (a2 + b2) / 12.0;
-    return CTC_OK;
+    return check_result("box", out, err, errlen);
 }
 
 ctc_status ctc_shape_cylinder(double mass, double radius, double length, const double axis[3],
@@ -76,17 +88,20 @@ ctc_status ctc_shape_cylinder(double mass, double radius, double length, const d
     ctc_status st = check_mass("cylinder", mass, err, errlen);
     if (st != CTC_OK) return st;
     if (!isfinite(radius) || !(radius > 0)) {
-        return ctc_fail(CTC_EINVAL, err, errlen, "cylinder: radius must be positive (got %g)",
-                        radius);
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "cylinder: radius must be positive and finite (got %g)", radius);
     }
     if (!isfinite(length) || !(length > 0)) {
-        return ctc_fail(CTC_EINVAL, err, errlen, "cylinder: length must be positive (got %g)",
-                        length);
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "cylinder: length must be positive and finite (got %g)", length);
     }
-    double n = finite3(axis) ? ctc_v3_norm(axis) : NAN;
-    if (!(n > 0) || !isfinite(n)) {
-        return ctc_fail(CTC_EINVAL, err, errlen, "cylinder: axis has zero length");
+    if (!finite3(axis)) return ctc_fail(CTC_EINVAL, err, errlen, "cylinder: axis is not finite");
+    double n = ctc_v3_norm(axis);
+    if (!isfinite(n)) {
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "cylinder: axis is too long (its length overflows)");
     }
+    if (!(n > 0)) return ctc_fail(CTC_EINVAL, err, errlen, "cylinder: axis has zero length");
     if (!finite3(centre)) {
         return ctc_fail(CTC_EINVAL, err, errlen, "cylinder: centre is not finite");
     }
@@ -96,5 +111,5 @@ ctc_status ctc_shape_cylinder(double mass, double radius, double length, const d
     ctc_v3_copy(out->com, centre);
     axisymmetric(out->inertia, e, mass * (3 * radius * radius + length * length) / 12.0,
                  mass * radius * radius / 2.0);
-    return CTC_OK;
+    return check_result("cylinder", out, err, errlen);
 }

@@ -3,7 +3,8 @@
  *
  * Each helper fills a ctc_body_spec (mass, centre of mass and inertia about it, body frame) from
  * the shape's dimensions, in metres and kilograms. They validate their arguments and return
- * CTC_EINVAL with a message naming the argument, e.g. "rod: length must be positive".
+ * CTC_EINVAL with a message naming the argument, e.g. "rod: length must be positive and
+ * finite", or "box: inertia overflows (mass or dimensions too large)".
  */
 #ifndef CTC_SHAPES_H
 #define CTC_SHAPES_H

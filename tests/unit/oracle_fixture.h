@@ -111,9 +111,9 @@ static inline void fx_quat_rot(const double q[4], double r[9])
     double s = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     double w = q[0] / s, x = q[1] / s, y = q[2] / s, z = q[3] / s;
     double m[9] = {
-        w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y),
-        2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x),
-        2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z,
+        w * w + x * x - y * y - z * z, 2 * (x * y - w * z),           2 * (x * z + w * y),
+        2 * (x * y + w * z),           w * w - x * x + y * y - z * z, 2 * (y * z - w * x),
+        2 * (x * z - w * y),           2 * (y * z + w * x),           w * w - x * x - y * y + z * z,
     };
     memcpy(r, m, sizeof(m));
 }
@@ -319,8 +319,8 @@ static inline void fx_random_state(fx_rng *r, const ctc_model *m, double *q, dou
 
 /* the body that child and parent make when the child is fixed (no rotation) at loc in the
  * parent's frame: one mass, one centre, parallel-axis inertias summed about the new centre */
-static inline ctc_body_spec fx_merge_bodies(const ctc_body_spec *parent,
-                                            const ctc_body_spec *child, const double loc[3])
+static inline ctc_body_spec fx_merge_bodies(const ctc_body_spec *parent, const ctc_body_spec *child,
+                                            const double loc[3])
 {
     ctc_body_spec out;
     double mass = parent->mass + child->mass;
@@ -337,9 +337,9 @@ static inline ctc_body_spec fx_merge_bodies(const ctc_body_spec *parent,
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < 3; j++) {
             double eye = i == j ? 1.0 : 0.0;
-            out.inertia[3 * i + j] = parent->inertia[3 * i + j] + child->inertia[3 * i + j]
-                                     + parent->mass * (fx_dot(d1, d1) * eye - d1[i] * d1[j])
-                                     + child->mass * (fx_dot(d2, d2) * eye - d2[i] * d2[j]);
+            out.inertia[3 * i + j] = parent->inertia[3 * i + j] + child->inertia[3 * i + j] +
+                                     parent->mass * (fx_dot(d1, d1) * eye - d1[i] * d1[j]) +
+                                     child->mass * (fx_dot(d2, d2) * eye - d2[i] * d2[j]);
         }
     }
     out.mass = mass;
@@ -400,8 +400,8 @@ static inline void fx_double_pendulum(const double mass[2], const double len[2],
     mm[1] = m2 * (lc2 * lc2 + l1 * lc2 * cos(q[1])) + i2;
     mm[2] = mm[1];
     mm[3] = m2 * lc2 * lc2 + i2;
-    tau[0] = mm[0] * a[0] + mm[1] * a[1] + h * (2.0 * v[0] * v[1] + v[1] * v[1])
-             + FX_G * ((m1 * lc1 + m2 * l1) * sin(q[0]) + m2 * lc2 * sin(q[0] + q[1]));
+    tau[0] = mm[0] * a[0] + mm[1] * a[1] + h * (2.0 * v[0] * v[1] + v[1] * v[1]) +
+             FX_G * ((m1 * lc1 + m2 * l1) * sin(q[0]) + m2 * lc2 * sin(q[0] + q[1]));
     tau[1] = mm[2] * a[0] + mm[3] * a[1] - h * v[0] * v[0] + FX_G * m2 * lc2 * sin(q[0] + q[1]);
 }
 
@@ -676,8 +676,8 @@ static inline void fx_lagrange_inverse(const ctc_model *m, const double *q0, con
         fx_retract(m, q0, x, q);
         double v_down = fx_potential_energy(m, q);
         x[i] = 0.0;
-        tau[i] = ma[i] + (p_up[i] - p_down[i]) / (2.0 * h) - (t_up - t_down) / (2.0 * h)
-                 + (v_up - v_down) / (2.0 * h);
+        tau[i] = ma[i] + (p_up[i] - p_down[i]) / (2.0 * h) - (t_up - t_down) / (2.0 * h) +
+                 (v_up - v_down) / (2.0 * h);
     }
 }
 

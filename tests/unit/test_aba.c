@@ -211,8 +211,8 @@ Test(aba, matches_mass_matrix_solve_on_random_spatial_chains)
             ctc_model_free(m);
         }
     }
-    cr_log_info("aba vs CRBA solve: worst relative error %.2e, worst error/tolerance %.2e",
-                worst, worst_ratio);
+    cr_log_info("aba vs CRBA solve: worst relative error %.2e, worst error/tolerance %.2e", worst,
+                worst_ratio);
 }
 
 Test(aba, fixed_joint_equals_merged_body)

@@ -161,14 +161,12 @@ Test(crba, matches_energy_polarisation_on_random_spatial_chains)
             fx_energy_mass_matrix(m, q, mm_b);
             double err = fx_max_abs_diff(nv * nv, mm_a, mm_b) / fx_max_abs(nv * nv, mm_b);
             worst = fmax(worst, err);
-            cr_assert_leq(err, 1e-12, "n = %d, seed %d: relative error %.3e", sizes[si], seed,
-                          err);
+            cr_assert_leq(err, 1e-12, "n = %d, seed %d: relative error %.3e", sizes[si], seed, err);
             ctc_oracle_free(o);
             ctc_model_free(m);
         }
     }
-    cr_log_info("crba vs energy polarisation: worst relative error %.2e (tolerance 1e-12)",
-                worst);
+    cr_log_info("crba vs energy polarisation: worst relative error %.2e (tolerance 1e-12)", worst);
 }
 
 Test(crba, fixed_joint_equals_merged_body)

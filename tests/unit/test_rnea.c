@@ -76,8 +76,8 @@ Test(rnea, matches_lagrangian_double_pendulum)
         ctc_oracle_rnea(m, o, q, v, a, tau);
         double err = fx_max_abs_diff(2, tau, want) / fmax(1.0, fx_max_abs(2, want));
         worst = fmax(worst, err);
-        cr_assert_leq(err, 1e-13, "sample %d: tau = (%.17g, %.17g), Lagrangian (%.17g, %.17g)",
-                      s, tau[0], tau[1], want[0], want[1]);
+        cr_assert_leq(err, 1e-13, "sample %d: tau = (%.17g, %.17g), Lagrangian (%.17g, %.17g)", s,
+                      tau[0], tau[1], want[0], want[1]);
     }
     cr_log_info("rnea double pendulum: worst relative error %.2e (tolerance 1e-13)", worst);
     ctc_oracle_free(o);

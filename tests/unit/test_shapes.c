@@ -262,11 +262,11 @@ Test(shapes, box_rejects_invalid_arguments_with_exact_messages)
     expect_error(ctc_shape_box(0.0, size, centre, &b, err, sizeof err), err,
                  "box: mass must be positive and finite (got 0)");
     expect_error(ctc_shape_box(1.0, s0, centre, &b, err, sizeof err), err,
-                 "box: size[0] must be positive (got -2)");
+                 "box: size[0] must be positive and finite (got -2)");
     expect_error(ctc_shape_box(1.0, s1, centre, &b, err, sizeof err), err,
-                 "box: size[1] must be positive (got 0)");
+                 "box: size[1] must be positive and finite (got 0)");
     expect_error(ctc_shape_box(1.0, s2, centre, &b, err, sizeof err), err,
-                 "box: size[2] must be positive (got inf)");
+                 "box: size[2] must be positive and finite (got inf)");
     expect_error(ctc_shape_box(1.0, size, c_bad, &b, err, sizeof err), err,
                  "box: centre is not finite");
 }
@@ -280,17 +280,24 @@ Test(shapes, cylinder_rejects_invalid_arguments_with_exact_messages)
     expect_error(ctc_shape_cylinder(-1.0, 0.1, 1.0, axis, centre, &b, err, sizeof err), err,
                  "cylinder: mass must be positive and finite (got -1)");
     expect_error(ctc_shape_cylinder(1.0, -0.1, 1.0, axis, centre, &b, err, sizeof err), err,
-                 "cylinder: radius must be positive (got -0.1)");
+                 "cylinder: radius must be positive and finite (got -0.1)");
     expect_error(ctc_shape_cylinder(1.0, NAN, 1.0, axis, centre, &b, err, sizeof err), err,
-                 "cylinder: radius must be positive (got nan)");
+                 "cylinder: radius must be positive and finite (got nan)");
     expect_error(ctc_shape_cylinder(1.0, 0.1, 0.0, axis, centre, &b, err, sizeof err), err,
-                 "cylinder: length must be positive (got 0)");
+                 "cylinder: length must be positive and finite (got 0)");
     expect_error(ctc_shape_cylinder(1.0, 0.1, INFINITY, axis, centre, &b, err, sizeof err), err,
-                 "cylinder: length must be positive (got inf)");
+                 "cylinder: length must be positive and finite (got inf)");
     expect_error(ctc_shape_cylinder(1.0, 0.1, 1.0, zero, centre, &b, err, sizeof err), err,
                  "cylinder: axis has zero length");
     expect_error(ctc_shape_cylinder(1.0, 0.1, 1.0, a_nan, centre, &b, err, sizeof err), err,
-                 "cylinder: axis has zero length");
+                 "cylinder: axis is not finite");
+    const double huge_axis[3] = {1e200, 1e200, 0}, huge_size[3] = {1e200, 1, 1};
+    expect_error(ctc_shape_cylinder(1.0, 0.1, 1.0, huge_axis, centre, &b, err, sizeof err), err,
+                 "cylinder: axis is too long (its length overflows)");
+    expect_error(ctc_shape_box(1.0, huge_size, centre, &b, err, sizeof err), err,
+                 "box: inertia overflows (mass or dimensions too large)");
+    expect_error(ctc_shape_cylinder(1e300, 1e10, 1.0, axis, centre, &b, err, sizeof err), err,
+                 "cylinder: inertia overflows (mass or dimensions too large)");
     expect_error(ctc_shape_cylinder(1.0, 0.1, 1.0, axis, c_inf, &b, err, sizeof err), err,
                  "cylinder: centre is not finite");
 }
