@@ -5,6 +5,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "shapes.h"
 #include "spatial.h"
@@ -22,7 +23,7 @@ double test_uniform(uint64_t *rng, double lo, double hi)
     return lo + (hi - lo) * (double)(splitmix64(rng) >> 11) * 0x1.0p-53;
 }
 
-static void random_unit(uint64_t *rng, double u[3])
+void test_random_unit(uint64_t *rng, double u[3])
 {
     double n;
     do {
@@ -39,7 +40,7 @@ void test_random_inertia(uint64_t *rng, double lo, double hi, double inertia[9])
         for (int i = 0; i < 3; i++) e[i] = test_uniform(rng, lo, hi);
     } while (e[0] + e[1] < e[2] || e[0] + e[2] < e[1] || e[1] + e[2] < e[0]);
     diag[0] = e[0], diag[4] = e[1], diag[8] = e[2];
-    random_unit(rng, axis);
+    test_random_unit(rng, axis);
     ctc_m3_axis_angle(rot, axis, test_uniform(rng, -CTC_PI, CTC_PI));
     ctc_m3_rotate_sym(inertia, rot, diag);
 }
@@ -78,7 +79,7 @@ test_chain *test_chain_random_spatial(int n, uint64_t seed, unsigned type_mask)
             t = (int)(splitmix64(&rng) % 5);
         } while (!(type_mask & (1u << t)));
         j->type = (ctc_joint_type)t;
-        random_unit(&rng, j->axis);
+        test_random_unit(&rng, j->axis);
         for (int i = 0; i < 3; i++) j->location[i] = k ? test_uniform(&rng, -0.5, 0.5) : 0.0;
         ctc_body_spec *b = &c->bodies[k];
         b->mass = exp(test_uniform(&rng, log(0.1), log(10.0)));
@@ -153,6 +154,23 @@ test_chain *test_chain_coil(int n)
         ctc_shape_cylinder(1.0 / n, len / 20, len, link, centre, &c->bodies[k], NULL, 0);
     }
     return c;
+}
+
+void test_chain_rotate(test_chain *c, const double rot[9])
+{
+    double t[3], in[9];
+    for (int k = 0; k < c->spec.nbodies; k++) {
+        ctc_m3_mulv(t, rot, c->joints[k].axis);
+        ctc_v3_copy(c->joints[k].axis, t);
+        ctc_m3_mulv(t, rot, c->joints[k].location);
+        ctc_v3_copy(c->joints[k].location, t);
+        ctc_m3_mulv(t, rot, c->bodies[k].com);
+        ctc_v3_copy(c->bodies[k].com, t);
+        ctc_m3_rotate_sym(in, rot, c->bodies[k].inertia);
+        memcpy(c->bodies[k].inertia, in, sizeof in);
+    }
+    ctc_m3_mulv(t, rot, c->spec.gravity);
+    ctc_v3_copy(c->spec.gravity, t);
 }
 
 void test_random_state(const ctc_model *m, uint64_t *rng, double vmax, double *q, double *v)

@@ -24,6 +24,13 @@ typedef struct test_chain {
 /* uniform random number in [lo, hi) */
 double test_uniform(uint64_t *rng, double lo, double hi);
 
+/* a random unit vector, uniform on the sphere */
+void test_random_unit(uint64_t *rng, double u[3]);
+
+/* Rotates a whole chain spec by rot (row-major 3x3): joint axes and locations, centres of mass,
+ * inertias and gravity. Valid because body frames are parallel to the world's at q = 0. */
+void test_chain_rotate(test_chain *c, const double rot[9]);
+
 /* A random full-rank inertia about the CoM: principal moments in [lo, hi] kg m^2 satisfying the
  * triangle inequality, in random principal axes. */
 void test_random_inertia(uint64_t *rng, double lo, double hi, double inertia[9]);

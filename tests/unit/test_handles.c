@@ -282,24 +282,6 @@ Test(handles, planar_chain_in_spatial_form_matches_newton_euler)
                 e.accel);
 }
 
-/* rotates a whole chain spec by rot (its bodies' frames are parallel to the world's at q = 0) */
-static void rotate_chain(test_chain *c, const double rot[9])
-{
-    double t[3], in[9];
-    for (int k = 0; k < c->spec.nbodies; k++) {
-        ctc_m3_mulv(t, rot, c->joints[k].axis);
-        ctc_v3_copy(c->joints[k].axis, t);
-        ctc_m3_mulv(t, rot, c->joints[k].location);
-        ctc_v3_copy(c->joints[k].location, t);
-        ctc_m3_mulv(t, rot, c->bodies[k].com);
-        ctc_v3_copy(c->bodies[k].com, t);
-        ctc_m3_rotate_sym(in, rot, c->bodies[k].inertia);
-        memcpy(c->bodies[k].inertia, in, sizeof in);
-    }
-    ctc_m3_mulv(t, rot, c->spec.gravity);
-    ctc_v3_copy(c->spec.gravity, t);
-}
-
 Test(handles, planar_records_in_a_tilted_plane_match_newton_euler)
 {
     /* random planar chains rotated as a whole: J = n . I n, gravity (g . e1, g . e2) */
@@ -310,7 +292,7 @@ Test(handles, planar_records_in_a_tilted_plane_match_newton_euler)
         double axis[3] = {test_uniform(&rng, -1, 1), test_uniform(&rng, -1, 1), 0.4}, rot[9];
         ctc_v3_scale(axis, axis, 1.0 / ctc_v3_norm(axis));
         ctc_m3_axis_angle(rot, axis, test_uniform(&rng, 0.3, 2.8));
-        rotate_chain(c, rot);
+        test_chain_rotate(c, rot);
         check_chain(&c->spec, &rng, &e);
         test_chain_free(c);
     }

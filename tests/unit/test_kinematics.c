@@ -618,23 +618,11 @@ Test(kinematics, planar_form_in_a_tilted_plane_reads_as_spatial_form)
     uint64_t rng = 77;
     for (uint64_t seed = 1; seed <= NSEEDS; seed++) {
         test_chain *c = random_chain(0, seed, covers);
-        double axis[3], rot[9], t[3];
+        double axis[3], rot[9];
         ctc_v3_set(axis, test_uniform(&rng, -1, 1), test_uniform(&rng, -1, 1), 0.5);
         ctc_v3_scale(axis, axis, 1.0 / ctc_v3_norm(axis));
         ctc_m3_axis_angle(rot, axis, test_uniform(&rng, 0.3, 2.8));
-        for (int k = 0; k < c->spec.nbodies; k++) {
-            ctc_m3_mulv(t, rot, c->joints[k].axis);
-            ctc_v3_copy(c->joints[k].axis, t);
-            ctc_m3_mulv(t, rot, c->joints[k].location);
-            ctc_v3_copy(c->joints[k].location, t);
-            ctc_m3_mulv(t, rot, c->bodies[k].com);
-            ctc_v3_copy(c->bodies[k].com, t);
-            double in[9];
-            ctc_m3_rotate_sym(in, rot, c->bodies[k].inertia);
-            memcpy(c->bodies[k].inertia, in, sizeof in);
-        }
-        ctc_m3_mulv(t, rot, c->spec.gravity);
-        ctc_v3_copy(c->spec.gravity, t);
+        test_chain_rotate(c, rot);
 
         kin_fixture fp = kin_make(&c->spec);
         c->spec.form = CTC_FORM_SPATIAL;

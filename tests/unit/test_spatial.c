@@ -12,16 +12,6 @@
 #include "chains.h"
 #include "spatial.h"
 
-static void random_unit(uint64_t *rng, double u[3])
-{
-    double n;
-    do {
-        ctc_v3_set(u, test_uniform(rng, -1, 1), test_uniform(rng, -1, 1), test_uniform(rng, -1, 1));
-        n = ctc_v3_norm(u);
-    } while (n < 0.1 || n > 1.0);
-    ctc_v3_scale(u, u, 1.0 / n);
-}
-
 /* R D R^T with D = diag(d), written out */
 static void rotated_diag(const double r[9], const double d[3], double s[9])
 {
@@ -92,7 +82,7 @@ Test(spatial, eigenvalues_of_rotated_diagonal_matrices_match_their_spectrum)
     double worst = 0;
     for (int t = 0; t < 400; t++) {
         double axis[3], r[9], d[3], s[9], eig[3];
-        random_unit(&rng, axis);
+        test_random_unit(&rng, axis);
         ctc_m3_axis_angle(r, axis, test_uniform(&rng, -CTC_PI, CTC_PI));
         for (int i = 0; i < 3; i++) d[i] = test_uniform(&rng, -5, 5);
         switch (t % 4) {
@@ -129,7 +119,7 @@ Test(spatial, eigenvalues_of_a_slender_rod_are_zero_and_a_repeated_pair)
         double e[3], s[9], eig[3], mass = test_uniform(&rng, 0.1, 10),
                                    len = test_uniform(&rng, 0.1, 3);
         double a = mass * len * len / 12;
-        random_unit(&rng, e);
+        test_random_unit(&rng, e);
         if (t < 3) ctc_v3_set(e, t == 0, t == 1, t == 2); /* along the coordinate axes */
         for (int i = 0; i < 3; i++) {
             for (int j = 0; j < 3; j++) s[3 * i + j] = a * ((i == j) - e[i] * e[j]);
@@ -197,7 +187,7 @@ Test(spatial, quaternion_of_axis_angle_gives_the_axis_angle_rotation)
     for (int t = 0; t < 500; t++) {
         double a[3], q[4], r[9], want[9];
         double th = test_uniform(&rng, -2 * CTC_PI, 2 * CTC_PI);
-        random_unit(&rng, a);
+        test_random_unit(&rng, a);
         if (t < 6) { /* the coordinate axes, both signs */
             ctc_v3_set(a, 0, 0, 0);
             a[t % 3] = t < 3 ? 1 : -1;
@@ -257,7 +247,7 @@ Test(spatial, axis_angle_rotates_by_the_right_hand_rule)
     uint64_t rng = 13;
     for (int t = 0; t < 300; t++) {
         double a[3], x[3], ax[3], want[3], got[3], th = test_uniform(&rng, -CTC_PI, CTC_PI);
-        random_unit(&rng, a);
+        test_random_unit(&rng, a);
         for (int i = 0; i < 3; i++) x[i] = test_uniform(&rng, -2, 2);
         ctc_m3_axis_angle(r, a, th);
         ctc_m3_mulv(got, r, x);
@@ -277,7 +267,7 @@ Test(spatial, rotate_sym_equals_r_s_rt)
     uint64_t rng = 17;
     for (int t = 0; t < 200; t++) {
         double a[3], r[9], s[9], got[9], want[9];
-        random_unit(&rng, a);
+        test_random_unit(&rng, a);
         ctc_m3_axis_angle(r, a, test_uniform(&rng, -CTC_PI, CTC_PI));
         for (int i = 0; i < 3; i++) {
             for (int j = i; j < 3; j++) s[3 * i + j] = s[3 * j + i] = test_uniform(&rng, -1, 1);
@@ -341,7 +331,7 @@ Test(spatial, normals_form_a_right_handed_orthonormal_basis)
     uint64_t rng = 21;
     for (int t = 0; t < 1000; t++) {
         double a[3];
-        random_unit(&rng, a);
+        test_random_unit(&rng, a);
         snprintf(what, sizeof what, "random axis %d", t);
         check_normals(a, what);
     }
