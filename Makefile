@@ -37,6 +37,7 @@ BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
 .PHONY: all deps test check check-asan bench clean
 .DELETE_ON_ERROR:
+.SECONDARY:
 
 all: $(LIB)
 
