@@ -24,8 +24,7 @@ typedef struct ctc_data {
     int dim;   /* 3 or 6, as the model's */
     int hsize; /* doubles in one handle-equation record: 3 dim^2 + 2 dim */
 
-    /* kinematics, from ctc_kinematics; world frame, or the plane's (x, y, n) frame in planar form
-     */
+    /* kinematics, from ctc_kinematics: world frame (planar form: the plane's frame e1, e2, n) */
     double *xpos;  /* (n x 3) origin of body k's frame = its handle 1 = joint k's centre, m */
     double *xrot;  /* (n x 9) orientation of body k, maps body to world coordinates */
     double *xcom;  /* (n x 3) centre of mass, m */
@@ -43,7 +42,7 @@ typedef struct ctc_data {
 
     /* GDCA tree records and joint solutions */
     double *hfwd;  /* (ntree x hsize) forward assemblies */
-    double *hinv;  /* (ntree x hsize) inverse assemblies */
+    double *hinv;  /* (ntree x hsize) inverse assemblies of the mobility form */
     double *fwd_E; /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
     double *fwd_z; /* (n x dim)   joint k: W Y + P f */
     double *inv_E; /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
@@ -68,7 +67,7 @@ ctc_data *ctc_data_new(const ctc_model *m);
 void ctc_data_free(ctc_data *d);
 
 /* The record of assembly index a: a body's (a < n), or internal node a - n's of the forward
- * (inverse = 0) or inverse (inverse = 1) pass. */
+ * (inverse = 0) or the mobility-form inverse (inverse = 1) pass. */
 static inline double *ctc_data_handles(const ctc_model *m, const ctc_data *d, int a, int inverse)
 {
     if (a < m->nbodies) return d->hbody + (size_t)a * d->hsize;

@@ -29,8 +29,8 @@ static ctc_model *build(const ctc_chain_spec *spec)
     return m;
 }
 
-/* qacc of GDCA vs ABA at `trials` random states; returns the largest error / tolerance */
-static double forward_vs_aba(const ctc_model *m, uint64_t seed, int trials)
+/* asserts qacc of GDCA matches ABA at `trials` random states */
+static void forward_vs_aba(const ctc_model *m, uint64_t seed, int trials)
 {
     ctc_data *d = ctc_data_new(m);
     ctc_oracle *o = ctc_oracle_new(m);
@@ -39,7 +39,6 @@ static double forward_vs_aba(const ctc_model *m, uint64_t seed, int trials)
     double *f = calloc((size_t)nv + 1, sizeof(double)), *a = calloc((size_t)nv + 1, sizeof(double));
     double *ref = calloc((size_t)nv + 1, sizeof(double));
     double *mass = calloc((size_t)nv * nv + 1, sizeof(double));
-    double worst = 0;
     cr_assert(d && o && q && v && f && a && ref && mass);
     uint64_t rng = seed;
     for (int t = 0; t < trials; t++) {
@@ -55,12 +54,10 @@ static double forward_vs_aba(const ctc_model *m, uint64_t seed, int trials)
         double err = test_rel_err(a, ref, nv);
         cr_assert(err <= tolerance(cond), "n=%d trial %d: error %.3g > tolerance %.3g (cond %.3g)",
                   m->nbodies, t, err, tolerance(cond), cond);
-        worst = fmax(worst, err / tolerance(cond));
     }
     free(q), free(v), free(f), free(a), free(ref), free(mass);
     ctc_oracle_free(o);
     ctc_data_free(d);
-    return worst;
 }
 
 static const int sizes[] = {1, 2, 3, 7, 16, 64, 257};
