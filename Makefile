@@ -1,7 +1,7 @@
 # ctcsim - build, test and benchmark.
 #
 #   make deps    install missing Debian packages (as root), or print the apt-get line to run
-#   make         build the library into build/
+#   make         build the library and the ctcsim command line into build/
 #   make test    build and run the unit tests, then again under AddressSanitizer + UBSan
 #   make bench   build with optimisation and run the benchmarks
 #   make clean   remove build/
@@ -16,18 +16,26 @@ SANITIZE ?=
 WARN := -Wall -Wextra -Wshadow -Wstrict-prototypes -Werror
 CFLAGS := -std=c11 $(WARN) $(OPT) -g -D_POSIX_C_SOURCE=200809L -Isrc $(EXTRA_CFLAGS)
 LDFLAGS := $(EXTRA_LDFLAGS)
-LDLIBS := -lm
+LDLIBS := -lcjson -lsundials_cvode -lsundials_nvecserial -lsundials_sunmatrixdense \
+	-lsundials_sunlinsoldense -llapacke -llapack -lblas -lm
 ifeq ($(SANITIZE),1)
 CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 LDFLAGS += -fsanitize=address,undefined
 endif
 
 # Debian packages the build and the tests need
-DEB_PACKAGES := gcc make libc6-dev libcriterion-dev
+DEB_PACKAGES := gcc make libc6-dev libcriterion-dev libcjson-dev liblapacke-dev libsundials-dev
 
 LIB_SRC := $(wildcard src/*.c)
 LIB_OBJ := $(LIB_SRC:src/%.c=$(BUILD)/obj/%.o)
 LIB := $(BUILD)/libctcsim.a
+# server/: the job format, presets and outputs shared by the command line and the service, and
+# the programs' mains
+MAINS := server/cli.c
+APP_SRC := $(filter-out $(MAINS),$(wildcard server/*.c))
+APP_OBJ := $(APP_SRC:server/%.c=$(BUILD)/obj/server/%.o)
+APP_LIB := $(BUILD)/libctcapp.a
+CLI := $(BUILD)/ctcsim
 TEST_SRC := $(wildcard tests/unit/test_*.c)
 TEST_BIN := $(TEST_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 SUPPORT_SRC := $(wildcard tests/support/*.c)
@@ -39,11 +47,15 @@ BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 .DELETE_ON_ERROR:
 .SECONDARY:
 
-all: $(LIB)
+all: $(LIB) $(CLI)
 
 $(BUILD)/obj/%.o: src/%.c
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) -MMD -MP -c $< -o $@
+
+$(BUILD)/obj/server/%.o: server/%.c
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -Iserver -MMD -MP -c $< -o $@
 
 $(BUILD)/obj/support/%.o: tests/support/%.c
 	@mkdir -p $(@D)
@@ -54,14 +66,24 @@ $(LIB): $(LIB_OBJ)
 	rm -f $@
 	ar rcs $@ $^
 
-$(BUILD)/tests/%: tests/unit/%.c $(SUPPORT_OBJ) $(LIB)
+$(APP_LIB): $(APP_OBJ)
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -Itests/support -MMD -MP $< $(SUPPORT_OBJ) $(LIB) -o $@ $(LDFLAGS) \
-		-lcriterion $(LDLIBS)
+	rm -f $@
+	ar rcs $@ $^
 
-$(BUILD)/bench/%: bench/%.c $(SUPPORT_OBJ) $(LIB)
+$(CLI): $(BUILD)/obj/server/cli.o $(APP_LIB) $(LIB)
+	$(CC) $^ -o $@ $(LDFLAGS) $(LDLIBS)
+
+$(BUILD)/tests/%: tests/unit/%.c $(SUPPORT_OBJ) $(APP_LIB) $(LIB)
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -Itests/support -MMD -MP $< $(SUPPORT_OBJ) $(LIB) -o $@ $(LDFLAGS) $(LDLIBS)
+	$(CC) $(CFLAGS) -Itests/support -Iserver -MMD -MP $< $(SUPPORT_OBJ) $(APP_LIB) $(LIB) -o $@ \
+		$(LDFLAGS) -lcriterion $(LDLIBS)
+
+# benchmarks also link SUNDIALS ARKODE, to measure it against the in-house explicit steppers
+$(BUILD)/bench/%: bench/%.c $(SUPPORT_OBJ) $(APP_LIB) $(LIB)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -Itests/support -Iserver -MMD -MP $< $(SUPPORT_OBJ) $(APP_LIB) $(LIB) -o $@ \
+		$(LDFLAGS) -lsundials_arkode $(LDLIBS)
 
 # installs what is missing: apt-get as root (updating the package lists first when there are
 # none, or when a package is not found), otherwise prints the command to run and fails
@@ -83,8 +105,9 @@ deps:
 		|| { apt-get update && apt-get install -y --no-install-recommends $$missing; }
 
 # runs the suite as built in $(BUILD)
-check: $(TEST_BIN)
+check: $(TEST_BIN) $(CLI)
 	@sh tests/run.sh $(TEST_BIN)
+	@CTCSIM=$(CLI) sh tests/cli/run.sh
 
 check-asan:
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan SANITIZE=1 OPT=-O1 check
@@ -96,10 +119,10 @@ test: deps
 
 bench: deps
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/bench-o3 OPT="-O3 -march=native -DNDEBUG" \
-		$(BUILD)/bench-o3/bench/bench_dynamics
-	$(BUILD)/bench-o3/bench/bench_dynamics
+		$(BENCH_SRC:bench/%.c=$(BUILD)/bench-o3/bench/%)
+	@for b in $(BENCH_SRC:bench/%.c=$(BUILD)/bench-o3/bench/%); do echo "== $$b"; $$b || exit 1; done
 
 clean:
 	rm -rf $(BUILD)
 
--include $(LIB_OBJ:.o=.d) $(SUPPORT_OBJ:.o=.d) $(TEST_BIN:=.d) $(BENCH_BIN:=.d)
+-include $(LIB_OBJ:.o=.d) $(APP_OBJ:.o=.d) $(BUILD)/obj/server/cli.d $(SUPPORT_OBJ:.o=.d) $(TEST_BIN:=.d) $(BENCH_BIN:=.d)

@@ -1,5 +1,5 @@
 /*
- * linalg.c - condition-number estimate and relative error for tests (linalg.h).
+ * linalg.c - condition-number estimate, SPD solve and relative error for tests (linalg.h).
  */
 #include "linalg.h"
 
@@ -14,6 +14,41 @@ double test_rel_err(const double *a, const double *b, int n)
         s = fmax(s, fabs(b[i]));
     }
     return e / (s > 0 ? s : 1.0);
+}
+
+int test_solve_spd(const double *m, int n, const double *b, double *x)
+{
+    double *l = malloc(sizeof(double) * (size_t)n * (size_t)n);
+    if (!l) return -1;
+    /* M = L L^T, lower triangle of l */
+    for (int j = 0; j < n; j++) {
+        for (int i = j; i < n; i++) {
+            double s = m[i * n + j];
+            for (int k = 0; k < j; k++) s -= l[i * n + k] * l[j * n + k];
+            if (i == j) {
+                if (!(s > 0)) {
+                    free(l);
+                    return -1;
+                }
+                l[j * n + j] = sqrt(s);
+            } else {
+                l[i * n + j] = s / l[j * n + j];
+            }
+        }
+    }
+    /* forward then backward substitution */
+    for (int i = 0; i < n; i++) {
+        double s = b[i];
+        for (int k = 0; k < i; k++) s -= l[i * n + k] * x[k];
+        x[i] = s / l[i * n + i];
+    }
+    for (int i = n - 1; i >= 0; i--) {
+        double s = x[i];
+        for (int k = i + 1; k < n; k++) s -= l[k * n + i] * x[k];
+        x[i] = s / l[i * n + i];
+    }
+    free(l);
+    return 0;
 }
 
 static void normalise(double *x, int n, double *norm)

@@ -9,6 +9,10 @@
  * Returns INFINITY if M is not numerically positive definite. */
 double test_cond_spd(const double *m, int n);
 
+/* Solves M x = b for the symmetric positive definite M (n x n, row-major) by Cholesky; returns
+ * -1 if M is not numerically positive definite, else 0. x may alias b. */
+int test_solve_spd(const double *m, int n, const double *b, double *x);
+
 /* Largest |a_i - b_i| over max |b_i| (or over 1 when b is all zero). */
 double test_rel_err(const double *a, const double *b, int n);
 

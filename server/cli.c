@@ -1,0 +1,307 @@
+/*
+ * cli.c - the `ctcsim` command line: run, validate and list jobs without the service.
+ *
+ *   ctcsim run FILE|- [--format csv|json] [-o OUT] [--channels LIST] [--every N] [--quiet]
+ *   ctcsim validate FILE|-
+ *   ctcsim presets
+ *   ctcsim preset NAME [KEY=VALUE ...]
+ *
+ * It reads a job (job_json.h) from a file or standard input, runs it with the library in this
+ * thread, and writes the series as CSV or one JSON object (result_out.h) to standard output or
+ * OUT; a one-line summary goes to standard error. Exit codes:
+ *   0  the run finished (status "done"), or the job is valid, or the listing was printed
+ *   1  usage error (unknown command or option)
+ *   2  the job is invalid: "FILE: FIELD: MESSAGE" on standard error
+ *   3  the run stopped early: diverged, integrator failure or timeout (the samples up to there
+ *      are still written)
+ *   4  input or output error (file not found, disk full)
+ */
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "job_json.h"
+#include "presets.h"
+#include "result_out.h"
+
+enum { EXIT_USAGE = 1, EXIT_INVALID = 2, EXIT_STOPPED = 3, EXIT_IO = 4 };
+
+#define CLI_MAX_INPUT (256L * 1024 * 1024)
+
+static const char usage[] =
+    "usage: ctcsim run FILE|- [--format csv|json] [-o OUT] [--channels LIST] [--every N] "
+    "[--quiet]\n"
+    "       ctcsim validate FILE|-\n"
+    "       ctcsim presets\n"
+    "       ctcsim preset NAME [KEY=VALUE ...]\n"
+    "\n"
+    "  run       run a job (JSON, see api/job.schema.json) and write its series: CSV by\n"
+    "            default, or with --format json one object with the normalised spec, the\n"
+    "            metrics and the series; to standard output or OUT\n"
+    "  validate  check a job without running it; prints its normalised form\n"
+    "  presets   list the ready-made jobs (the paper's scenes)\n"
+    "  preset    print a preset's job; KEY=VALUE sets its parameters (e.g. n=16)\n"
+    "\n"
+    "  --channels LIST  comma-separated subset of q,qdot,q_des,qdot_des,e,tau,w,energy\n"
+    "  --every N        keep every N-th sample (and the last)\n"
+    "  --quiet          no summary line on standard error\n"
+    "\n"
+    "exit codes: 0 done or valid, 1 usage, 2 invalid job, 3 run stopped early (diverged,\n"
+    "failed, timeout), 4 input/output error\n";
+
+/* reads the whole file (or stdin for "-") into a new buffer; NULL with *why on failure */
+static char *read_input(const char *path, size_t *len, const char **why)
+{
+    FILE *f = strcmp(path, "-") == 0 ? stdin : fopen(path, "rb");
+    if (!f) {
+        *why = strerror(errno);
+        return NULL;
+    }
+    size_t cap = 0, n = 0;
+    char *buf = NULL;
+    for (;;) {
+        if (n == cap) {
+            if (cap >= CLI_MAX_INPUT) {
+                *why = "input larger than 256 MiB";
+                goto fail;
+            }
+            size_t grow = cap ? 2 * cap : 1 << 16;
+            char *bigger = realloc(buf, grow);
+            if (!bigger) {
+                *why = "out of memory";
+                goto fail;
+            }
+            buf = bigger, cap = grow;
+        }
+        size_t got = fread(buf + n, 1, cap - n, f);
+        n += got;
+        if (got == 0) break;
+    }
+    if (ferror(f)) {
+        *why = strerror(errno);
+        goto fail;
+    }
+    if (f != stdin) fclose(f);
+    *len = n;
+    return buf;
+fail:
+    if (f != stdin) fclose(f);
+    free(buf);
+    return NULL;
+}
+
+static int load_job(const char *path, job **out)
+{
+    size_t len = 0;
+    const char *why = "";
+    char *text = read_input(path, &len, &why);
+    if (!text) {
+        fprintf(stderr, "ctcsim: %s: %s\n", path, why);
+        return EXIT_IO;
+    }
+    job_error err;
+    int rc = job_parse(text, len, out, &err);
+    free(text);
+    if (rc != 0) {
+        if (err.field[0])
+            fprintf(stderr, "ctcsim: %s: %s: %s\n", path, err.field, err.message);
+        else
+            fprintf(stderr, "ctcsim: %s: %s\n", path, err.message);
+        return EXIT_INVALID;
+    }
+    return 0;
+}
+
+static void print_summary(const job *j, const ctc_sim_result *r)
+{
+    const ctc_sim_metrics *m = &r->metrics;
+    fprintf(stderr, "%s: %s, %s %s, %d samples to t = %g s, %ld steps (%ld rejected), %.3g s",
+            j->name, ctc_run_status_name(r->status), ctc_form_name(m->form),
+            ctc_ctrl_type_name(j->spec.controller), r->nsamples, m->t_end, m->steps, m->rejected,
+            m->wall_s);
+    if (m->e_max) {
+        double e = 0;
+        for (int i = 0; i < m->nv; i++) e = e > m->e_max[i] ? e : m->e_max[i];
+        fprintf(stderr, ", max |e| %.3g", e);
+    }
+    if (m->errdyn_dev == m->errdyn_dev)
+        fprintf(stderr, ", error-dynamics deviation %.2g", m->errdyn_dev);
+    if (m->energy_drift == m->energy_drift) fprintf(stderr, ", energy drift %.2g", m->energy_drift);
+    fputc('\n', stderr);
+    if (r->message[0]) fprintf(stderr, "%s: %s\n", j->name, r->message);
+}
+
+static int cmd_run(int argc, char **argv)
+{
+    const char *path = NULL, *outpath = NULL, *format = "csv";
+    unsigned mask = 0;
+    int every = 1, quiet = 0;
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i];
+        if (strcmp(a, "--format") == 0 && i + 1 < argc) {
+            format = argv[++i];
+            if (strcmp(format, "csv") != 0 && strcmp(format, "json") != 0) {
+                fprintf(stderr, "ctcsim: --format must be csv or json (got \"%s\")\n", format);
+                return EXIT_USAGE;
+            }
+        } else if (strcmp(a, "-o") == 0 && i + 1 < argc) {
+            outpath = argv[++i];
+        } else if (strcmp(a, "--channels") == 0 && i + 1 < argc) {
+            char bad[64];
+            if (result_parse_channels(argv[++i], &mask, bad, sizeof bad) != 0) {
+                fprintf(stderr, "ctcsim: --channels: unknown channel \"%s\"\n", bad);
+                return EXIT_USAGE;
+            }
+        } else if (strcmp(a, "--every") == 0 && i + 1 < argc) {
+            char *end;
+            long n = strtol(argv[++i], &end, 10);
+            if (*end || n < 1 || n > INT_MAX) {
+                fprintf(stderr, "ctcsim: --every must be a positive integer (got \"%s\")\n",
+                        argv[i]);
+                return EXIT_USAGE;
+            }
+            every = (int)n;
+        } else if (strcmp(a, "--quiet") == 0) {
+            quiet = 1;
+        } else if (!path && (a[0] != '-' || strcmp(a, "-") == 0)) {
+            path = a;
+        } else {
+            fprintf(stderr, "ctcsim: run: unexpected argument \"%s\"\n%s", a, usage);
+            return EXIT_USAGE;
+        }
+    }
+    if (!path) {
+        fprintf(stderr, "ctcsim: run: which job? (a FILE or - for standard input)\n%s", usage);
+        return EXIT_USAGE;
+    }
+
+    job *j = NULL;
+    int rc = load_job(path, &j);
+    if (rc) return rc;
+    unsigned missing = mask & ~(j->spec.channels ? j->spec.channels : CTC_CH_ALL);
+    for (int c = 0; missing && c < CTC_NCHANNELS; c++) {
+        if (!(missing & CTC_CH_BIT(c))) continue;
+        fprintf(stderr, "ctcsim: --channels: \"%s\" is not among the job's output channels\n",
+                ctc_channel_name((ctc_channel)c));
+        job_free(j);
+        return EXIT_USAGE;
+    }
+
+    ctc_sim_result *r = NULL;
+    char err[256];
+    if (ctc_sim_run(&j->spec, NULL, &r, err, sizeof err) != CTC_OK) {
+        fprintf(stderr, "ctcsim: %s: %s\n", path, err);
+        job_free(j);
+        return EXIT_INVALID;
+    }
+
+    FILE *out = outpath ? fopen(outpath, "w") : stdout;
+    if (!out) {
+        fprintf(stderr, "ctcsim: %s: %s\n", outpath, strerror(errno));
+        rc = EXIT_IO;
+    } else {
+        int wrc = strcmp(format, "json") == 0 ? result_write_json(out, r, j, mask, every)
+                                              : result_write_csv(out, r, mask, every);
+        if (fflush(out) != 0) wrc = -1;
+        if (outpath && fclose(out) != 0) wrc = -1;
+        if (wrc) {
+            fprintf(stderr, "ctcsim: writing %s: %s\n", outpath ? outpath : "output",
+                    strerror(errno));
+            rc = EXIT_IO;
+        }
+    }
+    if (!quiet) print_summary(j, r);
+    if (!rc && r->status != CTC_RUN_DONE) rc = EXIT_STOPPED;
+    ctc_sim_result_free(r);
+    job_free(j);
+    return rc;
+}
+
+static int cmd_validate(int argc, char **argv)
+{
+    if (argc != 1) {
+        fprintf(stderr, "ctcsim: validate takes one FILE (or -)\n%s", usage);
+        return EXIT_USAGE;
+    }
+    job *j = NULL;
+    int rc = load_job(argv[0], &j);
+    if (rc) return rc;
+    char err[256];
+    if (ctc_sim_check(&j->spec, err, sizeof err) != CTC_OK) {
+        fprintf(stderr, "ctcsim: %s: %s\n", argv[0], err);
+        job_free(j);
+        return EXIT_INVALID;
+    }
+    char *text = cJSON_Print(j->normalised);
+    if (text) printf("%s\n", text);
+    cJSON_free(text);
+    fprintf(stderr, "%s: valid (%d bodies, %d coordinates, controller %s)\n", argv[0],
+            j->spec.chain.nbodies, j->nv, ctc_ctrl_type_name(j->spec.controller));
+    job_free(j);
+    return text ? 0 : EXIT_IO;
+}
+
+static int cmd_presets(void)
+{
+    int n = 0;
+    const preset *p = presets_list(&n);
+    for (int i = 0; i < n; i++) printf("%-32s %s\n", p[i].name, p[i].summary);
+    return 0;
+}
+
+static int cmd_preset(int argc, char **argv)
+{
+    if (argc < 1) {
+        fprintf(stderr, "ctcsim: preset: which one? (ctcsim presets lists them)\n");
+        return EXIT_USAGE;
+    }
+    const preset *p = presets_find(argv[0]);
+    if (!p) {
+        fprintf(stderr, "ctcsim: no preset \"%s\" (ctcsim presets lists them)\n", argv[0]);
+        return EXIT_INVALID;
+    }
+    /* KEY=VALUE parameters, the value as JSON (a bare word is taken as a string) */
+    cJSON *request = cJSON_CreateObject();
+    for (int i = 1; i < argc; i++) {
+        char *eq = strchr(argv[i], '=');
+        if (!eq || eq == argv[i]) {
+            fprintf(stderr, "ctcsim: preset: expected KEY=VALUE (got \"%s\")\n", argv[i]);
+            cJSON_Delete(request);
+            return EXIT_USAGE;
+        }
+        cJSON *value = cJSON_Parse(eq + 1);
+        if (!value) value = cJSON_CreateString(eq + 1);
+        *eq = 0;
+        cJSON_AddItemToObject(request, argv[i], value);
+    }
+    job_error err;
+    cJSON *doc = p->build(request, &err);
+    cJSON_Delete(request);
+    if (!doc) {
+        fprintf(stderr, "ctcsim: preset %s: %s: %s\n", argv[0], err.field, err.message);
+        return EXIT_INVALID;
+    }
+    char *text = cJSON_Print(doc);
+    cJSON_Delete(doc);
+    if (!text) return EXIT_IO;
+    printf("%s\n", text);
+    cJSON_free(text);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2 || strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0) {
+        fputs(usage, argc < 2 ? stderr : stdout);
+        return argc < 2 ? EXIT_USAGE : 0;
+    }
+    const char *cmd = argv[1];
+    if (strcmp(cmd, "run") == 0) return cmd_run(argc - 2, argv + 2);
+    if (strcmp(cmd, "validate") == 0) return cmd_validate(argc - 2, argv + 2);
+    if (strcmp(cmd, "presets") == 0 && argc == 2) return cmd_presets();
+    if (strcmp(cmd, "preset") == 0) return cmd_preset(argc - 2, argv + 2);
+    fprintf(stderr, "ctcsim: unknown command \"%s\"\n%s", cmd, usage);
+    return EXIT_USAGE;
+}

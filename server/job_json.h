@@ -1,0 +1,154 @@
+/*
+ * job_json.h - the job format: the one place a job's JSON is parsed, validated and normalised.
+ *
+ * The command line (`ctcsim run`) and the HTTP service (POST /api/jobs) both turn a JSON document
+ * into a runnable ctc_sim_spec here. The JSON Schema in api/job.schema.json describes the same
+ * format for users; this comment is the reference. Unknown keys are errors everywhere (a typo
+ * must not pass silently); every error names the JSON path of the offending value and the
+ * reason. Units are SI and radians throughout.
+ *
+ * A job is an object:
+ *   "name"        string, optional (1..JOB_MAX_NAME bytes; default "job" or the preset's name)
+ *   "scene"       object, required:
+ *       "gravity"   [gx, gy, gz] m/s^2, default [0, -9.81, 0]
+ *       "form"      "auto" (default) | "planar" | "spatial"
+ *       "bodies"    array of 1..JOB_MAX_BODIES bodies, base first; each:
+ *           "name"     string, optional (1..JOB_MAX_NAME bytes)
+ *           "mass"     kg > 0, required (a shape needs it too)
+ *           "com"      [x, y, z] m, centre of mass in the body frame   } both, or a "shape"
+ *           "inertia"  3x3 array of rows, or [Ixx, Iyy, Izz] (principal   } instead
+ *                      axes along the body axes), kg m^2 about the CoM  }
+ *           "shape"    {"type": "rod", "end": [x,y,z]}
+ *                    | {"type": "box", "size": [a,b,c], "centre": [x,y,z] (default 0)}
+ *                    | {"type": "cylinder", "radius": r, "length": L, "axis": [x,y,z],
+ *                       "centre": [x,y,z] (default 0)}          (shapes.h; needs "mass")
+ *           "joint"    the body's inboard joint, required:
+ *                      {"type": "revolute"|"prismatic"|"cylindrical"|"spherical"|"fixed",
+ *                       "axis": [x,y,z] (required for revolute, prismatic, cylindrical; not
+ *                       allowed for spherical and fixed), "location": [x,y,z] m in the parent's
+ *                       frame (the world's for the first body; default [0,0,0])}
+ *       "q0"        array of nq numbers (default: all zero, identity quaternions; a spherical
+ *                   joint's quaternion (w, x, y, z) must have unit length to 1e-6)
+ *       "v0"        array of nv numbers (default: all zero)
+ *   "controller"  object, required:
+ *       "type"      "none" | "pd" | "pid" | "poles" | "lqr"
+ *       pd:    "kp", "kv"                   or "zeta", "tau"
+ *       pid:   "kp", "kv", "ki"             or "zeta", "tau", "ki"
+ *       poles: "poles": three entries, each a number (real pole) or {"re": x, "im": y} (both)
+ *       lqr:   "Q": 3x3 array of rows or [q1, q2, q3] (diagonal), "lambda": number > 0
+ *       "joints"  optional array of nv objects, one per coordinate, each with any of the type's
+ *                 gain keys above to override them for that coordinate ({} keeps them); for pd
+ *                 and pid, an override that names the other pair ("zeta"/"tau" where the
+ *                 controller has "kp"/"kv", or the reverse) replaces the pair and must give both
+ *       "model"   optional {"mass_scale": s > 0, "inertia_scale": s > 0}, default 1 and 1:
+ *                 the controller's model of the plant (model error)
+ *     "none" allows only "type"; other types need a trajectory, and no spherical joint (error at
+ *     "controller.type": a quaternion error is not a per-coordinate error).
+ *   "trajectory"  one object for every coordinate, or an array of nv objects (required with a
+ *                 controller, not allowed without):
+ *       {"type": "constant", "value": v}
+ *       {"type": "sine"|"cosine", "amplitude": A, "period": T > 0, "phase": 0, "offset": 0}
+ *       {"type": "polynomial", "coefficients": [c0, c1, ...]}      (1..16 coefficients)
+ *       {"type": "min_jerk", "from": q0, "to": q1, "start": t0, "end": t1 > t0}
+ *       {"type": "spline", "times": [...], "values": [...], "boundary": "clamped"|"natural"}
+ *   "disturbance" optional (default {"type": "none"}), one object for every coordinate or an
+ *                 array of nv objects:
+ *       {"type": "none"} | {"type": "constant", "value": z}
+ *       | {"type": "sine", "amplitude", "period", "phase" (0), "offset" (0)}
+ *       | {"type": "step", "value": z, "time": t}
+ *   "integrator"  optional, default {"method": "dopri5", "rtol": 1e-8, "atol": 1e-10}:
+ *       {"method": "rk4", "step": h}      (default step 1e-3 s; the step is shortened so that it
+ *                                          divides the output interval)
+ *       {"method": "dopri5"|"bdf", "rtol": r, "atol": a, "initial_step": 0, "max_step": 0}
+ *       any method: "max_steps" (a whole number, default 10000000; 0 = no limit)
+ *   "duration"    s, required, 0 < duration <= JOB_MAX_DURATION
+ *   "output"      optional: {"interval": dt, 0 < dt <= duration (default 0.01 s, or the duration
+ *                 when shorter), "channels": ["q", "qdot", "q_des", "qdot_des", "e", "tau", "w",
+ *                 "energy"] (default: all that apply; q_des, qdot_des, e and w need a controller)}
+ *   "limits"      optional: {"max_speed": rad/s or m/s, > 0 (default 1e6), "wall_time": s >= 0
+ *                 (0 = none)}
+ *
+ * Or a preset with overrides: {"preset": NAME, PARAMS..., OVERRIDES...}. The preset's own
+ * parameters (presets.h, e.g. "n" of n_link_pendulum) are taken out, the preset's job document
+ * is built, and the remaining keys are applied to it as a JSON merge patch (RFC 7386: objects
+ * merge key by key, null removes a key, anything else replaces), with one refinement: an object
+ * whose "type" or "method" the patch changes is replaced whole, so {"integrator": {"method":
+ * "rk4", "step": 0.001}} or {"controller": {"type": "pd", "kp": 50, "kv": 10}} over a preset
+ * does not inherit the old method's rtol or the old controller's ki.
+ *
+ * Errors. A key repeated in one object is an error. Numbers must be finite (1e999 reads as
+ * infinity and is rejected). What the library checks is reported with the library's message at
+ * the nearest path: a controller's design at "controller" or "controller.joints[i]"; a
+ * trajectory's or disturbance's parameters at "trajectory", "trajectory[i]", ...; the integrator
+ * at "integrator"; a shape at "scene.bodies[k].shape"; what only ctc_model_build finds (inertia
+ * tensors, a planar form asked of a spatial chain) at "scene". A failed allocation is reported as
+ * LIMIT_EXCEEDED with the message "out of memory" (there is no code of its own).
+ *
+ * The normalised document has the keys above in the order above, every default written out
+ * (q0, v0 and the channel list explicitly), the preset expanded; it parses to the same spec.
+ * cJSON 1.7 prints a number with 15 significant digits when they read back within DBL_EPSILON
+ * relative, so a printed document may differ from the spec in the last bit of such numbers.
+ */
+#ifndef JOB_JSON_H
+#define JOB_JSON_H
+
+#include <stddef.h>
+
+#include <cjson/cJSON.h>
+
+#include "sim.h"
+
+#define JOB_MAX_BODIES 4096
+#define JOB_MAX_DURATION 3600.0   /* s of simulated time */
+#define JOB_MAX_SAMPLES 200000    /* output samples */
+#define JOB_MAX_VALUES 20000000   /* samples x values per sample over the recorded channels */
+#define JOB_MAX_NAME 200          /* bytes */
+
+/* Error codes, stable for clients (the service returns them as error.code). */
+typedef enum job_error_code {
+    JOB_OK = 0,
+    JOB_INVALID_JSON,   /* not parseable JSON */
+    JOB_MISSING_FIELD,  /* a required key is absent */
+    JOB_UNKNOWN_FIELD,  /* a key the format does not have */
+    JOB_INVALID_FIELD,  /* wrong type or value out of range */
+    JOB_UNKNOWN_PRESET, /* "preset" names no preset */
+    JOB_LIMIT_EXCEEDED, /* bodies, duration, samples beyond the limits above */
+    JOB_NO_MEMORY,      /* an allocation failed (the service answers 503) */
+} job_error_code;
+
+typedef struct job_error {
+    job_error_code code;
+    char field[256];   /* JSON path, e.g. "scene.bodies[2].mass"; "" for the whole document */
+    char message[512]; /* the reason, e.g. "must be positive (got -1 kg)" */
+} job_error;
+
+/* A parsed job: the spec points into the arrays this struct owns. */
+typedef struct job {
+    char *name;
+    char *preset;          /* the preset it came from, or NULL */
+    ctc_sim_spec spec;     /* ready for ctc_sim_run */
+    int nq, nv;            /* sizes of the arrays below */
+    ctc_body_spec *bodies; /* (nbodies) */
+    ctc_joint_spec *joints;
+    double *q0, *v0;       /* (nq), (nv) */
+    ctc_gains *gains;      /* (nv) designed gains, NULL when passive */
+    ctc_traj *traj;        /* (nv) NULL when passive */
+    ctc_disturb *disturb;  /* (nv) NULL when none */
+    cJSON *normalised;     /* the job with the preset expanded and every default filled in; itself
+                              a valid job document. Owned. */
+} job;
+
+/* Parses len bytes of JSON text (need not be terminated). Returns 0 and *out (free with
+ * job_free), or -1 with *err filled and *out NULL. */
+int job_parse(const char *text, size_t len, job **out, job_error *err);
+
+/* The same from a parsed document (not modified, not kept). */
+int job_from_json(const cJSON *doc, job **out, job_error *err);
+
+/* Frees a job; NULL is allowed. */
+void job_free(job *j);
+
+/* The code's name: "INVALID_JSON", "MISSING_FIELD", ... */
+const char *job_error_code_name(job_error_code c);
+
+#endif

@@ -1,0 +1,34 @@
+/*
+ * presets.h - the paper's scenes as ready-made jobs (DESIGN.md section 7, paper section 7).
+ *
+ * A preset builds a complete job document (job_json.h) that users can run as it is, print with
+ * `ctcsim preset NAME` and change with overrides. Some take parameters from the request
+ * ({"preset": "n_link_pendulum", "n": 16}).
+ *
+ *   triple_pendulum_{pd,pid,poles,lqr,passive}   paper 7.1, Fig. 6(a), 7, 8
+ *   spatial_double_pendulum_{pd,pid,poles,lqr}   paper 7.1, Fig. 6(b), 9, 10 (gravity -z)
+ *   n_link_pendulum                              paper 7.3, PD; parameter "n" (2..4096, default 8)
+ */
+#ifndef PRESETS_H
+#define PRESETS_H
+
+#include <cjson/cJSON.h>
+
+#include "job_json.h"
+
+typedef struct preset {
+    const char *name;
+    const char *summary;        /* one line for listings */
+    const char *const *params;  /* NULL-terminated keys this preset takes from the request */
+    /* builds the job document; request is the whole request object (for the parameters), may be
+       NULL (defaults). Returns NULL with *err filled on a bad parameter or out of memory. */
+    cJSON *(*build)(const cJSON *request, job_error *err);
+} preset;
+
+/* The presets, *count of them, in listing order. */
+const preset *presets_list(int *count);
+
+/* The preset of that name, or NULL. */
+const preset *presets_find(const char *name);
+
+#endif

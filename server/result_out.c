@@ -1,0 +1,192 @@
+/*
+ * result_out.c - metrics as JSON and series as CSV or columnar JSON (result_out.h).
+ *
+ * The series are streamed straight to the file, a number at a time, so a large run never needs a
+ * second copy in memory; only the small metrics and spec objects go through cJSON.
+ */
+#include "result_out.h"
+
+#include <math.h>
+#include <string.h>
+
+static const char *const energy_parts[2] = {"kinetic", "potential"};
+
+static cJSON *number_or_null(double x)
+{
+    return isfinite(x) ? cJSON_CreateNumber(x) : cJSON_CreateNull();
+}
+
+static cJSON *array_or_null(const double *x, int n)
+{
+    if (!x) return cJSON_CreateNull();
+    cJSON *a = cJSON_CreateArray();
+    for (int i = 0; a && i < n; i++) cJSON_AddItemToArray(a, number_or_null(x[i]));
+    return a;
+}
+
+cJSON *result_metrics_json(const ctc_sim_result *r, const job *j)
+{
+    const ctc_sim_metrics *m = &r->metrics;
+    cJSON *o = cJSON_CreateObject();
+    if (!o) return NULL;
+    cJSON_AddStringToObject(o, "status", ctc_run_status_name(r->status));
+    cJSON_AddStringToObject(o, "message", r->message);
+    cJSON_AddStringToObject(o, "form", ctc_form_name(m->form));
+    cJSON_AddNumberToObject(o, "nq", r->nq);
+    cJSON_AddNumberToObject(o, "nv", r->nv);
+    cJSON_AddNumberToObject(o, "samples", r->nsamples);
+    cJSON_AddNumberToObject(o, "t_end", m->t_end);
+    cJSON_AddItemToObject(o, "e_max", array_or_null(m->e_max, m->nv));
+    cJSON_AddItemToObject(o, "e_rms", array_or_null(m->e_rms, m->nv));
+    cJSON_AddItemToObject(o, "e_final", array_or_null(m->e_final, m->nv));
+    cJSON_AddItemToObject(o, "errdyn_dev", number_or_null(m->errdyn_dev));
+    cJSON_AddItemToObject(o, "energy_drift", number_or_null(m->energy_drift));
+    cJSON_AddItemToObject(o, "err_estimate", number_or_null(m->err_estimate));
+    cJSON_AddNumberToObject(o, "steps", (double)m->steps);
+    cJSON_AddNumberToObject(o, "rejected", (double)m->rejected);
+    cJSON_AddNumberToObject(o, "rhs_evals", (double)m->rhs_evals);
+    cJSON_AddNumberToObject(o, "wall_s", m->wall_s);
+    cJSON_AddNumberToObject(o, "cpu_s", m->cpu_s);
+    cJSON_AddNumberToObject(o, "us_per_eval", m->us_per_eval);
+    if (m->diverged_joint >= 0)
+        cJSON_AddNumberToObject(o, "diverged_joint", m->diverged_joint);
+    else
+        cJSON_AddNullToObject(o, "diverged_joint");
+    if (j && j->gains) {
+        cJSON *g = cJSON_AddArrayToObject(o, "gains");
+        for (int i = 0; g && i < j->nv; i++) {
+            cJSON *e = cJSON_CreateObject();
+            cJSON_AddNumberToObject(e, "ki", j->gains[i].ki);
+            cJSON_AddNumberToObject(e, "kp", j->gains[i].kp);
+            cJSON_AddNumberToObject(e, "kv", j->gains[i].kv);
+            cJSON_AddItemToArray(g, e);
+        }
+    }
+    return o;
+}
+
+int result_parse_channels(const char *list, unsigned *out, char *bad, size_t badlen)
+{
+    unsigned mask = 0;
+    const char *p = list;
+    while (*p) {
+        size_t len = strcspn(p, ",");
+        int found = -1;
+        for (int c = 0; c < CTC_NCHANNELS; c++) {
+            const char *name = ctc_channel_name((ctc_channel)c);
+            if (strlen(name) == len && strncmp(name, p, len) == 0) found = c;
+        }
+        if (found < 0) {
+            snprintf(bad, badlen, "%.*s", (int)len, p);
+            return -1;
+        }
+        mask |= CTC_CH_BIT(found);
+        p += len;
+        if (*p == ',') p++;
+    }
+    *out = mask;
+    return 0;
+}
+
+/* the samples written: 0, every, 2 every, ... and always the last */
+static int sample_kept(const ctc_sim_result *r, int j, int every)
+{
+    return j % every == 0 || j == r->nsamples - 1;
+}
+
+static int selected(const ctc_sim_result *r, unsigned mask, int c)
+{
+    return r->ch[c] && (mask == 0 || (mask & CTC_CH_BIT(c)));
+}
+
+static void column_name(char *buf, size_t len, int c, int i)
+{
+    if (c == CTC_CH_ENERGY)
+        snprintf(buf, len, "energy[%s]", energy_parts[i]);
+    else
+        snprintf(buf, len, "%s[%d]", ctc_channel_name((ctc_channel)c), i);
+}
+
+static void put_number(FILE *f, double x, int json)
+{
+    if (isfinite(x))
+        fprintf(f, "%.17g", x);
+    else
+        fputs(json ? "null" : "nan", f);
+}
+
+int result_write_csv(FILE *f, const ctc_sim_result *r, unsigned mask, int every)
+{
+    if (every < 1) every = 1;
+    char name[64];
+    fputs("t", f);
+    for (int c = 0; c < CTC_NCHANNELS; c++)
+        for (int i = 0; selected(r, mask, c) && i < r->width[c]; i++) {
+            column_name(name, sizeof name, c, i);
+            fprintf(f, ",%s", name);
+        }
+    fputc('\n', f);
+    for (int j = 0; j < r->nsamples; j++) {
+        if (!sample_kept(r, j, every)) continue;
+        put_number(f, r->t[j], 0);
+        for (int c = 0; c < CTC_NCHANNELS; c++)
+            for (int i = 0; selected(r, mask, c) && i < r->width[c]; i++) {
+                fputc(',', f);
+                put_number(f, r->ch[c][(size_t)j * (size_t)r->width[c] + (size_t)i], 0);
+            }
+        fputc('\n', f);
+    }
+    return ferror(f) ? -1 : 0;
+}
+
+/* one column of the series as a JSON array */
+static void write_column(FILE *f, const ctc_sim_result *r, const double *base, int stride,
+                         int every)
+{
+    fputc('[', f);
+    int first = 1;
+    for (int j = 0; j < r->nsamples; j++) {
+        if (!sample_kept(r, j, every)) continue;
+        if (!first) fputc(',', f);
+        first = 0;
+        put_number(f, base[(size_t)j * (size_t)stride], 1);
+    }
+    fputc(']', f);
+}
+
+static int write_object_member(FILE *f, const char *key, const cJSON *value)
+{
+    char *text = cJSON_PrintUnformatted(value);
+    if (!text) return -1;
+    fprintf(f, "\"%s\":%s,", key, text);
+    cJSON_free(text);
+    return 0;
+}
+
+int result_write_json(FILE *f, const ctc_sim_result *r, const job *j, unsigned mask, int every)
+{
+    if (every < 1) every = 1;
+    cJSON *metrics = result_metrics_json(r, j);
+    if (!metrics) return -1;
+    fputc('{', f);
+    fprintf(f, "\"status\":\"%s\",", ctc_run_status_name(r->status));
+    int rc = 0;
+    if (j && j->normalised) rc |= write_object_member(f, "spec", j->normalised);
+    rc |= write_object_member(f, "metrics", metrics);
+    cJSON_Delete(metrics);
+    if (rc) return -1;
+
+    fputs("\"series\":{\"t\":", f);
+    write_column(f, r, r->t, 1, every);
+    for (int c = 0; c < CTC_NCHANNELS; c++) {
+        if (!selected(r, mask, c)) continue;
+        fprintf(f, ",\"%s\":[", ctc_channel_name((ctc_channel)c));
+        for (int i = 0; i < r->width[c]; i++) {
+            if (i) fputc(',', f);
+            write_column(f, r, r->ch[c] + i, r->width[c], every);
+        }
+        fputc(']', f);
+    }
+    fputs("}}\n", f);
+    return ferror(f) ? -1 : 0;
+}

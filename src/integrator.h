@@ -1,0 +1,101 @@
+/*
+ * integrator.h - ODE integrators for dy/dt = f(t, y), stepped one step at a time.
+ *
+ * Three methods behind one interface, so the simulation loop (sim.c) can check for divergence,
+ * cancellation and progress between steps and sample the solution at its own output times:
+ *
+ *   rk4     classical fixed-step Runge-Kutta of order 4 (4 evaluations a step). Dense output by
+ *           cubic Hermite interpolation from y and f at both ends of the step (order 3, the
+ *           evaluation at the end is the next step's first, so it costs nothing).
+ *   dopri5  Dormand-Prince 5(4), adaptive, local extrapolation (the 5th-order solution is kept),
+ *           FSAL (6 evaluations an accepted step), PI step-size control, and the method's
+ *           4th-order continuous extension for dense output - MATLAB's ode45, which the paper
+ *           used. Error test: ||err_i / (atol + rtol max(|y_i|, |y_new_i|))||_rms <= 1.
+ *   bdf     SUNDIALS CVODE, variable-order variable-step BDF (orders 1-5) with Newton iteration
+ *           and a dense direct linear solver on a difference-quotient Jacobian; for stiff
+ *           systems (very high gains). Dense output by CVodeGetDky.
+ *
+ * The in-house explicit steppers are used rather than SUNDIALS ARKODE's ERKStep because they
+ * cost less per step on the small systems of a chain (bench/README.md has the figures).
+ *
+ * The right-hand side returns 0 on success; any other value stops the step, is returned by
+ * ctc_integrator_step and leaves the integrator's state at the last accepted step.
+ * An integrator belongs to one thread; it allocates only in ctc_integrator_new.
+ */
+#ifndef CTC_INTEGRATOR_H
+#define CTC_INTEGRATOR_H
+
+#include <stddef.h>
+
+#include "status.h"
+
+/* Right-hand side: ydot (n) = f(t, y (n)); ctx is the pointer given to ctc_integrator_new. */
+typedef int (*ctc_ode_rhs)(double t, const double *y, double *ydot, void *ctx);
+
+typedef enum ctc_integ_method {
+    CTC_INTEG_RK4,
+    CTC_INTEG_DOPRI5,
+    CTC_INTEG_BDF,
+} ctc_integ_method;
+
+typedef struct ctc_integ_spec {
+    ctc_integ_method method;
+    double step;         /* rk4: step size h > 0 (s) */
+    double rtol, atol;   /* dopri5, bdf: relative and absolute tolerance, > 0 */
+    double initial_step; /* dopri5, bdf: first step (s); 0 = chosen automatically */
+    double max_step;     /* dopri5, bdf: largest step (s); 0 = unbounded */
+    long max_steps;      /* any: ctc_integrator_step fails after this many steps; 0 = no limit */
+} ctc_integ_spec;
+
+typedef struct ctc_integ_stats {
+    long steps;          /* accepted steps */
+    long rejected;       /* rejected steps (error test or, for bdf, convergence failures) */
+    long rhs_evals;      /* right-hand-side evaluations, Jacobian difference quotients included */
+    long jac_evals;      /* bdf: Jacobian evaluations; 0 otherwise */
+    double err_estimate; /* sum over accepted steps of the local error estimate's max-norm (an
+                            a-posteriori bound on the accumulated error, units of y); NaN for
+                            rk4, which has no estimate */
+    double h_last;       /* the last accepted step size, s */
+} ctc_integ_stats;
+
+typedef struct ctc_integrator ctc_integrator;
+
+/* Checks spec: the method's own fields must be finite and positive (e.g. "step must be
+ * positive (got 0 s)", "rtol must be in (0, 1) (got 2)"), max_step >= 0, max_steps >= 0. */
+ctc_status ctc_integ_check(const ctc_integ_spec *spec, char *err, size_t errlen);
+
+/* Makes an integrator for an n-dimensional system (n >= 1). The spec is copied. On success
+ * *out owns it (ctc_integrator_free); returns CTC_EINVAL (bad spec) or CTC_ENOMEM otherwise. */
+ctc_status ctc_integrator_new(const ctc_integ_spec *spec, int n, ctc_ode_rhs rhs, void *ctx,
+                              ctc_integrator **out, char *err, size_t errlen);
+
+/* Frees it; NULL is allowed. */
+void ctc_integrator_free(ctc_integrator *it);
+
+/* Starts (or restarts, after a discontinuity or a change of y made by the caller) at time t0
+ * from y0 (n): forgets the step history (dopri5's FSAL stage, bdf's history) but keeps stats
+ * and the current step size. Evaluates f once; returns what the rhs returned (0 = ok). */
+int ctc_integrator_reset(ctc_integrator *it, double t0, const double *y0);
+
+/* Takes one step from the current time t towards tstop > t, never past it (a step that would
+ * pass it is shortened to end exactly on it). Returns 0 after an accepted step; the rhs's
+ * non-zero code if it failed; -1 with a message in err when the method fails (step size below
+ * the round-off limit, too many steps, bdf convergence failure) - e.g. "step size 1.2e-15 s at
+ * t = 0.73 s fell below the round-off limit". */
+int ctc_integrator_step(ctc_integrator *it, double tstop, char *err, size_t errlen);
+
+/* Current time (end of the last accepted step) and state (n; valid until the next call). */
+double ctc_integrator_time(const ctc_integrator *it);
+const double *ctc_integrator_state(const ctc_integrator *it);
+
+/* The solution at t within the last accepted step [t_prev, t_now] by the method's dense
+ * output, into y (n). At t = t_now it is the state exactly. */
+void ctc_integrator_dense(const ctc_integrator *it, double t, double *y);
+
+/* Counters since ctc_integrator_new. */
+const ctc_integ_stats *ctc_integrator_stats(const ctc_integrator *it);
+
+/* Method name ("rk4", "dopri5", "bdf"). */
+const char *ctc_integ_method_name(ctc_integ_method m);
+
+#endif

@@ -1,0 +1,758 @@
+/*
+ * sim.c - the computed torque control loop (sim.h): right-hand side, stepping, sampling, metrics.
+ *
+ * The state integrated is y = (q (nq), v (nv), int e (nv with a controller)). One evaluation of
+ * the right-hand side, for each coordinate i with desired (q_d, qd_d, qdd_d) = traj_i(t):
+ *
+ *     e_i = q_d - q_i,  de_i = qd_d - v_i,  w_i = ki ie_i + kp e_i + kv de_i,  u_i = qdd_d + w_i
+ *     f = iGDCA(controller model; q, v, u)                           (paper Eq. 18, 70)
+ *     qdd = GDCA(plant; q, v, f + z(t))                              (paper section 3)
+ *     dy/dt = (qdot(q, v), qdd, e)
+ *
+ * With an exact controller model the plant and the controller share one ctc_data, so the
+ * kinematics and the body handle equations are computed once per evaluation (Eq. 42-43).
+ * Spherical joints (passive runs only) are integrated as quaternions; the right-hand side reads
+ * a normalised copy, and samples report normalised quaternions.
+ *
+ * Between steps the loop checks the state for divergence (non-finite values, speeds beyond the
+ * bound), polls for cancellation and the wall-time limit, and records every output sample that
+ * falls in the step from the integrator's dense output; a sample's forces and energy come from
+ * one more evaluation at the sampled state. Discontinuities of the disturbance (step times) stop
+ * the integrator exactly there and restart it. Everything is allocated before the first step.
+ *
+ * Accuracy figures: the integrator's error estimate; for passive runs without disturbance, the
+ * energy drift; for an exact model without disturbance, the deviation of each coordinate's error
+ * from the exact solution E(t) = expm(Ac t) E(0) of the linear error dynamics (ctrl.h), computed
+ * here by propagating the 3x3 transition matrix of one output interval.
+ */
+#include "sim.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "data.h"
+#include "energy.h"
+#include "gdca.h"
+#include "handles.h"
+#include "kinematics.h"
+
+#define SIM_DEFAULT_MAX_SPEED 1e6
+#define SIM_MAX_SAMPLES 50000000L
+
+typedef struct sim_ctx {
+    const ctc_sim_spec *spec;
+    const ctc_model *plant;
+    ctc_model *ctrl_model; /* NULL when the controller's model is the plant */
+    ctc_data *dp, *dc;     /* dc == dp when the model is exact */
+    int nq, nv, ny, active, has_quat;
+    double *qn;    /* (nq) normalised positions */
+    double *u, *f; /* (nv) commanded accelerations, controller forces */
+    double *fz;    /* (nv) applied forces f + z */
+    double *w;     /* (nv) controller output */
+    double *des;   /* (nv x 3) desired q, qd, qdd */
+    double *qrate; /* (nq) */
+    long evals;
+} sim_ctx;
+
+static const char *const ctrl_names[] = {"none", "pd", "pid", "poles", "lqr"};
+static const char *const channel_names[] = {"q", "qdot", "q_des", "qdot_des",
+                                            "e", "tau",  "w",     "energy"};
+static const char *const run_names[] = {"done", "diverged", "failed", "cancelled", "timeout"};
+
+const char *ctc_ctrl_type_name(ctc_ctrl_type t)
+{
+    return (unsigned)t < 5 ? ctrl_names[t] : "unknown";
+}
+
+const char *ctc_channel_name(ctc_channel c)
+{
+    return (unsigned)c < CTC_NCHANNELS ? channel_names[c] : "unknown";
+}
+
+const char *ctc_run_status_name(ctc_run_status s)
+{
+    return (unsigned)s < 5 ? run_names[s] : "unknown";
+}
+
+static double now(clockid_t clock)
+{
+    struct timespec ts;
+    clock_gettime(clock, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int has_disturbance(const ctc_sim_spec *s, int nv)
+{
+    if (!s->disturb) return 0;
+    for (int i = 0; i < nv; i++)
+        if (s->disturb[i].type != CTC_DISTURB_NONE) return 1;
+    return 0;
+}
+
+/* the channels that apply: q, qdot, tau and energy always; the tracking ones with a controller */
+static unsigned channels_applicable(ctc_ctrl_type c)
+{
+    unsigned all = CTC_CH_ALL;
+    if (c == CTC_CTRL_NONE)
+        all &= ~(CTC_CH_BIT(CTC_CH_Q_DES) | CTC_CH_BIT(CTC_CH_QD_DES) | CTC_CH_BIT(CTC_CH_E) |
+                 CTC_CH_BIT(CTC_CH_W));
+    return all;
+}
+
+static long sample_count(double duration, double dt)
+{
+    double n = floor(duration / dt * (1 + 1e-12));
+    if (!(n < (double)SIM_MAX_SAMPLES)) return SIM_MAX_SAMPLES + 1;
+    long count = (long)n + 1;
+    if ((double)(count - 1) * dt < duration * (1 - 1e-12)) count++; /* a last sample at duration */
+    return count;
+}
+
+static double sample_time(long j, long count, double duration, double dt)
+{
+    return j == count - 1 ? duration : (double)j * dt;
+}
+
+/* the spec's checks that do not need a model */
+static ctc_status check_run(const ctc_sim_spec *s, char *err, size_t errlen)
+{
+    if (!isfinite(s->duration) || s->duration <= 0)
+        return ctc_fail(CTC_EINVAL, err, errlen, "duration must be positive and finite (got %g s)",
+                        s->duration);
+    if (!isfinite(s->output_interval) || s->output_interval <= 0)
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "output interval must be positive and finite (got %g s)",
+                        s->output_interval);
+    if (s->output_interval > s->duration)
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "output interval (%g s) must not exceed the duration (%g s)",
+                        s->output_interval, s->duration);
+    if (sample_count(s->duration, s->output_interval) > SIM_MAX_SAMPLES)
+        return ctc_fail(CTC_EINVAL, err, errlen, "more than %ld output samples", SIM_MAX_SAMPLES);
+    if (!(s->max_speed >= 0) || isinf(s->max_speed))
+        return ctc_fail(CTC_EINVAL, err, errlen, "max_speed must be >= 0 and finite (got %g)",
+                        s->max_speed);
+    if (!(s->wall_limit >= 0) || isinf(s->wall_limit))
+        return ctc_fail(CTC_EINVAL, err, errlen, "wall_limit must be >= 0 and finite (got %g s)",
+                        s->wall_limit);
+    if ((unsigned)s->controller > CTC_CTRL_LQR)
+        return ctc_fail(CTC_EINVAL, err, errlen, "unknown controller type %d", (int)s->controller);
+    unsigned bad = s->channels & ~channels_applicable(s->controller);
+    if (s->channels & ~CTC_CH_ALL)
+        return ctc_fail(CTC_EINVAL, err, errlen, "unknown output channel bits 0x%x",
+                        s->channels & ~CTC_CH_ALL);
+    for (int c = 0; c < CTC_NCHANNELS; c++)
+        if (bad & CTC_CH_BIT(c))
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "channel \"%s\" needs a controller (this run is passive)",
+                            channel_names[c]);
+    if (s->controller != CTC_CTRL_NONE &&
+        (!isfinite(s->model_mass_scale) || s->model_mass_scale <= 0))
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "model mass scale must be positive and finite (got %g)",
+                        s->model_mass_scale);
+    if (s->controller != CTC_CTRL_NONE &&
+        (!isfinite(s->model_inertia_scale) || s->model_inertia_scale <= 0))
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "model inertia scale must be positive and finite (got %g)",
+                        s->model_inertia_scale);
+    return ctc_integ_check(&s->integrator, err, errlen);
+}
+
+/* Routh-Hurwitz for s^3 + kv s^2 + kp s + ki, or s^2 + kv s + kp for PD (ctrl.h) */
+static int gains_stable(const ctc_gains *g)
+{
+    if (g->ki == 0) return g->kp > 0 && g->kv > 0;
+    return g->ki > 0 && g->kp > 0 && g->kv > 0 && g->kv * g->kp > g->ki;
+}
+
+/* the checks of the arrays against a built model */
+static ctc_status check_with_model(const ctc_sim_spec *s, const ctc_model *m, char *err,
+                                   size_t errlen)
+{
+    char why[200];
+    for (int i = 0; s->q0 && i < m->nq; i++)
+        if (!isfinite(s->q0[i]))
+            return ctc_fail(CTC_EINVAL, err, errlen, "q0[%d] is not finite", i);
+    for (int i = 0; s->v0 && i < m->nv; i++)
+        if (!isfinite(s->v0[i]))
+            return ctc_fail(CTC_EINVAL, err, errlen, "v0[%d] is not finite", i);
+    if (s->controller != CTC_CTRL_NONE) {
+        for (int k = 0; k < m->nbodies; k++)
+            if (m->joints[k].type == CTC_JOINT_SPHERICAL)
+                return ctc_fail(CTC_EINVAL, err, errlen,
+                                "joint %d: spherical joints are allowed in passive runs only "
+                                "(controller \"none\")",
+                                k);
+        if (!s->gains || !s->traj)
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "a controller needs gains and a trajectory for every coordinate");
+        for (int i = 0; i < m->nv; i++) {
+            const ctc_gains *g = &s->gains[i];
+            if (!isfinite(g->ki) || !isfinite(g->kp) || !isfinite(g->kv))
+                return ctc_fail(CTC_EINVAL, err, errlen, "coordinate %d: gains are not finite", i);
+            if (!gains_stable(g)) {
+                double re[3], im[3];
+                ctc_ctrl_closed_loop_poles(g, re, im);
+                int j = re[2] >= re[1] && re[2] >= re[0] ? 2 : re[1] >= re[0] ? 1 : 0;
+                char pole[64];
+                if (fabs(im[j]) > 1e-12 * fabs(re[j]))
+                    snprintf(pole, sizeof pole, "%g%+gi", re[j], im[j]);
+                else
+                    snprintf(pole, sizeof pole, "%g", re[j]);
+                return ctc_fail(CTC_EINVAL, err, errlen,
+                                "coordinate %d: gains (ki %g, kp %g, kv %g) make the error "
+                                "dynamics unstable (pole at %s)",
+                                i, g->ki, g->kp, g->kv, pole);
+            }
+            if (s->traj[i].type == CTC_TRAJ_SPLINE) {
+                if (s->traj[i].nknots < 2 || !s->traj[i].knots)
+                    return ctc_fail(CTC_EINVAL, err, errlen,
+                                    "coordinate %d: trajectory spline is not built", i);
+            } else if (ctc_traj_check(&s->traj[i], why, sizeof why) != CTC_OK) {
+                return ctc_fail(CTC_EINVAL, err, errlen, "coordinate %d: trajectory: %s", i, why);
+            }
+        }
+    }
+    for (int i = 0; s->disturb && i < m->nv; i++)
+        if (ctc_disturb_check(&s->disturb[i], why, sizeof why) != CTC_OK)
+            return ctc_fail(CTC_EINVAL, err, errlen, "coordinate %d: disturbance: %s", i, why);
+    return CTC_OK;
+}
+
+ctc_status ctc_sim_check(const ctc_sim_spec *spec, char *err, size_t errlen)
+{
+    ctc_status st = check_run(spec, err, errlen);
+    if (st != CTC_OK) return st;
+    ctc_model *m = NULL;
+    st = ctc_model_build(&spec->chain, &m, err, errlen);
+    if (st != CTC_OK) return st;
+    st = check_with_model(spec, m, err, errlen);
+    ctc_model_free(m);
+    return st;
+}
+
+/* the controller's model: the plant's chain with masses and inertias scaled */
+static ctc_status build_controller_model(const ctc_sim_spec *s, ctc_model **out, char *err,
+                                         size_t errlen)
+{
+    int n = s->chain.nbodies;
+    ctc_body_spec *b = malloc((size_t)n * sizeof *b);
+    if (!b) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    for (int k = 0; k < n; k++) {
+        b[k] = s->chain.bodies[k];
+        b[k].mass *= s->model_mass_scale;
+        for (int j = 0; j < 9; j++) b[k].inertia[j] *= s->model_inertia_scale;
+    }
+    ctc_chain_spec c = s->chain;
+    c.bodies = b;
+    c.form = CTC_FORM_AUTO;
+    char why[200];
+    ctc_status st = ctc_model_build(&c, out, why, sizeof why);
+    free(b);
+    if (st != CTC_OK)
+        return ctc_fail(st, err, errlen, "controller model (scaled masses and inertias): %s", why);
+    return CTC_OK;
+}
+
+/* driving forces and accelerations of state (q, v, ie) at time t; fills ctx's force arrays */
+static void evaluate(sim_ctx *c, double t, const double *y, double *qacc)
+{
+    const ctc_sim_spec *s = c->spec;
+    const double *q = y, *v = y + c->nq;
+    if (c->has_quat) {
+        memcpy(c->qn, q, (size_t)c->nq * sizeof *q);
+        ctc_model_q_normalize(c->plant, c->qn);
+        q = c->qn;
+    }
+
+    ctc_kinematics(c->plant, c->dp, q, v);
+    ctc_handles(c->plant, c->dp);
+
+    /* controller: u = qdd_d + K (int e, e, de), f = iGDCA(u) */
+    if (c->active) {
+        const double *ie = y + c->nq + c->nv;
+        for (int i = 0; i < c->nv; i++) {
+            double *d = c->des + 3 * i;
+            ctc_traj_eval(&s->traj[i], t, d);
+            const ctc_gains *g = &s->gains[i];
+            c->w[i] = g->ki * ie[i] + g->kp * (d[0] - q[i]) + g->kv * (d[1] - v[i]);
+            c->u[i] = d[2] + c->w[i];
+        }
+        if (c->ctrl_model) {
+            ctc_kinematics(c->ctrl_model, c->dc, q, v);
+            ctc_handles(c->ctrl_model, c->dc);
+            ctc_gdca_inverse(c->ctrl_model, c->dc, c->u, c->f);
+        } else {
+            ctc_gdca_inverse(c->plant, c->dp, c->u, c->f);
+        }
+    } else {
+        memset(c->f, 0, (size_t)c->nv * sizeof *c->f);
+    }
+
+    /* plant: qdd = GDCA(f + z) */
+    for (int i = 0; i < c->nv; i++)
+        c->fz[i] = c->f[i] + (s->disturb ? ctc_disturb_eval(&s->disturb[i], t) : 0);
+    ctc_gdca_forward(c->plant, c->dp, c->fz, qacc);
+    c->evals++;
+}
+
+static int sim_rhs(double t, const double *y, double *ydot, void *ctx)
+{
+    sim_ctx *c = ctx;
+    evaluate(c, t, y, ydot + c->nq);
+    ctc_model_q_rate(c->plant, c->has_quat ? c->qn : y, y + c->nq, ydot);
+    if (c->active)
+        for (int i = 0; i < c->nv; i++) ydot[c->nq + c->nv + i] = c->des[3 * i] - y[i];
+    return 0;
+}
+
+/* the joint that owns velocity coordinate i */
+static int joint_of(const ctc_model *m, int i)
+{
+    int k = 0;
+    while (k + 1 < m->nbodies && m->jnt_vadr[k + 1] <= i) k++;
+    return k;
+}
+
+/* checks an accepted state; on divergence fills the message and the joint and returns 1 */
+static int diverged(const sim_ctx *c, double t, const double *y, double bound, ctc_sim_result *r)
+{
+    const double *v = y + c->nq;
+    for (int i = 0; i < c->ny; i++) {
+        if (isfinite(y[i])) continue;
+        int vi = i < c->nq ? -1 : (i - c->nq) % c->nv;
+        int k = 0;
+        if (vi >= 0) {
+            k = joint_of(c->plant, vi);
+        } else {
+            while (k + 1 < c->plant->nbodies && c->plant->jnt_qadr[k + 1] <= i) k++;
+        }
+        r->metrics.diverged_joint = k;
+        snprintf(r->message, sizeof r->message, "t = %.6g s: joint %d state is not finite", t, k);
+        return 1;
+    }
+    for (int i = 0; i < c->nv; i++) {
+        if (fabs(v[i]) <= bound) continue;
+        int k = joint_of(c->plant, i);
+        int lin = c->plant->joints[k].type == CTC_JOINT_PRISMATIC ||
+                  (c->plant->joints[k].type == CTC_JOINT_CYLINDRICAL && i > c->plant->jnt_vadr[k]);
+        r->metrics.diverged_joint = k;
+        snprintf(r->message, sizeof r->message,
+                 "t = %.6g s: joint %d speed %.3g %s exceeds the bound %g", t, k, fabs(v[i]),
+                 lin ? "m/s" : "rad/s", bound);
+        return 1;
+    }
+    return 0;
+}
+
+/* 3x3 matrix exponential by scaling and squaring of a degree-18 Taylor polynomial */
+static void expm3(const double a[9], double t, double out[9])
+{
+    double norm = 0;
+    for (int i = 0; i < 9; i++) norm = fmax(norm, fabs(a[i] * t));
+    int squarings = 0;
+    while (norm * 3 > 0.5 && squarings < 60) {
+        norm *= 0.5;
+        squarings++;
+    }
+    double scale = ldexp(t, -squarings), x[9], term[9], sum[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    for (int i = 0; i < 9; i++) x[i] = a[i] * scale;
+    memcpy(term, sum, sizeof term);
+    for (int k = 1; k <= 18; k++) {
+        double next[9];
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                next[3 * i + j] =
+                    (term[3 * i] * x[j] + term[3 * i + 1] * x[3 + j] + term[3 * i + 2] * x[6 + j]) /
+                    k;
+        memcpy(term, next, sizeof term);
+        for (int i = 0; i < 9; i++) sum[i] += term[i];
+    }
+    for (int s = 0; s < squarings; s++) {
+        double sq[9];
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                sq[3 * i + j] =
+                    sum[3 * i] * sum[j] + sum[3 * i + 1] * sum[3 + j] + sum[3 * i + 2] * sum[6 + j];
+        memcpy(sum, sq, sizeof sum);
+    }
+    memcpy(out, sum, sizeof sum);
+}
+
+static void closed_loop_matrix(const ctc_gains *g, double a[9])
+{
+    /* d/dt (int e, e, de) = Ac (int e, e, de): ee = -ki int e - kp e - kv de */
+    const double ac[9] = {0, 1, 0, 0, 0, 1, -g->ki, -g->kp, -g->kv};
+    memcpy(a, ac, sizeof ac);
+}
+
+/* run-time state of the sampling and the metrics */
+typedef struct recorder {
+    ctc_sim_result *r;
+    long count, next; /* samples in all, the next to take */
+    double dt;
+    double *ysample; /* (ny) */
+    double *qacc;    /* (nv) */
+    /* error-dynamics reference (exact model, no disturbance) */
+    int track_errdyn;
+    double *phi;  /* (nv x 9) transition matrix over one interval */
+    double *eref; /* (nv x 3) reference error state at the last sample */
+    double t_ref; /* time of eref */
+    double *e_sq; /* (nv) sum of e^2 */
+    /* energy reference (passive, no disturbance) */
+    int track_energy;
+    double e0, ke_max, drift;
+} recorder;
+
+static void record_sample(sim_ctx *c, recorder *rec, double t, const double *y)
+{
+    ctc_sim_result *r = rec->r;
+    long j = r->nsamples;
+    evaluate(c, t, y, rec->qacc);
+    r->t[j] = t;
+    const double *q = c->has_quat ? c->qn : y, *v = y + c->nq;
+    for (int ch = 0; ch < CTC_NCHANNELS; ch++) {
+        double *out = r->ch[ch];
+        if (!out) continue;
+        out += (size_t)j * (size_t)r->width[ch];
+        for (int i = 0; i < r->width[ch]; i++) {
+            switch ((ctc_channel)ch) {
+            case CTC_CH_Q:
+                out[i] = q[i];
+                break;
+            case CTC_CH_QD:
+                out[i] = v[i];
+                break;
+            case CTC_CH_Q_DES:
+                out[i] = c->des[3 * i];
+                break;
+            case CTC_CH_QD_DES:
+                out[i] = c->des[3 * i + 1];
+                break;
+            case CTC_CH_E:
+                out[i] = c->des[3 * i] - q[i];
+                break;
+            case CTC_CH_TAU:
+                out[i] = c->fz[i];
+                break;
+            case CTC_CH_W:
+                out[i] = c->w[i];
+                break;
+            default:
+                break;
+            }
+        }
+    }
+    double ke = 0, pe = 0;
+    if (r->ch[CTC_CH_ENERGY] || rec->track_energy) {
+        ctc_energy(c->plant, c->dp, &ke, &pe);
+        if (r->ch[CTC_CH_ENERGY]) {
+            r->ch[CTC_CH_ENERGY][2 * j] = ke;
+            r->ch[CTC_CH_ENERGY][2 * j + 1] = pe;
+        }
+    }
+    ctc_sim_metrics *mt = &r->metrics;
+    if (c->active) {
+        for (int i = 0; i < c->nv; i++) {
+            double e = c->des[3 * i] - q[i];
+            mt->e_max[i] = fmax(mt->e_max[i], fabs(e));
+            rec->e_sq[i] += e * e;
+            mt->e_final[i] = e;
+        }
+    }
+    if (rec->track_energy) {
+        if (j == 0) rec->e0 = ke + pe;
+        rec->ke_max = fmax(rec->ke_max, ke);
+        rec->drift = fmax(rec->drift, fabs(ke + pe - rec->e0));
+    }
+    if (rec->track_errdyn) {
+        const double *ie = y + c->nq + c->nv;
+        for (int i = 0; i < c->nv; i++) {
+            double *er = rec->eref + 3 * i;
+            if (j == 0) {
+                mt->errdyn_dev = 0;
+                er[0] = ie[i], er[1] = c->des[3 * i] - q[i], er[2] = c->des[3 * i + 1] - v[i];
+            } else {
+                double phi[9], next[3];
+                const double *p = rec->phi + 9 * i;
+                if (fabs(t - rec->t_ref - rec->dt) > 1e-9 * rec->dt) { /* the shorter last step */
+                    double a[9];
+                    closed_loop_matrix(&c->spec->gains[i], a);
+                    expm3(a, t - rec->t_ref, phi);
+                    p = phi;
+                }
+                for (int k = 0; k < 3; k++)
+                    next[k] = p[3 * k] * er[0] + p[3 * k + 1] * er[1] + p[3 * k + 2] * er[2];
+                memcpy(er, next, sizeof next);
+                mt->errdyn_dev = fmax(mt->errdyn_dev, fabs(c->des[3 * i] - q[i] - er[1]));
+            }
+        }
+        rec->t_ref = t;
+    }
+    r->nsamples++;
+}
+
+static ctc_status alloc_result(const sim_ctx *c, unsigned channels, long count,
+                               ctc_sim_result **out)
+{
+    ctc_sim_result *r = calloc(1, sizeof *r);
+    if (!r) return CTC_ENOMEM;
+    *out = r;
+    r->nq = c->nq, r->nv = c->nv, r->channels = channels;
+    r->t = malloc((size_t)count * sizeof *r->t);
+    if (!r->t) return CTC_ENOMEM;
+    for (int ch = 0; ch < CTC_NCHANNELS; ch++) {
+        if (!(channels & CTC_CH_BIT(ch))) continue;
+        r->width[ch] = ch == CTC_CH_Q ? c->nq : ch == CTC_CH_ENERGY ? 2 : c->nv;
+        if (r->width[ch] == 0) continue;
+        r->ch[ch] = malloc((size_t)count * (size_t)r->width[ch] * sizeof(double));
+        if (!r->ch[ch]) return CTC_ENOMEM;
+    }
+    ctc_sim_metrics *mt = &r->metrics;
+    mt->form = c->plant->form;
+    mt->nv = c->nv;
+    mt->energy_drift = NAN;
+    mt->errdyn_dev = NAN;
+    mt->err_estimate = NAN;
+    mt->diverged_joint = -1;
+    if (c->active) {
+        mt->e_max = calloc((size_t)c->nv + 1, sizeof(double));
+        mt->e_rms = calloc((size_t)c->nv + 1, sizeof(double));
+        mt->e_final = calloc((size_t)c->nv + 1, sizeof(double));
+        if (!mt->e_max || !mt->e_rms || !mt->e_final) return CTC_ENOMEM;
+    }
+    return CTC_OK;
+}
+
+void ctc_sim_result_free(ctc_sim_result *r)
+{
+    if (!r) return;
+    free(r->t);
+    for (int ch = 0; ch < CTC_NCHANNELS; ch++) free(r->ch[ch]);
+    free(r->metrics.e_max);
+    free(r->metrics.e_rms);
+    free(r->metrics.e_final);
+    free(r);
+}
+
+static void ctx_free(sim_ctx *c)
+{
+    if (c->dc != c->dp) ctc_data_free(c->dc);
+    ctc_data_free(c->dp);
+    ctc_model_free(c->ctrl_model);
+    free(c->qn);
+    free(c->u);
+    free(c->qrate);
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc_sim_result **out,
+                       char *err, size_t errlen)
+{
+    static const ctc_sim_hooks no_hooks = {0};
+    if (!hooks) hooks = &no_hooks;
+    *out = NULL;
+    ctc_status st = check_run(spec, err, errlen);
+    if (st != CTC_OK) return st;
+
+    double wall0 = now(CLOCK_MONOTONIC), cpu0 = now(CLOCK_THREAD_CPUTIME_ID);
+    sim_ctx c = {.spec = spec};
+    ctc_model *plant = NULL;
+    ctc_integrator *integ = NULL;
+    ctc_sim_result *r = NULL;
+    recorder rec = {0};
+    double *ybuf = NULL, *breaks = NULL;
+
+    st = ctc_model_build(&spec->chain, &plant, err, errlen);
+    if (st != CTC_OK) return st;
+    c.plant = plant;
+    st = check_with_model(spec, plant, err, errlen);
+    if (st != CTC_OK) goto cleanup;
+
+    /* sizes and scratch */
+    c.nq = plant->nq, c.nv = plant->nv;
+    c.active = spec->controller != CTC_CTRL_NONE;
+    c.ny = c.nq + c.nv + (c.active ? c.nv : 0);
+    for (int k = 0; k < plant->nbodies; k++)
+        c.has_quat |= plant->joints[k].type == CTC_JOINT_SPHERICAL;
+    int exact = !c.active || (spec->model_mass_scale == 1 && spec->model_inertia_scale == 1);
+    if (!exact) {
+        st = build_controller_model(spec, &c.ctrl_model, err, errlen);
+        if (st != CTC_OK) goto cleanup;
+    }
+    size_t nq = (size_t)c.nq, nv = (size_t)c.nv + 1;
+    c.dp = ctc_data_new(plant);
+    c.dc = c.ctrl_model ? ctc_data_new(c.ctrl_model) : c.dp;
+    c.qn = malloc((nq + 1) * sizeof(double));
+    c.u = malloc(nv * 7 * sizeof(double));
+    c.qrate = malloc((nq + 1) * sizeof(double));
+    ybuf = malloc((size_t)(c.ny + 1) * 2 * sizeof(double) + nv * sizeof(double));
+    if (!c.dp || !c.dc || !c.qn || !c.u || !c.qrate || !ybuf) {
+        st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+        goto cleanup;
+    }
+    c.f = c.u + nv, c.fz = c.f + nv, c.w = c.fz + nv, c.des = c.w + nv;
+    memset(c.des, 0, 3 * nv * sizeof(double));
+    memset(c.w, 0, nv * sizeof(double));
+
+    /* the result, sized for every sample */
+    unsigned channels = spec->channels ? spec->channels : channels_applicable(spec->controller);
+    rec.count = sample_count(spec->duration, spec->output_interval);
+    rec.dt = spec->output_interval;
+    st = alloc_result(&c, channels, rec.count, &r);
+    if (st != CTC_OK) {
+        st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory for %ld samples", rec.count);
+        goto cleanup;
+    }
+    rec.r = r;
+    rec.ysample = ybuf + c.ny + 1;
+    rec.qacc = rec.ysample + c.ny + 1;
+    rec.track_energy = !c.active && !has_disturbance(spec, c.nv);
+    rec.track_errdyn = c.active && exact && !has_disturbance(spec, c.nv);
+    rec.e_sq = calloc(nv, sizeof(double));
+    rec.phi = calloc(nv * 12, sizeof(double));
+    if (!rec.e_sq || !rec.phi) {
+        st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+        goto cleanup;
+    }
+    rec.eref = rec.phi + 9 * nv;
+    if (rec.track_errdyn) {
+        for (int i = 0; i < c.nv; i++) {
+            double a[9];
+            closed_loop_matrix(&spec->gains[i], a);
+            expm3(a, rec.dt, rec.phi + 9 * i);
+        }
+    }
+
+    /* the integrator; rk4's step is shortened to divide the output interval */
+    ctc_integ_spec is = spec->integrator;
+    if (is.method == CTC_INTEG_RK4) is.step = rec.dt / ceil(rec.dt / is.step * (1 - 1e-12));
+    st = ctc_integrator_new(&is, c.ny, sim_rhs, &c, &integ, err, errlen);
+    if (st != CTC_OK) goto cleanup;
+
+    /* discontinuities, sorted: the integrator stops and restarts at each - disturbance steps, and
+       the ends of splines, where a clamped spline's acceleration jumps to zero */
+    int nbreaks = 0;
+    breaks = malloc(3 * nv * sizeof(double));
+    if (!breaks) {
+        st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+        goto cleanup;
+    }
+    for (int i = 0; i < c.nv; i++) {
+        double tb[3] = {spec->disturb ? ctc_disturb_breakpoint(&spec->disturb[i]) : INFINITY,
+                        INFINITY, INFINITY};
+        if (c.active && spec->traj[i].type == CTC_TRAJ_SPLINE) {
+            const ctc_traj *tr = &spec->traj[i];
+            tb[1] = tr->knots[0], tb[2] = tr->knots[5 * (tr->nknots - 1)];
+        }
+        for (int k = 0; k < 3; k++)
+            if (tb[k] > 0 && tb[k] < spec->duration) breaks[nbreaks++] = tb[k];
+    }
+    qsort(breaks, (size_t)nbreaks, sizeof(double), cmp_double);
+
+    /* initial state */
+    double *y0 = ybuf;
+    if (spec->q0)
+        memcpy(y0, spec->q0, nq * sizeof(double));
+    else
+        ctc_model_q_zero(plant, y0);
+    ctc_model_q_normalize(plant, y0);
+    for (int i = 0; i < c.nv; i++) y0[c.nq + i] = spec->v0 ? spec->v0[i] : 0;
+    for (int i = c.nq + c.nv; i < c.ny; i++) y0[i] = 0;
+
+    double bound = spec->max_speed > 0 ? spec->max_speed : SIM_DEFAULT_MAX_SPEED;
+    ctc_run_status status = CTC_RUN_DONE;
+    char why[200] = "";
+    double t = 0;
+    if (sim_rhs(0, y0, rec.ysample, &c) != 0 || diverged(&c, 0, y0, bound, r)) {
+        status = CTC_RUN_DIVERGED;
+    } else {
+        record_sample(&c, &rec, 0, y0);
+        rec.next = 1;
+        if (ctc_integrator_reset(integ, 0, y0) != 0) status = CTC_RUN_FAILED;
+    }
+
+    /* the loop: one accepted step at a time */
+    int ib = 0;
+    while (status == CTC_RUN_DONE && rec.next < rec.count) {
+        double tstop = ib < nbreaks ? breaks[ib] : spec->duration;
+        int rc = ctc_integrator_step(integ, tstop, why, sizeof why);
+        t = ctc_integrator_time(integ);
+        const double *y = ctc_integrator_state(integ);
+        if (rc != 0) {
+            status = CTC_RUN_FAILED;
+            snprintf(r->message, sizeof r->message, "integrator: %s", why);
+            break;
+        }
+        if (diverged(&c, t, y, bound, r)) {
+            status = CTC_RUN_DIVERGED;
+            break;
+        }
+        /* the samples inside this step */
+        while (rec.next < rec.count) {
+            double ts = sample_time(rec.next, rec.count, spec->duration, rec.dt);
+            if (ts > t) break;
+            ctc_integrator_dense(integ, ts, rec.ysample);
+            record_sample(&c, &rec, ts, rec.ysample);
+            rec.next++;
+            if (hooks->progress) hooks->progress(hooks->ctx, ts / spec->duration);
+        }
+        if (ib < nbreaks && t >= breaks[ib]) {
+            while (ib < nbreaks && breaks[ib] <= t) ib++;
+            if (ctc_integrator_reset(integ, t, y) != 0) {
+                status = CTC_RUN_FAILED;
+                break;
+            }
+        }
+        if (hooks->cancelled && hooks->cancelled(hooks->ctx)) {
+            status = CTC_RUN_CANCELLED;
+            snprintf(r->message, sizeof r->message, "cancelled at t = %.6g s", t);
+        } else if (spec->wall_limit > 0 && now(CLOCK_MONOTONIC) - wall0 > spec->wall_limit) {
+            status = CTC_RUN_TIMEOUT;
+            snprintf(r->message, sizeof r->message, "wall-time limit of %g s reached at t = %.6g s",
+                     spec->wall_limit, t);
+        }
+    }
+
+    /* metrics */
+    ctc_sim_metrics *mt = &r->metrics;
+    const ctc_integ_stats *stats = ctc_integrator_stats(integ);
+    r->status = status;
+    mt->t_end = r->nsamples ? r->t[r->nsamples - 1] : 0;
+    if (status != CTC_RUN_DONE) mt->t_end = t;
+    mt->steps = stats->steps;
+    mt->rejected = stats->rejected;
+    mt->rhs_evals = c.evals;
+    mt->err_estimate = stats->err_estimate;
+    for (int i = 0; c.active && i < c.nv; i++)
+        mt->e_rms[i] = r->nsamples ? sqrt(rec.e_sq[i] / (double)r->nsamples) : 0;
+    if (rec.track_energy && r->nsamples)
+        mt->energy_drift = rec.drift / fmax(fmax(fabs(rec.e0), rec.ke_max), 1e-300);
+    if (!rec.track_errdyn || r->nsamples < 2) mt->errdyn_dev = NAN;
+    mt->wall_s = now(CLOCK_MONOTONIC) - wall0;
+    mt->cpu_s = now(CLOCK_THREAD_CPUTIME_ID) - cpu0;
+    mt->us_per_eval = c.evals ? 1e6 * mt->wall_s / (double)c.evals : 0;
+    *out = r;
+    r = NULL;
+    st = CTC_OK;
+
+cleanup:
+    ctc_sim_result_free(r);
+    ctc_integrator_free(integ);
+    ctx_free(&c);
+    ctc_model_free(plant);
+    free(ybuf);
+    free(breaks);
+    free(rec.e_sq);
+    free(rec.phi);
+    return st;
+}

@@ -1,0 +1,144 @@
+/*
+ * sim.h - one computed torque control simulation: the job a user submits, run to its samples
+ * and metrics (paper section 2, DESIGN.md section 6).
+ *
+ * At each evaluation of the right-hand side, for the state y = (q, v, int e):
+ *   e = q_d - q, de = qd_d - v, w = ki int(e) + kp e + kv de, u = qdd_d + w   (per coordinate)
+ *   f = iGDCA_controller(q, v, u)              driving forces from the controller's model
+ *   qdd = GDCA_plant(q, v, f + z(t))           forward dynamics of the plant, disturbance added
+ * The controller's model is the plant unless mass or inertia scale factors are given. With
+ * controller NONE the run is passive: f = 0 and the plant moves under gravity and z(t) alone.
+ *
+ * Units: SI, radians; coordinates are relative joint coordinates (model.h). "Coordinate" means a
+ * velocity coordinate (nv of them): one per revolute or prismatic joint, two per cylindrical.
+ * Spherical joints are allowed in passive runs only (their quaternion error is not a linear
+ * coordinate error, so CTC per coordinate does not apply).
+ *
+ * A run is single-threaded and allocates everything before its first step. Any number of runs
+ * may go on at once in different threads.
+ */
+#ifndef CTC_SIM_H
+#define CTC_SIM_H
+
+#include <stddef.h>
+
+#include "ctrl.h"
+#include "disturb.h"
+#include "integrator.h"
+#include "model.h"
+#include "status.h"
+#include "traj.h"
+
+typedef enum ctc_ctrl_type {
+    CTC_CTRL_NONE = 0, /* passive */
+    CTC_CTRL_PD,
+    CTC_CTRL_PID,
+    CTC_CTRL_POLES,
+    CTC_CTRL_LQR,
+} ctc_ctrl_type;
+
+/* Output channels, as bits of ctc_sim_spec.channels. Widths: q nq; energy 2 (kinetic,
+ * potential); all others nv. q_des, qd_des, e and w need a controller. */
+typedef enum ctc_channel {
+    CTC_CH_Q = 0,   /* q: joint positions (rad, m; quaternions as w, x, y, z) */
+    CTC_CH_QD,      /* qdot: joint velocities */
+    CTC_CH_Q_DES,   /* q_des: desired positions */
+    CTC_CH_QD_DES,  /* qdot_des: desired velocities */
+    CTC_CH_E,       /* e: tracking error q_des - q */
+    CTC_CH_TAU,     /* tau: applied driving force f + z (N m, N) */
+    CTC_CH_W,       /* w: controller output (commanded minus desired acceleration) */
+    CTC_CH_ENERGY,  /* energy: kinetic and potential (J); potential is zero at the world origin */
+    CTC_NCHANNELS
+} ctc_channel;
+
+#define CTC_CH_BIT(c) (1u << (c))
+#define CTC_CH_ALL ((1u << CTC_NCHANNELS) - 1u)
+
+typedef struct ctc_sim_spec {
+    ctc_chain_spec chain;        /* the plant */
+    const double *q0;            /* (nq) initial positions; NULL = ctc_model_q_zero */
+    const double *v0;            /* (nv) initial velocities; NULL = 0 */
+    ctc_ctrl_type controller;    /* NONE = passive */
+    const ctc_gains *gains;      /* (nv) designed gains per coordinate (ctrl.h); unused if NONE */
+    double model_mass_scale;     /* controller's model: every mass times this (> 0; 1 = exact) */
+    double model_inertia_scale;  /* controller's model: every inertia about the CoM times this */
+    const ctc_traj *traj;        /* (nv) desired trajectory per coordinate; unused if NONE */
+    const ctc_disturb *disturb;  /* (nv) disturbance per coordinate; NULL = none */
+    ctc_integ_spec integrator;
+    double duration;             /* s, > 0 */
+    double output_interval;      /* s, > 0: samples at t = 0, dt, 2 dt, ... and at duration */
+    unsigned channels;           /* CTC_CH_BIT mask; 0 = every channel that applies */
+    double max_speed;            /* divergence bound on any |v_i| (rad/s, m/s); 0 = 1e6 */
+    double wall_limit;           /* s of wall time before the run stops as "timeout"; 0 = none */
+} ctc_sim_spec;
+
+typedef enum ctc_run_status {
+    CTC_RUN_DONE = 0,
+    CTC_RUN_DIVERGED,  /* non-finite state or a speed beyond max_speed: time and joint reported */
+    CTC_RUN_FAILED,    /* the integrator failed (step size underflow, too many steps) */
+    CTC_RUN_CANCELLED, /* the hooks asked to stop */
+    CTC_RUN_TIMEOUT,   /* wall_limit reached */
+} ctc_run_status;
+
+typedef struct ctc_sim_metrics {
+    ctc_form form;        /* the model form the plant was computed in */
+    int nv;               /* length of the per-coordinate arrays below */
+    double *e_max;        /* (nv) max |e| over the samples; NULL when passive */
+    double *e_rms;        /* (nv) RMS of e over the samples; NULL when passive */
+    double *e_final;      /* (nv) e at the last sample; NULL when passive */
+    double energy_drift;  /* passive, no disturbance: max |E(t) - E(0)| / max(|E(0)|, KE scale);
+                             NaN otherwise */
+    double errdyn_dev;    /* exact model, no disturbance: max over samples and coordinates of
+                             |E(t) - expm(Ac t) E(0)| for the error state (int e, e, de), the
+                             deviation from the linear error dynamics; NaN otherwise */
+    long steps, rejected, rhs_evals;
+    double err_estimate;  /* the integrator's accumulated error estimate (integrator.h) */
+    double wall_s, cpu_s; /* time spent in the run */
+    double us_per_eval;   /* wall microseconds per right-hand-side evaluation */
+    double t_end;         /* time reached */
+    int diverged_joint;   /* joint index (0-based) when DIVERGED, else -1 */
+} ctc_sim_metrics;
+
+typedef struct ctc_sim_result {
+    ctc_run_status status;
+    char message[256];   /* why a run did not finish, e.g. "t = 1.284 s: joint 2 speed 3.1e+06
+                            rad/s exceeds the bound 1e+06"; empty when done */
+    int nq, nv;
+    unsigned channels;   /* the channels recorded */
+    int width[CTC_NCHANNELS];  /* values per sample of each channel (0 if not recorded) */
+    int nsamples;
+    double *t;                 /* (nsamples) s */
+    double *ch[CTC_NCHANNELS]; /* (nsamples x width[c]) row-major; NULL if not recorded */
+    ctc_sim_metrics metrics;
+} ctc_sim_result;
+
+/* Callbacks between steps; every member may be NULL. */
+typedef struct ctc_sim_hooks {
+    void *ctx;
+    /* called after each output sample with the fraction of the duration done (0..1) */
+    void (*progress)(void *ctx, double fraction);
+    /* polled after each step: non-zero stops the run as CANCELLED */
+    int (*cancelled)(void *ctx);
+} ctc_sim_hooks;
+
+/* Checks a spec without running it: the model builds, the arrays are consistent with the
+ * controller, each trajectory, disturbance and the integrator check, the output fits the
+ * limits. Messages name the item ("duration must be positive (got -1 s)"). */
+ctc_status ctc_sim_check(const ctc_sim_spec *spec, char *err, size_t errlen);
+
+/* Runs the simulation. Returns CTC_EINVAL (bad spec, message in err) or CTC_ENOMEM before any
+ * step; otherwise CTC_OK and *out owns a new result (ctc_sim_result_free) whose status says how
+ * the run ended - a diverged, failed, cancelled or timed-out run keeps the samples taken up to
+ * its end. hooks may be NULL. */
+ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks,
+                       ctc_sim_result **out, char *err, size_t errlen);
+
+/* Frees a result; NULL is allowed. */
+void ctc_sim_result_free(ctc_sim_result *r);
+
+/* Names: "none", "pd", "pid", "poles", "lqr"; "q", "qdot", ...; "done", "diverged", ... */
+const char *ctc_ctrl_type_name(ctc_ctrl_type t);
+const char *ctc_channel_name(ctc_channel c);
+const char *ctc_run_status_name(ctc_run_status s);
+
+#endif

@@ -1,0 +1,108 @@
+#!/bin/sh
+# End-to-end tests of the `ctcsim` command line: every command, its output formats and its
+# documented exit codes, run on the real binary ($CTCSIM) with jobs written here.
+# Prints one line per failure and a closing "cli: N passed, N failed"; exits non-zero on failure.
+set -u
+CTCSIM=${CTCSIM:-build/ctcsim}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+
+pass() { passed=$((passed + 1)); }
+fail() {
+    failed=$((failed + 1))
+    echo "FAIL: $1"
+}
+
+# expect_exit CODE NAME COMMAND...: runs the command, stdout to $tmp/out, stderr to $tmp/err
+expect_exit() {
+    want=$1 name=$2
+    shift 2
+    "$@" >"$tmp/out" 2>"$tmp/err"
+    got=$?
+    if [ "$got" -eq "$want" ]; then pass; else
+        fail "$name: exit $got, expected $want"
+        sed 's/^/    /' "$tmp/err" | head -n 5
+    fi
+}
+
+# expect_grep NAME FILE PATTERN: the file has a line matching the fixed string
+expect_grep() {
+    if grep -qF -- "$3" "$2"; then pass; else fail "$1: no \"$3\" in $2"; fi
+}
+
+# a small PD job: two rods, 0.5 s sampled every 0.1 s
+cat >"$tmp/job.json" <<'EOF'
+{
+  "name": "two rods",
+  "scene": {
+    "bodies": [
+      {"mass": 1, "shape": {"type": "rod", "end": [0, -1, 0]},
+       "joint": {"type": "revolute", "axis": [0, 0, 1]}},
+      {"mass": 1, "shape": {"type": "rod", "end": [0, -1, 0]},
+       "joint": {"type": "revolute", "axis": [0, 0, 1], "location": [0, -1, 0]}}
+    ],
+    "q0": [0.5, -0.5]
+  },
+  "controller": {"type": "pd", "kp": 100, "kv": 20},
+  "trajectory": {"type": "constant", "value": 0},
+  "duration": 0.5,
+  "output": {"interval": 0.1}
+}
+EOF
+
+# listing and printing presets
+expect_exit 0 "presets" "$CTCSIM" presets
+expect_grep "presets lists the triple pendulum" "$tmp/out" "triple_pendulum_pid"
+expect_grep "presets lists the n-link pendulum" "$tmp/out" "n_link_pendulum"
+expect_exit 0 "preset prints JSON" "$CTCSIM" preset triple_pendulum_pid
+cp "$tmp/out" "$tmp/preset.json"
+expect_grep "preset has the paper's ki" "$tmp/preset.json" '"ki":'
+expect_exit 0 "a printed preset validates" "$CTCSIM" validate "$tmp/preset.json"
+expect_exit 0 "preset with a parameter" "$CTCSIM" preset n_link_pendulum n=5
+expect_exit 2 "preset with a bad parameter" "$CTCSIM" preset n_link_pendulum n=1
+expect_exit 2 "unknown preset" "$CTCSIM" preset no_such_thing
+
+# run: CSV to stdout, 6 samples + header
+expect_exit 0 "run csv" "$CTCSIM" run "$tmp/job.json"
+[ "$(wc -l <"$tmp/out")" -eq 7 ] && pass || fail "run csv: $(wc -l <"$tmp/out") lines, expected 7"
+head -n 1 "$tmp/out" | grep -q '^t,q\[0\],q\[1\],qdot\[0\],qdot\[1\],q_des\[0\]' && pass ||
+    fail "run csv header: $(head -n 1 "$tmp/out")"
+tail -n 1 "$tmp/out" | grep -q '^0.5,' && pass || fail "run csv: the last row is not t = 0.5"
+expect_grep "run summary" "$tmp/err" "two rods: done, planar pd, 6 samples"
+
+# channels, decimation, output file, JSON, standard input
+expect_exit 0 "run --channels --every" "$CTCSIM" run "$tmp/job.json" --channels e,tau --every 2
+[ "$(head -n 1 "$tmp/out")" = "t,e[0],e[1],tau[0],tau[1]" ] && pass ||
+    fail "run --channels header: $(head -n 1 "$tmp/out")"
+[ "$(wc -l <"$tmp/out")" -eq 5 ] && pass || fail "run --every 2: $(wc -l <"$tmp/out") lines, expected 5 (samples 0, 2, 4 and the last)"
+expect_exit 0 "run json to file" "$CTCSIM" run "$tmp/job.json" --format json -o "$tmp/r.json" --quiet
+[ ! -s "$tmp/out" ] && [ ! -s "$tmp/err" ] && pass || fail "run -o --quiet wrote to stdout/stderr"
+expect_grep "json has the status" "$tmp/r.json" '{"status":"done","spec":{'
+expect_grep "json has metrics" "$tmp/r.json" '"errdyn_dev":'
+expect_grep "json has the columnar series" "$tmp/r.json" '"series":{"t":[0,0.10000000000000001,'
+expect_exit 0 "run from stdin" sh -c "\"$CTCSIM\" run - <\"$tmp/job.json\""
+
+# errors and their exit codes
+expect_exit 1 "no command" "$CTCSIM"
+expect_exit 1 "unknown command" "$CTCSIM" fly
+expect_exit 1 "bad format" "$CTCSIM" run "$tmp/job.json" --format xml
+expect_exit 1 "bad channel" "$CTCSIM" run "$tmp/job.json" --channels q,torque
+expect_grep "bad channel named" "$tmp/err" 'unknown channel "torque"'
+expect_exit 4 "missing file" "$CTCSIM" run "$tmp/nope.json"
+expect_grep "missing file named" "$tmp/err" "nope.json: No such file or directory"
+sed 's/"mass": 1, "shape"/"mass": -1, "shape"/' "$tmp/job.json" >"$tmp/bad.json"
+expect_exit 2 "invalid job" "$CTCSIM" run "$tmp/bad.json"
+expect_grep "invalid job names the field" "$tmp/err" "bad.json: scene.bodies[0].mass: "
+expect_exit 2 "validate an invalid job" "$CTCSIM" validate "$tmp/bad.json"
+sed 's/"kp": 100/"kp": 100, "kq": 3/' "$tmp/job.json" >"$tmp/typo.json"
+expect_exit 2 "unknown key" "$CTCSIM" validate "$tmp/typo.json"
+expect_grep "unknown key named" "$tmp/err" "controller.kq"
+sed 's/"duration": 0.5/"duration": 0.5, "limits": {"max_speed": 0.01}/' "$tmp/job.json" \
+    >"$tmp/diverge.json"
+expect_exit 3 "a diverging run" "$CTCSIM" run "$tmp/diverge.json"
+expect_grep "divergence reported" "$tmp/err" "exceeds the bound 0.01"
+
+echo "cli: $passed passed, $failed failed"
+[ "$failed" -eq 0 ]

@@ -1,0 +1,986 @@
+/*
+ * test_job_json.c - the job format (server/job_json.c): every way a job can be wrong, each with
+ * its exact code, field and message; the defaults and what each part of a valid job turns into
+ * (bodies from shapes and inertias, gains of every controller type against the paper's values,
+ * per-coordinate overrides, trajectories and disturbances); presets expanded with RFC 7386 merge
+ * patches; and the normalised document, which must parse back to the same spec and print to the
+ * same text.
+ *
+ * Jobs are written with single quotes for readability; json() turns them into JSON.
+ */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "job_json.h"
+#include "presets.h"
+
+/* ---- writing jobs ---- */
+
+/* a revolute joint about z, and bodies that hang on it */
+#define REV "{'type':'revolute','axis':[0,0,1]}"
+#define BODY "{'mass':1,'com':[0,-0.5,0],'inertia':[0.1,0.1,0.1],'joint':" REV "}"
+#define BODY_AT(loc)                                                                               \
+    "{'mass':1,'com':[0,-0.5,0],'inertia':[0.1,0.1,0.1],'joint':{'type':'revolute','axis':[0,0,"   \
+    "1],'location':" loc "}}"
+#define BODY2 BODY_AT("[0,-1,0]")
+/* one body (nv = 1), two bodies (nv = 2) */
+#define SCENE1 "'scene':{'bodies':[" BODY "]}"
+#define SCENE2 "'scene':{'bodies':[" BODY "," BODY2 "]}"
+#define SCENE2_WITH(extra) "'scene':{'bodies':[" BODY "," BODY2 "]," extra "}"
+#define PASSIVE "'controller':{'type':'none'}"
+#define PD "'controller':{'type':'pd','kp':100,'kv':20}"
+#define HOLD "'trajectory':{'type':'constant','value':0}"
+#define DUR "'duration':1"
+/* a valid job around one changed part */
+#define PASSIVE_JOB(extra) "{" SCENE2 "," PASSIVE "," DUR extra "}"
+#define PD_JOB(extra) "{" SCENE2 "," PD "," HOLD "," DUR extra "}"
+#define CTRL_JOB(ctrl) "{" SCENE2 ",'controller':" ctrl "," HOLD "," DUR "}"
+#define TRAJ_JOB(traj) "{" SCENE2 "," PD ",'trajectory':" traj "," DUR "}"
+#define BODY_JOB(body) "{'scene':{'bodies':[" body "]}," PASSIVE "," DUR "}"
+
+/* text with every ' turned into " (malloc'd) */
+static char *json(const char *text)
+{
+    char *s = strdup(text);
+    cr_assert_not_null(s);
+    for (char *c = s; *c != '\0'; c++) {
+        if (*c == '\'') *c = '"';
+    }
+    return s;
+}
+
+/* a passive chain of n hanging bodies (malloc'd JSON); duration and output as given */
+static char *chain_job(int n, const char *rest)
+{
+    size_t len = strlen(BODY2) + 2;
+    char *s = malloc(256 + (size_t)n * len + strlen(rest));
+    cr_assert_not_null(s);
+    char *w = s + sprintf(s, "{\"scene\":{\"bodies\":[" BODY);
+    for (int k = 1; k < n; k++) w += sprintf(w, "," BODY2);
+    sprintf(w, "]}," PASSIVE ",%s}", rest);
+    char *out = json(s);
+    free(s);
+    return out;
+}
+
+static char *too_many_bodies(void)
+{
+    return chain_job(JOB_MAX_BODIES + 1, DUR);
+}
+
+static char *too_many_values(void)
+{
+    /* 200 bodies, passive: 1 + 200 q + 200 qdot + 200 tau + 2 energy = 603 values a sample */
+    return chain_job(200, "'duration':1000");
+}
+
+/* a passive job named with n bytes (malloc'd JSON) */
+static char *name_of_length(size_t n)
+{
+    char *name = malloc(n + 1);
+    cr_assert_not_null(name);
+    memset(name, 'x', n);
+    name[n] = '\0';
+    char *s = malloc(n + 512);
+    cr_assert_not_null(s);
+    sprintf(s, "{'name':'%s'," SCENE1 "," PASSIVE "," DUR "}", name);
+    char *out = json(s);
+    free(name);
+    free(s);
+    return out;
+}
+
+/* an unknown key holding arrays nested 990 deep (cJSON's limit is 1000) */
+static char *deeply_nested(void)
+{
+    enum { DEPTH = 990 };
+    char *s = malloc(2 * DEPTH + 64);
+    cr_assert_not_null(s);
+    char *w = s + sprintf(s, "{\"deep\":");
+    memset(w, '[', DEPTH);
+    memset(w + DEPTH, ']', DEPTH);
+    strcpy(w + 2 * DEPTH, "}");
+    return s;
+}
+
+static job *parse_ok(const char *text)
+{
+    char *doc = json(text);
+    job *j = NULL;
+    job_error err;
+    int rc = job_parse(doc, strlen(doc), &j, &err);
+    cr_assert_eq(rc, 0, "job rejected: %s at \"%s\": %s\n%s", job_error_code_name(err.code),
+                 err.field, err.message, doc);
+    cr_assert_not_null(j);
+    free(doc);
+    return j;
+}
+
+/* ---- every way to get a job wrong ---- */
+
+typedef struct bad_job {
+    const char *what;
+    const char *text;    /* the job, single-quoted; or */
+    char *(*make)(void); /* a function that writes it (malloc'd JSON) */
+    job_error_code code;
+    const char *field;
+    const char *message;
+} bad_job;
+
+static const bad_job bad_jobs[] = {
+    /* the text itself */
+    {"empty text", "", NULL, JOB_INVALID_JSON, "", "empty document"},
+    {"only white space", " \n\t ", NULL, JOB_INVALID_JSON, "", "empty document"},
+    /* cJSON reports an early end at the last byte */
+    {"cut short", "{'scene':", NULL, JOB_INVALID_JSON, "", "invalid JSON at line 1, column 9"},
+    {"trailing comma, line 3", "{\n  'duration': 1,\n  'scene': [1, 2,]\n}", NULL, JOB_INVALID_JSON,
+     "", "invalid JSON at line 3, column 18"},
+    {"text after the document", "{} x", NULL, JOB_INVALID_JSON, "",
+     "invalid JSON at line 1, column 4: text after the end of the document"},
+    {"array instead of an object", "[1, 2]", NULL, JOB_INVALID_FIELD, "",
+     "the job must be a JSON object (got an array)"},
+    {"number instead of an object", "42", NULL, JOB_INVALID_FIELD, "",
+     "the job must be a JSON object (got a number)"},
+    {"repeated key", "{'duration':1,'duration':2}", NULL, JOB_INVALID_FIELD, "duration",
+     "key \"duration\" appears more than once"},
+    {"unknown key nested 990 deep", NULL, deeply_nested, JOB_UNKNOWN_FIELD, "deep",
+     "unknown key \"deep\""},
+    {"repeated key deep down", BODY_JOB("{'mass':1,'mass':2}"), NULL, JOB_INVALID_FIELD,
+     "scene.bodies[0].mass", "key \"mass\" appears more than once"},
+
+    /* the top level */
+    {"empty object", "{}", NULL, JOB_MISSING_FIELD, "scene", "is required"},
+    {"misspelt top-level key", PASSIVE_JOB(",'durration':1"), NULL, JOB_UNKNOWN_FIELD, "durration",
+     "unknown key \"durration\" (did you mean \"duration\"?)"},
+    {"unknown top-level key", PASSIVE_JOB(",'colour':'red'"), NULL, JOB_UNKNOWN_FIELD, "colour",
+     "unknown key \"colour\""},
+    {"no controller", "{" SCENE1 "," DUR "}", NULL, JOB_MISSING_FIELD, "controller",
+     "is required ({\"type\": \"none\"} for a passive run)"},
+    {"no duration", "{" SCENE1 "," PASSIVE "}", NULL, JOB_MISSING_FIELD, "duration", "is required"},
+    {"name not a string", PASSIVE_JOB(",'name':5"), NULL, JOB_INVALID_FIELD, "name",
+     "must be a string (got a number)"},
+    {"empty name", PASSIVE_JOB(",'name':''"), NULL, JOB_INVALID_FIELD, "name", "must not be empty"},
+
+    /* the scene */
+    {"scene an array", "{'scene':[]," PASSIVE "," DUR "}", NULL, JOB_INVALID_FIELD, "scene",
+     "must be an object (got an array)"},
+    {"no bodies", "{'scene':{'bodies':[]}," PASSIVE "," DUR "}", NULL, JOB_INVALID_FIELD,
+     "scene.bodies", "must not be empty"},
+    {"too many bodies", NULL, too_many_bodies, JOB_LIMIT_EXCEEDED, "scene.bodies",
+     "has 4097 bodies; the limit is 4096"},
+    {"gravity of 2 numbers", "{" SCENE2_WITH("'gravity':[0,-9.81]") "," PASSIVE "," DUR "}", NULL,
+     JOB_INVALID_FIELD, "scene.gravity", "must be an array of 3 numbers (got 2 entries)"},
+    {"gravity overflows", "{" SCENE2_WITH("'gravity':[0,-1e999,0]") "," PASSIVE "," DUR "}", NULL,
+     JOB_INVALID_FIELD, "scene.gravity[1]", "must be finite (got -inf)"},
+    {"unknown form", "{" SCENE2_WITH("'form':'flat'") "," PASSIVE "," DUR "}", NULL,
+     JOB_INVALID_FIELD, "scene.form",
+     "must be one of \"auto\", \"planar\", \"spatial\" (got \"flat\")"},
+    {"negative mass", BODY_JOB("{'mass':-1,'com':[0,0,0],'inertia':[1,1,1],'joint':" REV "}"), NULL,
+     JOB_INVALID_FIELD, "scene.bodies[0].mass", "must be positive (got -1 kg)"},
+    {"mass a string", BODY_JOB("{'mass':'1','com':[0,0,0],'inertia':[1,1,1],'joint':" REV "}"),
+     NULL, JOB_INVALID_FIELD, "scene.bodies[0].mass", "must be a number (got a string)"},
+    {"mass 1e400", BODY_JOB("{'mass':1e400,'com':[0,0,0],'inertia':[1,1,1],'joint':" REV "}"), NULL,
+     JOB_INVALID_FIELD, "scene.bodies[0].mass", "must be finite (got inf)"},
+    {"misspelt body key", BODY_JOB("{'masss':1,'com':[0,0,0],'inertia':[1,1,1],'joint':" REV "}"),
+     NULL, JOB_UNKNOWN_FIELD, "scene.bodies[0].masss",
+     "unknown key \"masss\" (did you mean \"mass\"?)"},
+    {"no centre of mass", BODY_JOB("{'mass':1,'inertia':[1,1,1],'joint':" REV "}"), NULL,
+     JOB_MISSING_FIELD, "scene.bodies[0].com", "is required (or give a \"shape\")"},
+    {"com beside a shape",
+     BODY_JOB("{'mass':1,'com':[0,0,0],'shape':{'type':'rod','end':[0,-1,0]},'joint':" REV "}"),
+     NULL, JOB_INVALID_FIELD, "scene.bodies[0].com",
+     "not allowed with \"shape\" (the shape gives it)"},
+    {"inertia of 2 numbers", BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[1,1],'joint':" REV "}"),
+     NULL, JOB_INVALID_FIELD, "scene.bodies[0].inertia",
+     "must be a 3x3 array of rows or an array of 3 principal moments (got 2 entries)"},
+    {"negative principal moment",
+     BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[1,-1,1],'joint':" REV "}"), NULL,
+     JOB_INVALID_FIELD, "scene.bodies[0].inertia[1]", "must not be negative (got -1 kg m^2)"},
+    {"inertia row of 2",
+     BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[[1,0,0],[0,1,0],[0,1]],'joint':" REV "}"), NULL,
+     JOB_INVALID_FIELD, "scene.bodies[0].inertia[2]",
+     "must be an array of 3 numbers (got 2 entries)"},
+    {"asymmetric inertia",
+     BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[[1,0.5,0],[0,1,0],[0,0,1]],'joint':" REV "}"),
+     NULL, JOB_INVALID_FIELD, "scene",
+     "body 0: inertia is not symmetric (inertia[0][1] = 0.5, inertia[1][0] = 0)"},
+    {"zero axis",
+     BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{'type':'revolute','axis':[0,0,"
+              "0]}}"),
+     NULL, JOB_INVALID_FIELD, "scene.bodies[0].joint.axis",
+     "must have non-zero length (got [0, 0, 0])"},
+    {"axis of a spherical joint",
+     BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{'type':'spherical','axis':[0,0,"
+              "1]}}"),
+     NULL, JOB_UNKNOWN_FIELD, "scene.bodies[0].joint.axis",
+     "key \"axis\" does not apply to joint type \"spherical\""},
+    {"unknown joint type",
+     BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{'type':'hinge'}}"), NULL,
+     JOB_INVALID_FIELD, "scene.bodies[0].joint.type",
+     "must be one of \"revolute\", \"prismatic\", \"cylindrical\", \"spherical\", \"fixed\" (got "
+     "\"hinge\")"},
+    {"no joint", BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[1,1,1]}"), NULL, JOB_MISSING_FIELD,
+     "scene.bodies[0].joint", "is required"},
+    {"revolute joint without an axis",
+     BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{'type':'revolute'}}"), NULL,
+     JOB_MISSING_FIELD, "scene.bodies[0].joint.axis", "is required"},
+    {"misspelt joint key",
+     BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{'type':'revolute','axes':[0,0,"
+              "1]}}"),
+     NULL, JOB_UNKNOWN_FIELD, "scene.bodies[0].joint.axes",
+     "unknown key \"axes\" (did you mean \"axis\"?)"},
+    {"flat box", BODY_JOB("{'mass':1,'shape':{'type':'box','size':[1,0,0.1]},'joint':" REV "}"),
+     NULL, JOB_INVALID_FIELD, "scene.bodies[0].shape",
+     "box: size[1] must be positive and finite (got 0)"},
+    {"radius of a rod",
+     BODY_JOB("{'mass':1,'shape':{'type':'rod','end':[0,-1,0],'radius':0.1},'joint':" REV "}"),
+     NULL, JOB_UNKNOWN_FIELD, "scene.bodies[0].shape.radius",
+     "key \"radius\" does not apply to shape type \"rod\""},
+    {"rod in a spatial scene",
+     "{'scene':{'form':'spatial','bodies':[{'mass':1,'shape':{'type':'rod','end':[0,-1,0]},"
+     "'joint':" REV "}]}," PASSIVE "," DUR "}",
+     NULL, JOB_INVALID_FIELD, "scene",
+     "body 0: 6x6 inertia is singular (a principal moment is 0 kg m^2); a body without inertia "
+     "about an axis, such as a slender rod, is allowed only in a planar scene"},
+    {"planar form of a spatial chain",
+     "{'scene':{'form':'planar','bodies':[" BODY ",{'mass':1,'com':[0,-0.5,0],'inertia':[0.1,"
+     "0.1,0.1],'joint':{'type':'revolute','axis':[1,0,0]}}]}," PASSIVE "," DUR "}",
+     NULL, JOB_INVALID_FIELD, "scene",
+     "chain: planar form requested but joint 1: revolute axis is not normal to the plane of "
+     "motion"},
+    {"only fixed joints",
+     BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{'type':'fixed'}}"), NULL,
+     JOB_INVALID_FIELD, "scene.bodies",
+     "must have at least one joint that moves (every joint is fixed)"},
+    {"q0 too short", "{" SCENE2_WITH("'q0':[0]") "," PASSIVE "," DUR "}", NULL, JOB_INVALID_FIELD,
+     "scene.q0", "must have 2 entries, one per position coordinate (got 1)"},
+    {"v0 too long", "{" SCENE2_WITH("'v0':[0,0,0]") "," PASSIVE "," DUR "}", NULL,
+     JOB_INVALID_FIELD, "scene.v0", "must have 2 entries, one per coordinate (got 3)"},
+    {"q0 an object", "{" SCENE2_WITH("'q0':{}") "," PASSIVE "," DUR "}", NULL, JOB_INVALID_FIELD,
+     "scene.q0", "must be an array of 2 numbers, one per position coordinate (got an object)"},
+    {"quaternion not a rotation",
+     "{'scene':{'bodies':[{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{'type':'spherical'}}"
+     "],'q0':[0.5,0,0,0]}," PASSIVE "," DUR "}",
+     NULL, JOB_INVALID_FIELD, "scene.q0",
+     "entries 0 to 3, the quaternion (w, x, y, z) of scene.bodies[0].joint, must have unit "
+     "length (got 0.5)"},
+
+    /* the controller */
+    {"controller without a type", "{" SCENE2 ",'controller':{'kp':1}," DUR "}", NULL,
+     JOB_MISSING_FIELD, "controller.type", "is required"},
+    {"unknown controller type", CTRL_JOB("{'type':'pdd'}"), NULL, JOB_INVALID_FIELD,
+     "controller.type",
+     "must be one of \"none\", \"pd\", \"pid\", \"poles\", \"lqr\" (got \"pdd\")"},
+    {"gains of no controller", "{" SCENE2 ",'controller':{'type':'none','kp':1}," DUR "}", NULL,
+     JOB_UNKNOWN_FIELD, "controller.kp", "key \"kp\" does not apply to controller type \"none\""},
+    {"pd without gains", CTRL_JOB("{'type':'pd'}"), NULL, JOB_MISSING_FIELD, "controller.kp",
+     "is required (or give \"zeta\" and \"tau\")"},
+    {"kp without kv", CTRL_JOB("{'type':'pd','kp':100}"), NULL, JOB_MISSING_FIELD, "controller.kv",
+     "is required with \"kp\""},
+    {"both pairs", CTRL_JOB("{'type':'pd','kp':100,'kv':20,'zeta':1}"), NULL, JOB_INVALID_FIELD,
+     "controller.zeta",
+     "cannot be combined with \"kp\" and \"kv\" (give \"kp\" and \"kv\", or \"zeta\" and \"tau\")"},
+    {"pid without ki", CTRL_JOB("{'type':'pid','kp':100,'kv':20}"), NULL, JOB_MISSING_FIELD,
+     "controller.ki", "is required"},
+    {"unstable pid: ki = kv kp", CTRL_JOB("{'type':'pid','kp':100,'kv':20,'ki':2000}"), NULL,
+     JOB_INVALID_FIELD, "controller",
+     "ki = 2000 must be below kv*kp = 2000 (Routh-Hurwitz: the closed-loop error dynamics would "
+     "be unstable)"},
+    {"negative kp", CTRL_JOB("{'type':'pd','kp':-1,'kv':20}"), NULL, JOB_INVALID_FIELD,
+     "controller", "kp must be positive and finite (got -1)"},
+    {"pole in the right half plane", CTRL_JOB("{'type':'poles','poles':[-1,2,-3]}"), NULL,
+     JOB_INVALID_FIELD, "controller", "pole 1 (2) is not strictly in the left half plane"},
+    {"complex pole without its conjugate",
+     CTRL_JOB("{'type':'poles','poles':[{'re':-1,'im':2},{'re':-1,'im':3},-2]}"), NULL,
+     JOB_INVALID_FIELD, "controller", "pole 0 (-1+2i) has no conjugate partner"},
+    {"two poles", CTRL_JOB("{'type':'poles','poles':[-1,-2]}"), NULL, JOB_INVALID_FIELD,
+     "controller.poles", "must be an array of 3 poles (got 2 entries)"},
+    {"pole a string", CTRL_JOB("{'type':'poles','poles':[-1,'-2',-3]}"), NULL, JOB_INVALID_FIELD,
+     "controller.poles[1]", "must be a number or an object {\"re\": x, \"im\": y} (got a string)"},
+    {"pole without im", CTRL_JOB("{'type':'poles','poles':[-1,{'re':-2},-3]}"), NULL,
+     JOB_MISSING_FIELD, "controller.poles[1].im", "is required"},
+    {"lambda zero", CTRL_JOB("{'type':'lqr','Q':[1,1,1],'lambda':0}"), NULL, JOB_INVALID_FIELD,
+     "controller", "lambda must be positive and finite (got 0)"},
+    {"Q not positive semidefinite", CTRL_JOB("{'type':'lqr','Q':[1,-1,1],'lambda':0.01}"), NULL,
+     JOB_INVALID_FIELD, "controller", "Q is not positive semidefinite (eigenvalue -1)"},
+    {"lqr without lambda", CTRL_JOB("{'type':'lqr','Q':[1,1,1]}"), NULL, JOB_MISSING_FIELD,
+     "controller.lambda", "is required"},
+    {"overrides for 1 of 2 coordinates", CTRL_JOB("{'type':'pd','kp':100,'kv':20,'joints':[{}]}"),
+     NULL, JOB_INVALID_FIELD, "controller.joints",
+     "must have 2 entries, one per coordinate (got 1)"},
+    {"ki override of pd", CTRL_JOB("{'type':'pd','kp':100,'kv':20,'joints':[{},{'ki':1}]}"), NULL,
+     JOB_UNKNOWN_FIELD, "controller.joints[1].ki",
+     "key \"ki\" does not apply to controller type \"pd\""},
+    {"override with a negative kv",
+     CTRL_JOB("{'type':'pd','kp':100,'kv':20,'joints':[{},{'kv':-5}]}"), NULL, JOB_INVALID_FIELD,
+     "controller.joints[1]", "kv must be positive and finite (got -5)"},
+    {"override switching to half a pair",
+     CTRL_JOB("{'type':'pd','kp':100,'kv':20,'joints':[{'zeta':1},{}]}"), NULL, JOB_MISSING_FIELD,
+     "controller.joints[0].tau", "is required with \"zeta\""},
+    {"zero mass scale", CTRL_JOB("{'type':'pd','kp':100,'kv':20,'model':{'mass_scale':0}}"), NULL,
+     JOB_INVALID_FIELD, "controller.model.mass_scale", "must be positive (got 0)"},
+    {"unknown key in the controller's model",
+     CTRL_JOB("{'type':'pd','kp':100,'kv':20,'model':{'mass':2}}"), NULL, JOB_UNKNOWN_FIELD,
+     "controller.model.mass", "unknown key \"mass\""},
+    {"spherical joint with a controller",
+     "{'scene':{'bodies':[" BODY ",{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{'type':"
+     "'spherical'}}]}," PD "," HOLD "," DUR "}",
+     NULL, JOB_INVALID_FIELD, "controller.type",
+     "\"pd\" cannot drive the spherical joint of scene.bodies[1] (its quaternion error is not a "
+     "per-coordinate error); spherical joints are allowed only with controller \"none\""},
+
+    /* the trajectory */
+    {"trajectory of a passive run", PASSIVE_JOB("," HOLD), NULL, JOB_INVALID_FIELD, "trajectory",
+     "not allowed with controller \"none\" (a passive run has no desired motion)"},
+    {"controller without a trajectory", "{" SCENE2 "," PD "," DUR "}", NULL, JOB_MISSING_FIELD,
+     "trajectory", "is required with controller \"pd\""},
+    {"trajectory for 1 of 2 coordinates", TRAJ_JOB("[{'type':'constant','value':0}]"), NULL,
+     JOB_INVALID_FIELD, "trajectory", "must have 2 entries, one per coordinate (got 1)"},
+    {"trajectory a string", TRAJ_JOB("'sine'"), NULL, JOB_INVALID_FIELD, "trajectory",
+     "must be an object or an array of 2 objects, one per coordinate (got a string)"},
+    {"sine of period 0",
+     TRAJ_JOB("[{'type':'constant','value':0},{'type':'sine','amplitude':1,'period':0}]"), NULL,
+     JOB_INVALID_FIELD, "trajectory[1]", "sine: period must be positive and finite (got 0 s)"},
+    {"spline times not increasing", TRAJ_JOB("{'type':'spline','times':[0,1,1],'values':[0,1,2]}"),
+     NULL, JOB_INVALID_FIELD, "trajectory", "spline: times[2] = 1 is not after times[1] = 1"},
+    {"spline values short", TRAJ_JOB("{'type':'spline','times':[0,1,2],'values':[0,1]}"), NULL,
+     JOB_INVALID_FIELD, "trajectory.values", "must have as many entries as \"times\" (3, got 2)"},
+    {"spline of one knot", TRAJ_JOB("{'type':'spline','times':[0],'values':[0]}"), NULL,
+     JOB_INVALID_FIELD, "trajectory.times", "must have 2 to 100000 entries (got 1)"},
+    {"unknown spline boundary",
+     TRAJ_JOB("{'type':'spline','times':[0,1],'values':[0,1],'boundary':'free'}"), NULL,
+     JOB_INVALID_FIELD, "trajectory.boundary",
+     "must be one of \"clamped\", \"natural\" (got \"free\")"},
+    {"polynomial of 17 coefficients",
+     TRAJ_JOB("{'type':'polynomial','coefficients':[0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0]}"), NULL,
+     JOB_INVALID_FIELD, "trajectory.coefficients", "must have 1 to 16 entries (got 17)"},
+    {"min_jerk ending at its start",
+     TRAJ_JOB("{'type':'min_jerk','from':0,'to':1,'start':1,'end':1}"), NULL, JOB_INVALID_FIELD,
+     "trajectory", "min_jerk: end (1 s) must be after start (1 s)"},
+    {"min_jerk without 'to'", TRAJ_JOB("{'type':'min_jerk','from':0,'start':0,'end':1}"), NULL,
+     JOB_MISSING_FIELD, "trajectory.to", "is required"},
+    {"misspelt trajectory key", TRAJ_JOB("{'type':'sine','amplitud':1,'period':1}"), NULL,
+     JOB_UNKNOWN_FIELD, "trajectory.amplitud",
+     "unknown key \"amplitud\" (did you mean \"amplitude\"?)"},
+
+    /* the disturbance */
+    {"disturbance of negative period",
+     PASSIVE_JOB(",'disturbance':{'type':'sine','amplitude':1,'period':-1}"), NULL,
+     JOB_INVALID_FIELD, "disturbance", "sine: period must be positive and finite (got -1 s)"},
+    {"step without a time",
+     PASSIVE_JOB(",'disturbance':[{'type':'step','value':1},{'type':'none'}]"), NULL,
+     JOB_MISSING_FIELD, "disturbance[0].time", "is required"},
+    {"value of no disturbance", PASSIVE_JOB(",'disturbance':{'type':'none','value':1}"), NULL,
+     JOB_UNKNOWN_FIELD, "disturbance.value",
+     "key \"value\" does not apply to disturbance type \"none\""},
+
+    /* the integrator */
+    {"rtol of 2", PASSIVE_JOB(",'integrator':{'rtol':2}"), NULL, JOB_INVALID_FIELD, "integrator",
+     "rtol must be in (0, 1) (got 2)"},
+    {"atol of 0", PASSIVE_JOB(",'integrator':{'method':'bdf','atol':0}"), NULL, JOB_INVALID_FIELD,
+     "integrator", "atol must be positive and finite (got 0)"},
+    {"rtol for rk4", PASSIVE_JOB(",'integrator':{'method':'rk4','rtol':1e-6}"), NULL,
+     JOB_UNKNOWN_FIELD, "integrator.rtol", "key \"rtol\" does not apply to method \"rk4\""},
+    {"negative rk4 step", PASSIVE_JOB(",'integrator':{'method':'rk4','step':-1}"), NULL,
+     JOB_INVALID_FIELD, "integrator", "step must be positive and finite (got -1 s)"},
+    {"unknown method", PASSIVE_JOB(",'integrator':{'method':'euler'}"), NULL, JOB_INVALID_FIELD,
+     "integrator.method", "must be one of \"rk4\", \"dopri5\", \"bdf\" (got \"euler\")"},
+    {"fractional max_steps", PASSIVE_JOB(",'integrator':{'max_steps':1.5}"), NULL,
+     JOB_INVALID_FIELD, "integrator.max_steps",
+     "must be a whole number from 0 (no limit) to 2^53 (got 1.5)"},
+
+    /* duration, output, limits */
+    {"zero duration", "{" SCENE2 "," PASSIVE ",'duration':0}", NULL, JOB_INVALID_FIELD, "duration",
+     "must be positive (got 0 s)"},
+    {"two hours", "{" SCENE2 "," PASSIVE ",'duration':7200}", NULL, JOB_LIMIT_EXCEEDED, "duration",
+     "must be at most 3600 s (got 7200 s)"},
+    {"duration a string", "{" SCENE2 "," PASSIVE ",'duration':'5'}", NULL, JOB_INVALID_FIELD,
+     "duration", "must be a number (got a string)"},
+    {"zero interval", PASSIVE_JOB(",'output':{'interval':0}"), NULL, JOB_INVALID_FIELD,
+     "output.interval", "must be positive (got 0 s)"},
+    {"interval beyond the duration", PASSIVE_JOB(",'output':{'interval':2}"), NULL,
+     JOB_INVALID_FIELD, "output.interval", "must not exceed the duration (got 2 s > 1 s)"},
+    {"too many samples", "{" SCENE2 "," PASSIVE ",'duration':3600}", NULL, JOB_LIMIT_EXCEEDED,
+     "output.interval",
+     "gives up to 360002 samples over 3600 s; the limit is 200000 (use a longer interval)"},
+    {"too many values", NULL, too_many_values, JOB_LIMIT_EXCEEDED, "output",
+     "would record up to 60301206 values (100002 samples x 603 per sample); the limit is "
+     "20000000 (record fewer channels or use a longer interval)"},
+    {"tracking error of a passive run", PASSIVE_JOB(",'output':{'channels':['q','e']}"), NULL,
+     JOB_INVALID_FIELD, "output.channels[1]",
+     "channel \"e\" needs a controller (this run is passive)"},
+    {"unknown channel", PASSIVE_JOB(",'output':{'channels':['x']}"), NULL, JOB_INVALID_FIELD,
+     "output.channels[0]",
+     "must be one of \"q\", \"qdot\", \"q_des\", \"qdot_des\", \"e\", \"tau\", \"w\", \"energy\" "
+     "(got \"x\")"},
+    {"channel twice", PASSIVE_JOB(",'output':{'channels':['q','q']}"), NULL, JOB_INVALID_FIELD,
+     "output.channels[1]", "\"q\" is listed twice"},
+    {"no channels", PASSIVE_JOB(",'output':{'channels':[]}"), NULL, JOB_INVALID_FIELD,
+     "output.channels", "must name at least one channel"},
+    {"misspelt output key", PASSIVE_JOB(",'output':{'intervall':0.1}"), NULL, JOB_UNKNOWN_FIELD,
+     "output.intervall", "unknown key \"intervall\" (did you mean \"interval\"?)"},
+    {"zero speed bound", PASSIVE_JOB(",'limits':{'max_speed':0}"), NULL, JOB_INVALID_FIELD,
+     "limits.max_speed", "must be positive (got 0)"},
+    {"negative wall time", PASSIVE_JOB(",'limits':{'wall_time':-1}"), NULL, JOB_INVALID_FIELD,
+     "limits.wall_time", "must not be negative (got -1 s)"},
+
+    /* presets */
+    {"preset not a string", "{'preset':3}", NULL, JOB_INVALID_FIELD, "preset",
+     "must be a string (got a number)"},
+    {"preset parameter out of range", "{'preset':'n_link_pendulum','n':1}", NULL, JOB_INVALID_FIELD,
+     "n", "must be an integer from 2 to 4096 (got 1)"},
+    {"parameter of another preset", "{'preset':'triple_pendulum_pd','n':4}", NULL,
+     JOB_UNKNOWN_FIELD, "n", "unknown key \"n\""},
+    {"override breaking the preset", "{'preset':'triple_pendulum_pd','controller':{'kv':-1}}", NULL,
+     JOB_INVALID_FIELD, "controller", "kv must be positive and finite (got -1)"},
+};
+
+Test(job_json, rejects_every_bad_job_with_its_code_field_and_message)
+{
+    int count = (int)(sizeof bad_jobs / sizeof bad_jobs[0]);
+    cr_assert_geq(count, 40);
+    for (int i = 0; i < count; i++) {
+        const bad_job *b = &bad_jobs[i];
+        char *doc = b->make != NULL ? b->make() : json(b->text);
+        job *j = (job *)0x1;
+        job_error err;
+        int rc = job_parse(doc, strlen(doc), &j, &err);
+        cr_expect_eq(rc, -1, "%s: accepted", b->what);
+        cr_expect_null(j, "%s: *out not NULL", b->what);
+        if (rc == 0) job_free(j);
+        cr_expect_eq(err.code, b->code, "%s: code %s, want %s", b->what,
+                     job_error_code_name(err.code), job_error_code_name(b->code));
+        cr_expect_str_eq(err.field, b->field, "%s: field \"%s\", want \"%s\"", b->what, err.field,
+                         b->field);
+        cr_expect_str_eq(err.message, b->message, "%s: message\n  \"%s\", want\n  \"%s\"", b->what,
+                         err.message, b->message);
+        free(doc);
+    }
+}
+
+Test(job_json, unknown_preset_lists_every_preset)
+{
+    int count;
+    const preset *list = presets_list(&count);
+    char want[512];
+    size_t used = (size_t)snprintf(want, sizeof want, "unknown preset \"nope\" (the presets are: ");
+    for (int i = 0; i < count; i++) {
+        used +=
+            (size_t)snprintf(want + used, sizeof want - used, "%s%s", i ? ", " : "", list[i].name);
+    }
+    snprintf(want + used, sizeof want - used, ")");
+
+    const char *doc = "{\"preset\": \"nope\", \"duration\": 1}";
+    job *j;
+    job_error err;
+    cr_assert_eq(job_parse(doc, strlen(doc), &j, &err), -1);
+    cr_assert_eq(err.code, JOB_UNKNOWN_PRESET);
+    cr_assert_str_eq(err.field, "preset");
+    cr_assert_str_eq(err.message, want);
+}
+
+Test(job_json, names_are_limited_to_JOB_MAX_NAME_bytes)
+{
+    char *ok = name_of_length(JOB_MAX_NAME), *long_name = name_of_length(JOB_MAX_NAME + 1);
+    job *j;
+    job_error err;
+    cr_assert_eq(job_parse(ok, strlen(ok), &j, &err), 0, "%s", err.message);
+    cr_assert_eq(strlen(j->name), JOB_MAX_NAME);
+    job_free(j);
+    cr_assert_eq(job_parse(long_name, strlen(long_name), &j, &err), -1);
+    cr_assert_eq(err.code, JOB_INVALID_FIELD);
+    cr_assert_str_eq(err.field, "name");
+    cr_assert_str_eq(err.message, "must be at most 200 bytes long (got 201)");
+    free(ok);
+    free(long_name);
+}
+
+Test(job_json, reads_exactly_len_bytes_of_unterminated_text)
+{
+    /* a buffer of exactly len bytes, no NUL: the sanitizer build catches any read beyond it */
+    char *doc = json(PASSIVE_JOB(""));
+    size_t len = strlen(doc);
+    char *exact = malloc(len);
+    memcpy(exact, doc, len);
+    job *j;
+    job_error err;
+    cr_assert_eq(job_parse(exact, len, &j, &err), 0, "%s", err.message);
+    job_free(j);
+    cr_assert_eq(job_parse(exact, len - 1, &j, &err), -1, "the closing brace is cut off");
+    cr_assert_eq(err.code, JOB_INVALID_JSON);
+
+    /* bytes after len are not read; within len they are text after the document */
+    char *longer = malloc(len + 3);
+    memcpy(longer, doc, len);
+    memcpy(longer + len, "]]]", 3);
+    cr_assert_eq(job_parse(longer, len, &j, &err), 0, "%s", err.message);
+    job_free(j);
+    cr_assert_eq(job_parse(longer, len + 1, &j, &err), -1);
+    cr_assert_eq(err.code, JOB_INVALID_JSON);
+    free(exact);
+    free(longer);
+    free(doc);
+}
+
+/* ---- what a valid job turns into ---- */
+
+Test(job_json, fills_every_default_of_a_minimal_planar_job)
+{
+    job *j = parse_ok("{" SCENE1 "," PASSIVE "," DUR "}");
+    const ctc_sim_spec *s = &j->spec;
+    cr_assert_str_eq(j->name, "job");
+    cr_assert_null(j->preset);
+    cr_assert_eq(j->nq, 1);
+    cr_assert_eq(j->nv, 1);
+    cr_assert_eq(s->chain.nbodies, 1);
+    cr_assert_eq(s->chain.form, CTC_FORM_AUTO);
+    cr_assert(s->chain.gravity[0] == 0 && s->chain.gravity[1] == -9.81 && s->chain.gravity[2] == 0);
+    cr_assert_eq(s->chain.bodies[0].mass, 1);
+    cr_assert_eq(s->chain.bodies[0].inertia[4], 0.1);
+    cr_assert_eq(s->chain.joints[0].location[1], 0);
+    cr_assert_eq(s->q0[0], 0);
+    cr_assert_eq(s->v0[0], 0);
+    cr_assert_eq(s->controller, CTC_CTRL_NONE);
+    cr_assert_null(j->gains);
+    cr_assert_null(j->traj);
+    cr_assert_null(j->disturb);
+    cr_assert_null(s->disturb);
+    cr_assert_eq(s->model_mass_scale, 1);
+    cr_assert_eq(s->model_inertia_scale, 1);
+    cr_assert_eq(s->integrator.method, CTC_INTEG_DOPRI5);
+    cr_assert_eq(s->integrator.rtol, 1e-8);
+    cr_assert_eq(s->integrator.atol, 1e-10);
+    cr_assert_eq(s->integrator.initial_step, 0);
+    cr_assert_eq(s->integrator.max_step, 0);
+    cr_assert_eq(s->integrator.max_steps, 10000000);
+    cr_assert_eq(s->duration, 1);
+    cr_assert_eq(s->output_interval, 0.01);
+    unsigned passive = CTC_CH_BIT(CTC_CH_Q) | CTC_CH_BIT(CTC_CH_QD) | CTC_CH_BIT(CTC_CH_TAU) |
+                       CTC_CH_BIT(CTC_CH_ENERGY);
+    cr_assert_eq(s->channels, passive);
+    cr_assert_eq(s->max_speed, 1e6);
+    cr_assert_eq(s->wall_limit, 0);
+    job_free(j);
+
+    /* rk4's step; an interval no longer than a short duration; every channel with a controller */
+    j = parse_ok("{" SCENE1 "," PD "," HOLD ",'duration':0.004,'integrator':{'method':'rk4'}}");
+    cr_assert_eq(j->spec.integrator.step, 1e-3);
+    cr_assert_eq(j->spec.output_interval, 0.004);
+    cr_assert_eq(j->spec.channels, CTC_CH_ALL);
+    job_free(j);
+}
+
+Test(job_json, shapes_give_the_textbook_bodies_in_a_spatial_scene)
+{
+    /* box 1 x 0.1 x 0.2 of 3 kg at (0.5, 0, 0); cylinder r 0.1, L 0.6 of 2 kg along x */
+    job *j = parse_ok("{'scene':{'gravity':[0,0,-9.81],'bodies':["
+                      "{'mass':3,'shape':{'type':'box','size':[1,0.1,0.2],'centre':[0.5,0,0]},"
+                      "'joint':{'type':'revolute','axis':[0,0,2]}},"
+                      "{'mass':2,'shape':{'type':'cylinder','radius':0.1,'length':0.6,"
+                      "'axis':[1,0,0]},'joint':{'type':'cylindrical','axis':[1,0,0],"
+                      "'location':[1,0,0]}}]}," PASSIVE "," DUR "}");
+    const ctc_body_spec *box = &j->bodies[0], *cyl = &j->bodies[1];
+    cr_assert_eq(j->nv, 3);
+    cr_assert_eq(box->mass, 3);
+    cr_assert(box->com[0] == 0.5 && box->com[1] == 0 && box->com[2] == 0);
+    cr_assert_float_eq(box->inertia[0], 3.0 / 12 * (0.01 + 0.04), 1e-15);
+    cr_assert_float_eq(box->inertia[4], 3.0 / 12 * (1 + 0.04), 1e-15);
+    cr_assert_float_eq(box->inertia[8], 3.0 / 12 * (1 + 0.01), 1e-15);
+    cr_assert_eq(box->inertia[1], 0);
+    cr_assert_float_eq(cyl->inertia[0], 2 * 0.01 / 2, 1e-15);
+    cr_assert_float_eq(cyl->inertia[4], 2 * (3 * 0.01 + 0.36) / 12, 1e-15);
+    cr_assert_float_eq(cyl->inertia[8], 2 * (3 * 0.01 + 0.36) / 12, 1e-15);
+    cr_assert_eq(j->joints[0].axis[2], 2, "axes are kept as given (the builder normalises)");
+    cr_assert_eq(j->joints[1].type, CTC_JOINT_CYLINDRICAL);
+    cr_assert_eq(j->joints[1].location[0], 1);
+    job_free(j);
+}
+
+Test(job_json, inertia_as_rows_equals_inertia_as_a_diagonal)
+{
+    job *rows = parse_ok(BODY_JOB("{'mass':2,'com':[0.1,0.2,0.3],'inertia':[[1,0,0],[0,2,0],"
+                                  "[0,0,2.5]],'joint':" REV "}"));
+    job *diag =
+        parse_ok(BODY_JOB("{'mass':2,'com':[0.1,0.2,0.3],'inertia':[1,2,2.5],'joint':" REV "}"));
+    for (int i = 0; i < 9; i++) {
+        cr_assert_eq(rows->bodies[0].inertia[i], diag->bodies[0].inertia[i], "inertia[%d]", i);
+    }
+    cr_assert_eq(rows->bodies[0].com[2], 0.3);
+
+    /* a full tensor keeps its products of inertia */
+    job *full = parse_ok(BODY_JOB("{'mass':2,'com':[0,0,0],'inertia':[[2,0.1,0],[0.1,2,0],[0,0,"
+                                  "3]],'joint':" REV "}"));
+    cr_assert_eq(full->bodies[0].inertia[1], 0.1);
+    cr_assert_eq(full->bodies[0].inertia[3], 0.1);
+    job_free(rows);
+    job_free(diag);
+    job_free(full);
+}
+
+static void expect_gains(const ctc_gains *g, double ki, double kp, double kv, double tol,
+                         const char *what)
+{
+    cr_assert_leq(fabs(g->ki - ki), tol * fmax(1, ki), "%s: ki %.17g, want %g", what, g->ki, ki);
+    cr_assert_leq(fabs(g->kp - kp), tol * fmax(1, kp), "%s: kp %.17g, want %g", what, g->kp, kp);
+    cr_assert_leq(fabs(g->kv - kv), tol * fmax(1, kv), "%s: kv %.17g, want %g", what, g->kv, kv);
+}
+
+Test(job_json, every_controller_type_designs_the_paper_gains)
+{
+    /* none */
+    job *j = parse_ok(PASSIVE_JOB(""));
+    cr_assert_null(j->spec.gains);
+    job_free(j);
+
+    /* pd and pid as given (paper 7.1: kp 100, kv 20, ki 250) */
+    j = parse_ok(CTRL_JOB("{'type':'pd','kp':100,'kv':20}"));
+    cr_assert_eq(j->spec.controller, CTC_CTRL_PD);
+    for (int i = 0; i < 2; i++) expect_gains(&j->gains[i], 0, 100, 20, 0, "pd");
+    cr_assert_eq(j->spec.gains, j->gains);
+    job_free(j);
+    j = parse_ok(CTRL_JOB("{'type':'pid','kp':100,'kv':20,'ki':250}"));
+    expect_gains(&j->gains[1], 250, 100, 20, 0, "pid");
+    job_free(j);
+
+    /* zeta and tau: wn = 1/tau, kp = wn^2, kv = 2 zeta wn */
+    j = parse_ok(CTRL_JOB("{'type':'pid','zeta':0.7,'tau':0.1,'ki':50}"));
+    expect_gains(&j->gains[0], 50, 100, 14, 1e-14, "pid from zeta, tau");
+    job_free(j);
+
+    /* poles (-2, -2.1, -2.2): K = (9.24, 13.22, 6.3); a conjugate pair -1 +- 2i with -3:
+       (s^2 + 2s + 5)(s + 3) = s^3 + 5 s^2 + 11 s + 15 */
+    j = parse_ok(CTRL_JOB("{'type':'poles','poles':[-2,-2.1,-2.2]}"));
+    expect_gains(&j->gains[0], 9.24, 13.22, 6.3, 1e-14, "poles");
+    job_free(j);
+    j = parse_ok(CTRL_JOB("{'type':'poles','poles':[{'re':-1,'im':2},-3,{'re':-1,'im':-2}]}"));
+    expect_gains(&j->gains[1], 15, 11, 5, 1e-14, "complex poles");
+    job_free(j);
+
+    /* LQR, Q = I, lambda = 0.01: K = (10, 18.2674, 11.6848), as rows or as a diagonal */
+    j = parse_ok(CTRL_JOB("{'type':'lqr','Q':[[1,0,0],[0,1,0],[0,0,1]],'lambda':0.01}"));
+    expect_gains(&j->gains[0], 10, 18.2674, 11.6848, 1e-5, "lqr");
+    job_free(j);
+    j = parse_ok(CTRL_JOB("{'type':'lqr','Q':[1,1,1],'lambda':0.01}"));
+    expect_gains(&j->gains[1], 10, 18.2674, 11.6848, 1e-5, "lqr, diagonal Q");
+    job_free(j);
+}
+
+Test(job_json, per_coordinate_overrides_replace_the_shared_gains)
+{
+    /* three coordinates: kept, kp replaced, switched to zeta and tau */
+    job *j = parse_ok("{'scene':{'bodies':[" BODY "," BODY2 "," BODY2 "]},'controller':{'type':"
+                      "'pid','kp':100,'kv':20,'ki':250,'joints':[{},{'kp':50},{'zeta':1,'tau':0.2,"
+                      "'ki':10}]}," HOLD "," DUR "}");
+    expect_gains(&j->gains[0], 250, 100, 20, 0, "kept");
+    expect_gains(&j->gains[1], 250, 50, 20, 0, "kp replaced");
+    expect_gains(&j->gains[2], 10, 25, 10, 1e-14, "zeta and tau");
+    job_free(j);
+
+    /* lqr: one coordinate with its own lambda; poles: one with its own poles */
+    j = parse_ok(CTRL_JOB("{'type':'lqr','Q':[1,1,1],'lambda':1,'joints':[{'lambda':0.01},{}]}"));
+    expect_gains(&j->gains[0], 10, 18.2674, 11.6848, 1e-5, "lambda override");
+    /* Q = I, lambda = 1: p(s) p(-s) = -s^6 + s^4 - s^2 + 1 gives ki = 1, kp = kv = 1 + sqrt 2 */
+    expect_gains(&j->gains[1], 1, 1 + sqrt(2.0), 1 + sqrt(2.0), 1e-12, "lambda 1");
+    job_free(j);
+    j = parse_ok(CTRL_JOB("{'type':'poles','poles':[-1,-1,-1],'joints':[{},{'poles':[-2,-2.1,"
+                          "-2.2]}]}"));
+    expect_gains(&j->gains[0], 1, 3, 3, 1e-14, "(s + 1)^3");
+    expect_gains(&j->gains[1], 9.24, 13.22, 6.3, 1e-14, "poles override");
+    job_free(j);
+}
+
+Test(job_json, one_trajectory_object_serves_every_coordinate)
+{
+    /* a cylindrical joint has two coordinates; a spline gives each its own knots */
+    job *j = parse_ok("{'scene':{'bodies':[{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{"
+                      "'type':'cylindrical','axis':[0,0,1]}}]}," PD ",'trajectory':{'type':"
+                      "'spline','times':[0,0.5,1],'values':[0,1,0]}," DUR "}");
+    cr_assert_eq(j->nv, 2);
+    for (int i = 0; i < 2; i++) {
+        cr_assert_eq(j->traj[i].type, CTC_TRAJ_SPLINE);
+        cr_assert_eq(j->traj[i].nknots, 3);
+        cr_assert_eq(j->traj[i].boundary, CTC_SPLINE_CLAMPED);
+        cr_assert_not_null(j->traj[i].knots);
+    }
+    cr_assert_neq(j->traj[0].knots, j->traj[1].knots);
+    double at[3];
+    ctc_traj_eval(&j->traj[1], 0.5, at);
+    cr_assert_float_eq(at[0], 1, 1e-12);
+    job_free(j);
+
+    /* an array: one type per coordinate, defaults filled */
+    j = parse_ok(TRAJ_JOB("[{'type':'cosine','amplitude':0.6,'period':1.5},"
+                          "{'type':'min_jerk','from':0,'to':1,'start':0.2,'end':0.8}]"));
+    cr_assert_eq(j->traj[0].type, CTC_TRAJ_COSINE);
+    cr_assert_eq(j->traj[0].period, 1.5);
+    cr_assert_eq(j->traj[0].phase, 0);
+    cr_assert_eq(j->traj[0].offset, 0);
+    cr_assert_eq(j->traj[1].type, CTC_TRAJ_MIN_JERK);
+    cr_assert(j->traj[1].q1 == 1 && j->traj[1].t0 == 0.2 && j->traj[1].t1 == 0.8);
+    job_free(j);
+}
+
+Test(job_json, a_disturbance_that_is_none_everywhere_leaves_none)
+{
+    job *j = parse_ok(PASSIVE_JOB(",'disturbance':[{'type':'none'},{'type':'none'}]"));
+    cr_assert_null(j->spec.disturb);
+    job_free(j);
+    j = parse_ok(PASSIVE_JOB(",'disturbance':[{'type':'none'},{'type':'step','value':0.2,"
+                             "'time':0.5}]"));
+    cr_assert_eq(j->spec.disturb, j->disturb);
+    cr_assert_eq(j->disturb[0].type, CTC_DISTURB_NONE);
+    cr_assert_eq(j->disturb[1].type, CTC_DISTURB_STEP);
+    cr_assert(j->disturb[1].value == 0.2 && j->disturb[1].time == 0.5);
+    job_free(j);
+}
+
+Test(job_json, spherical_joints_start_at_the_identity_quaternion)
+{
+    job *j = parse_ok("{'scene':{'bodies':[{'mass':1,'com':[0,0,-0.5],'inertia':[1,1,1],'joint':"
+                      "{'type':'spherical'}}],'v0':[0,1,0]}," PASSIVE "," DUR "}");
+    cr_assert_eq(j->nq, 4);
+    cr_assert_eq(j->nv, 3);
+    cr_assert(j->q0[0] == 1 && j->q0[1] == 0 && j->q0[2] == 0 && j->q0[3] == 0);
+    cr_assert_eq(j->v0[1], 1);
+    job_free(j);
+}
+
+Test(job_json, the_spec_runs)
+{
+    /* a passive and a controlled job, a few samples each */
+    const char *jobs[] = {
+        "{" SCENE2 "," PASSIVE ",'duration':0.05}",
+        "{" SCENE2 "," PD ",'trajectory':{'type':'sine','amplitude':0.1,'period':1},"
+        "'disturbance':{'type':'constant','value':0.2},'duration':0.05,"
+        "'integrator':{'method':'rk4','step':0.001}}",
+    };
+    for (int i = 0; i < 2; i++) {
+        job *j = parse_ok(jobs[i]);
+        ctc_sim_result *r = NULL;
+        char err[256] = "";
+        cr_assert_eq(ctc_sim_run(&j->spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
+        cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+        cr_assert_eq(r->nsamples, 6);
+        cr_assert_eq(r->channels, j->spec.channels);
+        ctc_sim_result_free(r);
+        job_free(j);
+    }
+}
+
+/* ---- presets ---- */
+
+Test(job_json, preset_overrides_are_an_rfc7386_merge_patch)
+{
+    /* objects merge key by key, null deletes, anything else replaces */
+    job *j = parse_ok("{'preset':'triple_pendulum_pd','name':null,'disturbance':null,"
+                      "'controller':{'kp':50},'duration':1,'output':{'interval':0.1}}");
+    cr_assert_str_eq(j->preset, "triple_pendulum_pd");
+    cr_assert_str_eq(j->name, "triple_pendulum_pd", "a deleted name defaults to the preset's");
+    cr_assert_null(j->spec.disturb);
+    cr_assert_eq(j->spec.controller, CTC_CTRL_PD);
+    expect_gains(&j->gains[2], 0, 50, 20, 0, "kp overridden, kv kept");
+    cr_assert_eq(j->spec.duration, 1);
+    cr_assert_eq(j->spec.output_interval, 0.1);
+    cr_assert_eq(j->traj[1].type, CTC_TRAJ_COSINE, "the preset's trajectory is kept");
+    job_free(j);
+
+    /* an array replaces the preset's whole array; a parameter is taken out of the patch */
+    j = parse_ok("{'preset':'n_link_pendulum','n':3,'scene':{'q0':[0.1,0.2,0.3]},"
+                 "'trajectory':[{'type':'constant','value':1},{'type':'constant','value':2},"
+                 "{'type':'constant','value':3}]}");
+    cr_assert_eq(j->spec.chain.nbodies, 3);
+    cr_assert(j->q0[0] == 0.1 && j->q0[2] == 0.3);
+    cr_assert_eq(j->traj[2].value, 3);
+    cr_assert_str_eq(j->preset, "n_link_pendulum");
+    job_free(j);
+
+    /* a new object below a key the preset lacks: nulls inside it are dropped */
+    j = parse_ok(
+        "{'preset':'triple_pendulum_passive','limits':{'max_speed':100,'wall_time':null}}");
+    cr_assert_eq(j->spec.max_speed, 100);
+    cr_assert_eq(j->spec.wall_limit, 0);
+    job_free(j);
+}
+
+/* ---- the normalised document ---- */
+
+static void expect_same_traj(const ctc_traj *a, const ctc_traj *b, int i)
+{
+    cr_assert_eq(a->type, b->type, "traj[%d].type", i);
+    cr_assert(a->value == b->value && a->amplitude == b->amplitude && a->period == b->period &&
+                  a->phase == b->phase && a->offset == b->offset,
+              "traj[%d] sinusoid or constant", i);
+    cr_assert_eq(a->ncoef, b->ncoef, "traj[%d].ncoef", i);
+    for (int c = 0; c < a->ncoef; c++) cr_assert_eq(a->coef[c], b->coef[c], "traj[%d].coef", i);
+    cr_assert(a->q0 == b->q0 && a->q1 == b->q1 && a->t0 == b->t0 && a->t1 == b->t1,
+              "traj[%d] min_jerk", i);
+    cr_assert_eq(a->nknots, b->nknots, "traj[%d].nknots", i);
+    cr_assert_eq(a->boundary, b->boundary, "traj[%d].boundary", i);
+    for (int k = 0; k < 5 * a->nknots; k++) {
+        cr_assert_eq(a->knots[k], b->knots[k], "traj[%d].knots[%d]", i, k);
+    }
+}
+
+/* every number and setting of two jobs' specs is the same */
+static void expect_same_job(const job *a, const job *b)
+{
+    const ctc_sim_spec *s = &a->spec, *t = &b->spec;
+    cr_assert_str_eq(a->name, b->name);
+    cr_assert(a->nq == b->nq && a->nv == b->nv);
+    cr_assert_eq(s->chain.nbodies, t->chain.nbodies);
+    cr_assert_eq(s->chain.form, t->chain.form);
+    for (int i = 0; i < 3; i++) cr_assert_eq(s->chain.gravity[i], t->chain.gravity[i]);
+    for (int k = 0; k < s->chain.nbodies; k++) {
+        const ctc_body_spec *x = &s->chain.bodies[k], *y = &t->chain.bodies[k];
+        const ctc_joint_spec *p = &s->chain.joints[k], *q = &t->chain.joints[k];
+        cr_assert_eq(x->mass, y->mass, "body %d mass", k);
+        for (int i = 0; i < 3; i++) cr_assert_eq(x->com[i], y->com[i], "body %d com", k);
+        for (int i = 0; i < 9; i++) cr_assert_eq(x->inertia[i], y->inertia[i], "body %d I", k);
+        cr_assert_eq(p->type, q->type, "joint %d type", k);
+        for (int i = 0; i < 3; i++) {
+            cr_assert_eq(p->axis[i], q->axis[i], "joint %d axis", k);
+            cr_assert_eq(p->location[i], q->location[i], "joint %d location", k);
+        }
+    }
+    for (int i = 0; i < a->nq; i++) cr_assert_eq(s->q0[i], t->q0[i], "q0[%d]", i);
+    for (int i = 0; i < a->nv; i++) cr_assert_eq(s->v0[i], t->v0[i], "v0[%d]", i);
+    cr_assert_eq(s->controller, t->controller);
+    cr_assert_eq(s->gains == NULL, t->gains == NULL);
+    for (int i = 0; s->gains != NULL && i < a->nv; i++) {
+        cr_assert(s->gains[i].ki == t->gains[i].ki && s->gains[i].kp == t->gains[i].kp &&
+                      s->gains[i].kv == t->gains[i].kv,
+                  "gains[%d]", i);
+    }
+    cr_assert_eq(s->model_mass_scale, t->model_mass_scale);
+    cr_assert_eq(s->model_inertia_scale, t->model_inertia_scale);
+    cr_assert_eq(s->traj == NULL, t->traj == NULL);
+    for (int i = 0; s->traj != NULL && i < a->nv; i++)
+        expect_same_traj(&s->traj[i], &t->traj[i], i);
+    cr_assert_eq(s->disturb == NULL, t->disturb == NULL);
+    for (int i = 0; s->disturb != NULL && i < a->nv; i++) {
+        const ctc_disturb *x = &s->disturb[i], *y = &t->disturb[i];
+        cr_assert(x->type == y->type && x->value == y->value && x->amplitude == y->amplitude &&
+                      x->period == y->period && x->phase == y->phase && x->offset == y->offset &&
+                      x->time == y->time,
+                  "disturb[%d]", i);
+    }
+    const ctc_integ_spec *m = &s->integrator, *n = &t->integrator;
+    cr_assert(m->method == n->method && m->step == n->step && m->rtol == n->rtol &&
+              m->atol == n->atol && m->initial_step == n->initial_step &&
+              m->max_step == n->max_step && m->max_steps == n->max_steps);
+    cr_assert_eq(s->duration, t->duration);
+    cr_assert_eq(s->output_interval, t->output_interval);
+    cr_assert_eq(s->channels, t->channels);
+    cr_assert_eq(s->max_speed, t->max_speed);
+    cr_assert_eq(s->wall_limit, t->wall_limit);
+}
+
+/* doc -> job -> normalised -> text -> job -> normalised -> text: the same spec and text, and the
+ * normalised document itself (unprinted) parses to the same spec and document */
+static void expect_round_trip(const char *text, int from_text)
+{
+    char *doc = from_text ? strdup(text) : json(text);
+    job *first = NULL, *second = NULL, *direct = NULL;
+    job_error err;
+    cr_assert_eq(job_parse(doc, strlen(doc), &first, &err), 0, "%s: %s", err.field, err.message);
+    char *text1 = cJSON_Print(first->normalised);
+    cr_assert_eq(job_parse(text1, strlen(text1), &second, &err), 0, "normalised rejected: %s: %s",
+                 err.field, err.message);
+    char *text2 = cJSON_Print(second->normalised);
+    cr_assert_str_eq(text1, text2);
+    expect_same_job(first, second);
+    cr_assert_eq(job_from_json(first->normalised, &direct, &err), 0, "%s", err.message);
+    expect_same_job(first, direct);
+    cr_assert(cJSON_Compare(first->normalised, direct->normalised, 1));
+    free(text1);
+    free(text2);
+    free(doc);
+    job_free(first);
+    job_free(second);
+    job_free(direct);
+}
+
+Test(job_json, normalised_documents_parse_back_to_the_same_job)
+{
+    expect_round_trip("{" SCENE1 "," PASSIVE "," DUR "}", 0);
+
+    /* everything at once: shapes, joint types, pid overrides of both forms, every trajectory
+       and disturbance type, rk4, a channel list, limits */
+    expect_round_trip(
+        "{'name':'everything','scene':{'gravity':[0,0,-9.81],'form':'spatial','bodies':["
+        "{'name':'base','mass':3,'shape':{'type':'box','size':[1,0.1,0.2]},'joint':{'type':"
+        "'revolute','axis':[0,0,1]}},"
+        "{'mass':2,'shape':{'type':'cylinder','radius':0.1,'length':0.6,'axis':[1,0,0],'centre':"
+        "[0.3,0,0]},'joint':{'type':'cylindrical','axis':[1,0,0],'location':[1,0,0]}},"
+        "{'mass':1,'com':[0,0,0],'inertia':[[0.2,0.01,0],[0.01,0.2,0],[0,0,0.3]],'joint':{'type':"
+        "'fixed','location':[0.6,0,0]}},"
+        "{'mass':1,'com':[0.1,0,0],'inertia':[0.1,0.2,0.2],'joint':{'type':'prismatic','axis':[0,"
+        "1,0]}},"
+        "{'mass':1,'com':[0.1,0,0],'inertia':[0.1,0.2,0.2],'joint':{'type':'revolute','axis':[0,"
+        "1,0]}}],'q0':[0.1,0.2,0.3,0.4,0.5],'v0':[0,0,1,0,0]},"
+        "'controller':{'type':'pid','zeta':0.9,'tau':0.1,'ki':100,'joints':[{},{'kp':400,'kv':"
+        "40},{'ki':0},{'tau':0.2},{}],'model':{'mass_scale':1.1,'inertia_scale':0.9}},"
+        "'trajectory':[{'type':'constant','value':0.5},{'type':'sine','amplitude':1,'period':2,"
+        "'phase':0.3},{'type':'polynomial','coefficients':[0,1,-0.5]},{'type':'min_jerk','from':0,"
+        "'to':0.2,'start':0,'end':0.5},{'type':'spline','times':[0,0.5,1],'values':[0,1,0],"
+        "'boundary':'natural'}],"
+        "'disturbance':[{'type':'none'},{'type':'constant','value':0.2},{'type':'sine','amplitude':"
+        "0.1,'period':0.5},{'type':'step','value':1,'time':0.5},{'type':'none'}],"
+        "'integrator':{'method':'rk4','step':0.0005,'max_steps':100000},'duration':2,"
+        "'output':{'interval':0.05,'channels':['e','q','w']},'limits':{'max_speed':1000,"
+        "'wall_time':10}}",
+        0);
+
+    /* lqr with rows, complex poles with overrides, bdf */
+    expect_round_trip(CTRL_JOB("{'type':'lqr','Q':[[2,0,0],[0,1,0],[0,0,1]],'lambda':0.1}"), 0);
+    expect_round_trip("{" SCENE2 ",'controller':{'type':'poles','poles':[{'re':-1,'im':2},{'re':"
+                      "-1,'im':-2},-3],'joints':[{'poles':[-1,-2,-3]},{}]}," HOLD "," DUR
+                      ",'integrator':{'method':'bdf','rtol':1e-6,'atol':1e-8,'max_step':0.1}}",
+                      0);
+
+    /* every preset, printed numbers of 17 digits (q0 = 5 pi / 6) included */
+    int count;
+    const preset *list = presets_list(&count);
+    for (int i = 0; i < count; i++) {
+        char request[128];
+        snprintf(request, sizeof request, "{\"preset\": \"%s\"}", list[i].name);
+        expect_round_trip(request, 1);
+    }
+}
+
+Test(job_json, normalised_keys_come_in_canonical_order)
+{
+    /* given back to front, written in the format's order with every default */
+    job *j = parse_ok("{'duration':1,'output':{'channels':['qdot','q']},'controller':{'type':"
+                      "'none'},'scene':{'v0':[1],'bodies':[{'joint':{'axis':[0,0,1],'type':"
+                      "'revolute'},'inertia':[1,1,1],'com':[0,0,0],'mass':1}]}}");
+    char *text = cJSON_PrintUnformatted(j->normalised);
+    char *want = json(
+        "{'name':'job','scene':{'gravity':[0,-9.81,0],'form':'auto','bodies':[{'mass':1,'com':[0,"
+        "0,0],'inertia':[1,1,1],'joint':{'type':'revolute','axis':[0,0,1],'location':[0,0,0]}}],"
+        "'q0':[0],'v0':[1]},'controller':{'type':'none'},'disturbance':{'type':'none'},"
+        "'integrator':{'method':'dopri5','rtol':1e-08,'atol':1e-10,'initial_step':0,'max_step':0,"
+        "'max_steps':10000000},'duration':1,'output':{'interval':0.01,'channels':['q','qdot']},"
+        "'limits':{'max_speed':1000000,'wall_time':0}}");
+    cr_assert_str_eq(text, want);
+    free(text);
+    free(want);
+    job_free(j);
+}
+
+/* ---- names ---- */
+
+Test(job_json, error_codes_have_stable_names)
+{
+    cr_assert_str_eq(job_error_code_name(JOB_OK), "OK");
+    cr_assert_str_eq(job_error_code_name(JOB_INVALID_JSON), "INVALID_JSON");
+    cr_assert_str_eq(job_error_code_name(JOB_MISSING_FIELD), "MISSING_FIELD");
+    cr_assert_str_eq(job_error_code_name(JOB_UNKNOWN_FIELD), "UNKNOWN_FIELD");
+    cr_assert_str_eq(job_error_code_name(JOB_INVALID_FIELD), "INVALID_FIELD");
+    cr_assert_str_eq(job_error_code_name(JOB_UNKNOWN_PRESET), "UNKNOWN_PRESET");
+    cr_assert_str_eq(job_error_code_name(JOB_LIMIT_EXCEEDED), "LIMIT_EXCEEDED");
+    job_free(NULL);
+}

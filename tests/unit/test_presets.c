@@ -1,0 +1,665 @@
+/*
+ * test_presets.c - the paper's scenes as job documents (server/presets.c): every preset builds a
+ * document that the job format (server/job_json.c) accepts, the documents hold the values of
+ * Kingsley et al. 2017 sections 7.1 and 7.3, and the n-link pendulum's parameter is checked with
+ * exact messages.
+ *
+ * Oracles, each written apart from the code under test:
+ *  - the paper's numbers, typed in here (q0, trajectories, gains, disturbance, duration), read
+ *    back from the document and from the parsed job;
+ *  - the designed gains of the pole-placement and LQR presets against the values the paper
+ *    prints (K = (9.24, 13.22, 6.3) and (10, 18.2674, 11.6848), DESIGN.md section 6);
+ *  - the scene geometry: the parsed chain built with ctc_model_build and posed with
+ *    ctc_kinematics, against hand-worked positions (rods hanging along -y; the tip of a planar
+ *    chain at sum_k (sin theta_k, -cos theta_k) with theta_k the absolute angle of rod k; the
+ *    spatial pendulum's second cuboid pointing down after a quarter turn about body 1's y).
+ * Positions are compared to 1e-12 m, numbers read back to 1e-15 relative.
+ */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "data.h"
+#include "job_json.h"
+#include "kinematics.h"
+#include "model.h"
+#include "presets.h"
+
+#define POS_TOL 1e-12  /* m */
+#define READ_TOL 1e-15 /* relative */
+
+static const double pi = 3.14159265358979323846;
+
+static const char *const all_names[] = {
+    "triple_pendulum_pd",          "triple_pendulum_pid",
+    "triple_pendulum_poles",       "triple_pendulum_lqr",
+    "triple_pendulum_passive",     "spatial_double_pendulum_pd",
+    "spatial_double_pendulum_pid", "spatial_double_pendulum_poles",
+    "spatial_double_pendulum_lqr", "n_link_pendulum",
+};
+#define NPRESETS ((int)(sizeof all_names / sizeof all_names[0]))
+
+/* ---- helpers ---- */
+
+/* the preset's document for request (NULL = defaults); fails the test if it does not build */
+static cJSON *build(const char *name, const cJSON *request)
+{
+    const preset *p = presets_find(name);
+    cr_assert_not_null(p, "no preset %s", name);
+    job_error err = {0};
+    cJSON *doc = p->build(request, &err);
+    cr_assert_not_null(doc, "%s: %s: %s", name, err.field, err.message);
+    return doc;
+}
+
+/* request parsed from JSON text */
+static cJSON *request_from(const char *text)
+{
+    cJSON *r = cJSON_Parse(text);
+    cr_assert_not_null(r, "bad test JSON: %s", text);
+    return r;
+}
+
+/* the parsed job of a document; fails the test on an error */
+static job *parse_doc(const cJSON *doc, const char *what)
+{
+    job *j = NULL;
+    job_error err = {0};
+    int rc = job_from_json(doc, &j, &err);
+    cr_assert_eq(rc, 0, "%s: job_from_json: %s at \"%s\": %s", what, job_error_code_name(err.code),
+                 err.field, err.message);
+    cr_assert_not_null(j);
+    return j;
+}
+
+/* the member at a dotted path of objects, e.g. "controller.kp"; fails the test if absent */
+static const cJSON *at(const cJSON *doc, const char *path)
+{
+    char buf[128];
+    snprintf(buf, sizeof buf, "%s", path);
+    const cJSON *node = doc;
+    for (char *save = NULL, *key = strtok_r(buf, ".", &save); key != NULL;
+         key = strtok_r(NULL, ".", &save)) {
+        node = cJSON_GetObjectItemCaseSensitive(node, key);
+        cr_assert_not_null(node, "document has no %s", path);
+    }
+    return node;
+}
+
+static double number_at(const cJSON *doc, const char *path)
+{
+    const cJSON *v = at(doc, path);
+    cr_assert(cJSON_IsNumber(v), "%s is not a number", path);
+    return v->valuedouble;
+}
+
+static const char *string_at(const cJSON *doc, const char *path)
+{
+    const cJSON *v = at(doc, path);
+    cr_assert(cJSON_IsString(v), "%s is not a string", path);
+    return v->valuestring;
+}
+
+/* element i of a numeric array */
+static double element(const cJSON *array, int i, const char *what)
+{
+    const cJSON *v = cJSON_GetArrayItem(array, i);
+    cr_assert(cJSON_IsNumber(v), "%s[%d] is not a number", what, i);
+    return v->valuedouble;
+}
+
+static void expect_close(double got, double want, double tol, const char *what)
+{
+    cr_assert_leq(fabs(got - want), tol, "%s = %.17g, want %.17g (tolerance %g)", what, got, want,
+                  tol);
+}
+
+/* world coordinates of a vector given in the model's frame (planar form: plane coordinates) */
+static void to_world(const ctc_model *m, const double in[3], double out[3])
+{
+    if (m->form != CTC_FORM_PLANAR) {
+        for (int i = 0; i < 3; i++) out[i] = in[i];
+        return;
+    }
+    for (int i = 0; i < 3; i++) {
+        out[i] = in[0] * m->plane_e1[i] + in[1] * m->plane_e2[i] + in[2] * m->plane_n[i];
+    }
+}
+
+/* the model's frame coordinates of a world vector (inverse of to_world) */
+static void from_world(const ctc_model *m, const double in[3], double out[3])
+{
+    if (m->form != CTC_FORM_PLANAR) {
+        for (int i = 0; i < 3; i++) out[i] = in[i];
+        return;
+    }
+    const double *basis[3] = {m->plane_e1, m->plane_e2, m->plane_n};
+    for (int r = 0; r < 3; r++) {
+        out[r] = basis[r][0] * in[0] + basis[r][1] * in[1] + basis[r][2] * in[2];
+    }
+}
+
+/* world position of the point p (body frame, world axes at q = 0) of body k after kinematics */
+static void body_point(const ctc_model *m, const ctc_data *d, int k, const double p[3],
+                       double out[3])
+{
+    double pm[3], rp[3], sum[3];
+    const double *xr = d->xrot + 9 * k, *xp = d->xpos + 3 * k;
+    from_world(m, p, pm);
+    for (int i = 0; i < 3; i++) {
+        rp[i] = xr[3 * i] * pm[0] + xr[3 * i + 1] * pm[1] + xr[3 * i + 2] * pm[2];
+        sum[i] = xp[i] + rp[i];
+    }
+    to_world(m, sum, out);
+}
+
+static void expect_point(const double got[3], double x, double y, double z, const char *what)
+{
+    const double want[3] = {x, y, z};
+    for (int i = 0; i < 3; i++) {
+        cr_assert_leq(fabs(got[i] - want[i]), POS_TOL,
+                      "%s = (%.17g, %.17g, %.17g), want (%g, %g, %g)", what, got[0], got[1], got[2],
+                      x, y, z);
+    }
+}
+
+/* the model of a parsed job, posed at q (nq) at rest */
+typedef struct posed {
+    ctc_model *m;
+    ctc_data *d;
+} posed;
+
+static posed pose(const job *j, const double *q)
+{
+    posed p;
+    char err[256] = "";
+    cr_assert_eq(ctc_model_build(&j->spec.chain, &p.m, err, sizeof err), CTC_OK,
+                 "ctc_model_build: %s", err);
+    p.d = ctc_data_new(p.m);
+    cr_assert_not_null(p.d);
+    double v[8] = {0};
+    cr_assert_leq(p.m->nv, 8);
+    ctc_kinematics(p.m, p.d, q, v);
+    return p;
+}
+
+static void pose_free(posed *p)
+{
+    ctc_data_free(p->d);
+    ctc_model_free(p->m);
+}
+
+/* ---- the table ---- */
+
+Test(presets, lists_every_paper_scene_once_in_order)
+{
+    int n = -1;
+    const preset *list = presets_list(&n);
+    cr_assert_eq(n, NPRESETS);
+    for (int i = 0; i < n; i++) {
+        cr_assert_str_eq(list[i].name, all_names[i]);
+        cr_assert_eq(presets_find(all_names[i]), &list[i], "presets_find(%s)", all_names[i]);
+        cr_assert_not_null(list[i].summary);
+        cr_assert_gt(strlen(list[i].summary), 20, "%s: summary too short", list[i].name);
+        cr_assert_null(strchr(list[i].summary, '\n'), "%s: summary is not one line", list[i].name);
+        cr_assert_not_null(list[i].params, "%s: params must be a NULL-terminated list",
+                           list[i].name);
+        cr_assert_not_null(list[i].build);
+    }
+    cr_assert_null(presets_find("no_such_preset"));
+    cr_assert_null(presets_find("triple_pendulum"));
+    cr_assert_null(presets_find(""));
+    cr_assert_null(presets_find(NULL));
+
+    /* only the n-link pendulum takes a parameter */
+    const preset *nl = presets_find("n_link_pendulum");
+    cr_assert_str_eq(nl->params[0], "n");
+    cr_assert_null(nl->params[1]);
+    cr_assert_null(presets_find("triple_pendulum_pid")->params[0]);
+}
+
+/* ---- building and parsing ---- */
+
+Test(presets, every_preset_builds_a_complete_job_document)
+{
+    for (int i = 0; i < NPRESETS; i++) {
+        cJSON *doc = build(all_names[i], NULL);
+        const char *name = string_at(doc, "name");
+        cr_assert_leq(strlen(name), JOB_MAX_NAME, "%s: name too long", all_names[i]);
+        cr_assert(strstr(name, "Kingsley et al. 2017") != NULL, "%s: name \"%s\" cites no paper",
+                  all_names[i], name);
+        cr_assert(cJSON_IsArray(at(doc, "scene.bodies")));
+        cr_assert(cJSON_IsArray(at(doc, "scene.gravity")));
+        cr_assert(cJSON_IsArray(at(doc, "scene.q0")));
+        cr_assert(cJSON_IsArray(at(doc, "scene.v0")));
+        cr_assert(cJSON_IsString(at(doc, "controller.type")));
+        cr_assert_eq(number_at(doc, "duration"), 5.0, "%s: duration", all_names[i]);
+        cr_assert_str_eq(string_at(doc, "integrator.method"), "dopri5");
+        cr_assert_eq(number_at(doc, "integrator.rtol"), 1e-8);
+        cr_assert_eq(number_at(doc, "integrator.atol"), 1e-10);
+        cr_assert_eq(number_at(doc, "output.interval"), 0.01);
+
+        /* keys that are not the preset's parameters do not change the document */
+        cJSON *req = request_from("{\"preset\": \"x\", \"duration\": 3, \"scene\": null}");
+        cJSON *again = build(all_names[i], req);
+        cr_assert(cJSON_Compare(doc, again, 1), "%s: the request's other keys changed it",
+                  all_names[i]);
+        cJSON_Delete(again);
+        cJSON_Delete(req);
+        cJSON_Delete(doc);
+    }
+}
+
+Test(presets, every_preset_parses_as_a_job)
+{
+    static const struct {
+        int nbodies;
+        ctc_ctrl_type ctrl;
+        int disturbed;
+    } want[] = {
+        {3, CTC_CTRL_PD, 1},   {3, CTC_CTRL_PID, 1}, {3, CTC_CTRL_POLES, 1}, {3, CTC_CTRL_LQR, 1},
+        {3, CTC_CTRL_NONE, 0}, {2, CTC_CTRL_PD, 1},  {2, CTC_CTRL_PID, 1},   {2, CTC_CTRL_POLES, 1},
+        {2, CTC_CTRL_LQR, 1},  {8, CTC_CTRL_PD, 0},
+    };
+    for (int i = 0; i < NPRESETS; i++) {
+        cJSON *doc = build(all_names[i], NULL);
+
+        /* from the tree and from its text */
+        job *j = parse_doc(doc, all_names[i]);
+        char *text = cJSON_PrintUnformatted(doc);
+        cr_assert_not_null(text);
+        job *jt = NULL;
+        job_error err = {0};
+        cr_assert_eq(job_parse(text, strlen(text), &jt, &err), 0, "%s: job_parse: %s: %s",
+                     all_names[i], err.field, err.message);
+
+        for (int pass = 0; pass < 2; pass++) {
+            const job *p = pass ? jt : j;
+            int nb = want[i].nbodies;
+            cr_assert_str_eq(p->name, string_at(doc, "name"));
+            cr_assert_eq(p->spec.chain.nbodies, nb, "%s: %d bodies", all_names[i],
+                         p->spec.chain.nbodies);
+            cr_assert_eq(p->nq, nb);
+            cr_assert_eq(p->nv, nb);
+            cr_assert_eq(p->spec.controller, want[i].ctrl, "%s: controller", all_names[i]);
+            cr_assert_eq(p->gains == NULL, want[i].ctrl == CTC_CTRL_NONE, "%s: gains",
+                         all_names[i]);
+            cr_assert_eq(p->traj == NULL, want[i].ctrl == CTC_CTRL_NONE, "%s: trajectory",
+                         all_names[i]);
+            if (want[i].disturbed) {
+                cr_assert_not_null(p->disturb, "%s: no disturbance", all_names[i]);
+                for (int k = 0; k < nb; k++) {
+                    cr_assert_eq(p->disturb[k].type, CTC_DISTURB_CONSTANT);
+                    cr_assert_eq(p->disturb[k].value, 0.2, "%s: disturbance %d", all_names[i], k);
+                }
+            } else if (p->disturb != NULL) {
+                for (int k = 0; k < nb; k++) {
+                    cr_assert_eq(ctc_disturb_eval(&p->disturb[k], 1.0), 0.0, "%s: disturbance %d",
+                                 all_names[i], k);
+                }
+            }
+            cr_assert_eq(p->spec.duration, 5.0);
+            cr_assert_eq(p->spec.output_interval, 0.01);
+            cr_assert_eq(p->spec.integrator.method, CTC_INTEG_DOPRI5);
+            cr_assert_eq(p->spec.integrator.rtol, 1e-8);
+            cr_assert_eq(p->spec.integrator.atol, 1e-10);
+            cr_assert_not_null(p->normalised);
+        }
+
+        /* the expanded document is itself a job that parses to the same sizes */
+        job *jn = parse_doc(j->normalised, all_names[i]);
+        cr_assert_eq(jn->spec.chain.nbodies, j->spec.chain.nbodies);
+        cr_assert_eq(jn->spec.controller, j->spec.controller);
+
+        job_free(jn);
+        job_free(jt);
+        job_free(j);
+        free(text);
+        cJSON_Delete(doc);
+    }
+}
+
+/* ---- the paper's values ---- */
+
+Test(presets, triple_pendulum_holds_the_papers_values)
+{
+    const double q0[3] = {5 * pi / 6, 3 * pi / 4, 2 * pi / 3};
+    static const char *const shape[3] = {"sine", "cosine", "sine"};
+    cJSON *doc = build("triple_pendulum_pid", NULL);
+    cr_assert_str_eq(string_at(doc, "name"),
+                     "Triple pendulum, PID (Kingsley et al. 2017, sec. 7.1)");
+
+    /* the document: three unit rods, gravity -y, q0, v0, Eq. 81-82, PID, 0.2 N m, 5 s */
+    const cJSON *g = at(doc, "scene.gravity"), *bodies = at(doc, "scene.bodies");
+    const cJSON *dq0 = at(doc, "scene.q0"), *dv0 = at(doc, "scene.v0"),
+                *traj = at(doc, "trajectory");
+    expect_close(element(g, 0, "gravity"), 0, 0, "gravity x");
+    expect_close(element(g, 1, "gravity"), -9.81, 0, "gravity y");
+    expect_close(element(g, 2, "gravity"), 0, 0, "gravity z");
+    cr_assert_eq(cJSON_GetArraySize(bodies), 3);
+    cr_assert_eq(cJSON_GetArraySize(dq0), 3);
+    cr_assert_eq(cJSON_GetArraySize(dv0), 3);
+    cr_assert_eq(cJSON_GetArraySize(traj), 3);
+    for (int k = 0; k < 3; k++) {
+        const cJSON *b = cJSON_GetArrayItem(bodies, k);
+        const double loc_y = k == 0 ? 0 : -1;
+        cr_assert_eq(number_at(b, "mass"), 1.0);
+        cr_assert_str_eq(string_at(b, "shape.type"), "rod");
+        const cJSON *end = at(b, "shape.end"), *axis = at(b, "joint.axis"),
+                    *loc = at(b, "joint.location");
+        cr_assert_str_eq(string_at(b, "joint.type"), "revolute");
+        for (int i = 0; i < 3; i++) {
+            cr_assert_eq(element(end, i, "end"), i == 1 ? -1.0 : 0.0, "rod %d end[%d]", k, i);
+            cr_assert_eq(element(axis, i, "axis"), i == 2 ? 1.0 : 0.0, "joint %d axis[%d]", k, i);
+            cr_assert_eq(element(loc, i, "location"), i == 1 ? loc_y : 0.0, "joint %d location[%d]",
+                         k, i);
+        }
+        expect_close(element(dq0, k, "q0"), q0[k], READ_TOL * q0[k], "q0");
+        cr_assert_eq(element(dv0, k, "v0"), 0.0);
+        const cJSON *tr = cJSON_GetArrayItem(traj, k);
+        cr_assert_str_eq(string_at(tr, "type"), shape[k], "trajectory %d", k);
+        cr_assert_eq(number_at(tr, "amplitude"), 0.6);
+        cr_assert_eq(number_at(tr, "period"), 1.5);
+    }
+    cr_assert_str_eq(string_at(doc, "controller.type"), "pid");
+    cr_assert_eq(number_at(doc, "controller.kp"), 100.0);
+    cr_assert_eq(number_at(doc, "controller.kv"), 20.0);
+    cr_assert_eq(number_at(doc, "controller.ki"), 250.0);
+    cr_assert_str_eq(string_at(doc, "disturbance.type"), "constant");
+    cr_assert_eq(number_at(doc, "disturbance.value"), 0.2);
+
+    /* the parsed job: the same numbers where the simulation reads them */
+    job *j = parse_doc(doc, "triple_pendulum_pid");
+    const ctc_traj_type tt[3] = {CTC_TRAJ_SINE, CTC_TRAJ_COSINE, CTC_TRAJ_SINE};
+    for (int k = 0; k < 3; k++) {
+        expect_close(j->q0[k], q0[k], READ_TOL * q0[k], "job q0");
+        cr_assert_eq(j->v0[k], 0.0);
+        cr_assert_eq(j->traj[k].type, tt[k], "job trajectory %d type", k);
+        cr_assert_eq(j->traj[k].amplitude, 0.6);
+        cr_assert_eq(j->traj[k].period, 1.5);
+        cr_assert_eq(j->traj[k].phase, 0.0);
+        cr_assert_eq(j->traj[k].offset, 0.0);
+        cr_assert_eq(j->gains[k].kp, 100.0);
+        cr_assert_eq(j->gains[k].kv, 20.0);
+        cr_assert_eq(j->gains[k].ki, 250.0);
+        cr_assert_eq(j->bodies[k].mass, 1.0);
+    }
+    /* q_d(0) from the trajectory: (0, 0.6, 0), Eq. 81-82 at t = 0, and q_d1(0.375 s) = 0.6 */
+    double out[3];
+    ctc_traj_eval(&j->traj[1], 0.0, out);
+    expect_close(out[0], 0.6, 1e-15, "q_d2(0)");
+    ctc_traj_eval(&j->traj[0], 0.375, out);
+    expect_close(out[0], 0.6, 1e-15, "q_d1(T/4)");
+    job_free(j);
+    cJSON_Delete(doc);
+}
+
+Test(presets, passive_triple_pendulum_has_no_control)
+{
+    cJSON *doc = build("triple_pendulum_passive", NULL);
+    const cJSON *ctrl = at(doc, "controller");
+    cr_assert_str_eq(string_at(doc, "controller.type"), "none");
+    cr_assert_eq(cJSON_GetArraySize(ctrl), 1, "a passive controller has only \"type\"");
+    cr_assert_null(cJSON_GetObjectItemCaseSensitive(doc, "trajectory"));
+    cr_assert_null(cJSON_GetObjectItemCaseSensitive(doc, "disturbance"));
+    const cJSON *q0 = at(doc, "scene.q0");
+    expect_close(element(q0, 0, "q0"), 5 * pi / 6, 1e-15, "q0[0]");
+    cJSON_Delete(doc);
+}
+
+Test(presets, pole_and_lqr_presets_give_the_papers_gains)
+{
+    /* poles (-2, -2.1, -2.2): (s + 2)(s + 2.1)(s + 2.2) = s^3 + 6.3 s^2 + 13.22 s + 9.24;
+       LQR Q = I, lambda = 0.01: K = (10, 18.2674, 11.6848) as printed (4 decimals) */
+    static const struct {
+        const char *name;
+        double ki, kp, kv, tol;
+    } want[] = {
+        {"triple_pendulum_poles", 9.24, 13.22, 6.3, 1e-12},
+        {"spatial_double_pendulum_poles", 9.24, 13.22, 6.3, 1e-12},
+        {"triple_pendulum_lqr", 10, 18.2674, 11.6848, 5e-5},
+        {"spatial_double_pendulum_lqr", 10, 18.2674, 11.6848, 5e-5},
+    };
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
+        cJSON *doc = build(want[i].name, NULL);
+        job *j = parse_doc(doc, want[i].name);
+        for (int k = 0; k < j->nv; k++) {
+            expect_close(j->gains[k].ki, want[i].ki, want[i].tol, "ki");
+            expect_close(j->gains[k].kp, want[i].kp, want[i].tol, "kp");
+            expect_close(j->gains[k].kv, want[i].kv, want[i].tol, "kv");
+        }
+        job_free(j);
+        cJSON_Delete(doc);
+    }
+}
+
+Test(presets, spatial_double_pendulum_holds_the_papers_values)
+{
+    cJSON *doc = build("spatial_double_pendulum_lqr", NULL);
+    job *j = parse_doc(doc, "spatial_double_pendulum_lqr");
+    cr_assert_eq(j->spec.chain.gravity[2], -9.81, "gravity -z (the paper gives none)");
+    cr_assert_eq(j->spec.chain.gravity[0], 0.0);
+    cr_assert_eq(j->spec.chain.gravity[1], 0.0);
+    expect_close(j->q0[0], pi / 2, 1e-15, "q0[0]");
+    cr_assert_eq(j->q0[1], 0.0);
+    cr_assert_eq(j->v0[0], 1.0);
+    cr_assert_eq(j->v0[1], 1.0);
+    cr_assert_eq(j->traj[0].type, CTC_TRAJ_SINE);
+    cr_assert_eq(j->traj[1].type, CTC_TRAJ_COSINE);
+    for (int k = 0; k < 2; k++) {
+        cr_assert_eq(j->traj[k].amplitude, 1.0);
+        cr_assert_eq(j->traj[k].period, 1.5);
+        /* uniform cuboid 1 x 0.1 x 0.1 m, 1 kg: m/12 diag(b^2 + c^2, a^2 + c^2, a^2 + b^2) */
+        const ctc_body_spec *b = &j->bodies[k];
+        cr_assert_eq(b->mass, 1.0);
+        expect_close(b->com[0], 0.5, 1e-15, "com x");
+        expect_close(b->inertia[0], 0.02 / 12, 1e-15, "Ixx");
+        expect_close(b->inertia[4], 1.01 / 12, 1e-15, "Iyy");
+        expect_close(b->inertia[8], 1.01 / 12, 1e-15, "Izz");
+    }
+    job_free(j);
+    cJSON_Delete(doc);
+}
+
+/* ---- the n-link pendulum's parameter ---- */
+
+Test(presets, n_link_pendulum_of_16_has_16_bodies_and_alternating_q0)
+{
+    cJSON *req = request_from("{\"preset\": \"n_link_pendulum\", \"n\": 16}");
+    cJSON *doc = build("n_link_pendulum", req);
+    cr_assert_str_eq(string_at(doc, "name"),
+                     "16-link pendulum, PD (Kingsley et al. 2017, sec. 7.3)");
+    cr_assert_eq(cJSON_GetArraySize(at(doc, "scene.bodies")), 16);
+    cr_assert_str_eq(string_at(doc, "controller.type"), "pd");
+    cr_assert_eq(number_at(doc, "controller.kp"), 100.0);
+    cr_assert_eq(number_at(doc, "controller.kv"), 20.0);
+    cr_assert_null(cJSON_GetObjectItemCaseSensitive(doc, "disturbance"));
+
+    /* Eq. 84: q0_k = (-1)^k pi/6 for k = 1..n, at rest, driven to q_d = 0 */
+    job *j = parse_doc(doc, "n_link_pendulum n = 16");
+    cr_assert_eq(j->spec.chain.nbodies, 16);
+    cr_assert_eq(j->nv, 16);
+    for (int k = 1; k <= 16; k++) {
+        double want = (k % 2 == 0 ? 1 : -1) * pi / 6;
+        expect_close(j->q0[k - 1], want, 1e-15, "q0_k");
+        cr_assert_eq(j->v0[k - 1], 0.0);
+        double out[3];
+        ctc_traj_eval(&j->traj[k - 1], 2.0, out);
+        cr_assert(out[0] == 0 && out[1] == 0 && out[2] == 0, "q_d_%d(2) is not 0", k);
+        cr_assert_eq(j->gains[k - 1].ki, 0.0);
+    }
+    job_free(j);
+    cJSON_Delete(doc);
+    cJSON_Delete(req);
+}
+
+Test(presets, n_link_pendulum_takes_n_from_2_to_4096_default_8)
+{
+    static const struct {
+        const char *request;
+        int n;
+    } cases[] = {
+        {NULL, 8},
+        {"{}", 8},
+        {"{\"preset\": \"n_link_pendulum\", \"duration\": 2}", 8},
+        {"{\"n\": 2}", 2},
+        {"{\"n\": 3.0}", 3},
+        {"{\"n\": 4096}", 4096},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        cJSON *req = cases[i].request ? request_from(cases[i].request) : NULL;
+        cJSON *doc = build("n_link_pendulum", req);
+        const char *what = cases[i].request ? cases[i].request : "NULL";
+        cr_assert_eq(cJSON_GetArraySize(at(doc, "scene.bodies")), cases[i].n, "%s", what);
+        cr_assert_eq(cJSON_GetArraySize(at(doc, "scene.q0")), cases[i].n, "%s", what);
+        job *j = parse_doc(doc, what);
+        cr_assert_eq(j->spec.chain.nbodies, cases[i].n, "%s", what);
+        job_free(j);
+        cJSON_Delete(doc);
+        cJSON_Delete(req);
+    }
+}
+
+Test(presets, n_link_pendulum_rejects_bad_n_with_exact_messages)
+{
+    static const struct {
+        const char *request;
+        const char *message;
+    } cases[] = {
+        {"{\"n\": 0}", "must be an integer from 2 to 4096 (got 0)"},
+        {"{\"n\": 1}", "must be an integer from 2 to 4096 (got 1)"},
+        {"{\"n\": 4097}", "must be an integer from 2 to 4096 (got 4097)"},
+        {"{\"n\": 2.5}", "must be an integer from 2 to 4096 (got 2.5)"},
+        {"{\"n\": \"8\"}", "must be an integer from 2 to 4096 (got a string)"},
+        {"{\"n\": -3}", "must be an integer from 2 to 4096 (got -3)"},
+        {"{\"n\": 1e10}", "must be an integer from 2 to 4096 (got 1e+10)"},
+        {"{\"n\": 0.1}", "must be an integer from 2 to 4096 (got 0.1)"},
+        {"{\"n\": true}", "must be an integer from 2 to 4096 (got true)"},
+        {"{\"n\": null}", "must be an integer from 2 to 4096 (got null)"},
+        {"{\"n\": [8]}", "must be an integer from 2 to 4096 (got an array)"},
+        {"{\"n\": {}}", "must be an integer from 2 to 4096 (got an object)"},
+    };
+    const preset *p = presets_find("n_link_pendulum");
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        cJSON *req = request_from(cases[i].request);
+        job_error err = {0};
+        cJSON *doc = p->build(req, &err);
+        cr_assert_null(doc, "%s: built a document", cases[i].request);
+        cr_assert_eq(err.code, JOB_INVALID_FIELD, "%s: code %s", cases[i].request,
+                     job_error_code_name(err.code));
+        cr_assert_str_eq(err.field, "n", "%s", cases[i].request);
+        cr_assert_str_eq(err.message, cases[i].message, "%s", cases[i].request);
+        cJSON_Delete(req);
+    }
+}
+
+/* ---- through the job format's preset form ---- */
+
+Test(presets, preset_form_takes_the_parameter_and_applies_overrides)
+{
+    /* the presets write their integrator out (dopri5 with rtol, atol): a patch that switches to
+       rk4 replaces the object, so rk4 does not inherit the keys it does not take */
+    static const char text[] = "{\"preset\": \"n_link_pendulum\", \"n\": 16, \"duration\": 3,"
+                               " \"integrator\": {\"method\": \"rk4\", \"step\": 0.001}}";
+    job *j = NULL;
+    job_error err = {0};
+    cr_assert_eq(job_parse(text, strlen(text), &j, &err), 0, "job_parse: %s at \"%s\": %s",
+                 job_error_code_name(err.code), err.field, err.message);
+    cr_assert_str_eq(j->preset, "n_link_pendulum");
+    cr_assert_eq(j->spec.chain.nbodies, 16);
+    cr_assert_eq(j->spec.duration, 3.0);
+    cr_assert_eq(j->spec.integrator.method, CTC_INTEG_RK4);
+    cr_assert_eq(j->spec.integrator.step, 0.001);
+    expect_close(j->q0[15], pi / 6, 1e-15, "q0_16");
+    job_free(j);
+
+    /* a bad parameter comes back as the preset reported it */
+    static const char bad[] = "{\"preset\": \"n_link_pendulum\", \"n\": 1}";
+    j = NULL;
+    cr_assert_neq(job_parse(bad, strlen(bad), &j, &err), 0);
+    cr_assert_null(j);
+    cr_assert_eq(err.code, JOB_INVALID_FIELD, "code %s", job_error_code_name(err.code));
+    cr_assert_str_eq(err.field, "n");
+    cr_assert_str_eq(err.message, "must be an integer from 2 to 4096 (got 1)");
+}
+
+/* ---- the scene geometry, through the library's kinematics ---- */
+
+Test(presets, triple_pendulum_hangs_along_minus_y_and_poses_as_drawn)
+{
+    static const double end[3] = {0, -1, 0};
+    cJSON *doc = build("triple_pendulum_pd", NULL);
+    job *j = parse_doc(doc, "triple_pendulum_pd");
+
+    /* q = 0: joints at y = 0, -1, -2; body 3's centre of mass at y = -2.5, its tip at y = -3 */
+    const double zero[3] = {0, 0, 0};
+    posed p = pose(j, zero);
+    cr_assert_eq(p.m->form, CTC_FORM_PLANAR, "the triple pendulum is planar");
+    double got[3], com[3];
+    for (int k = 0; k < 3; k++) {
+        body_point(p.m, p.d, k, zero, got);
+        expect_point(got, 0, -k, 0, "joint centre");
+    }
+    to_world(p.m, p.d->xcom + 6, com);
+    expect_point(com, 0, -2.5, 0, "body 3 centre of mass");
+    body_point(p.m, p.d, 2, end, got);
+    expect_point(got, 0, -3, 0, "body 3 tip");
+    pose_free(&p);
+
+    /* the paper's q0: rod k points along (sin theta_k, -cos theta_k), theta_k = q_1 + .. + q_k */
+    p = pose(j, j->q0);
+    double theta = 0, tip[3] = {0, 0, 0};
+    for (int k = 0; k < 3; k++) {
+        theta += j->q0[k];
+        tip[0] += sin(theta);
+        tip[1] -= cos(theta);
+    }
+    body_point(p.m, p.d, 2, end, got);
+    expect_point(got, tip[0], tip[1], 0, "body 3 tip at q0");
+    pose_free(&p);
+
+    job_free(j);
+    cJSON_Delete(doc);
+}
+
+Test(presets, spatial_double_pendulum_poses_as_drawn)
+{
+    static const double far_end[3] = {1, 0, 0}, origin[3] = {0, 0, 0};
+    cJSON *doc = build("spatial_double_pendulum_pd", NULL);
+    job *j = parse_doc(doc, "spatial_double_pendulum_pd");
+    double got[3];
+
+    /* q = 0: both cuboids along +x, J2 at (1, 0, 0), the tip at (2, 0, 0) */
+    const double q_zero[2] = {0, 0};
+    posed p = pose(j, q_zero);
+    cr_assert_eq(p.m->form, CTC_FORM_SPATIAL, "J1 about z and J2 about y: not planar");
+    body_point(p.m, p.d, 1, origin, got);
+    expect_point(got, 1, 0, 0, "J2 at q = 0");
+    body_point(p.m, p.d, 1, far_end, got);
+    expect_point(got, 2, 0, 0, "tip at q = 0");
+    pose_free(&p);
+
+    /* q0 = (pi/2, 0): a quarter turn about z lays both along +y, centres at y = 0.5 and 1.5 */
+    p = pose(j, j->q0);
+    double com[3];
+    to_world(p.m, p.d->xcom, com);
+    expect_point(com, 0, 0.5, 0, "body 1 centre of mass at q0");
+    to_world(p.m, p.d->xcom + 3, com);
+    expect_point(com, 0, 1.5, 0, "body 2 centre of mass at q0");
+    pose_free(&p);
+
+    /* (pi/2, pi/2): a quarter turn about body 1's y (now world -x) turns body 2's x from +y
+       towards -z: body 2 hangs straight down from J2 */
+    const double q_down[2] = {pi / 2, pi / 2};
+    p = pose(j, q_down);
+    body_point(p.m, p.d, 1, far_end, got);
+    expect_point(got, 0, 1, -1, "tip at (pi/2, pi/2)");
+    to_world(p.m, p.d->xcom + 3, com);
+    expect_point(com, 0, 1, -0.5, "body 2 centre of mass at (pi/2, pi/2)");
+    pose_free(&p);
+
+    job_free(j);
+    cJSON_Delete(doc);
+}
