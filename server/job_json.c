@@ -1581,7 +1581,7 @@ static int parse_channels(parser *p, const cJSON *output, const char *const *nam
     int i = 0;
     for (const cJSON *e = v->child; e != NULL; e = e->next, i++) {
         char at[PATH_LEN];
-        int c;
+        int c = 0;
         index_path(at, "output.channels", i);
         if (enum_at(p, e, at, names, CTC_NCHANNELS, &c) != 0) return -1;
         if (*mask & CTC_CH_BIT(c)) {

@@ -118,38 +118,34 @@ ctc_status ctc_bdf_new(ctc_integrator *it, char *err, size_t errlen)
         return ctc_fail(CTC_ENOMEM, err, errlen, "bdf: out of memory for CVODE (n = %d)", n);
     }
     N_VConst(0.0, b->y_out);
-    const char *call = "CVodeSetErrHandlerFn";
     int flag = CVodeSetErrHandlerFn(b->cvode, bdf_error_handler, b);
-    if (flag == CV_SUCCESS) flag = CVodeInit(b->cvode, bdf_rhs, 0.0, b->y_out), call = "CVodeInit";
-    if (flag == CV_SUCCESS) flag = CVodeSetUserData(b->cvode, b), call = "CVodeSetUserData";
-    if (flag == CV_SUCCESS) {
-        flag = CVodeSStolerances(b->cvode, it->spec.rtol, it->spec.atol);
-        call = "CVodeSStolerances";
-    }
+    if (flag == CV_SUCCESS) flag = CVodeInit(b->cvode, bdf_rhs, 0.0, b->y_out);
+    if (flag == CV_SUCCESS) flag = CVodeSetUserData(b->cvode, b);
+    if (flag == CV_SUCCESS) flag = CVodeSStolerances(b->cvode, it->spec.rtol, it->spec.atol);
     if (flag != CV_SUCCESS) {
         return ctc_fail(flag == CV_MEM_FAIL ? CTC_ENOMEM : CTC_EINVAL, err, errlen,
-                        "bdf: %s failed (%d): %s", call, flag, b->msg);
+                        "bdf: CVODE setup failed (%d): %s", flag, b->msg);
     }
 
     /* Newton with a dense direct solver on CVODE's difference-quotient Jacobian */
     b->jac = SUNDenseMatrix(n, n, b->sunctx);
     b->ls = b->jac != NULL ? SUNLinSol_Dense(b->y_out, b->jac, b->sunctx) : NULL;
     if (b->jac == NULL || b->ls == NULL) {
-        return ctc_fail(CTC_ENOMEM, err, errlen, "bdf: out of memory for the %d x %d Jacobian",
-                        n, n);
+        return ctc_fail(CTC_ENOMEM, err, errlen, "bdf: out of memory for the %d x %d Jacobian", n,
+                        n);
     }
     flag = CVodeSetLinearSolver(b->cvode, b->ls, b->jac);
     if (flag != CV_SUCCESS) {
-        return ctc_fail(CTC_ENOMEM, err, errlen, "bdf: CVodeSetLinearSolver failed (%d): %s",
-                        flag, b->msg);
+        return ctc_fail(CTC_ENOMEM, err, errlen, "bdf: CVodeSetLinearSolver failed (%d): %s", flag,
+                        b->msg);
     }
 
     /* bounds on the step */
     if (it->spec.max_step > 0 && isfinite(it->spec.max_step)) {
         flag = CVodeSetMaxStep(b->cvode, it->spec.max_step);
         if (flag != CV_SUCCESS) {
-            return ctc_fail(CTC_EINVAL, err, errlen, "bdf: CVodeSetMaxStep failed (%d): %s",
-                            flag, b->msg);
+            return ctc_fail(CTC_EINVAL, err, errlen, "bdf: CVodeSetMaxStep failed (%d): %s", flag,
+                            b->msg);
         }
     }
     b->h_init = it->spec.initial_step;

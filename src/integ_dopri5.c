@@ -44,16 +44,16 @@ static const double A31 = 3.0 / 40, A32 = 9.0 / 40;
 static const double A41 = 44.0 / 45, A42 = -56.0 / 15, A43 = 32.0 / 9;
 static const double A51 = 19372.0 / 6561, A52 = -25360.0 / 2187, A53 = 64448.0 / 6561,
                     A54 = -212.0 / 729;
-static const double A61 = 9017.0 / 3168, A62 = -355.0 / 33, A63 = 46732.0 / 5247,
-                    A64 = 49.0 / 176, A65 = -5103.0 / 18656;
+static const double A61 = 9017.0 / 3168, A62 = -355.0 / 33, A63 = 46732.0 / 5247, A64 = 49.0 / 176,
+                    A65 = -5103.0 / 18656;
 
 /* 5th-order weights b_i (b2 = b7 = 0), also the coupling coefficients of stage 7 */
 static const double B1 = 35.0 / 384, B3 = 500.0 / 1113, B4 = 125.0 / 192, B5 = -2187.0 / 6784,
                     B6 = 11.0 / 84;
 
 /* error weights e_i = b_i - b_hat_i (e2 = 0) */
-static const double E1 = 71.0 / 57600, E3 = -71.0 / 16695, E4 = 71.0 / 1920,
-                    E5 = -17253.0 / 339200, E6 = 22.0 / 525, E7 = -1.0 / 40;
+static const double E1 = 71.0 / 57600, E3 = -71.0 / 16695, E4 = 71.0 / 1920, E5 = -17253.0 / 339200,
+                    E6 = 22.0 / 525, E7 = -1.0 / 40;
 
 /* dense output weights d_i (d2 = 0) */
 static const double D1 = -12715105075.0 / 11282082432.0, D3 = 87487479700.0 / 32700410799.0,
@@ -119,8 +119,8 @@ int ctc_dopri5_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
 {
     const int n = it->n;
     const double t = it->t, atol = it->spec.atol, rtol = it->spec.rtol;
-    const double hmax = it->spec.max_step > 0 && isfinite(it->spec.max_step) ? it->spec.max_step
-                                                                            : 0.0;
+    const double hmax =
+        it->spec.max_step > 0 && isfinite(it->spec.max_step) ? it->spec.max_step : 0.0;
     const double *y = it->y, *k1 = it->f;
     double *k2 = it->k_work[0], *k3 = it->k_work[1], *k4 = it->k_work[2], *k5 = it->k_work[3],
            *k6 = it->k_work[4];
@@ -158,32 +158,37 @@ int ctc_dopri5_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
         }
         if ((rc = ctc_integ_call_rhs(it, t_stage = t + C5 * hs, ys, k5)) != 0) break;
         for (int i = 0; i < n; i++) {
-            ys[i] = y[i] + hs * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] +
-                                 A65 * k5[i]);
+            ys[i] =
+                y[i] + hs * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]);
         }
         if ((rc = ctc_integ_call_rhs(it, t_stage = t_new, ys, k6)) != 0) break;
 
-        /* the 5th-order solution and stage 7 at it (the next step's k1) */
-        int finite = 1;
+        /* the 5th-order solution and stage 7 at it (the next step's k1); nan_probe stays 0
+         * unless some y_new_i is infinite or NaN (0 * inf = NaN; IEEE arithmetic, no -ffast-math),
+         * and the loop vectorises */
+        double nan_probe = 0;
         for (int i = 0; i < n; i++) {
             y_new[i] = y[i] + hs * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i]);
-            finite &= isfinite(y_new[i]);
+            nan_probe += 0.0 * y_new[i];
         }
         if ((rc = ctc_integ_call_rhs(it, t_stage = t_new, y_new, k7)) != 0) break;
 
-        /* error estimate: weighted rms for the test, max-norm for the statistics */
-        double sum = 0, err_max = 0;
+        /* error estimate: the scaled errors into ys (free now) in a loop that vectorises, then
+         * their rms for the test; the max-norm of the raw errors for the statistics */
+        double err_max = 0;
         for (int i = 0; i < n; i++) {
-            double e = hs * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] +
-                             E7 * k7[i]);
-            double r = e / (atol + rtol * fmax(fabs(y[i]), fabs(y_new[i])));
-            sum += r * r;
-            err_max = fmax(err_max, fabs(e));
+            double e =
+                hs * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
+            double a = fabs(y[i]), b = fabs(y_new[i]), abs_e = fabs(e);
+            ys[i] = e / (atol + rtol * (a > b ? a : b));
+            err_max = abs_e > err_max ? abs_e : err_max;
         }
+        double sum = 0;
+        for (int i = 0; i < n; i++) sum += ys[i] * ys[i];
         err_norm = sqrt(sum / n);
 
         /* a non-finite state or estimate: retry much smaller, a few times */
-        if (!finite || !isfinite(err_norm)) {
+        if (nan_probe != 0 || !isfinite(err_norm)) {
             it->stats.rejected++;
             rejected_here = 1;
             if (++nonfinite >= CTC_DOPRI5_MAX_NONFINITE) {
@@ -218,7 +223,8 @@ int ctc_dopri5_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
             swap(&it->y, &it->y_new);
             swap(&it->f_prev, &it->f);
             swap(&it->f, &it->f_new);
-            for (int s = 0; s < CTC_DOPRI5_KEPT_STAGES; s++) swap(&it->k_kept[s], &it->k_work[s + 1]);
+            for (int s = 0; s < CTC_DOPRI5_KEPT_STAGES; s++)
+                swap(&it->k_kept[s], &it->k_work[s + 1]);
             it->t_prev = t;
             it->t = t_new;
             it->stats.steps++;
@@ -243,14 +249,13 @@ void ctc_dopri5_dense(const ctc_integrator *it, double t, double *y)
     const double h = it->t - it->t_prev;
     const double th = (t - it->t_prev) / h, th1 = 1.0 - th;
     const double *y0 = it->y_prev, *y1 = it->y, *k1 = it->f_prev, *k7 = it->f;
-    const double *k3 = it->k_kept[0], *k4 = it->k_kept[1], *k5 = it->k_kept[2],
-                 *k6 = it->k_kept[3];
+    const double *k3 = it->k_kept[0], *k4 = it->k_kept[1], *k5 = it->k_kept[2], *k6 = it->k_kept[3];
     for (int i = 0; i < it->n; i++) {
         double dy = y1[i] - y0[i];
         double slope0 = h * k1[i] - dy;
         double curv = dy - h * k7[i] - slope0;
-        double tail = h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] +
-                           D7 * k7[i]);
+        double tail =
+            h * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i] + D7 * k7[i]);
         y[i] = y0[i] + th * (dy + th1 * (slope0 + th * (curv + th1 * tail)));
     }
 }

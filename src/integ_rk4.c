@@ -89,5 +89,6 @@ void ctc_rk4_dense(const ctc_integrator *it, double t, double *y)
     const double c_y0 = 1.0 - 3.0 * th2 + 2.0 * th3, c_y1 = 3.0 * th2 - 2.0 * th3;
     const double c_f0 = h * (th - 2.0 * th2 + th3), c_f1 = h * (th3 - th2);
     const double *y0 = it->y_prev, *y1 = it->y, *f0 = it->f_prev, *f1 = it->f;
-    for (int i = 0; i < it->n; i++) y[i] = c_y0 * y0[i] + c_y1 * y1[i] + c_f0 * f0[i] + c_f1 * f1[i];
+    for (int i = 0; i < it->n; i++)
+        y[i] = c_y0 * y0[i] + c_y1 * y1[i] + c_f0 * f0[i] + c_f1 * f1[i];
 }

@@ -103,7 +103,7 @@ ctc_status ctc_integrator_new(const ctc_integ_spec *spec, int n, ctc_ode_rhs rhs
     it->h = spec->method == CTC_INTEG_RK4 ? spec->step : 0.0;
     it->err_old = 1e-4;
 
-    /* one block for every n-vector, handed out in order */
+    /* one block for every n-vector, handed out in the order of slots (bdf takes the first 4) */
     int nvec = vectors_needed(spec->method);
     it->block = calloc((size_t)nvec * (size_t)n, sizeof(double));
     if (it->block == NULL) {
@@ -111,13 +111,12 @@ ctc_status ctc_integrator_new(const ctc_integ_spec *spec, int n, ctc_ode_rhs rhs
         return ctc_fail(CTC_ENOMEM, err, errlen, "integrator: out of memory for %d x %d doubles",
                         nvec, n);
     }
-    double *next = it->block;
-    double **mine[7 + CTC_DOPRI5_WORK_STAGES + CTC_DOPRI5_KEPT_STAGES] = {
-        &it->y,         &it->y_prev,    &it->y_new,     &it->f,         &it->f_prev,
-        &it->f_new,     &it->y_stage,   &it->k_work[0], &it->k_work[1], &it->k_work[2],
-        &it->k_work[3], &it->k_work[4], &it->k_kept[0], &it->k_kept[1], &it->k_kept[2],
-        &it->k_kept[3]};
-    for (int i = 0; i < nvec; i++) *mine[i] = next + (size_t)i * (size_t)n;
+    double **slots[7 + CTC_DOPRI5_WORK_STAGES + CTC_DOPRI5_KEPT_STAGES] = {
+        &it->y,         &it->y_prev,    &it->y_new,     &it->f,
+        &it->f_prev,    &it->f_new,     &it->y_stage,   &it->k_work[0],
+        &it->k_work[1], &it->k_work[2], &it->k_work[3], &it->k_work[4],
+        &it->k_kept[0], &it->k_kept[1], &it->k_kept[2], &it->k_kept[3]};
+    for (int i = 0; i < nvec; i++) *slots[i] = it->block + (size_t)i * (size_t)n;
 
     if (spec->method == CTC_INTEG_BDF) {
         st = ctc_bdf_new(it, err, errlen);
@@ -252,7 +251,6 @@ int ctc_integ_fail_roundoff(double h, double t, char *err, size_t errlen)
 
 int ctc_integ_fail_rhs(int rc, double t, char *err, size_t errlen)
 {
-    ctc_fail(CTC_EINVAL, err, errlen, "right-hand side failed (returned %d) at t = %.10g s", rc,
-             t);
+    ctc_fail(CTC_EINVAL, err, errlen, "right-hand side failed (returned %d) at t = %.10g s", rc, t);
     return rc;
 }

@@ -20,7 +20,8 @@
  *
  * The right-hand side returns 0 on success; any other value stops the step, is returned by
  * ctc_integrator_step and leaves the integrator's state at the last accepted step.
- * An integrator belongs to one thread; it allocates only in ctc_integrator_new.
+ * An integrator belongs to one thread. rk4 and dopri5 allocate only in ctc_integrator_new; bdf's
+ * CVODE also allocates a little at each Jacobian evaluation (its difference-quotient Jacobian).
  */
 #ifndef CTC_INTEGRATOR_H
 #define CTC_INTEGRATOR_H
@@ -52,16 +53,17 @@ typedef struct ctc_integ_stats {
     long rejected;       /* rejected steps (error test or, for bdf, convergence failures) */
     long rhs_evals;      /* right-hand-side evaluations, Jacobian difference quotients included */
     long jac_evals;      /* bdf: Jacobian evaluations; 0 otherwise */
-    double err_estimate; /* sum over accepted steps of the local error estimate's max-norm (an
-                            a-posteriori bound on the accumulated error, units of y); NaN for
-                            rk4, which has no estimate */
+    double err_estimate; /* sum over accepted steps of the local error estimate's max-norm
+                            (units of y); the global error can exceed it where the dynamics
+                            amplify errors. NaN for rk4, which has no estimate */
     double h_last;       /* the last accepted step size, s */
 } ctc_integ_stats;
 
 typedef struct ctc_integrator ctc_integrator;
 
 /* Checks spec: the method's own fields must be finite and positive (e.g. "step must be
- * positive (got 0 s)", "rtol must be in (0, 1) (got 2)"), max_step >= 0, max_steps >= 0. */
+ * positive and finite (got 0 s)", "rtol must be in (0, 1) (got 2)"), max_step >= 0 and
+ * max_steps >= 0. */
 ctc_status ctc_integ_check(const ctc_integ_spec *spec, char *err, size_t errlen);
 
 /* Makes an integrator for an n-dimensional system (n >= 1). The spec is copied. On success
@@ -73,8 +75,10 @@ ctc_status ctc_integrator_new(const ctc_integ_spec *spec, int n, ctc_ode_rhs rhs
 void ctc_integrator_free(ctc_integrator *it);
 
 /* Starts (or restarts, after a discontinuity or a change of y made by the caller) at time t0
- * from y0 (n): forgets the step history (dopri5's FSAL stage, bdf's history) but keeps stats
- * and the current step size. Evaluates f once; returns what the rhs returned (0 = ok). */
+ * from y0 (n): forgets the step history (dopri5's FSAL stage, bdf's history) but keeps the
+ * stats (max_steps counts from ctc_integrator_new) and, for rk4 and dopri5, the current step
+ * size; bdf restarts at order 1 and lets CVODE choose its starting step. Evaluates f once;
+ * returns what the rhs returned (0 = ok). */
 int ctc_integrator_reset(ctc_integrator *it, double t0, const double *y0);
 
 /* Takes one step from the current time t towards tstop > t, never past it (a step that would

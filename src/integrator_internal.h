@@ -104,7 +104,8 @@ void ctc_dopri5_dense(const ctc_integrator *it, double t, double *y);
 
 /* ---- bdf (integ_bdf.c) ---- */
 
-/* Creates CVODE's memory for it (spec and n set): CTC_ENOMEM or CTC_EINVAL with a message. */
+/* Creates CVODE's memory for it (spec and n set) in it->bdf: CTC_OK, or CTC_ENOMEM or CTC_EINVAL
+ * with a message, leaving what was made in it->bdf for ctc_integrator_free. */
 ctc_status ctc_bdf_new(ctc_integrator *it, char *err, size_t errlen);
 
 /* Frees what ctc_bdf_new made; NULL allowed. */
