@@ -202,8 +202,9 @@ static int cmd_run(int argc, char **argv)
         fprintf(stderr, "ctcsim: %s: %s\n", outpath, strerror(errno));
         rc = EXIT_IO;
     } else {
-        int wrc = strcmp(format, "json") == 0 ? result_write_json(out, r, j, mask, every)
-                                              : result_write_csv(out, r, mask, every);
+        result_select sel = {.channels = mask, .every = every};
+        int wrc = strcmp(format, "json") == 0 ? result_write_json(out, r, j, &sel)
+                                              : result_write_csv(out, r, &sel);
         if (fflush(out) != 0) wrc = -1;
         if (outpath && fclose(out) != 0) wrc = -1;
         if (wrc) {

@@ -94,9 +94,21 @@ static int sample_kept(const ctc_sim_result *r, int j, int every)
     return j % every == 0 || j == r->nsamples - 1;
 }
 
-static int selected(const ctc_sim_result *r, unsigned mask, int c)
+static int selected(const ctc_sim_result *r, const result_select *sel, int c)
 {
-    return r->ch[c] && (mask == 0 || (mask & CTC_CH_BIT(c)));
+    return r->ch[c] && (!sel || sel->channels == 0 || (sel->channels & CTC_CH_BIT(c)));
+}
+
+static int every_of(const result_select *sel)
+{
+    return sel && sel->every > 1 ? sel->every : 1;
+}
+
+/* column i of channel c is written: the coordinate filter applies to nv-wide channels */
+static int column_kept(const ctc_sim_result *r, const result_select *sel, int c, int i)
+{
+    if (!sel || !sel->coords || c == CTC_CH_ENERGY || r->width[c] != r->nv) return 1;
+    return sel->coords[i] != 0;
 }
 
 static void column_name(char *buf, size_t len, int c, int i)
@@ -115,13 +127,14 @@ static void put_number(FILE *f, double x, int json)
         fputs(json ? "null" : "nan", f);
 }
 
-int result_write_csv(FILE *f, const ctc_sim_result *r, unsigned mask, int every)
+int result_write_csv(FILE *f, const ctc_sim_result *r, const result_select *sel)
 {
-    if (every < 1) every = 1;
+    int every = every_of(sel);
     char name[64];
     fputs("t", f);
     for (int c = 0; c < CTC_NCHANNELS; c++)
-        for (int i = 0; selected(r, mask, c) && i < r->width[c]; i++) {
+        for (int i = 0; selected(r, sel, c) && i < r->width[c]; i++) {
+            if (!column_kept(r, sel, c, i)) continue;
             column_name(name, sizeof name, c, i);
             fprintf(f, ",%s", name);
         }
@@ -130,7 +143,8 @@ int result_write_csv(FILE *f, const ctc_sim_result *r, unsigned mask, int every)
         if (!sample_kept(r, j, every)) continue;
         put_number(f, r->t[j], 0);
         for (int c = 0; c < CTC_NCHANNELS; c++)
-            for (int i = 0; selected(r, mask, c) && i < r->width[c]; i++) {
+            for (int i = 0; selected(r, sel, c) && i < r->width[c]; i++) {
+                if (!column_kept(r, sel, c, i)) continue;
                 fputc(',', f);
                 put_number(f, r->ch[c][(size_t)j * (size_t)r->width[c] + (size_t)i], 0);
             }
@@ -154,6 +168,27 @@ static void write_column(FILE *f, const ctc_sim_result *r, const double *base, i
     fputc(']', f);
 }
 
+int result_write_series_json(FILE *f, const ctc_sim_result *r, const result_select *sel)
+{
+    int every = every_of(sel);
+    fputs("{\"t\":", f);
+    write_column(f, r, r->t, 1, every);
+    for (int c = 0; c < CTC_NCHANNELS; c++) {
+        if (!selected(r, sel, c)) continue;
+        fprintf(f, ",\"%s\":[", ctc_channel_name((ctc_channel)c));
+        int first = 1;
+        for (int i = 0; i < r->width[c]; i++) {
+            if (!column_kept(r, sel, c, i)) continue;
+            if (!first) fputc(',', f);
+            first = 0;
+            write_column(f, r, r->ch[c] + i, r->width[c], every);
+        }
+        fputc(']', f);
+    }
+    fputc('}', f);
+    return ferror(f) ? -1 : 0;
+}
+
 static int write_object_member(FILE *f, const char *key, const cJSON *value)
 {
     char *text = cJSON_PrintUnformatted(value);
@@ -163,9 +198,8 @@ static int write_object_member(FILE *f, const char *key, const cJSON *value)
     return 0;
 }
 
-int result_write_json(FILE *f, const ctc_sim_result *r, const job *j, unsigned mask, int every)
+int result_write_json(FILE *f, const ctc_sim_result *r, const job *j, const result_select *sel)
 {
-    if (every < 1) every = 1;
     cJSON *metrics = result_metrics_json(r, j);
     if (!metrics) return -1;
     fputc('{', f);
@@ -175,18 +209,8 @@ int result_write_json(FILE *f, const ctc_sim_result *r, const job *j, unsigned m
     rc |= write_object_member(f, "metrics", metrics);
     cJSON_Delete(metrics);
     if (rc) return -1;
-
-    fputs("\"series\":{\"t\":", f);
-    write_column(f, r, r->t, 1, every);
-    for (int c = 0; c < CTC_NCHANNELS; c++) {
-        if (!selected(r, mask, c)) continue;
-        fprintf(f, ",\"%s\":[", ctc_channel_name((ctc_channel)c));
-        for (int i = 0; i < r->width[c]; i++) {
-            if (i) fputc(',', f);
-            write_column(f, r, r->ch[c] + i, r->width[c], every);
-        }
-        fputc(']', f);
-    }
-    fputs("}}\n", f);
+    fputs("\"series\":", f);
+    result_write_series_json(f, r, sel);
+    fputs("}\n", f);
     return ferror(f) ? -1 : 0;
 }

@@ -25,14 +25,26 @@ cJSON *result_metrics_json(const ctc_sim_result *r, const job *j);
  * with the offending name copied into bad (badlen bytes). */
 int result_parse_channels(const char *list, unsigned *out, char *bad, size_t badlen);
 
-/* Writes the series as CSV: a header line, then every `every`-th sample (the last one always)
- * with the channels in mask that were recorded (mask 0 = all recorded). Returns 0, or -1 on a
- * write error. */
-int result_write_csv(FILE *f, const ctc_sim_result *r, unsigned mask, int every);
+/* Which part of the series to write. */
+typedef struct result_select {
+    unsigned channels;  /* CTC_CH_BIT mask of recorded channels to write; 0 = all recorded */
+    int every;          /* keep every every-th sample and always the last; < 1 means 1 */
+    const char *coords; /* (nv) non-zero = keep coordinate i, or NULL = all. Applies to the
+                           channels of width nv, and to q when nq == nv; columns keep their
+                           indices ("q[2]") */
+} result_select;
 
-/* Writes {"status", "spec", "metrics", "series"} as JSON, the series columnar ("t": [...],
- * "q": [[q0 samples], [q1 samples], ...]) with the same selection rules as the CSV. spec is the
- * job's normalised document (may be NULL). Returns 0, or -1 on a write error or out of memory. */
-int result_write_json(FILE *f, const ctc_sim_result *r, const job *j, unsigned mask, int every);
+/* Writes the series as CSV: a header line, then the selected samples and columns (sel may be
+ * NULL: everything). Returns 0, or -1 on a write error. */
+int result_write_csv(FILE *f, const ctc_sim_result *r, const result_select *sel);
+
+/* Writes the series object alone: {"t": [...], "q": [[q[0] samples], [q[1] samples], ...],
+ * ...}, columnar, with the same selection as the CSV. Returns 0, or -1 on a write error. */
+int result_write_series_json(FILE *f, const ctc_sim_result *r, const result_select *sel);
+
+/* Writes {"status", "spec", "metrics", "series"} as JSON (the series as above). j gives the
+ * normalised spec and the gains (may be NULL). Returns 0, or -1 on a write error or out of
+ * memory. */
+int result_write_json(FILE *f, const ctc_sim_result *r, const job *j, const result_select *sel);
 
 #endif

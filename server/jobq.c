@@ -1,0 +1,528 @@
+/*
+ * jobq.c - the bounded job queue and its worker threads (jobq.h).
+ *
+ * The queue is a ring of job ids under one mutex, with two condition variables: `work` (an id was
+ * queued, or the queue is stopping) wakes idle workers, and `finished` (a job left the queue or a
+ * worker) wakes jobq_wait. The ring holds max_queue ids, or more when start-up recovery brings
+ * back more jobs than that; jobq_submit refuses while it holds max_queue or more, so the ring
+ * never has to grow after jobq_start. Ids are the store's row ids, which are positive; a worker
+ * slot holding 0 is idle.
+ *
+ * Each worker owns one database connection (opened by jobq_start, so a database that cannot be
+ * opened fails the start rather than a thread) and a slot that records the job it runs and a
+ * cancel flag. A worker pops an id under the lock and does everything else outside it:
+ * store_start (which refuses a job that is no longer queued, so an id queued twice runs once),
+ * store_get and job_parse of the stored spec, ctc_sim_run with two hooks, and store_finish with
+ * the status, the metrics JSON (result_out.h) and the series in one transaction. The hooks run on
+ * the worker's thread between integrator steps: `progress` writes the fraction done at most every
+ * JOBQ_PROGRESS_INTERVAL s of monotonic time, and `cancelled` reads the slot's cancel flag and
+ * the queue's stopping flag, both C11 atomics, so polling costs two loads per step.
+ *
+ * A run that stopped because the queue is stopping (and not because its job was cancelled) is put
+ * back to queued with store_requeue and restarts from t = 0 at the next jobq_start; the ids still
+ * in the ring are simply dropped, their rows being queued already. The `done` counter counts the
+ * jobs a worker brought to a final status; a job jobq_cancel takes out of the ring is recorded by
+ * the caller and not counted here.
+ *
+ * Failures a worker cannot hand to anyone (the database refusing a write) go to stderr, prefixed
+ * "jobq: job ID:". A job whose result cannot be stored is recorded failed without its series
+ * when that still works; otherwise its row stays unfinished until the next start recovers it.
+ */
+#include "jobq.h"
+
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <cjson/cJSON.h>
+
+#include "job_json.h"
+#include "result_out.h"
+#include "sim.h"
+#include "store.h"
+
+#define JOBQ_MAX_WAIT 1e9 /* s: longer waits are cut to this (about 31 years) */
+
+/* what became of a popped job */
+typedef enum worker_outcome {
+    OUTCOME_SKIPPED = 0, /* not run: no longer queued, or the database failed */
+    OUTCOME_FINISHED,    /* stored with a final status */
+    OUTCOME_REQUEUED,    /* interrupted by jobq_stop and put back to queued */
+} worker_outcome;
+
+typedef struct jobq_worker {
+    jobq *q;
+    store *db; /* this worker's connection; used by its thread only while it runs */
+    pthread_t thread;
+    int64_t running;   /* id of the job in hand, 0 = idle (guarded by q->lock) */
+    atomic_int cancel; /* set by jobq_cancel for the job in hand, cleared at each pop */
+    /* the job in hand, for the hooks (worker thread only) */
+    int64_t job_id;
+    double last_progress; /* monotonic s of the last progress write (or of the start) */
+} jobq_worker;
+
+struct jobq {
+    jobq_config config; /* config.db_path points to db_path */
+    char *db_path;
+    pthread_mutex_t lock;
+    pthread_cond_t work;     /* an id was queued, or stopping */
+    pthread_cond_t finished; /* a job left the ring or a slot; CLOCK_MONOTONIC */
+    int64_t *ring;           /* (cap) ids, count of them from head, oldest first */
+    int cap, head, count;
+    long done;
+    atomic_int stopping;
+    jobq_worker *workers; /* (config.workers) */
+    int nstarted;         /* threads running */
+    int sync_ready;       /* lock and conditions initialised */
+};
+
+static double monotonic_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int fail(char *err, size_t errlen, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static int fail(char *err, size_t errlen, const char *fmt, ...)
+{
+    if (err && errlen) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, errlen, fmt, ap);
+        va_end(ap);
+    }
+    return -1;
+}
+
+/* ---- the ring (caller holds q->lock) ---- */
+
+static void ring_push(jobq *q, int64_t id)
+{
+    q->ring[(q->head + q->count) % q->cap] = id;
+    q->count++;
+}
+
+static int64_t ring_pop(jobq *q)
+{
+    int64_t id = q->ring[q->head];
+    q->head = (q->head + 1) % q->cap;
+    q->count--;
+    return id;
+}
+
+/* Position (0 = oldest) of id in the ring, or -1. */
+static int ring_find(const jobq *q, int64_t id)
+{
+    for (int i = 0; i < q->count; i++)
+        if (q->ring[(q->head + i) % q->cap] == id) return i;
+    return -1;
+}
+
+/* Removes the entry at position pos, keeping the others in order. */
+static void ring_remove(jobq *q, int pos)
+{
+    for (int i = pos; i + 1 < q->count; i++)
+        q->ring[(q->head + i) % q->cap] = q->ring[(q->head + i + 1) % q->cap];
+    q->count--;
+}
+
+/* The worker whose slot holds id, or NULL (never an idle one: ids are positive). */
+static jobq_worker *slot_find(jobq *q, int64_t id)
+{
+    for (int i = 0; id > 0 && i < q->nstarted; i++)
+        if (q->workers[i].running == id) return &q->workers[i];
+    return NULL;
+}
+
+/* Whether id is queued or running here. */
+static int job_here(jobq *q, int64_t id)
+{
+    return ring_find(q, id) >= 0 || slot_find(q, id) != NULL;
+}
+
+/* ---- the simulation's hooks (worker thread) ---- */
+
+static void hook_progress(void *ctx, double fraction)
+{
+    jobq_worker *w = ctx;
+    double t = monotonic_now();
+    if (t - w->last_progress < JOBQ_PROGRESS_INTERVAL) return;
+    w->last_progress = t;
+    /* progress is a hint: a failed write is not worth stopping the run for */
+    char err[256];
+    (void)store_progress(w->db, w->job_id, fraction, err, sizeof err);
+}
+
+static int hook_cancelled(void *ctx)
+{
+    jobq_worker *w = ctx;
+    return atomic_load_explicit(&w->cancel, memory_order_relaxed) ||
+           atomic_load_explicit(&w->q->stopping, memory_order_relaxed);
+}
+
+/* ---- one job (worker thread, without the lock) ---- */
+
+static store_status store_status_of(ctc_run_status st)
+{
+    switch (st) {
+    case CTC_RUN_DONE:
+        return STORE_DONE;
+    case CTC_RUN_DIVERGED:
+        return STORE_DIVERGED;
+    case CTC_RUN_CANCELLED:
+        return STORE_CANCELLED;
+    case CTC_RUN_FAILED:
+    case CTC_RUN_TIMEOUT:
+        break;
+    }
+    return STORE_FAILED;
+}
+
+/* Stores a final status; if that fails with a series, tries once more as failed without it. */
+static worker_outcome finish(jobq_worker *w, int64_t id, store_status status, const char *message,
+                             const char *metrics, const ctc_sim_result *r)
+{
+    char err[512], why[768];
+    if (store_finish(w->db, id, status, message, metrics, r, err, sizeof err) == 0)
+        return OUTCOME_FINISHED;
+    fprintf(stderr, "jobq: job %lld: storing the result: %s\n", (long long)id, err);
+    if (!r) return OUTCOME_SKIPPED;
+    snprintf(why, sizeof why, "the result could not be stored: %s", err);
+    if (store_finish(w->db, id, STORE_FAILED, why, NULL, NULL, err, sizeof err) == 0)
+        return OUTCOME_FINISHED;
+    fprintf(stderr, "jobq: job %lld: recording the failure: %s\n", (long long)id, err);
+    return OUTCOME_SKIPPED;
+}
+
+/* Runs job id to a final status, or puts it back to queued when the queue stops under it. */
+static worker_outcome run_job(jobq_worker *w, int64_t id)
+{
+    jobq *q = w->q;
+    char err[512], why[1024];
+    store_job row = {0};
+    job *j = NULL;
+    ctc_sim_result *r = NULL;
+    char *metrics = NULL;
+    worker_outcome outcome = OUTCOME_SKIPPED;
+
+    /* a stop between the pop and here leaves the job queued, as it is stored */
+    if (atomic_load(&q->stopping)) return OUTCOME_SKIPPED;
+    int rc = store_start(w->db, id, err, sizeof err);
+    if (rc == 1) return OUTCOME_SKIPPED; /* cancelled or deleted meanwhile */
+    if (rc != 0) {
+        fprintf(stderr, "jobq: job %lld: marking it running: %s\n", (long long)id, err);
+        return OUTCOME_SKIPPED;
+    }
+
+    /* the stored spec, validated at submission; it should parse again */
+    rc = store_get(w->db, id, &row, err, sizeof err);
+    if (rc == 1) goto cleanup; /* deleted under us: nothing to record */
+    if (rc != 0) {
+        snprintf(why, sizeof why, "reading the job: %s", err);
+        outcome = finish(w, id, STORE_FAILED, why, NULL, NULL);
+        goto cleanup;
+    }
+    job_error jerr;
+    const char *spec = row.spec ? row.spec : "";
+    if (job_parse(spec, strlen(spec), &j, &jerr) != 0) {
+        snprintf(why, sizeof why, "the stored job no longer parses: %s%s%s", jerr.field,
+                 jerr.field[0] ? ": " : "", jerr.message);
+        outcome = finish(w, id, STORE_FAILED, why, NULL, NULL);
+        goto cleanup;
+    }
+
+    /* the configured limit caps the job's own */
+    double cap = q->config.job_time_limit;
+    if (cap > 0 && (j->spec.wall_limit <= 0 || cap < j->spec.wall_limit)) j->spec.wall_limit = cap;
+
+    /* cancelled between the pop and here: nothing ran, nothing to keep */
+    if (atomic_load(&w->cancel)) {
+        outcome = finish(w, id, STORE_CANCELLED, "cancelled before it started", NULL, NULL);
+        goto cleanup;
+    }
+
+    w->job_id = id;
+    w->last_progress = monotonic_now();
+    ctc_sim_hooks hooks = {.ctx = w, .progress = hook_progress, .cancelled = hook_cancelled};
+    if (ctc_sim_run(&j->spec, &hooks, &r, err, sizeof err) != CTC_OK) {
+        outcome = finish(w, id, STORE_FAILED, err, NULL, NULL);
+        goto cleanup;
+    }
+
+    /* stopped by jobq_stop rather than by a cancel: back to queued, to restart from t = 0 */
+    if (r->status == CTC_RUN_CANCELLED && !atomic_load(&w->cancel) && atomic_load(&q->stopping)) {
+        if (store_requeue(w->db, id, err, sizeof err) == 0) {
+            outcome = OUTCOME_REQUEUED;
+        } else {
+            /* still running in the database: the next start recovers it all the same */
+            fprintf(stderr, "jobq: job %lld: putting it back to queued: %s\n", (long long)id, err);
+        }
+        goto cleanup;
+    }
+
+    cJSON *m = result_metrics_json(r, j);
+    metrics = m ? cJSON_PrintUnformatted(m) : NULL;
+    cJSON_Delete(m);
+    outcome = finish(w, id, store_status_of(r->status), r->message, metrics, r);
+
+cleanup:
+    cJSON_free(metrics);
+    ctc_sim_result_free(r);
+    job_free(j);
+    store_job_clear(&row);
+    return outcome;
+}
+
+/* ---- the workers ---- */
+
+static void *worker_main(void *arg)
+{
+    jobq_worker *w = arg;
+    jobq *q = w->q;
+    pthread_mutex_lock(&q->lock);
+    for (;;) {
+        /* wait while empty; stop without taking more once stopping */
+        while (q->count == 0 && !atomic_load(&q->stopping)) pthread_cond_wait(&q->work, &q->lock);
+        if (atomic_load(&q->stopping)) break;
+        int64_t id = ring_pop(q);
+        w->running = id;
+        atomic_store(&w->cancel, 0);
+        pthread_mutex_unlock(&q->lock);
+
+        worker_outcome outcome = run_job(w, id);
+
+        /* the slot is free again; jobq_wait may be waiting for this job */
+        pthread_mutex_lock(&q->lock);
+        w->running = 0;
+        if (outcome == OUTCOME_FINISHED) q->done++;
+        pthread_cond_broadcast(&q->finished);
+    }
+    pthread_mutex_unlock(&q->lock);
+    return NULL;
+}
+
+/* Stops and joins the started workers, closes every connection and frees q (jobq_stop, and a
+ * jobq_start that failed half way). */
+static void jobq_free(jobq *q)
+{
+    if (q->sync_ready) {
+        pthread_mutex_lock(&q->lock);
+        atomic_store(&q->stopping, 1);
+        pthread_cond_broadcast(&q->work);
+        pthread_cond_broadcast(&q->finished);
+        pthread_mutex_unlock(&q->lock);
+    }
+    for (int i = 0; i < q->nstarted; i++) pthread_join(q->workers[i].thread, NULL);
+    for (int i = 0; q->workers && i < q->config.workers; i++) store_close(q->workers[i].db);
+    if (q->sync_ready) {
+        pthread_cond_destroy(&q->finished);
+        pthread_cond_destroy(&q->work);
+        pthread_mutex_destroy(&q->lock);
+    }
+    free(q->workers);
+    free(q->ring);
+    free(q->db_path);
+    free(q);
+}
+
+/* The lock and the two conditions; `finished` waits on the monotonic clock. */
+static int init_sync(jobq *q, char *err, size_t errlen)
+{
+    pthread_condattr_t attr;
+    int rc = pthread_condattr_init(&attr);
+    if (rc != 0) return fail(err, errlen, "condition attributes: %s", strerror(rc));
+    rc = pthread_condattr_setclock(&attr, CLOCK_MONOTONIC);
+    if (rc != 0) {
+        pthread_condattr_destroy(&attr);
+        return fail(err, errlen, "condition clock: %s", strerror(rc));
+    }
+    rc = pthread_mutex_init(&q->lock, NULL);
+    if (rc == 0) {
+        rc = pthread_cond_init(&q->work, NULL);
+        if (rc == 0) {
+            rc = pthread_cond_init(&q->finished, &attr);
+            if (rc != 0) pthread_cond_destroy(&q->work);
+        }
+        if (rc != 0) pthread_mutex_destroy(&q->lock);
+    }
+    pthread_condattr_destroy(&attr);
+    if (rc != 0) return fail(err, errlen, "queue lock: %s", strerror(rc));
+    q->sync_ready = 1;
+    return 0;
+}
+
+int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
+{
+    *out = NULL;
+    if (!config->db_path || !config->db_path[0])
+        return fail(err, errlen, "db_path must name the database file");
+    if (config->workers < 1)
+        return fail(err, errlen, "workers must be >= 1 (got %d)", config->workers);
+    if (config->max_queue < 1)
+        return fail(err, errlen, "max_queue must be >= 1 (got %d)", config->max_queue);
+    if (!(config->job_time_limit >= 0) || isinf(config->job_time_limit))
+        return fail(err, errlen, "job_time_limit must be >= 0 and finite (got %g s)",
+                    config->job_time_limit);
+
+    int rc = -1;
+    store *db = NULL;
+    int64_t *ids = NULL;
+    int nids = 0;
+    char why[512];
+    jobq *q = calloc(1, sizeof *q);
+    if (!q) return fail(err, errlen, "out of memory");
+    q->config = *config;
+    atomic_init(&q->stopping, 0);
+    q->db_path = strdup(config->db_path);
+    q->workers = calloc((size_t)config->workers, sizeof *q->workers);
+    if (!q->db_path || !q->workers) {
+        fail(err, errlen, "out of memory");
+        goto cleanup;
+    }
+    q->config.db_path = q->db_path;
+    if (init_sync(q, err, errlen) != 0) goto cleanup;
+
+    /* recovery: what the database holds as queued or running is queued again, oldest first */
+    if (store_open(q->db_path, &db, why, sizeof why) != 0 ||
+        store_recover(db, &ids, &nids, why, sizeof why) != 0) {
+        fail(err, errlen, "recovering jobs: %s", why);
+        goto cleanup;
+    }
+    q->cap = nids > config->max_queue ? nids : config->max_queue;
+    q->ring = malloc((size_t)q->cap * sizeof *q->ring);
+    if (!q->ring) {
+        fail(err, errlen, "out of memory for a queue of %d jobs", q->cap);
+        goto cleanup;
+    }
+    for (int i = 0; i < nids; i++) ring_push(q, ids[i]);
+
+    /* one connection per worker, opened here so that a failure fails the start */
+    for (int i = 0; i < config->workers; i++) {
+        jobq_worker *w = &q->workers[i];
+        w->q = q;
+        atomic_init(&w->cancel, 0);
+        if (store_open(q->db_path, &w->db, why, sizeof why) != 0) {
+            fail(err, errlen, "worker %d: %s", i, why);
+            goto cleanup;
+        }
+    }
+
+    /* the threads inherit the caller's signal mask (main.c blocks SIGINT and SIGTERM first) */
+    for (int i = 0; i < config->workers; i++) {
+        int e = pthread_create(&q->workers[i].thread, NULL, worker_main, &q->workers[i]);
+        if (e != 0) {
+            fail(err, errlen, "starting worker %d: %s", i, strerror(e));
+            break;
+        }
+        pthread_mutex_lock(&q->lock);
+        q->nstarted++;
+        pthread_mutex_unlock(&q->lock);
+    }
+    if (q->nstarted < config->workers) goto cleanup;
+
+    *out = q;
+    q = NULL;
+    rc = 0;
+
+cleanup:
+    if (q) jobq_free(q);
+    store_close(db);
+    free(ids);
+    return rc;
+}
+
+int jobq_submit(jobq *q, int64_t id)
+{
+    int rc = 0;
+    pthread_mutex_lock(&q->lock);
+    if (atomic_load(&q->stopping)) {
+        rc = 2;
+    } else if (q->count >= q->config.max_queue) {
+        rc = 1;
+    } else {
+        ring_push(q, id);
+        pthread_cond_signal(&q->work);
+    }
+    pthread_mutex_unlock(&q->lock);
+    return rc;
+}
+
+int jobq_space(jobq *q)
+{
+    pthread_mutex_lock(&q->lock);
+    int space = atomic_load(&q->stopping) ? 0 : q->config.max_queue - q->count;
+    pthread_mutex_unlock(&q->lock);
+    return space > 0 ? space : 0;
+}
+
+int jobq_cancel(jobq *q, int64_t id)
+{
+    int rc = 0;
+    pthread_mutex_lock(&q->lock);
+    int pos = ring_find(q, id);
+    jobq_worker *w = pos < 0 ? slot_find(q, id) : NULL;
+    if (pos >= 0) {
+        /* the caller records it cancelled; jobq_wait need not wait for it any longer */
+        ring_remove(q, pos);
+        pthread_cond_broadcast(&q->finished);
+        rc = 1;
+    } else if (w) {
+        /* under the lock, so the flag cannot land on the worker's next job */
+        atomic_store(&w->cancel, 1);
+        rc = 2;
+    }
+    pthread_mutex_unlock(&q->lock);
+    return rc;
+}
+
+int jobq_wait(jobq *q, int64_t id, double timeout_s)
+{
+    /* the deadline on the monotonic clock, which `finished` waits on */
+    if (!(timeout_s > 0)) timeout_s = 0;
+    if (timeout_s > JOBQ_MAX_WAIT) timeout_s = JOBQ_MAX_WAIT;
+    struct timespec deadline;
+    clock_gettime(CLOCK_MONOTONIC, &deadline);
+    double whole = floor(timeout_s);
+    deadline.tv_sec += (time_t)whole;
+    deadline.tv_nsec += (long)((timeout_s - whole) * 1e9);
+    if (deadline.tv_nsec >= 1000000000L) {
+        deadline.tv_sec++;
+        deadline.tv_nsec -= 1000000000L;
+    }
+
+    pthread_mutex_lock(&q->lock);
+    int here = job_here(q, id);
+    while (here) {
+        int e = pthread_cond_timedwait(&q->finished, &q->lock, &deadline);
+        here = job_here(q, id);
+        if (e == ETIMEDOUT) break;
+    }
+    pthread_mutex_unlock(&q->lock);
+    return here ? 1 : 0;
+}
+
+void jobq_get_stats(jobq *q, jobq_stats *out)
+{
+    pthread_mutex_lock(&q->lock);
+    out->workers = q->config.workers;
+    out->busy = 0;
+    for (int i = 0; i < q->nstarted; i++) out->busy += q->workers[i].running != 0;
+    out->queued = q->count;
+    out->done = q->done;
+    pthread_mutex_unlock(&q->lock);
+}
+
+void jobq_stop(jobq *q)
+{
+    if (!q) return;
+    jobq_free(q);
+}

@@ -1,0 +1,71 @@
+/*
+ * jobq.h - the bounded job queue and its worker threads.
+ *
+ * HTTP threads submit job ids (the job row is already stored as queued, store.h); N worker
+ * threads pop them in order, each with its own database connection, and for each job: mark it
+ * running, parse its stored spec (job_json.h; the model is built once per job), run it
+ * (ctc_sim_run) with progress written to the database at most every JOBQ_PROGRESS_INTERVAL s and
+ * cancellation polled between steps, then store the result, status and series in one transaction.
+ * A per-job wall-time limit from the configuration caps the job's own limits.wall_time.
+ *
+ * The queue is a mutex + condition variable ring (wait while empty, pop under the lock, work
+ * outside it). jobq_stop stops taking jobs, asks running ones to stop at their next step, puts
+ * them back to queued in the database (they restart from t = 0 at the next start), and joins the
+ * workers. A job answered 202 is therefore never lost: it is in the database before it is queued.
+ *
+ * All functions are thread-safe unless they say otherwise.
+ */
+#ifndef JOBQ_H
+#define JOBQ_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define JOBQ_PROGRESS_INTERVAL 0.25 /* s between progress writes of one job */
+
+typedef struct jobq jobq;
+
+typedef struct jobq_config {
+    const char *db_path; /* the database each worker opens */
+    int workers;         /* >= 1 */
+    int max_queue;       /* >= 1: jobs waiting (not running) at most */
+    double job_time_limit; /* s of wall time per job; 0 = none */
+} jobq_config;
+
+typedef struct jobq_stats {
+    int workers;
+    int busy;    /* workers running a job */
+    int queued;  /* jobs waiting */
+    long done;   /* jobs finished since start (any final status) */
+} jobq_stats;
+
+/* Starts the workers. Opens a connection for recovery, re-queues every job the database holds as
+ * queued or running (store_recover; these may exceed max_queue), and starts the threads. Returns
+ * 0, or -1 with a message. The config is copied (db_path too). */
+int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen);
+
+/* Queues a stored job. Returns 0, 1 when the queue is full (the caller answers 503 and should
+ * mark the stored job cancelled or delete it), or 2 when the queue is stopping. */
+int jobq_submit(jobq *q, int64_t id);
+
+/* Free places in the queue now (a hint for the caller before it stores a job). */
+int jobq_space(jobq *q);
+
+/* Cancels a job: removes it from the queue if it waits there (returns 1: the caller records it
+ * cancelled), or asks the worker running it to stop at its next step (returns 2: the worker
+ * records it cancelled). Returns 0 if the job is neither queued nor running here. */
+int jobq_cancel(jobq *q, int64_t id);
+
+/* Waits until the job is no longer queued or running here, or timeout_s passes. Returns 0 when it
+ * finished (or was never here), 1 on timeout. */
+int jobq_wait(jobq *q, int64_t id, double timeout_s);
+
+/* Current counters. */
+void jobq_get_stats(jobq *q, jobq_stats *out);
+
+/* Stops taking jobs, makes running jobs stop at their next step and re-queues them in the
+ * database, joins the workers and frees q. Queued jobs stay queued in the database. NULL is
+ * allowed. Not thread-safe with other calls on q (call it once, at shutdown). */
+void jobq_stop(jobq *q);
+
+#endif

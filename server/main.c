@@ -1,0 +1,347 @@
+/*
+ * main.c - `ctcsim-server`, the HTTP/JSON service: reads its settings, starts the store check,
+ * the job queue and the HTTP daemon, and stops them again on SIGINT or SIGTERM.
+ *
+ * Every setting has a flag and an environment variable (the table below; --help prints it with
+ * the defaults); a flag overrides the environment, an empty variable counts as unset. A bad value
+ * is reported with the flag or variable that gave it and exits 2.
+ *
+ * Start-up order: block SIGINT and SIGTERM (before any thread exists, so every thread inherits
+ * the mask and only main's sigwait sees them); open the database once, which creates or migrates
+ * it and refuses one that is not ctcsim's (exit 3); start the workers, which re-queue the jobs a
+ * previous run left queued or running; start listening (exit 4 when the address cannot be bound);
+ * print one line saying where. Shutdown: refuse new jobs, stop the HTTP daemon (requests in flight
+ * finish), stop the workers (running jobs go back to queued and restart at the next start), exit
+ * 0.
+ */
+#include <arpa/inet.h>
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "http.h"
+#include "jobq.h"
+#include "routes.h"
+#include "store.h"
+
+enum { EXIT_BAD_SETTING = 2, EXIT_DATABASE = 3, EXIT_LISTEN = 4 };
+
+#define MAX_WAIT 300.0 /* s, the largest ?wait= of POST /api/jobs */
+
+/* The settings, as given or defaulted. */
+typedef struct server_settings {
+    const char *bind;
+    long long port;
+    const char *db;
+    long long workers;
+    long long max_queue;
+    long long max_body; /* bytes */
+    const char *token;  /* NULL = none */
+    const char *web;
+    const char *api;
+    double job_time_limit; /* s, 0 = none */
+    long long http_threads;
+} server_settings;
+
+typedef enum setting_kind {
+    SETTING_TEXT,    /* any string */
+    SETTING_ADDRESS, /* a numeric IPv4 or IPv6 address */
+    SETTING_INTEGER, /* from min to max */
+    SETTING_BYTES,   /* an integer with an optional K or M (KiB, MiB), from min to max */
+    SETTING_SECONDS, /* a number of seconds from min to max */
+} setting_kind;
+
+typedef struct setting {
+    const char *flag;
+    const char *env; /* NULL: a flag only */
+    setting_kind kind;
+    size_t offset; /* of the value in server_settings */
+    long long min, max;
+    const char *arg;  /* the value's name in --help */
+    const char *help; /* what it sets; the default follows in --help */
+} setting;
+
+#define AT(field) offsetof(server_settings, field)
+
+static const setting settings[] = {
+    {"--bind", "CTCSIM_BIND", SETTING_ADDRESS, AT(bind), 0, 0, "ADDR",
+     "address to listen on (numeric IPv4 or IPv6; 0.0.0.0 for all)"},
+    {"--port", "CTCSIM_PORT", SETTING_INTEGER, AT(port), 0, 65535, "PORT",
+     "port to listen on (0: any free port, printed at start)"},
+    {"--db", "CTCSIM_DB", SETTING_TEXT, AT(db), 0, 0, "FILE",
+     "SQLite database of the jobs (created when absent)"},
+    {"--workers", "CTCSIM_WORKERS", SETTING_INTEGER, AT(workers), 1, 1024, "N",
+     "simulations run at once"},
+    {"--max-queue", "CTCSIM_MAX_QUEUE", SETTING_INTEGER, AT(max_queue), 1, 1000000, "N",
+     "jobs waiting at most; more are refused with 503"},
+    {"--max-body", "CTCSIM_MAX_BODY", SETTING_BYTES, AT(max_body), 1024, 1LL << 30, "BYTES",
+     "largest request body (suffix K or M for KiB, MiB)"},
+    {"--token", "CTCSIM_TOKEN", SETTING_TEXT, AT(token), 0, 0, "TOKEN",
+     "when set, POST and DELETE need \"Authorization: Bearer TOKEN\""},
+    {"--web", "CTCSIM_WEB", SETTING_TEXT, AT(web), 0, 0, "DIR", "web root of the static files"},
+    {"--api", "CTCSIM_API", SETTING_TEXT, AT(api), 0, 0, "DIR",
+     "directory of openapi.yaml (served at /api/openapi.yaml)"},
+    {"--job-time-limit", "CTCSIM_JOB_TIME_LIMIT", SETTING_SECONDS, AT(job_time_limit), 0, 1000000,
+     "SECONDS", "wall time one job may take (0: no limit)"},
+    {"--http-threads", NULL, SETTING_INTEGER, AT(http_threads), 1, 1024, "N",
+     "threads answering HTTP requests"},
+};
+
+#define NSETTINGS (sizeof settings / sizeof settings[0])
+
+/* The default of a setting as text, for --help. */
+static void default_text(const setting *st, const server_settings *def, char *buf, size_t len)
+{
+    const char *base = (const char *)def + st->offset;
+    switch (st->kind) {
+    case SETTING_TEXT:
+    case SETTING_ADDRESS: {
+        const char *s = *(const char *const *)(const void *)base;
+        snprintf(buf, len, "%s", s ? s : "none");
+        break;
+    }
+    case SETTING_INTEGER:
+    case SETTING_BYTES: {
+        long long x = *(const long long *)(const void *)base;
+        if (st->kind == SETTING_BYTES && x % (1024 * 1024) == 0)
+            snprintf(buf, len, "%lldM", x / (1024 * 1024));
+        else if (st->kind == SETTING_BYTES && x % 1024 == 0)
+            snprintf(buf, len, "%lldK", x / 1024);
+        else
+            snprintf(buf, len, "%lld", x);
+        break;
+    }
+    case SETTING_SECONDS:
+        snprintf(buf, len, "%g", *(const double *)(const void *)base);
+        break;
+    }
+}
+
+static void print_help(const server_settings *def)
+{
+    printf("usage: ctcsim-server [OPTION ...]\n"
+           "\n"
+           "The ctcsim HTTP/JSON service: runs computed torque control simulations submitted\n"
+           "as jobs (POST /api/jobs), stores them and their results in SQLite, and serves the\n"
+           "web page. Every option also reads from its environment variable; a flag wins.\n"
+           "\n");
+    for (size_t i = 0; i < NSETTINGS; i++) {
+        const setting *st = &settings[i];
+        char flag[64], def_text[64];
+        snprintf(flag, sizeof flag, "%s %s", st->flag, st->arg);
+        default_text(st, def, def_text, sizeof def_text);
+        if (st == &settings[3]) /* --workers */
+            snprintf(def_text, sizeof def_text, "the online cores, %lld here", def->workers);
+        printf("  %-26s %s\n  %-26s (default %s%s%s)\n", flag, st->help, "", def_text,
+               st->env ? "; " : "", st->env ? st->env : "");
+    }
+    printf("  %-26s %s\n  %-26s %s\n", "--help", "print this and exit", "--version",
+           "print the version and exit");
+    printf("\n"
+           "Stop it with SIGINT (Ctrl-C) or SIGTERM: running jobs are put back in the queue\n"
+           "and start again at the next start.\n"
+           "exit codes: 0 stopped by a signal, 2 bad option, 3 database error, 4 cannot listen\n");
+}
+
+/* Sets one setting from text; 0, or -1 after printing why (source names the flag or variable). */
+static int set_value(const setting *st, const char *text, const char *source, server_settings *out)
+{
+    char *base = (char *)out + st->offset;
+    char *end = NULL;
+    switch (st->kind) {
+    case SETTING_TEXT:
+        *(const char **)(void *)base = text;
+        return 0;
+    case SETTING_ADDRESS: {
+        unsigned char addr[16];
+        if (inet_pton(AF_INET, text, addr) == 1 || inet_pton(AF_INET6, text, addr) == 1) {
+            *(const char **)(void *)base = text;
+            return 0;
+        }
+        fprintf(stderr, "ctcsim-server: %s must be a numeric IPv4 or IPv6 address (got \"%s\")\n",
+                source, text);
+        return -1;
+    }
+    case SETTING_INTEGER:
+    case SETTING_BYTES: {
+        errno = 0;
+        long long x = strtoll(text, &end, 10);
+        long long unit = 1;
+        if (st->kind == SETTING_BYTES && (*end == 'K' || *end == 'k')) unit = 1024, end++;
+        if (st->kind == SETTING_BYTES && (*end == 'M' || *end == 'm')) unit = 1024 * 1024, end++;
+        int digits = end != text && text[0] >= '0' && text[0] <= '9';
+        if (!digits || *end || errno == ERANGE || x > st->max / unit || x * unit < st->min) {
+            if (st->kind == SETTING_BYTES)
+                fprintf(stderr,
+                        "ctcsim-server: %s must be a number of bytes from %lld to %lld, "
+                        "with an optional K or M (got \"%s\")\n",
+                        source, st->min, st->max, text);
+            else
+                fprintf(stderr,
+                        "ctcsim-server: %s must be an integer from %lld to %lld (got \"%s\")\n",
+                        source, st->min, st->max, text);
+            return -1;
+        }
+        *(long long *)(void *)base = x * unit;
+        return 0;
+    }
+    case SETTING_SECONDS: {
+        double x = strtod(text, &end);
+        if (end == text || *end || !isfinite(x) || x < (double)st->min || x > (double)st->max) {
+            fprintf(stderr,
+                    "ctcsim-server: %s must be a number of seconds from %lld to %lld (got "
+                    "\"%s\")\n",
+                    source, st->min, st->max, text);
+            return -1;
+        }
+        *(double *)(void *)base = x;
+        return 0;
+    }
+    }
+    return -1;
+}
+
+/* Reads the environment, then the flags over it. Returns 0 to run, 1 when --help or --version
+ * has been answered, -1 after printing what is wrong. */
+static int read_settings(int argc, char **argv, server_settings *out)
+{
+    server_settings def = *out;
+    for (size_t i = 0; i < NSETTINGS; i++) {
+        const char *value = settings[i].env ? getenv(settings[i].env) : NULL;
+        if (value && *value && set_value(&settings[i], value, settings[i].env, out) != 0) return -1;
+    }
+    for (int a = 1; a < argc; a++) {
+        const char *arg = argv[a];
+        if (strcmp(arg, "--help") == 0 || strcmp(arg, "-h") == 0) {
+            print_help(&def);
+            return 1;
+        }
+        if (strcmp(arg, "--version") == 0) {
+            printf("ctcsim-server " CTCSIM_VERSION "\n");
+            return 1;
+        }
+        const setting *st = NULL;
+        const char *value = NULL;
+        for (size_t i = 0; i < NSETTINGS && !st; i++) {
+            size_t n = strlen(settings[i].flag);
+            if (strncmp(arg, settings[i].flag, n) != 0) continue;
+            if (arg[n] == '=') st = &settings[i], value = arg + n + 1;
+            if (arg[n] == 0) st = &settings[i];
+        }
+        if (!st) {
+            fprintf(stderr, "ctcsim-server: unknown option \"%s\" (--help lists them)\n", arg);
+            return -1;
+        }
+        if (!value) {
+            if (a + 1 == argc) {
+                fprintf(stderr, "ctcsim-server: %s needs a value (%s)\n", st->flag, st->arg);
+                return -1;
+            }
+            value = argv[++a];
+        }
+        if (set_value(st, value, st->flag, out) != 0) return -1;
+    }
+    if (out->token && !out->token[0]) out->token = NULL;
+    return 0;
+}
+
+/* "ctcsim-server: DB: why", naming the database once (the store's messages may name it) */
+static void database_error(const char *db, const char *err)
+{
+    if (strstr(err, db))
+        fprintf(stderr, "ctcsim-server: %s\n", err);
+    else
+        fprintf(stderr, "ctcsim-server: %s: %s\n", db, err);
+}
+
+int main(int argc, char **argv)
+{
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    server_settings cfg = {
+        .bind = "127.0.0.1",
+        .port = 8080,
+        .db = "ctcsim.db",
+        .workers = cores >= 1 ? (cores <= 1024 ? cores : 1024) : 1,
+        .max_queue = 1024,
+        .max_body = 8 * 1024 * 1024,
+        .token = NULL,
+        .web = "web",
+        .api = "api",
+        .job_time_limit = 600,
+        .http_threads = 4,
+    };
+    int rc = read_settings(argc, argv, &cfg);
+    if (rc != 0) return rc > 0 ? 0 : EXIT_BAD_SETTING;
+
+    /* signals: SIGINT and SIGTERM for sigwait below, in every thread started from here on */
+    sigset_t stop_signals;
+    sigemptyset(&stop_signals);
+    sigaddset(&stop_signals, SIGINT);
+    sigaddset(&stop_signals, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &stop_signals, NULL);
+    struct sigaction ignore = {.sa_handler = SIG_IGN};
+    sigaction(SIGPIPE, &ignore, NULL); /* a client gone mid-reply is not our death */
+
+    /* the database: created, migrated and checked once, here */
+    char err[512] = "";
+    store *check = NULL;
+    if (store_open(cfg.db, &check, err, sizeof err) != 0) {
+        database_error(cfg.db, err);
+        return EXIT_DATABASE;
+    }
+    store_close(check);
+    struct stat st;
+    if (stat(cfg.web, &st) != 0 || !S_ISDIR(st.st_mode))
+        fprintf(stderr,
+                "ctcsim-server: warning: web root %s is not a directory (pages answer 404)\n",
+                cfg.web);
+
+    /* the workers, then the HTTP daemon */
+    jobq_config qc = {.db_path = cfg.db,
+                      .workers = (int)cfg.workers,
+                      .max_queue = (int)cfg.max_queue,
+                      .job_time_limit = cfg.job_time_limit};
+    jobq *queue = NULL;
+    if (jobq_start(&qc, &queue, err, sizeof err) != 0) {
+        database_error(cfg.db, err);
+        return EXIT_DATABASE;
+    }
+    routes_ctx ctx = {.queue = queue, .db_path = cfg.db, .api_dir = cfg.api, .max_wait = MAX_WAIT};
+    http_config hc = {.bind = cfg.bind,
+                      .port = (int)cfg.port,
+                      .threads = (int)cfg.http_threads,
+                      .max_body = (size_t)cfg.max_body,
+                      .web_root = cfg.web,
+                      .token = cfg.token,
+                      .routes = routes_table,
+                      .ctx = &ctx};
+    http_server *http = NULL;
+    if (http_start(&hc, &http, err, sizeof err) != 0) {
+        fprintf(stderr, "ctcsim-server: %s\n", err);
+        jobq_stop(queue);
+        return EXIT_LISTEN;
+    }
+    int v6 = strchr(cfg.bind, ':') != NULL;
+    fprintf(stderr,
+            "ctcsim-server " CTCSIM_VERSION " listening on http://%s%s%s:%d (%lld worker%s, "
+            "database %s)\n",
+            v6 ? "[" : "", cfg.bind, v6 ? "]" : "", http_port(http), cfg.workers,
+            cfg.workers == 1 ? "" : "s", cfg.db);
+    fflush(stderr);
+
+    /* until SIGINT or SIGTERM */
+    int sig = 0;
+    while (sigwait(&stop_signals, &sig) != 0) continue;
+
+    atomic_store(&ctx.stopping, 1);
+    http_stop(http);
+    jobq_stop(queue);
+    fprintf(stderr, "ctcsim-server: stopped\n");
+    return 0;
+}

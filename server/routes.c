@@ -1,0 +1,901 @@
+/*
+ * routes.c - the service's endpoints (routes.h, whose top comment is the API reference): one
+ * small handler per route, in the order of the table at the end.
+ *
+ * Handlers are linear: parse the path and query or reply 400, parse the body or reply its error,
+ * do the work through the store (store.h) and the queue (jobq.h), reply. Each HTTP thread has its
+ * own store connection, opened on its first use and kept in a pthread key whose destructor closes
+ * it when libmicrohttpd ends the thread; a connection that reports an error is closed at once, so
+ * the next request opens a fresh one.
+ *
+ * A new job is validated in full (job_parse runs ctc_sim_check) before it is stored, stored before
+ * it is queued, and answered 202 only once it is both: a job that cannot be queued is recorded
+ * cancelled and deleted again, and the client gets 503. ?wait defers the reply (http_defer): a
+ * thread of the HTTP layer waits in short slices of jobq_wait, so the HTTP thread goes on serving
+ * its other connections and a shutdown is held up by a waiting client for one slice at most; that
+ * thread opens a store connection of its own, closed when it ends. (Should even the few bytes of
+ * the wait's state not be had, the job is answered at once, 202, as without ?wait.)
+ *
+ * Job rows are built from store_job in one place (job_row), so lists, single jobs and the replies
+ * of POST and DELETE show the same fields.
+ */
+#include "routes.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <inttypes.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <microhttpd.h>
+
+#include "job_json.h"
+#include "presets.h"
+#include "result_out.h"
+#include "store.h"
+
+#define ROUTES_LIST_DEFAULT 50
+#define ROUTES_LIST_MAX 200
+#define ROUTES_EVERY_MAX 1000000
+#define ROUTES_RETRY_AFTER 5   /* s, with 503 QUEUE_FULL and SHUTTING_DOWN */
+#define ROUTES_WAIT_SLICE 0.25 /* s of one jobq_wait while a client waits */
+
+/* ---- the thread's store connection ---- */
+
+static pthread_key_t store_key;
+static pthread_once_t store_once = PTHREAD_ONCE_INIT;
+static int store_key_ok;
+
+static void store_key_destroy(void *s)
+{
+    store_close(s);
+}
+
+static void store_key_make(void)
+{
+    store_key_ok = pthread_key_create(&store_key, store_key_destroy) == 0;
+}
+
+/* This thread's connection, opened on first use; NULL after replying 503. */
+static store *thread_store(const routes_ctx *ctx, http_reply *rep)
+{
+    pthread_once(&store_once, store_key_make);
+    if (!store_key_ok) {
+        http_reply_error(rep, 503, "DATABASE_ERROR", "",
+                         "no thread-local storage for the database");
+        return NULL;
+    }
+    store *s = pthread_getspecific(store_key);
+    if (s) return s;
+    char err[256] = "";
+    if (store_open(ctx->db_path, &s, err, sizeof err) != 0) {
+        fprintf(stderr, "ctcsim-server: database: %s\n", err);
+        http_reply_error(rep, 503, "DATABASE_ERROR", "", "the database cannot be opened: %s", err);
+        return NULL;
+    }
+    if (pthread_setspecific(store_key, s) != 0) {
+        store_close(s);
+        http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
+        return NULL;
+    }
+    return s;
+}
+
+/* After a failed store call: logs it, replies 503 DATABASE_ERROR and drops the connection. */
+static void database_failed(http_reply *rep, const char *what, const char *err)
+{
+    fprintf(stderr, "ctcsim-server: database: %s: %s\n", what, err);
+    http_reply_error(rep, 503, "DATABASE_ERROR", "", "the database failed (%s): %s", what, err);
+    store *s = pthread_getspecific(store_key);
+    if (s) {
+        pthread_setspecific(store_key, NULL);
+        store_close(s);
+    }
+}
+
+/* ---- parsing the request ---- */
+
+/* A decimal integer from min to max, digits only; 0, or -1 when text is not one. */
+static int parse_integer(const char *text, long long min, long long max, long long *out)
+{
+    if (!text || !*text || strspn(text, "0123456789") != strlen(text)) return -1;
+    errno = 0;
+    long long x = strtoll(text, NULL, 10);
+    if (errno == ERANGE || x < min || x > max) return -1;
+    *out = x;
+    return 0;
+}
+
+/* The job id of the path; 0, or -1 after replying 400 INVALID_ID. */
+static int path_id(const http_request *req, http_reply *rep, int64_t *id)
+{
+    long long x;
+    if (parse_integer(req->params[0], 1, INT64_MAX, &x) != 0) {
+        http_reply_error(rep, 400, "INVALID_ID", "id",
+                         "a job id is a positive integer (got \"%s\")", req->params[0]);
+        return -1;
+    }
+    *id = x;
+    return 0;
+}
+
+/* An integer query parameter (def when absent); 0, or -1 after replying 400 INVALID_QUERY. */
+static int query_integer(const http_request *req, http_reply *rep, const char *key, long long min,
+                         long long max, long long def, long long *out)
+{
+    const char *text = http_query(req, key);
+    *out = def;
+    if (!text) return 0;
+    if (parse_integer(text, min, max, out) != 0) {
+        http_reply_error(rep, 400, "INVALID_QUERY", key,
+                         "%s must be an integer from %lld to %lld (got \"%s\")", key, min, max,
+                         text);
+        return -1;
+    }
+    return 0;
+}
+
+/* The body must be declared JSON (parameters such as charset allowed); 0, or -1 after 415. */
+static int body_is_json(const http_request *req, http_reply *rep)
+{
+    const char *type = http_header(req, "Content-Type");
+    const char *want = "application/json";
+    size_t n = strlen(want);
+    if (type) {
+        while (*type == ' ' || *type == '\t') type++;
+        if (strncasecmp(type, want, n) == 0 &&
+            (type[n] == 0 || type[n] == ';' || type[n] == ' ' || type[n] == '\t'))
+            return 0;
+    }
+    http_reply_error(rep, 415, "UNSUPPORTED_MEDIA_TYPE", "",
+                     "the body must be JSON with Content-Type: application/json (got %s%s%s)",
+                     type ? "\"" : "", type ? type : "none", type ? "\"" : "");
+    return -1;
+}
+
+/* Parses the body as a job; NULL after replying the parser's error. */
+static job *body_job(const http_request *req, http_reply *rep)
+{
+    job *j = NULL;
+    job_error e = {0};
+    if (job_parse(req->body, req->body_len, &j, &e) == 0) return j;
+    if (e.code == JOB_NO_MEMORY)
+        http_reply_error(rep, 503, "NO_MEMORY", e.field, "%s", e.message);
+    else
+        http_reply_error(rep, 400, job_error_code_name(e.code), e.field, "%s", e.message);
+    return NULL;
+}
+
+/* ---- replies ---- */
+
+/* An ISO 8601 UTC time with milliseconds, or null for 0 (not yet). */
+static cJSON *time_json(double t)
+{
+    if (!(t > 0) || !isfinite(t)) return cJSON_CreateNull();
+    double whole = floor(t);
+    long ms = lround((t - whole) * 1000.0);
+    if (ms >= 1000) {
+        whole += 1;
+        ms -= 1000;
+    }
+    time_t secs = (time_t)whole;
+    struct tm tm;
+    char text[64];
+    if (!gmtime_r(&secs, &tm)) return cJSON_CreateNull();
+    size_t n = strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%S", &tm);
+    snprintf(text + n, sizeof text - n, ".%03ldZ", ms);
+    return cJSON_CreateString(text);
+}
+
+static cJSON *number_or_null(double x)
+{
+    return isfinite(x) ? cJSON_CreateNumber(x) : cJSON_CreateNull();
+}
+
+static cJSON *string_or_null(const char *s)
+{
+    return s ? cJSON_CreateString(s) : cJSON_CreateNull();
+}
+
+static void job_location(char *buf, size_t len, int64_t id)
+{
+    snprintf(buf, len, "/api/jobs/%" PRId64, id);
+}
+
+/* The row of a job as lists show it (routes.h); NULL when out of memory. */
+static cJSON *job_row(const store_job *j)
+{
+    char location[64];
+    job_location(location, sizeof location, j->id);
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "id", (double)j->id);
+    cJSON_AddItemToObject(o, "name", string_or_null(j->name));
+    cJSON_AddItemToObject(o, "preset", string_or_null(j->preset));
+    cJSON_AddStringToObject(o, "status", store_status_name(j->status));
+    cJSON_AddNumberToObject(o, "progress", isfinite(j->progress) ? j->progress : 0);
+    cJSON_AddItemToObject(o, "created", time_json(j->created));
+    cJSON_AddItemToObject(o, "started", time_json(j->started));
+    cJSON_AddItemToObject(o, "finished", time_json(j->finished));
+    cJSON *scene = cJSON_AddObjectToObject(o, "scene");
+    cJSON_AddNumberToObject(scene, "bodies", j->nbodies);
+    cJSON_AddNumberToObject(scene, "coordinates", j->nv);
+    cJSON_AddItemToObject(o, "controller", string_or_null(j->controller));
+    cJSON_AddItemToObject(o, "e_max", number_or_null(j->e_max));
+    cJSON_AddItemToObject(o, "wall_s", number_or_null(j->wall_s));
+    cJSON_AddStringToObject(o, "location", location);
+    /* cJSON's adders fail quietly: check the last of each kind once */
+    if (!o || !scene || !cJSON_GetObjectItemCaseSensitive(o, "location")) {
+        cJSON_Delete(o);
+        return NULL;
+    }
+    return o;
+}
+
+/* A stored JSON text parsed back, or null (none, or unreadable). */
+static cJSON *stored_json(const char *text)
+{
+    cJSON *doc = text ? cJSON_Parse(text) : NULL;
+    return doc ? doc : cJSON_CreateNull();
+}
+
+/* The whole job: its row, the normalised spec, the metrics and the message. */
+static cJSON *job_full(const store_job *j)
+{
+    cJSON *o = job_row(j);
+    if (!o) return NULL;
+    cJSON_AddItemToObject(o, "spec", stored_json(j->spec));
+    cJSON_AddItemToObject(o, "metrics", stored_json(j->metrics));
+    cJSON_AddItemToObject(o, "message",
+                          string_or_null(j->message && j->message[0] ? j->message : NULL));
+    if (!cJSON_GetObjectItemCaseSensitive(o, "message")) {
+        cJSON_Delete(o);
+        return NULL;
+    }
+    return o;
+}
+
+static void reply_job(http_reply *rep, int status, const store_job *j, int full)
+{
+    http_reply_json(rep, status, full ? job_full(j) : job_row(j));
+}
+
+static int job_finished(store_status st)
+{
+    return st != STORE_QUEUED && st != STORE_RUNNING;
+}
+
+/* ---- POST /api/jobs ---- */
+
+static double monotonic_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ?wait=S: 0 when absent, else 0 < S <= max_wait; 0, or -1 after replying 400. */
+static int query_wait(const http_request *req, http_reply *rep, const routes_ctx *ctx, double *wait)
+{
+    const char *text = http_query(req, "wait");
+    *wait = 0;
+    if (!text) return 0;
+    char *end;
+    double s = strtod(text, &end);
+    if (end == text || *end || !(s > 0 && s <= ctx->max_wait)) {
+        http_reply_error(rep, 400, "INVALID_QUERY", "wait",
+                         "wait must be a number of seconds, more than 0 and at most %g (got "
+                         "\"%s\")",
+                         ctx->max_wait, text);
+        return -1;
+    }
+    *wait = s;
+    return 0;
+}
+
+/* Waits up to wait s for the job to leave the queue and the workers, in slices, giving up at
+ * shutdown. Returns 1 when it did. */
+static int wait_for_job(const routes_ctx *ctx, int64_t id, double wait)
+{
+    double deadline = monotonic_now() + wait;
+    for (;;) {
+        double left = deadline - monotonic_now();
+        if (left <= 0 || atomic_load(&ctx->stopping)) return 0;
+        if (jobq_wait(ctx->queue, id, left < ROUTES_WAIT_SLICE ? left : ROUTES_WAIT_SLICE) == 0)
+            return 1;
+    }
+}
+
+/* The answer to POST /api/jobs once the job is queued: 200 with the whole job when it has
+ * finished (waited is 1 and it has), else 202 with its row; Location either way. */
+static void reply_new_job(http_reply *rep, const routes_ctx *ctx, int64_t id, int waited)
+{
+    char err[256] = "";
+    store_job row = {0};
+    store *s = thread_store(ctx, rep);
+    int got = s ? store_get(s, id, &row, err, sizeof err) : -1;
+    job_location(rep->location, sizeof rep->location, id);
+    if (got != 0) {
+        /* queued all the same: say so with what is known */
+        if (s) fprintf(stderr, "ctcsim-server: database: reading job %" PRId64 ": %s\n", id, err);
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddNumberToObject(o, "id", (double)id);
+        cJSON_AddStringToObject(o, "location", rep->location);
+        http_reply_json(rep, 202, o);
+        return;
+    }
+    int finished = waited && job_finished(row.status);
+    reply_job(rep, finished ? 200 : 202, &row, finished);
+    store_job_clear(&row);
+}
+
+/* ?wait: what the deferred part of POST /api/jobs needs. */
+typedef struct job_wait {
+    const routes_ctx *ctx;
+    int64_t id;
+    double wait; /* s */
+} job_wait;
+
+/* Runs off libmicrohttpd's threads (http_defer): waits, then answers. */
+static void finish_wait(http_reply *rep, void *arg)
+{
+    job_wait *w = arg;
+    reply_new_job(rep, w->ctx, w->id, wait_for_job(w->ctx, w->id, w->wait));
+    free(w);
+}
+
+static void post_jobs(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    char err[256] = "";
+    double wait;
+    if (atomic_load(&ctx->stopping)) {
+        rep->retry_after = ROUTES_RETRY_AFTER;
+        http_reply_error(rep, 503, "SHUTTING_DOWN", "", "the server is shutting down");
+        return;
+    }
+    if (body_is_json(req, rep) != 0 || query_wait(req, rep, ctx, &wait) != 0) return;
+    job *j = body_job(req, rep);
+    if (!j) return;
+    char *spec = NULL;
+    store *s = NULL;
+
+    if (jobq_space(ctx->queue) <= 0) {
+        rep->retry_after = ROUTES_RETRY_AFTER;
+        http_reply_error(rep, 503, "QUEUE_FULL", "",
+                         "the queue is full; try again in a few seconds");
+        goto done;
+    }
+    if (!(s = thread_store(ctx, rep))) goto done;
+    if (!(spec = cJSON_PrintUnformatted(j->normalised))) {
+        http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
+        goto done;
+    }
+
+    /* stored first, then queued: a job answered 202 is in the database */
+    int64_t id;
+    if (store_insert(s, j->name, j->preset, j->spec.chain.nbodies, j->nv,
+                     ctc_ctrl_type_name(j->spec.controller), spec, &id, err, sizeof err) != 0) {
+        database_failed(rep, "storing the job", err);
+        goto done;
+    }
+    int rc = jobq_submit(ctx->queue, id);
+    if (rc != 0) {
+        const char *why = rc == 1 ? "the queue was full" : "the server was shutting down";
+        if (store_finish(s, id, STORE_CANCELLED, why, NULL, NULL, err, sizeof err) != 0 ||
+            store_delete(s, id, err, sizeof err) < 0)
+            fprintf(stderr, "ctcsim-server: database: withdrawing job %" PRId64 ": %s\n", id, err);
+        rep->retry_after = ROUTES_RETRY_AFTER;
+        if (rc == 1)
+            http_reply_error(rep, 503, "QUEUE_FULL", "",
+                             "the queue is full; try again in a few seconds");
+        else
+            http_reply_error(rep, 503, "SHUTTING_DOWN", "", "the server is shutting down");
+        goto done;
+    }
+
+    /* ?wait: answered from a thread that may block, so this one serves others meanwhile */
+    job_wait *w = wait > 0 ? malloc(sizeof *w) : NULL;
+    if (w) {
+        *w = (job_wait){.ctx = ctx, .id = id, .wait = wait};
+        http_defer(rep, finish_wait, w);
+    } else {
+        reply_new_job(rep, ctx, id, 0);
+    }
+done:
+    free(spec);
+    job_free(j);
+}
+
+/* ---- GET /api/jobs ---- */
+
+static void get_jobs(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    long long limit, cursor;
+    if (query_integer(req, rep, "limit", 1, ROUTES_LIST_MAX, ROUTES_LIST_DEFAULT, &limit) != 0)
+        return;
+    if (query_integer(req, rep, "cursor", 1, INT64_MAX, 0, &cursor) != 0) return;
+    int status = -1;
+    const char *st = http_query(req, "status");
+    if (st && (status = store_status_parse(st)) < 0) {
+        http_reply_error(rep, 400, "INVALID_QUERY", "status",
+                         "status must be one of queued, running, done, failed, diverged, "
+                         "cancelled (got \"%s\")",
+                         st);
+        return;
+    }
+    store *s = thread_store(ctx, rep);
+    if (!s) return;
+
+    /* one row more than asked tells whether there is a next page */
+    store_job *rows = NULL;
+    int n = 0;
+    char err[256] = "";
+    if (store_list(s, cursor, status, (int)limit + 1, &rows, &n, err, sizeof err) != 0) {
+        database_failed(rep, "listing jobs", err);
+        return;
+    }
+    cJSON *o = cJSON_CreateObject();
+    cJSON *list = cJSON_AddArrayToObject(o, "jobs");
+    int shown = n > limit ? (int)limit : n;
+    for (int i = 0; i < shown; i++) cJSON_AddItemToArray(list, job_row(&rows[i]));
+    if (n > limit)
+        cJSON_AddNumberToObject(o, "next_cursor", (double)rows[shown - 1].id);
+    else
+        cJSON_AddNullToObject(o, "next_cursor");
+    int complete = list && cJSON_GetArraySize(list) == shown &&
+                   cJSON_GetObjectItemCaseSensitive(o, "next_cursor");
+    store_jobs_free(rows, n);
+    if (!complete) {
+        cJSON_Delete(o);
+        o = NULL;
+    }
+    http_reply_json(rep, 200, o);
+}
+
+/* ---- GET /api/jobs/{id} ---- */
+
+/* Reads the job of the path; 0 with *row filled, or -1 after replying (400, 404, 503). */
+static int path_job(const http_request *req, http_reply *rep, const routes_ctx *ctx, store_job *row)
+{
+    int64_t id;
+    if (path_id(req, rep, &id) != 0) return -1;
+    store *s = thread_store(ctx, rep);
+    if (!s) return -1;
+    char err[256] = "";
+    int rc = store_get(s, id, row, err, sizeof err);
+    if (rc == 1) http_reply_error(rep, 404, "NOT_FOUND", "id", "no job %" PRId64, id);
+    if (rc < 0) database_failed(rep, "reading a job", err);
+    return rc == 0 ? 0 : -1;
+}
+
+static void get_job(const http_request *req, http_reply *rep, void *arg)
+{
+    store_job row = {0};
+    if (path_job(req, rep, arg, &row) != 0) return;
+    reply_job(rep, 200, &row, 1);
+    store_job_clear(&row);
+}
+
+/* ---- GET /api/jobs/{id}/series ---- */
+
+/* The channel names of a mask, ", "-separated, into buf. */
+static void channel_names(char *buf, size_t len, unsigned mask)
+{
+    size_t used = 0;
+    buf[0] = 0;
+    for (int c = 0; c < CTC_NCHANNELS; c++) {
+        if (!(mask & CTC_CH_BIT(c)) || used >= len) continue;
+        used += (size_t)snprintf(buf + used, len - used, "%s%s", used ? ", " : "",
+                                 ctc_channel_name((ctc_channel)c));
+    }
+}
+
+/* ?joints=0,2: the coordinate indices, checked against nv later; *count < 0 when absent. The
+ * list is at most as long as the text. 0, or -1 after replying 400. */
+static int query_joints(const http_request *req, http_reply *rep, long **list, int *count)
+{
+    const char *text = http_query(req, "joints");
+    *list = NULL;
+    *count = -1;
+    if (!text) return 0;
+    size_t len = strlen(text);
+    long *out = malloc((len / 2 + 1) * sizeof *out);
+    char *copy = strdup(text);
+    if (!out || !copy) {
+        free(out);
+        free(copy);
+        http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
+        return -1;
+    }
+    int n = 0;
+    char *p = copy;
+    for (;;) {
+        char *comma = strchr(p, ',');
+        if (comma) *comma = 0;
+        long long x;
+        if (parse_integer(p, 0, JOB_MAX_BODIES * 6LL, &x) != 0) {
+            http_reply_error(rep, 400, "INVALID_QUERY", "joints",
+                             "joints must be a comma-separated list of coordinate indices "
+                             "from 0 (got \"%s\")",
+                             text);
+            free(out);
+            free(copy);
+            return -1;
+        }
+        out[n++] = (long)x;
+        if (!comma) break;
+        p = comma + 1;
+    }
+    free(copy);
+    *list = out;
+    *count = n;
+    return 0;
+}
+
+static void get_series(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    char err[256] = "";
+    long *joints = NULL;
+    char *coords = NULL;
+    ctc_sim_result *r = NULL;
+    store_job row = {0};
+    int have_row = 0;
+
+    /* the query, before touching the database */
+    int64_t id;
+    if (path_id(req, rep, &id) != 0) return;
+    unsigned mask = 0;
+    const char *channels = http_query(req, "channels");
+    if (channels) {
+        char bad[64];
+        if (!*channels || result_parse_channels(channels, &mask, bad, sizeof bad) != 0) {
+            http_reply_error(rep, 400, "INVALID_QUERY", "channels",
+                             "unknown channel \"%s\" (the channels are q, qdot, q_des, qdot_des, "
+                             "e, tau, w, energy)",
+                             *channels ? bad : "");
+            return;
+        }
+    }
+    long long every;
+    if (query_integer(req, rep, "every", 1, ROUTES_EVERY_MAX, 1, &every) != 0) return;
+    const char *format = http_query(req, "format");
+    if (!format) format = "json";
+    if (strcmp(format, "json") != 0 && strcmp(format, "csv") != 0) {
+        http_reply_error(rep, 400, "INVALID_QUERY", "format",
+                         "format must be json or csv (got \"%s\")", format);
+        return;
+    }
+    int njoints;
+    if (query_joints(req, rep, &joints, &njoints) != 0) return;
+
+    /* the job: finished, with a series */
+    if (path_job(req, rep, ctx, &row) != 0) goto done;
+    have_row = 1;
+    if (!job_finished(row.status)) {
+        http_reply_error(rep, 409, "NOT_FINISHED", "id",
+                         "job %" PRId64 " is %s; its series is there once it has finished", id,
+                         store_status_name(row.status));
+        goto done;
+    }
+    store *s = thread_store(ctx, rep);
+    if (!s) goto done;
+    int rc = store_get_series(s, id, &r, err, sizeof err);
+    if (rc == 1) {
+        http_reply_error(rep, 404, "NOT_FOUND", "id",
+                         "job %" PRId64 " has no series (it was %s before it ran)", id,
+                         store_status_name(row.status));
+        goto done;
+    }
+    if (rc < 0) {
+        database_failed(rep, "reading a series", err);
+        goto done;
+    }
+
+    /* the selection, checked against what was recorded */
+    unsigned missing = mask & ~r->channels;
+    if (missing) {
+        char names[128], recorded[128];
+        channel_names(names, sizeof names, missing);
+        channel_names(recorded, sizeof recorded, r->channels);
+        http_reply_error(rep, 400, "INVALID_QUERY", "channels",
+                         "job %" PRId64 " did not record %s (it recorded %s)", id, names, recorded);
+        goto done;
+    }
+    if (njoints >= 0) {
+        coords = calloc((size_t)r->nv + 1, 1);
+        if (!coords) {
+            http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
+            goto done;
+        }
+        for (int i = 0; i < njoints; i++) {
+            if (joints[i] >= r->nv) {
+                http_reply_error(rep, 400, "INVALID_QUERY", "joints",
+                                 "coordinate %ld is out of range (job %" PRId64
+                                 " has %d coordinates, 0 to %d)",
+                                 joints[i], id, r->nv, r->nv - 1);
+                goto done;
+            }
+            if (coords[joints[i]]) {
+                http_reply_error(rep, 400, "INVALID_QUERY", "joints",
+                                 "coordinate %ld is listed twice", joints[i]);
+                goto done;
+            }
+            coords[joints[i]] = 1;
+        }
+    }
+
+    /* written as the command line writes it */
+    result_select sel = {.channels = mask, .every = (int)every, .coords = coords};
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    int csv = strcmp(format, "csv") == 0;
+    int wrc = -1;
+    if (f) {
+        wrc = csv ? result_write_csv(f, r, &sel) : result_write_series_json(f, r, &sel);
+        if (!csv) fputc('\n', f);
+        if (fclose(f) != 0) wrc = -1;
+    }
+    if (wrc != 0) {
+        free(buf);
+        http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory writing the series");
+        goto done;
+    }
+    http_reply_buffer(rep, 200, csv ? "text/csv; charset=utf-8" : "application/json", buf, len);
+done:
+    if (have_row) store_job_clear(&row);
+    ctc_sim_result_free(r);
+    free(coords);
+    free(joints);
+}
+
+/* ---- DELETE /api/jobs/{id} ---- */
+
+static void delete_job(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    char err[256] = "";
+    store_job row = {0};
+    if (path_job(req, rep, ctx, &row) != 0) return;
+    store *s = thread_store(ctx, rep);
+    if (!s) goto done;
+    int64_t id = row.id;
+
+    if (!job_finished(row.status)) {
+        int rc = jobq_cancel(ctx->queue, id);
+        if (rc == 2) { /* running: its worker records it cancelled */
+            reply_job(rep, 202, &row, 0);
+            goto done;
+        }
+        /* taken out of the queue (1), or held by no worker here (0): record it ourselves,
+           unless it finished meanwhile */
+        store_job_clear(&row);
+        if (store_get(s, id, &row, err, sizeof err) != 0) {
+            database_failed(rep, "reading a job", err);
+            goto done;
+        }
+        if (rc == 1 || !job_finished(row.status)) {
+            if (store_finish(s, id, STORE_CANCELLED, "cancelled by request", NULL, NULL, err,
+                             sizeof err) != 0) {
+                database_failed(rep, "cancelling a job", err);
+                goto done;
+            }
+            store_job_clear(&row);
+            if (store_get(s, id, &row, err, sizeof err) != 0) {
+                database_failed(rep, "reading a job", err);
+                goto done;
+            }
+            reply_job(rep, 200, &row, 1);
+            goto done;
+        }
+    }
+
+    /* finished: deleted with its series */
+    int rc = store_delete(s, id, err, sizeof err);
+    if (rc == 0) {
+        http_reply_buffer(rep, 204, NULL, NULL, 0);
+    } else if (rc == 1) {
+        http_reply_error(rep, 404, "NOT_FOUND", "id", "no job %" PRId64, id);
+    } else if (rc == 2) {
+        http_reply_error(rep, 409, "NOT_FINISHED", "id",
+                         "job %" PRId64 " was queued again meanwhile; cancel it first", id);
+    } else {
+        database_failed(rep, "deleting a job", err);
+    }
+done:
+    store_job_clear(&row);
+}
+
+/* ---- POST /api/validate ---- */
+
+static void post_validate(const http_request *req, http_reply *rep, void *arg)
+{
+    (void)arg;
+    if (body_is_json(req, rep) != 0) return;
+    job *j = body_job(req, rep);
+    if (!j) return;
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddBoolToObject(o, "valid", 1);
+    if (!cJSON_AddItemToObject(o, "spec", cJSON_Duplicate(j->normalised, 1))) {
+        cJSON_Delete(o);
+        o = NULL;
+    }
+    job_free(j);
+    http_reply_json(rep, 200, o);
+}
+
+/* ---- GET /api/presets, /api/presets/{name} ---- */
+
+static void get_presets(const http_request *req, http_reply *rep, void *arg)
+{
+    (void)req;
+    (void)arg;
+    int count = 0;
+    const preset *p = presets_list(&count);
+    cJSON *o = cJSON_CreateObject();
+    cJSON *list = cJSON_AddArrayToObject(o, "presets");
+    for (int i = 0; i < count; i++) {
+        cJSON *e = cJSON_CreateObject();
+        cJSON_AddStringToObject(e, "name", p[i].name);
+        cJSON_AddStringToObject(e, "summary", p[i].summary);
+        cJSON *params = cJSON_AddArrayToObject(e, "params");
+        for (int k = 0; p[i].params && p[i].params[k]; k++)
+            cJSON_AddItemToArray(params, cJSON_CreateString(p[i].params[k]));
+        cJSON_AddItemToArray(list, e);
+    }
+    if (!list || cJSON_GetArraySize(list) != count) {
+        cJSON_Delete(o);
+        o = NULL;
+    }
+    http_reply_json(rep, 200, o);
+}
+
+/* What the query-string walk collects for a preset. */
+typedef struct preset_query {
+    const preset *preset;
+    cJSON *request; /* {key: value} */
+    char bad[128];  /* the first key the preset does not take */
+    int failed;     /* out of memory */
+} preset_query;
+
+static enum MHD_Result collect_param(void *cls, enum MHD_ValueKind kind, const char *key,
+                                     const char *value)
+{
+    (void)kind;
+    preset_query *q = cls;
+    int known = 0;
+    for (int k = 0; q->preset->params && q->preset->params[k]; k++)
+        if (strcmp(key, q->preset->params[k]) == 0) known = 1;
+    if (!known) {
+        if (!q->bad[0]) snprintf(q->bad, sizeof q->bad, "%s", key);
+        return MHD_YES;
+    }
+    /* the value as JSON (?n=16), else as a string */
+    cJSON *v = value ? cJSON_ParseWithOpts(value, NULL, 1) : NULL;
+    if (!v) v = cJSON_CreateString(value ? value : "");
+    if (!v || !cJSON_AddItemToObject(q->request, key, v)) {
+        cJSON_Delete(v);
+        q->failed = 1;
+    }
+    return MHD_YES;
+}
+
+static void get_preset(const http_request *req, http_reply *rep, void *arg)
+{
+    (void)arg;
+    const char *name = req->params[0];
+    preset_query q = {.preset = presets_find(name)};
+    if (!q.preset) {
+        http_reply_error(rep, 404, "UNKNOWN_PRESET", "name",
+                         "no preset \"%s\" (GET /api/presets lists them)", name);
+        return;
+    }
+    q.request = cJSON_CreateObject();
+    if (q.request) MHD_get_connection_values(req->conn, MHD_GET_ARGUMENT_KIND, collect_param, &q);
+    if (!q.request || q.failed) {
+        http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
+    } else if (q.bad[0]) {
+        char takes[128] = "";
+        for (int k = 0; q.preset->params && q.preset->params[k]; k++) {
+            size_t used = strlen(takes);
+            snprintf(takes + used, sizeof takes - used, "%s%s", k ? ", " : "", q.preset->params[k]);
+        }
+        if (takes[0])
+            http_reply_error(rep, 400, "INVALID_QUERY", q.bad,
+                             "preset %s has no parameter \"%s\" (it takes: %s)", name, q.bad,
+                             takes);
+        else
+            http_reply_error(rep, 400, "INVALID_QUERY", q.bad,
+                             "preset %s takes no parameters (got \"%s\")", name, q.bad);
+    } else {
+        job_error e = {0};
+        cJSON *doc = q.preset->build(q.request, &e);
+        if (doc)
+            http_reply_json(rep, 200, doc);
+        else if (e.code == JOB_NO_MEMORY)
+            http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
+        else
+            http_reply_error(rep, 400, "INVALID_QUERY", e.field, "%s", e.message);
+    }
+    cJSON_Delete(q.request);
+}
+
+/* ---- GET /api/health ---- */
+
+static void get_health(const http_request *req, http_reply *rep, void *arg)
+{
+    (void)req;
+    routes_ctx *ctx = arg;
+    jobq_stats stats = {0};
+    jobq_get_stats(ctx->queue, &stats);
+    long counts[STORE_NSTATUS] = {0};
+    char err[256] = "";
+    http_reply ignored = {.fd = -1};
+    store *s = thread_store(ctx, &ignored);
+    int ok = s && store_count(s, counts, err, sizeof err) == 0;
+    if (s && !ok) database_failed(&ignored, "counting jobs", err);
+    free(ignored.body);
+
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "status", ok ? "ok" : "error");
+    cJSON_AddStringToObject(o, "version", CTCSIM_VERSION);
+    cJSON_AddNumberToObject(o, "workers", stats.workers);
+    cJSON_AddNumberToObject(o, "busy", stats.busy);
+    cJSON_AddNumberToObject(o, "queued", stats.queued);
+    cJSON_AddStringToObject(o, "database", ok ? "ok" : "error");
+    cJSON *jobs = cJSON_AddObjectToObject(o, "jobs"); /* {} when the database failed */
+    for (int st = 0; ok && st < STORE_NSTATUS; st++)
+        cJSON_AddNumberToObject(jobs, store_status_name((store_status)st), (double)counts[st]);
+    if (!cJSON_GetObjectItemCaseSensitive(o, "jobs")) {
+        cJSON_Delete(o);
+        o = NULL;
+    }
+    http_reply_json(rep, ok ? 200 : 503, o);
+}
+
+/* ---- GET /api/openapi.yaml ---- */
+
+static void get_openapi(const http_request *req, http_reply *rep, void *arg)
+{
+    (void)req;
+    routes_ctx *ctx = arg;
+    char path[4096];
+    snprintf(path, sizeof path, "%s/openapi.yaml", ctx->api_dir ? ctx->api_dir : "api");
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    struct stat st;
+    if (fd < 0 || fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        if (fd >= 0) close(fd);
+        http_reply_error(rep, 404, "NOT_FOUND", "",
+                         "this server has no API description (openapi.yaml is missing)");
+        return;
+    }
+    rep->status = 200;
+    rep->content_type = "application/yaml";
+    rep->fd = fd;
+    rep->fd_size = (uint64_t)st.st_size;
+}
+
+/* ---- the table ---- */
+
+const http_route routes_table[] = {
+    {"GET", "/api/jobs", get_jobs},
+    {"POST", "/api/jobs", post_jobs},
+    {"GET", "/api/jobs/{id}", get_job},
+    {"DELETE", "/api/jobs/{id}", delete_job},
+    {"GET", "/api/jobs/{id}/series", get_series},
+    {"POST", "/api/validate", post_validate},
+    {"GET", "/api/presets", get_presets},
+    {"GET", "/api/presets/{name}", get_preset},
+    {"GET", "/api/health", get_health},
+    {"GET", "/api/openapi.yaml", get_openapi},
+    {NULL, NULL, NULL},
+};

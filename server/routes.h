@@ -1,0 +1,76 @@
+/*
+ * routes.h - the service's endpoints: one handler per route (routes.c). This comment is the API's
+ * reference; api/openapi.yaml documents the same for clients and is served at /api/openapi.yaml.
+ *
+ * Conventions. Bodies are JSON (POST needs Content-Type application/json, charset allowed, else
+ * 415). Ids are positive integers (else 400 INVALID_ID, field "id"). Times are ISO 8601 UTC
+ * strings with milliseconds ("2026-11-21T02:30:00.123Z") or null. Coordinates and joints are
+ * numbered from 0, as in the job's arrays. Errors are {"error": {"code", "message", "field"}}
+ * (field "" when none) with these statuses and codes:
+ *   400 INVALID_JSON, MISSING_FIELD, UNKNOWN_FIELD, INVALID_FIELD, LIMIT_EXCEEDED (job_json.h),
+ *       INVALID_ID, INVALID_QUERY (field = the query parameter)
+ *   401 UNAUTHORIZED (with --token: POST and DELETE need "Authorization: Bearer TOKEN")
+ *   404 NOT_FOUND (route, job or file), UNKNOWN_PRESET (400 inside a job body, 404 as a path)
+ *   405 METHOD_NOT_ALLOWED (with Allow)   409 NOT_FINISHED (series of an unfinished job)
+ *   413 BODY_TOO_LARGE   415 UNSUPPORTED_MEDIA_TYPE
+ *   503 QUEUE_FULL (with Retry-After), NO_MEMORY, DATABASE_ERROR, SHUTTING_DOWN
+ *
+ * A job row (lists and single jobs):
+ *   {"id", "name", "preset" (or null), "status" ("queued", "running", "done", "failed",
+ *    "diverged", "cancelled"), "progress" (0..1), "created", "started", "finished",
+ *    "scene": {"bodies", "coordinates"}, "controller", "e_max" (max tracking error over the
+ *    coordinates, or null), "wall_s" (or null), "location": "/api/jobs/ID"}
+ *
+ * POST /api/jobs             body: a job or {"preset": ...} (job_json.h). Validates first (400
+ *                            with the parser's code, field and message). Stores it queued, then
+ *                            202 {row} with Location. ?wait=S (0 < S <= 300) holds the answer
+ *                            until the job finishes: then 200 {job} as GET /api/jobs/{id}, or
+ *                            202 {row} if S ran out.
+ * GET  /api/jobs             ?limit=N (1..200, default 50) &cursor=ID (rows with id < ID)
+ *                            &status=S -> 200 {"jobs": [rows], "next_cursor": ID or null}
+ * GET  /api/jobs/{id}        200 {row + "spec": normalised job, "metrics": {...} or null
+ *                            (result_out.h), "message": text or null}
+ * GET  /api/jobs/{id}/series ?channels=q,tau (default: all recorded) &joints=0,2 (coordinate
+ *                            indices; default all) &every=N (default 1) &format=json|csv
+ *                            (default json). json: the series object of `ctcsim run --format
+ *                            json`; csv: exactly the CSV of `ctcsim run`. 409 NOT_FINISHED while
+ *                            queued or running; 404 if the job has no series (cancelled before it
+ *                            ran).
+ * DELETE /api/jobs/{id}      queued: cancelled, 200 {job}; running: cancel requested, 202 {row}
+ *                            (the worker stops at its next step and records "cancelled");
+ *                            finished: deleted with its series, 204.
+ * POST /api/validate         200 {"valid": true, "spec": normalised job} or the 400 error.
+ * GET  /api/presets          200 {"presets": [{"name", "summary", "params": [...]}]}
+ * GET  /api/presets/{name}   200 the preset's job document; query parameters are its params
+ *                            (?n=16); 404 UNKNOWN_PRESET; 400 INVALID_QUERY for a bad param.
+ * GET  /api/health           200 {"status": "ok", "version", "workers", "busy", "queued",
+ *                            "database": "ok", "jobs": {status: count}}; 503 with "status":
+ *                            "error" and "database": "error" when the database fails.
+ * GET  /api/openapi.yaml     the API description (application/yaml).
+ * GET  / and other paths      static files from the web root (http.h).
+ */
+#ifndef ROUTES_H
+#define ROUTES_H
+
+#include <stdatomic.h>
+
+#include "http.h"
+#include "jobq.h"
+
+#define CTCSIM_VERSION "0.3.0"
+
+/* What the handlers share; one for the whole server. */
+typedef struct routes_ctx {
+    jobq *queue;
+    const char *db_path;  /* each HTTP thread opens its own connection on first use; it is
+                             closed when the thread exits (a pthread key destructor) */
+    const char *api_dir;  /* directory holding openapi.yaml */
+    double max_wait;      /* s, the largest ?wait= accepted (300) */
+    atomic_int stopping;  /* set at shutdown (read by the HTTP threads, hence atomic): POST
+                             /api/jobs answers 503 SHUTTING_DOWN */
+} routes_ctx;
+
+/* The route table, terminated by {NULL}. Handlers expect a routes_ctx as their ctx. */
+extern const http_route routes_table[];
+
+#endif

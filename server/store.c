@@ -1,0 +1,1087 @@
+/*
+ * store.c - the service's SQLite storage (store.h): one connection per store, its statements
+ * prepared once, the schema created or checked at open.
+ *
+ * Connections. Each store owns one sqlite3 connection in WAL mode (readers never block the
+ * writer and the writer never blocks readers), synchronous=NORMAL (a commit survives a crash of
+ * the process; a power cut may lose the last commits but never corrupts the file), foreign keys
+ * on (a job's series go with it, ON DELETE CASCADE) and a busy timeout of STORE_BUSY_MS, so the
+ * connections of the workers and of the HTTP threads wait for each other's write locks instead
+ * of failing. Every statement is prepared once at open (SQLITE_PREPARE_PERSISTENT), bound with
+ * sqlite3_bind_* (no value is ever written into SQL text) and reset and unbound after each use,
+ * so no statement holds a read snapshot between calls. Writes of more than one statement run in
+ * BEGIN IMMEDIATE transactions: the write lock is taken first, so a transaction never has to
+ * upgrade a stale read snapshot (which SQLite would answer with SQLITE_BUSY at once).
+ *
+ * Schema. PRAGMA user_version holds the schema's version. store_open reads it: the current
+ * version needs nothing; a newer one, or version 0 with tables of someone else, is refused and
+ * the file left untouched; version 0 on an empty database runs the migrations in one BEGIN
+ * IMMEDIATE transaction, reading the version again once it holds the write lock, so two
+ * connections that open a new database at once migrate it once. migrations[v] takes version v
+ * to v + 1. Statuses are stored by name ("queued", ...) so that the file reads in the sqlite3
+ * shell and does not depend on the order of store_status. Job ids come from AUTOINCREMENT: they
+ * increase and are never reused, even after the newest job is deleted (a client's old URL never
+ * names a new job).
+ *
+ * Series. store_finish writes one series row per recorded channel, "t" (width 1) first, with the
+ * samples as nsamples x width float64, row-major, little-endian: the result's own arrays are
+ * bound as blobs with no copy, which needs a little-endian host with IEEE 754 doubles (checked
+ * at compile time below). The rows and the job's final status, message, metrics, e_max and
+ * wall_s go in one transaction, so a job is either finished with all its series or unfinished
+ * with none. store_get_series copies the blobs back (memcpy: a blob need not be aligned) into a
+ * new ctc_sim_result and checks every row's size against its width and sample count, so a
+ * damaged row is an error, never an out-of-bounds read.
+ *
+ * Errors are the message of the failing step prefixed with what was being done and the job's
+ * id ("cannot finish job 3: no such job", "job 3: storing series tau: disk I/O error").
+ */
+#include "store.h"
+
+#include <errno.h>
+#include <float.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <sqlite3.h>
+
+/* series blobs are the host's doubles byte for byte: they must be IEEE 754 binary64 and
+ * little-endian, as on x86_64 and little-endian ARM */
+#if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__ ||                       \
+    (defined(__FLOAT_WORD_ORDER__) && __FLOAT_WORD_ORDER__ != __ORDER_LITTLE_ENDIAN__)
+#error "store.c writes series as the host's doubles and needs a little-endian machine"
+#endif
+_Static_assert(sizeof(double) == 8 && DBL_MANT_DIG == 53 && FLT_RADIX == 2,
+               "store.c writes series as IEEE 754 binary64 doubles");
+
+#define STORE_BUSY_MS 5000 /* how long a connection waits for another's lock */
+#define STORE_MAX_LIST 1000
+
+/* migrations[v] takes the schema from version v to v + 1 (run in one transaction) */
+static const char *const migrations[STORE_SCHEMA_VERSION] = {
+    /* 0 -> 1: jobs and their series */
+    "CREATE TABLE jobs ("
+    "  id INTEGER PRIMARY KEY AUTOINCREMENT,"
+    "  name TEXT NOT NULL,"
+    "  preset TEXT,"
+    "  status TEXT NOT NULL DEFAULT 'queued' CHECK (status IN ('queued', 'running', 'done',"
+    "    'failed', 'diverged', 'cancelled')),"
+    "  progress REAL NOT NULL DEFAULT 0,"
+    "  created REAL NOT NULL,"
+    "  started REAL NOT NULL DEFAULT 0,"
+    "  finished REAL NOT NULL DEFAULT 0,"
+    "  nbodies INTEGER NOT NULL,"
+    "  nv INTEGER NOT NULL,"
+    "  controller TEXT NOT NULL,"
+    "  spec TEXT NOT NULL,"
+    "  metrics TEXT,"
+    "  message TEXT,"
+    "  e_max REAL,"
+    "  wall_s REAL);"
+    "CREATE INDEX jobs_by_status ON jobs (status);"
+    "CREATE TABLE series ("
+    "  job_id INTEGER NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,"
+    "  channel TEXT NOT NULL,"
+    "  width INTEGER NOT NULL CHECK (width > 0),"
+    "  nsamples INTEGER NOT NULL CHECK (nsamples >= 0),"
+    "  data BLOB NOT NULL,"
+    "  PRIMARY KEY (job_id, channel));"
+    "PRAGMA user_version = 1;",
+};
+
+/* the statements of a connection, prepared once at open */
+typedef enum stmt_id {
+    ST_BEGIN,
+    ST_COMMIT,
+    ST_ROLLBACK,
+    ST_INSERT,
+    ST_STATUS_OF,
+    ST_START,
+    ST_PROGRESS,
+    ST_REQUEUE,
+    ST_RECOVER_IDS,
+    ST_RECOVER_SERIES,
+    ST_RECOVER_JOBS,
+    ST_FINISH,
+    ST_SERIES_DELETE,
+    ST_SERIES_INSERT,
+    ST_GET,
+    ST_LIST_ANY,
+    ST_LIST_STATUS,
+    ST_SERIES_GET,
+    ST_DELETE,
+    ST_COUNT,
+    ST_NSTMT
+} stmt_id;
+
+/* the columns of a row as store_job holds them; store_get adds spec and metrics */
+#define JOB_COLUMNS                                                                                \
+    "id, name, preset, status, progress, created, started, finished, nbodies, nv, controller, "    \
+    "message, e_max, wall_s"
+#define ACTIVE "status IN ('queued', 'running')"
+
+static const char *const stmt_sql[ST_NSTMT] = {
+    [ST_BEGIN] = "BEGIN IMMEDIATE",
+    [ST_COMMIT] = "COMMIT",
+    [ST_ROLLBACK] = "ROLLBACK",
+    [ST_INSERT] = "INSERT INTO jobs (name, preset, status, progress, created, nbodies, nv, "
+                  "controller, spec) VALUES (?1, ?2, 'queued', 0, ?3, ?4, ?5, ?6, ?7)",
+    [ST_STATUS_OF] = "SELECT status FROM jobs WHERE id = ?1",
+    [ST_START] = "UPDATE jobs SET status = 'running', started = ?2, progress = 0 "
+                 "WHERE id = ?1 AND status = 'queued'",
+    [ST_PROGRESS] = "UPDATE jobs SET progress = ?2 WHERE id = ?1 AND status = 'running'",
+    [ST_REQUEUE] = "UPDATE jobs SET status = 'queued', progress = 0, started = 0 "
+                   "WHERE id = ?1 AND status = 'running'",
+    [ST_RECOVER_IDS] = "SELECT id FROM jobs WHERE " ACTIVE " ORDER BY id",
+    [ST_RECOVER_SERIES] =
+        "DELETE FROM series WHERE job_id IN (SELECT id FROM jobs WHERE " ACTIVE ")",
+    [ST_RECOVER_JOBS] = "UPDATE jobs SET status = 'queued', progress = 0, started = 0 "
+                        "WHERE " ACTIVE,
+    [ST_FINISH] = "UPDATE jobs SET status = ?2, message = ?3, metrics = ?4, e_max = ?5, "
+                  "wall_s = ?6, finished = ?7, "
+                  "progress = CASE WHEN ?2 = 'done' THEN 1 ELSE progress END "
+                  "WHERE id = ?1 AND " ACTIVE,
+    [ST_SERIES_DELETE] = "DELETE FROM series WHERE job_id = ?1",
+    [ST_SERIES_INSERT] = "INSERT INTO series (job_id, channel, width, nsamples, data) "
+                         "VALUES (?1, ?2, ?3, ?4, ?5)",
+    [ST_GET] = "SELECT " JOB_COLUMNS ", spec, metrics FROM jobs WHERE id = ?1",
+    [ST_LIST_ANY] = "SELECT " JOB_COLUMNS " FROM jobs WHERE id < ?1 ORDER BY id DESC LIMIT ?2",
+    [ST_LIST_STATUS] = "SELECT " JOB_COLUMNS " FROM jobs WHERE status = ?3 AND id < ?1 "
+                       "ORDER BY id DESC LIMIT ?2",
+    [ST_SERIES_GET] = "SELECT s.channel, s.width, s.nsamples, s.data, j.nv "
+                      "FROM series AS s JOIN jobs AS j ON j.id = s.job_id WHERE s.job_id = ?1",
+    [ST_DELETE] = "DELETE FROM jobs WHERE id = ?1",
+    [ST_COUNT] = "SELECT status, count(*) FROM jobs GROUP BY status",
+};
+
+struct store {
+    sqlite3 *db;
+    sqlite3_stmt *stmt[ST_NSTMT];
+};
+
+static const char *const status_names[STORE_NSTATUS] = {
+    "queued", "running", "done", "failed", "diverged", "cancelled",
+};
+
+const char *store_status_name(store_status st)
+{
+    return (unsigned)st < STORE_NSTATUS ? status_names[st] : "unknown";
+}
+
+int store_status_parse(const char *name)
+{
+    for (int i = 0; name && i < STORE_NSTATUS; i++)
+        if (strcmp(name, status_names[i]) == 0) return i;
+    return -1;
+}
+
+/* ---- helpers ---- */
+
+static void set_err(char *err, size_t errlen, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static void set_err(char *err, size_t errlen, const char *fmt, ...)
+{
+    if (!err || errlen == 0) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
+}
+
+/* "WHAT: sqlite's message", with WHAT formatted; call before resetting the failed statement */
+static void db_err(const store *s, char *err, size_t errlen, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+static void db_err(const store *s, char *err, size_t errlen, const char *fmt, ...)
+{
+    if (!err || errlen == 0) return;
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
+    if (n >= 0 && (size_t)n < errlen)
+        snprintf(err + n, errlen - (size_t)n, ": %s", sqlite3_errmsg(s->db));
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* makes a statement ready for its next use: no snapshot held, no pointer into the caller kept */
+static void release(sqlite3_stmt *st)
+{
+    sqlite3_reset(st);
+    sqlite3_clear_bindings(st);
+}
+
+/* runs a statement without parameters or rows (BEGIN IMMEDIATE, COMMIT, ROLLBACK, the
+ * recovery updates) and resets it; SQLITE_OK or the failing result code (the message stays in
+ * sqlite3_errmsg) */
+static int tx_step(store *s, stmt_id which)
+{
+    int rc = sqlite3_step(s->stmt[which]);
+    sqlite3_reset(s->stmt[which]);
+    return rc == SQLITE_DONE ? SQLITE_OK : rc;
+}
+
+/* undoes an open transaction, if SQLite has not already rolled it back itself */
+static void tx_rollback(store *s)
+{
+    if (!sqlite3_get_autocommit(s->db)) tx_step(s, ST_ROLLBACK);
+}
+
+/* a job's status by id: 1 when there is no such job, 0 with *st, -1 on error */
+static int status_of(store *s, int64_t id, store_status *st, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_STATUS_OF];
+    int rc = -1;
+    sqlite3_bind_int64(q, 1, id);
+    int step = sqlite3_step(q);
+    if (step == SQLITE_DONE) {
+        rc = 1;
+        goto done;
+    }
+    if (step != SQLITE_ROW) {
+        db_err(s, err, errlen, "job %lld: reading its status", (long long)id);
+        goto done;
+    }
+    int parsed = store_status_parse((const char *)sqlite3_column_text(q, 0));
+    if (parsed < 0) {
+        set_err(err, errlen, "job %lld has an unknown status '%s'", (long long)id,
+                (const char *)sqlite3_column_text(q, 0));
+        goto done;
+    }
+    *st = (store_status)parsed;
+    rc = 0;
+done:
+    release(q);
+    return rc;
+}
+
+/* the reason an update that needs a running job changed nothing ("cannot WHAT job 3: no such
+ * job", "cannot WHAT job 3: it is done, not running") */
+static void not_running_err(store *s, int64_t id, const char *what, char *err, size_t errlen)
+{
+    store_status st;
+    int found = status_of(s, id, &st, err, errlen);
+    if (found == 1)
+        set_err(err, errlen, "cannot %s job %lld: no such job", what, (long long)id);
+    else if (found == 0)
+        set_err(err, errlen, "cannot %s job %lld: it is %s, not running", what, (long long)id,
+                store_status_name(st));
+}
+
+/* column i as a new string, or NULL for SQL NULL; -1 when out of memory */
+static int dup_column(sqlite3_stmt *q, int i, char **out)
+{
+    *out = NULL;
+    if (sqlite3_column_type(q, i) == SQLITE_NULL) return 0;
+    const char *text = (const char *)sqlite3_column_text(q, i);
+    if (!text) return -1;
+    *out = strdup(text);
+    return *out ? 0 : -1;
+}
+
+/* a REAL column that may be NULL (NaN then) */
+static double real_or_nan(sqlite3_stmt *q, int i)
+{
+    return sqlite3_column_type(q, i) == SQLITE_NULL ? NAN : sqlite3_column_double(q, i);
+}
+
+/* fills j from the current row of a JOB_COLUMNS query (spec and metrics follow when
+ * with_spec); 0, or -1 with a message (j is then cleared) */
+static int read_job(sqlite3_stmt *q, int with_spec, store_job *j, char *err, size_t errlen)
+{
+    int rc = -1;
+    memset(j, 0, sizeof *j);
+    j->id = sqlite3_column_int64(q, 0);
+    int status = store_status_parse((const char *)sqlite3_column_text(q, 3));
+    if (status < 0) {
+        set_err(err, errlen, "job %lld has an unknown status '%s'", (long long)j->id,
+                (const char *)sqlite3_column_text(q, 3));
+        goto done;
+    }
+    j->status = (store_status)status;
+    j->progress = sqlite3_column_double(q, 4);
+    j->created = sqlite3_column_double(q, 5);
+    j->started = sqlite3_column_double(q, 6);
+    j->finished = sqlite3_column_double(q, 7);
+    j->nbodies = sqlite3_column_int(q, 8);
+    j->nv = sqlite3_column_int(q, 9);
+    j->e_max = real_or_nan(q, 12);
+    j->wall_s = real_or_nan(q, 13);
+    if (dup_column(q, 1, &j->name) || dup_column(q, 2, &j->preset) ||
+        dup_column(q, 10, &j->controller) || dup_column(q, 11, &j->message) ||
+        (with_spec && (dup_column(q, 14, &j->spec) || dup_column(q, 15, &j->metrics)))) {
+        set_err(err, errlen, "job %lld: out of memory", (long long)j->id);
+        goto done;
+    }
+    rc = 0;
+done:
+    if (rc) store_job_clear(j);
+    return rc;
+}
+
+/* ---- opening ---- */
+
+/* the message for a failed sqlite3_open_v2 (db may be NULL: out of memory) */
+static void open_err(sqlite3 *db, const char *path, char *err, size_t errlen)
+{
+    if (!db) {
+        set_err(err, errlen, "cannot open database %s: out of memory", path);
+        return;
+    }
+    int sys = sqlite3_system_errno(db);
+    /* the usual cause: the directory named in the path is missing (looked at, since some file
+     * systems answer ENOENT for a file they will not create in a directory that exists) */
+    const char *slash = strrchr(path, '/');
+    char dir[4096];
+    struct stat st;
+    if (sys == ENOENT && slash && (size_t)(slash - path) < sizeof dir) {
+        size_t dirlen = slash == path ? 1 : (size_t)(slash - path);
+        memcpy(dir, path, dirlen);
+        dir[dirlen] = '\0';
+        if (stat(dir, &st) != 0 && errno == ENOENT) {
+            set_err(err, errlen, "cannot open database %s: directory %s does not exist", path, dir);
+            return;
+        }
+        /* SQLite retries read-only after EACCES and reports that attempt's ENOENT */
+        if (access(dir, W_OK | X_OK) != 0) {
+            set_err(err, errlen, "cannot open database %s: cannot create it in directory %s (%s)",
+                    path, dir, strerror(errno));
+            return;
+        }
+    }
+    if (sys)
+        set_err(err, errlen, "cannot open database %s: %s (%s)", path, sqlite3_errmsg(db),
+                strerror(sys));
+    else
+        set_err(err, errlen, "cannot open database %s: %s", path, sqlite3_errmsg(db));
+}
+
+/* runs a single-row pragma or query and reads its first column as an integer or as text
+ * (text: NULL when not wanted); SQLite's result code */
+static int query_one(sqlite3 *db, const char *sql, int *value, char *text, size_t textlen)
+{
+    sqlite3_stmt *q = NULL;
+    int rc = sqlite3_prepare_v2(db, sql, -1, &q, NULL);
+    if (rc != SQLITE_OK) goto done;
+    rc = sqlite3_step(q);
+    if (rc != SQLITE_ROW) goto done;
+    if (value) *value = sqlite3_column_int(q, 0);
+    if (text) snprintf(text, textlen, "%s", (const char *)sqlite3_column_text(q, 0));
+    rc = SQLITE_OK;
+done:
+    sqlite3_finalize(q);
+    return rc;
+}
+
+/* reads the schema version and the number of objects that are not SQLite's own */
+static int read_schema(sqlite3 *db, int *version, int *objects)
+{
+    int rc = query_one(db, "PRAGMA user_version", version, NULL, 0);
+    if (rc != SQLITE_OK) return rc;
+    return query_one(db,
+                     "SELECT count(*) FROM sqlite_master WHERE name NOT LIKE 'sqlite\\_%' "
+                     "ESCAPE '\\'",
+                     objects, NULL, 0);
+}
+
+/* 1 with a message when a database of this version and content is not ours to touch */
+static int refused(int version, int objects, const char *path, char *err, size_t errlen)
+{
+    if (version > STORE_SCHEMA_VERSION) {
+        set_err(err, errlen,
+                "database %s has schema version %d, newer than this ctcsim (%d): upgrade ctcsim",
+                path, version, STORE_SCHEMA_VERSION);
+        return 1;
+    }
+    if (version < 0) {
+        set_err(err, errlen, "database %s is not a ctcsim database (schema version %d)", path,
+                version);
+        return 1;
+    }
+    if (version == 0 && objects > 0) {
+        set_err(err, errlen,
+                "database %s is not a ctcsim database (it has tables but no ctcsim schema "
+                "version)",
+                path);
+        return 1;
+    }
+    return 0;
+}
+
+/* brings the schema to STORE_SCHEMA_VERSION, or refuses a database that is not ctcsim's */
+static int migrate(sqlite3 *db, const char *path, char *err, size_t errlen)
+{
+    int rc = -1, in_tx = 0, version = 0, objects = 0;
+    /* the common case, and every refusal, without taking the write lock */
+    if (read_schema(db, &version, &objects) != SQLITE_OK) {
+        set_err(err, errlen, "cannot open database %s: %s", path, sqlite3_errmsg(db));
+        goto done;
+    }
+    if (refused(version, objects, path, err, errlen)) goto done;
+    if (version == STORE_SCHEMA_VERSION) {
+        rc = 0;
+        goto done;
+    }
+    if (sqlite3_exec(db, "BEGIN IMMEDIATE", NULL, NULL, NULL) != SQLITE_OK) {
+        set_err(err, errlen, "database %s: cannot lock it to create the schema: %s", path,
+                sqlite3_errmsg(db));
+        goto done;
+    }
+    in_tx = 1;
+    /* again under the write lock: another connection may have migrated it meanwhile */
+    if (read_schema(db, &version, &objects) != SQLITE_OK) {
+        set_err(err, errlen, "cannot open database %s: %s", path, sqlite3_errmsg(db));
+        goto done;
+    }
+    if (refused(version, objects, path, err, errlen)) goto done;
+    for (int v = version; v < STORE_SCHEMA_VERSION; v++) {
+        char *why = NULL;
+        if (sqlite3_exec(db, migrations[v], NULL, NULL, &why) != SQLITE_OK) {
+            set_err(err, errlen, "database %s: migrating the schema from version %d to %d: %s",
+                    path, v, v + 1, why ? why : sqlite3_errmsg(db));
+            sqlite3_free(why);
+            goto done;
+        }
+    }
+    if (sqlite3_exec(db, "COMMIT", NULL, NULL, NULL) != SQLITE_OK) {
+        set_err(err, errlen, "database %s: committing the schema: %s", path, sqlite3_errmsg(db));
+        goto done;
+    }
+    in_tx = 0;
+    rc = 0;
+done:
+    if (in_tx && !sqlite3_get_autocommit(db)) sqlite3_exec(db, "ROLLBACK", NULL, NULL, NULL);
+    return rc;
+}
+
+int store_open(const char *path, store **out, char *err, size_t errlen)
+{
+    int rc = -1;
+    char mode[16] = "";
+    store *s = NULL;
+    *out = NULL;
+    if (!path || !*path) {
+        set_err(err, errlen, "cannot open database: the path is empty");
+        goto done;
+    }
+    s = calloc(1, sizeof *s);
+    if (!s) {
+        set_err(err, errlen, "cannot open database %s: out of memory", path);
+        goto done;
+    }
+    if (sqlite3_open_v2(path, &s->db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, NULL) !=
+        SQLITE_OK) {
+        open_err(s->db, path, err, errlen);
+        goto done;
+    }
+    /* SQLite falls back to read-only when it may not write the file: the service must write */
+    if (sqlite3_db_readonly(s->db, "main") == 1) {
+        set_err(err, errlen, "cannot open database %s for writing (read-only file or directory)",
+                path);
+        goto done;
+    }
+    sqlite3_busy_timeout(s->db, STORE_BUSY_MS);
+    /* the first read of the file: a file that is not SQLite's fails here */
+    int wal = query_one(s->db, "PRAGMA journal_mode = WAL", NULL, mode, sizeof mode);
+    if ((wal & 0xff) == SQLITE_READONLY || (wal & 0xff) == SQLITE_CANTOPEN) {
+        /* the file is writable but WAL mode cannot create its two files beside it */
+        set_err(err, errlen,
+                "cannot open database %s: %s (WAL mode needs to create %s-wal and %s-shm in its "
+                "directory)",
+                path, sqlite3_errmsg(s->db), path, path);
+        goto done;
+    }
+    if (wal != SQLITE_OK) {
+        set_err(err, errlen, "cannot open database %s: %s", path, sqlite3_errmsg(s->db));
+        goto done;
+    }
+    if (strcmp(mode, "wal") != 0 && strcmp(mode, "memory") != 0) {
+        set_err(err, errlen, "database %s: cannot use WAL mode (journal mode stays '%s')", path,
+                mode);
+        goto done;
+    }
+    if (sqlite3_exec(s->db, "PRAGMA synchronous = NORMAL; PRAGMA foreign_keys = ON", NULL, NULL,
+                     NULL) != SQLITE_OK) {
+        set_err(err, errlen, "database %s: %s", path, sqlite3_errmsg(s->db));
+        goto done;
+    }
+    if (migrate(s->db, path, err, errlen)) goto done;
+    for (int i = 0; i < ST_NSTMT; i++)
+        if (sqlite3_prepare_v3(s->db, stmt_sql[i], -1, SQLITE_PREPARE_PERSISTENT, &s->stmt[i],
+                               NULL) != SQLITE_OK) {
+            set_err(err, errlen, "database %s: its schema is not ctcsim's: %s", path,
+                    sqlite3_errmsg(s->db));
+            goto done;
+        }
+    *out = s;
+    rc = 0;
+done:
+    if (rc) store_close(s);
+    return rc;
+}
+
+void store_close(store *s)
+{
+    if (!s) return;
+    for (int i = 0; i < ST_NSTMT; i++) sqlite3_finalize(s->stmt[i]);
+    sqlite3_close(s->db);
+    free(s);
+}
+
+/* ---- jobs ---- */
+
+int store_insert(store *s, const char *name, const char *preset, int nbodies, int nv,
+                 const char *controller, const char *spec, int64_t *id, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_INSERT];
+    int rc = -1;
+    if (!name || !controller || !spec) {
+        set_err(err, errlen, "cannot store a job without %s",
+                !name         ? "a name"
+                : !controller ? "a controller"
+                              : "a spec");
+        goto done;
+    }
+    if (nbodies < 1 || nv < 0) {
+        set_err(err, errlen, "cannot store a job of %d bodies and %d coordinates", nbodies, nv);
+        goto done;
+    }
+    if (sqlite3_bind_text(q, 1, name, -1, SQLITE_STATIC) != SQLITE_OK ||
+        (preset ? sqlite3_bind_text(q, 2, preset, -1, SQLITE_STATIC) : sqlite3_bind_null(q, 2)) !=
+            SQLITE_OK ||
+        sqlite3_bind_double(q, 3, now_s()) != SQLITE_OK ||
+        sqlite3_bind_int(q, 4, nbodies) != SQLITE_OK || sqlite3_bind_int(q, 5, nv) != SQLITE_OK ||
+        sqlite3_bind_text(q, 6, controller, -1, SQLITE_STATIC) != SQLITE_OK ||
+        sqlite3_bind_text(q, 7, spec, -1, SQLITE_STATIC) != SQLITE_OK ||
+        sqlite3_step(q) != SQLITE_DONE) {
+        db_err(s, err, errlen, "cannot store job '%s'", name);
+        goto done;
+    }
+    *id = sqlite3_last_insert_rowid(s->db);
+    rc = 0;
+done:
+    release(q);
+    return rc;
+}
+
+int store_recover(store *s, int64_t **ids, int *n, char *err, size_t errlen)
+{
+    sqlite3_stmt *sel = s->stmt[ST_RECOVER_IDS];
+    int rc = -1, in_tx = 0, count = 0, cap = 16, step;
+    int64_t *list = malloc((size_t)cap * sizeof *list);
+    *ids = NULL;
+    *n = 0;
+    if (!list) {
+        set_err(err, errlen, "recovering jobs: out of memory");
+        goto done;
+    }
+    if (tx_step(s, ST_BEGIN) != SQLITE_OK) {
+        db_err(s, err, errlen, "recovering jobs");
+        goto done;
+    }
+    in_tx = 1;
+    /* the unfinished jobs, oldest first */
+    while ((step = sqlite3_step(sel)) == SQLITE_ROW) {
+        if (count == cap) {
+            int64_t *grown =
+                cap <= INT_MAX / 2 ? realloc(list, 2 * (size_t)cap * sizeof *list) : NULL;
+            if (!grown) {
+                set_err(err, errlen, "recovering jobs: out of memory");
+                goto done;
+            }
+            list = grown;
+            cap *= 2;
+        }
+        list[count++] = sqlite3_column_int64(sel, 0);
+    }
+    if (step != SQLITE_DONE) {
+        db_err(s, err, errlen, "recovering jobs");
+        goto done;
+    }
+    sqlite3_reset(sel);
+    /* a running job restarts from t = 0: drop any series it left, then queue them all */
+    if (tx_step(s, ST_RECOVER_SERIES) != SQLITE_OK || tx_step(s, ST_RECOVER_JOBS) != SQLITE_OK) {
+        db_err(s, err, errlen, "recovering jobs");
+        goto done;
+    }
+    if (tx_step(s, ST_COMMIT) != SQLITE_OK) {
+        db_err(s, err, errlen, "recovering jobs");
+        goto done;
+    }
+    in_tx = 0;
+    *ids = list;
+    *n = count;
+    list = NULL;
+    rc = 0;
+done:
+    sqlite3_reset(sel);
+    if (in_tx) tx_rollback(s);
+    free(list);
+    return rc;
+}
+
+int store_start(store *s, int64_t id, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_START];
+    int rc = -1;
+    sqlite3_bind_int64(q, 1, id);
+    sqlite3_bind_double(q, 2, now_s());
+    if (sqlite3_step(q) != SQLITE_DONE) {
+        db_err(s, err, errlen, "cannot start job %lld", (long long)id);
+        goto done;
+    }
+    rc = sqlite3_changes(s->db) == 1 ? 0 : 1;
+done:
+    release(q);
+    return rc;
+}
+
+int store_progress(store *s, int64_t id, double progress, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_PROGRESS];
+    int rc = -1;
+    if (isnan(progress)) {
+        set_err(err, errlen, "job %lld: progress is NaN", (long long)id);
+        goto done;
+    }
+    /* a fraction a rounding error past 0..1 is still a fraction */
+    sqlite3_bind_int64(q, 1, id);
+    sqlite3_bind_double(q, 2, fmin(fmax(progress, 0.0), 1.0));
+    if (sqlite3_step(q) != SQLITE_DONE) {
+        db_err(s, err, errlen, "job %lld: cannot record progress", (long long)id);
+        goto done;
+    }
+    if (sqlite3_changes(s->db) != 1) {
+        release(q);
+        not_running_err(s, id, "record progress of", err, errlen);
+        goto done;
+    }
+    rc = 0;
+done:
+    release(q);
+    return rc;
+}
+
+int store_requeue(store *s, int64_t id, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_REQUEUE];
+    int rc = -1;
+    sqlite3_bind_int64(q, 1, id);
+    if (sqlite3_step(q) != SQLITE_DONE) {
+        db_err(s, err, errlen, "cannot requeue job %lld", (long long)id);
+        goto done;
+    }
+    if (sqlite3_changes(s->db) != 1) {
+        release(q);
+        not_running_err(s, id, "requeue", err, errlen);
+        goto done;
+    }
+    rc = 0;
+done:
+    release(q);
+    return rc;
+}
+
+/* the largest finite-or-infinite entry of the run's e_max, NaN when there is none */
+static double result_e_max(const ctc_sim_result *r)
+{
+    double m = NAN;
+    if (!r || !r->metrics.e_max) return m;
+    for (int i = 0; i < r->metrics.nv; i++)
+        if (!isnan(r->metrics.e_max[i]) && (isnan(m) || r->metrics.e_max[i] > m))
+            m = r->metrics.e_max[i];
+    return m;
+}
+
+/* binds a REAL that may be NaN (stored as NULL) */
+static int bind_real(sqlite3_stmt *q, int i, double x)
+{
+    return isnan(x) ? sqlite3_bind_null(q, i) : sqlite3_bind_double(q, i, x);
+}
+
+/* checks that r's arrays can be stored: sizes that fit and arrays that exist */
+static int check_result(const ctc_sim_result *r, int64_t id, char *err, size_t errlen)
+{
+    if (r->nsamples < 0) {
+        set_err(err, errlen, "cannot finish job %lld: the result has %d samples", (long long)id,
+                r->nsamples);
+        return -1;
+    }
+    if (r->nsamples > 0 && !r->t) {
+        set_err(err, errlen, "cannot finish job %lld: the result has samples but no times",
+                (long long)id);
+        return -1;
+    }
+    return 0;
+}
+
+/* writes one series row; data holds nsamples x width doubles */
+static int put_series(store *s, int64_t id, const char *channel, int width, int nsamples,
+                      const double *data, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_SERIES_INSERT];
+    int rc = -1;
+    sqlite3_uint64 bytes = (sqlite3_uint64)nsamples * (sqlite3_uint64)width * sizeof(double);
+    /* a zero-length blob needs a non-NULL pointer (NULL would bind SQL NULL) */
+    const void *blob = data ? (const void *)data : (const void *)"";
+    if (sqlite3_bind_int64(q, 1, id) != SQLITE_OK ||
+        sqlite3_bind_text(q, 2, channel, -1, SQLITE_STATIC) != SQLITE_OK ||
+        sqlite3_bind_int(q, 3, width) != SQLITE_OK ||
+        sqlite3_bind_int(q, 4, nsamples) != SQLITE_OK ||
+        sqlite3_bind_blob64(q, 5, blob, bytes, SQLITE_STATIC) != SQLITE_OK ||
+        sqlite3_step(q) != SQLITE_DONE) {
+        db_err(s, err, errlen, "job %lld: storing series %s", (long long)id, channel);
+        goto done;
+    }
+    rc = 0;
+done:
+    release(q);
+    return rc;
+}
+
+int store_finish(store *s, int64_t id, store_status status, const char *message,
+                 const char *metrics, const ctc_sim_result *r, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_FINISH];
+    sqlite3_stmt *del = s->stmt[ST_SERIES_DELETE];
+    int rc = -1, in_tx = 0;
+    if (status < STORE_DONE || status >= STORE_NSTATUS) {
+        set_err(err, errlen,
+                "cannot finish job %lld as %s: the status must be done, failed, diverged or "
+                "cancelled",
+                (long long)id, store_status_name(status));
+        goto done;
+    }
+    if (r && check_result(r, id, err, errlen)) goto done;
+    if (tx_step(s, ST_BEGIN) != SQLITE_OK) {
+        db_err(s, err, errlen, "cannot finish job %lld", (long long)id);
+        goto done;
+    }
+    in_tx = 1;
+    /* the final status, only for a job still queued or running */
+    if (sqlite3_bind_int64(q, 1, id) != SQLITE_OK ||
+        sqlite3_bind_text(q, 2, store_status_name(status), -1, SQLITE_STATIC) != SQLITE_OK ||
+        (message && *message ? sqlite3_bind_text(q, 3, message, -1, SQLITE_STATIC)
+                             : sqlite3_bind_null(q, 3)) != SQLITE_OK ||
+        (metrics ? sqlite3_bind_text(q, 4, metrics, -1, SQLITE_STATIC) : sqlite3_bind_null(q, 4)) !=
+            SQLITE_OK ||
+        bind_real(q, 5, result_e_max(r)) != SQLITE_OK ||
+        bind_real(q, 6, r ? r->metrics.wall_s : NAN) != SQLITE_OK ||
+        sqlite3_bind_double(q, 7, now_s()) != SQLITE_OK || sqlite3_step(q) != SQLITE_DONE) {
+        db_err(s, err, errlen, "cannot finish job %lld", (long long)id);
+        goto done;
+    }
+    if (sqlite3_changes(s->db) != 1) {
+        store_status st;
+        int found = status_of(s, id, &st, err, errlen);
+        if (found == 1)
+            set_err(err, errlen, "cannot finish job %lld: no such job", (long long)id);
+        else if (found == 0)
+            set_err(err, errlen, "cannot finish job %lld: it is already %s", (long long)id,
+                    store_status_name(st));
+        goto done;
+    }
+    /* the series: t, then every recorded channel, replacing any rows left behind */
+    sqlite3_bind_int64(del, 1, id);
+    if (sqlite3_step(del) != SQLITE_DONE) {
+        db_err(s, err, errlen, "job %lld: clearing its series", (long long)id);
+        goto done;
+    }
+    if (r) {
+        if (put_series(s, id, "t", 1, r->nsamples, r->t, err, errlen)) goto done;
+        for (int c = 0; c < CTC_NCHANNELS; c++) {
+            if (!r->ch[c] || r->width[c] <= 0) continue;
+            if (put_series(s, id, ctc_channel_name((ctc_channel)c), r->width[c], r->nsamples,
+                           r->ch[c], err, errlen))
+                goto done;
+        }
+    }
+    if (tx_step(s, ST_COMMIT) != SQLITE_OK) {
+        db_err(s, err, errlen, "cannot finish job %lld", (long long)id);
+        goto done;
+    }
+    in_tx = 0;
+    rc = 0;
+done:
+    release(q);
+    release(del);
+    if (in_tx) tx_rollback(s);
+    return rc;
+}
+
+int store_get(store *s, int64_t id, store_job *out, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_GET];
+    int rc = -1;
+    memset(out, 0, sizeof *out);
+    sqlite3_bind_int64(q, 1, id);
+    int step = sqlite3_step(q);
+    if (step == SQLITE_DONE) {
+        rc = 1;
+        goto done;
+    }
+    if (step != SQLITE_ROW) {
+        db_err(s, err, errlen, "cannot read job %lld", (long long)id);
+        goto done;
+    }
+    if (read_job(q, 1, out, err, errlen)) goto done;
+    rc = 0;
+done:
+    release(q);
+    return rc;
+}
+
+void store_job_clear(store_job *j)
+{
+    if (!j) return;
+    free(j->name);
+    free(j->preset);
+    free(j->controller);
+    free(j->spec);
+    free(j->metrics);
+    free(j->message);
+    memset(j, 0, sizeof *j);
+}
+
+int store_list(store *s, int64_t before, int status, int limit, store_job **rows, int *n, char *err,
+               size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[status < 0 ? ST_LIST_ANY : ST_LIST_STATUS];
+    int rc = -1, count = 0, cap = 0, step;
+    store_job *list = NULL;
+    *rows = NULL;
+    *n = 0;
+    if (limit < 1 || limit > STORE_MAX_LIST) {
+        set_err(err, errlen, "limit must be between 1 and %d (got %d)", STORE_MAX_LIST, limit);
+        goto done;
+    }
+    if (before < 0) {
+        set_err(err, errlen, "before must be 0 or a job id (got %lld)", (long long)before);
+        goto done;
+    }
+    if (status < -1 || status >= STORE_NSTATUS) {
+        set_err(err, errlen, "unknown job status %d", status);
+        goto done;
+    }
+    cap = limit < 64 ? limit : 64;
+    list = calloc((size_t)cap, sizeof *list);
+    if (!list) {
+        set_err(err, errlen, "listing jobs: out of memory");
+        goto done;
+    }
+    /* id < INT64_MAX is every id: the one statement serves "from the newest" too */
+    sqlite3_bind_int64(q, 1, before > 0 ? before : INT64_MAX);
+    sqlite3_bind_int(q, 2, limit);
+    if (status >= 0) sqlite3_bind_text(q, 3, store_status_name(status), -1, SQLITE_STATIC);
+    while ((step = sqlite3_step(q)) == SQLITE_ROW) {
+        if (count == cap) {
+            store_job *grown = realloc(list, 2 * (size_t)cap * sizeof *list);
+            if (!grown) {
+                set_err(err, errlen, "listing jobs: out of memory");
+                goto done;
+            }
+            list = grown;
+            cap *= 2;
+        }
+        if (read_job(q, 0, &list[count], err, errlen)) goto done;
+        count++;
+    }
+    if (step != SQLITE_DONE) {
+        db_err(s, err, errlen, "listing jobs");
+        goto done;
+    }
+    *rows = list;
+    *n = count;
+    list = NULL;
+    rc = 0;
+done:
+    release(q);
+    store_jobs_free(list, count);
+    return rc;
+}
+
+void store_jobs_free(store_job *rows, int n)
+{
+    for (int i = 0; rows && i < n; i++) store_job_clear(&rows[i]);
+    free(rows);
+}
+
+/* the channel index of a series row's name, -1 for "t", -2 if unknown */
+static int channel_of(const char *name)
+{
+    if (strcmp(name, "t") == 0) return -1;
+    for (int c = 0; c < CTC_NCHANNELS; c++)
+        if (strcmp(name, ctc_channel_name((ctc_channel)c)) == 0) return c;
+    return -2;
+}
+
+/* the width a channel must have in a job of nv coordinates (0: any, for q, whose nq may differ
+ * from nv with spherical joints) */
+static int expected_width(int c, int nv)
+{
+    return c == -1 ? 1 : c == CTC_CH_ENERGY ? 2 : c == CTC_CH_Q ? 0 : nv;
+}
+
+int store_get_series(store *s, int64_t id, ctc_sim_result **out, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_SERIES_GET];
+    ctc_sim_result *r = NULL;
+    int rc = -1, step, nv = 0;
+    *out = NULL;
+    sqlite3_bind_int64(q, 1, id);
+    /* one statement, one snapshot: the rows are consistent with each other and with the job */
+    while ((step = sqlite3_step(q)) == SQLITE_ROW) {
+        const char *name = (const char *)sqlite3_column_text(q, 0);
+        int width = sqlite3_column_int(q, 1);
+        sqlite3_int64 nsamples = sqlite3_column_int64(q, 2);
+        const void *blob = sqlite3_column_blob(q, 3);
+        sqlite3_int64 bytes = sqlite3_column_bytes(q, 3);
+        int c = channel_of(name ? name : "");
+        if (!r) {
+            nv = sqlite3_column_int(q, 4);
+            r = calloc(1, sizeof *r);
+            if (!r) {
+                set_err(err, errlen, "job %lld: reading its series: out of memory", (long long)id);
+                goto done;
+            }
+            r->nsamples = -1;
+        }
+        /* every row checked before it is copied: a damaged one is an error, not a crash */
+        if (c == -2) {
+            set_err(err, errlen, "job %lld: series has an unknown channel '%s'", (long long)id,
+                    name ? name : "");
+            goto done;
+        }
+        if (width < 1 || (expected_width(c, nv) && width != expected_width(c, nv))) {
+            set_err(err, errlen, "job %lld: series %s has width %d, expected %d", (long long)id,
+                    name, width, expected_width(c, nv));
+            goto done;
+        }
+        if (nsamples < 0 || nsamples > INT_MAX || (r->nsamples >= 0 && nsamples != r->nsamples)) {
+            set_err(err, errlen, "job %lld: series %s has %lld samples, the others %d",
+                    (long long)id, name, (long long)nsamples, r->nsamples);
+            goto done;
+        }
+        if ((sqlite3_uint64)bytes != (sqlite3_uint64)nsamples * (sqlite3_uint64)width * 8u) {
+            set_err(err, errlen,
+                    "job %lld: series %s holds %lld bytes, expected %lld (%lld samples x %d "
+                    "values x 8)",
+                    (long long)id, name, (long long)bytes, (long long)nsamples * width * 8,
+                    (long long)nsamples, width);
+            goto done;
+        }
+        r->nsamples = (int)nsamples;
+        /* malloc(0) may be NULL: keep at least one value so that NULL means "out of memory" */
+        double *data = malloc(bytes > 0 ? (size_t)bytes : sizeof(double));
+        if (!data) {
+            set_err(err, errlen, "job %lld: reading series %s: out of memory", (long long)id, name);
+            goto done;
+        }
+        if (bytes > 0) memcpy(data, blob, (size_t)bytes);
+        if (c == -1) {
+            r->t = data;
+        } else {
+            r->ch[c] = data;
+            r->width[c] = width;
+            r->channels |= CTC_CH_BIT(c);
+        }
+    }
+    if (step != SQLITE_DONE) {
+        db_err(s, err, errlen, "job %lld: reading its series", (long long)id);
+        goto done;
+    }
+    if (!r) {
+        rc = 1;
+        goto done;
+    }
+    if (!r->t) {
+        set_err(err, errlen, "job %lld: series has no t", (long long)id);
+        goto done;
+    }
+    /* nq is q's width; with q not recorded it is taken as nv (they differ only with spherical
+     * joints, and then only q has width nq) */
+    r->nv = nv;
+    r->nq = r->width[CTC_CH_Q] ? r->width[CTC_CH_Q] : nv;
+    r->metrics.nv = nv;
+    *out = r;
+    r = NULL;
+    rc = 0;
+done:
+    release(q);
+    ctc_sim_result_free(r);
+    return rc;
+}
+
+int store_delete(store *s, int64_t id, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_DELETE];
+    int rc = -1, in_tx = 0;
+    store_status st;
+    if (tx_step(s, ST_BEGIN) != SQLITE_OK) {
+        db_err(s, err, errlen, "cannot delete job %lld", (long long)id);
+        goto done;
+    }
+    in_tx = 1;
+    /* only a finished job goes; its series rows follow by ON DELETE CASCADE */
+    int found = status_of(s, id, &st, err, errlen);
+    if (found != 0) {
+        rc = found;
+        goto done;
+    }
+    if (st == STORE_QUEUED || st == STORE_RUNNING) {
+        rc = 2;
+        goto done;
+    }
+    sqlite3_bind_int64(q, 1, id);
+    if (sqlite3_step(q) != SQLITE_DONE) {
+        db_err(s, err, errlen, "cannot delete job %lld", (long long)id);
+        goto done;
+    }
+    if (tx_step(s, ST_COMMIT) != SQLITE_OK) {
+        db_err(s, err, errlen, "cannot delete job %lld", (long long)id);
+        goto done;
+    }
+    in_tx = 0;
+    rc = 0;
+done:
+    release(q);
+    if (in_tx) tx_rollback(s);
+    return rc;
+}
+
+int store_count(store *s, long counts[STORE_NSTATUS], char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_COUNT];
+    int rc = -1, step;
+    for (int i = 0; i < STORE_NSTATUS; i++) counts[i] = 0;
+    while ((step = sqlite3_step(q)) == SQLITE_ROW) {
+        const char *name = (const char *)sqlite3_column_text(q, 0);
+        int st = store_status_parse(name);
+        if (st < 0) {
+            set_err(err, errlen, "counting jobs: unknown status '%s'", name ? name : "");
+            goto done;
+        }
+        counts[st] = (long)sqlite3_column_int64(q, 1);
+    }
+    if (step != SQLITE_DONE) {
+        db_err(s, err, errlen, "counting jobs");
+        goto done;
+    }
+    rc = 0;
+done:
+    release(q);
+    return rc;
+}

@@ -1,0 +1,134 @@
+/*
+ * store.h - the service's SQLite storage: jobs, their specs, status, progress, metrics and
+ * result series.
+ *
+ * One store is one SQLite connection and belongs to one thread at a time (the service opens one
+ * per worker and one per HTTP thread). The database runs in WAL mode with a busy timeout, so
+ * readers never block the writer; every statement is prepared once per connection and reused.
+ * The schema is versioned with PRAGMA user_version and migrated forward in one transaction by
+ * store_open; a database that is not ctcsim's (tables it does not know, or a newer version) is
+ * refused with a message instead of being touched.
+ *
+ * Tables:
+ *   jobs(id INTEGER PRIMARY KEY, name, preset, status, progress, created, started, finished,
+ *        nbodies, nv, controller, spec TEXT (normalised job JSON), metrics TEXT (JSON, NULL until
+ *        finished), message, e_max REAL, wall_s REAL)
+ *   series(job_id, channel, width, nsamples, data BLOB)  - one row per recorded channel ("t" is a
+ *        channel of width 1); data is nsamples x width float64, row-major, little-endian
+ * A job's series and its final status are written in one transaction (store_finish), so a job is
+ * either fully stored or still unfinished. Times are seconds since the Unix epoch (UTC).
+ *
+ * Every function returns 0 on success and -1 on failure with a message in err (errlen bytes; err
+ * may be NULL), except where it says otherwise. Strings returned in structs are owned by the
+ * struct and freed by its clear function.
+ */
+#ifndef STORE_H
+#define STORE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sim.h"
+
+#define STORE_SCHEMA_VERSION 1
+
+/* Job statuses as stored (and as the API shows them). */
+typedef enum store_status {
+    STORE_QUEUED = 0,
+    STORE_RUNNING,
+    STORE_DONE,
+    STORE_FAILED,    /* integrator failure or the per-job wall-time limit */
+    STORE_DIVERGED,
+    STORE_CANCELLED,
+    STORE_NSTATUS
+} store_status;
+
+typedef struct store store;
+
+/* One job's row, without its series. */
+typedef struct store_job {
+    int64_t id;
+    char *name;
+    char *preset;      /* NULL when not from a preset */
+    store_status status;
+    double progress;   /* 0..1 */
+    double created;    /* s since the epoch */
+    double started;    /* 0 until it starts */
+    double finished;   /* 0 until it finishes */
+    int nbodies, nv;
+    char *controller;  /* "pid", "none", ... */
+    char *spec;        /* normalised job JSON */
+    char *metrics;     /* metrics JSON (result_out.h) or NULL */
+    char *message;     /* why it failed / diverged / was cancelled, or NULL */
+    double e_max;      /* max over coordinates of metrics.e_max, NaN if none */
+    double wall_s;     /* NaN until finished */
+} store_job;
+
+/* Opens (creating if absent) the database at path, sets WAL mode, foreign keys and a busy
+ * timeout, and migrates the schema to STORE_SCHEMA_VERSION. Fails with a clear message when the
+ * file cannot be opened or created, is not an SQLite database, or is not ctcsim's. */
+int store_open(const char *path, store **out, char *err, size_t errlen);
+
+/* Closes the connection (finalising its statements); NULL is allowed. */
+void store_close(store *s);
+
+/* Inserts a new queued job: name, preset (may be NULL), nbodies, nv, controller name and the
+ * normalised spec JSON. *id receives its id (increasing). */
+int store_insert(store *s, const char *name, const char *preset, int nbodies, int nv,
+                 const char *controller, const char *spec, int64_t *id, char *err, size_t errlen);
+
+/* Start-up recovery: every job found queued or running becomes queued with progress 0 (a running
+ * one restarts from t = 0; its partial series, if any, is deleted). *ids receives a new array
+ * (free()) of their ids, oldest first, and *n its length. */
+int store_recover(store *s, int64_t **ids, int *n, char *err, size_t errlen);
+
+/* Marks a queued job running (started = now, progress 0). Returns 1 if the job was not queued
+ * (cancelled or deleted meanwhile: do not run it), 0 on success, -1 on error. */
+int store_start(store *s, int64_t id, char *err, size_t errlen);
+
+/* Records progress (0..1) of a running job. */
+int store_progress(store *s, int64_t id, double progress, char *err, size_t errlen);
+
+/* Puts a running job back to queued (shutdown interrupted it; it will restart from t = 0). */
+int store_requeue(store *s, int64_t id, char *err, size_t errlen);
+
+/* Finishes a job in one transaction: status (DONE, FAILED, DIVERGED or CANCELLED), message (may be
+ * NULL or ""), metrics JSON, and the recorded series of r (may be NULL: no series, e.g. a queued
+ * job cancelled before it ran). finished = now, progress 1 for DONE. */
+int store_finish(store *s, int64_t id, store_status status, const char *message,
+                 const char *metrics, const ctc_sim_result *r, char *err, size_t errlen);
+
+/* Reads one job. Returns 1 if there is no such job, 0 when found, -1 on error. Clear *out with
+ * store_job_clear after a 0. */
+int store_get(store *s, int64_t id, store_job *out, char *err, size_t errlen);
+
+/* Frees the strings of a job row and zeroes it. */
+void store_job_clear(store_job *j);
+
+/* Lists jobs newest first: those with id < before (0 = from the newest), with the given status
+ * (-1 = any), at most limit (1..1000) rows, without spec and metrics (NULL in the rows). *rows
+ * receives a new array (free with store_jobs_free), *n its length. */
+int store_list(store *s, int64_t before, int status, int limit, store_job **rows, int *n,
+               char *err, size_t errlen);
+
+/* Frees an array from store_list. */
+void store_jobs_free(store_job *rows, int n);
+
+/* Reads the series of a job into a new result (free with ctc_sim_result_free): t, the recorded
+ * channels with their widths, nsamples, nq and nv; status and metrics are left zero except
+ * metrics.nv. Returns 1 if the job has no series (unknown, unfinished or cancelled before it ran),
+ * 0 on success, -1 on error. */
+int store_get_series(store *s, int64_t id, ctc_sim_result **out, char *err, size_t errlen);
+
+/* Deletes a finished job and its series. Returns 1 if there is no such job, 2 if it is queued or
+ * running (cancel it first), 0 on success, -1 on error. */
+int store_delete(store *s, int64_t id, char *err, size_t errlen);
+
+/* Counts jobs by status into counts[STORE_NSTATUS]; also a cheap database health check. */
+int store_count(store *s, long counts[STORE_NSTATUS], char *err, size_t errlen);
+
+/* "queued", "running", "done", "failed", "diverged", "cancelled"; and back (-1 if unknown). */
+const char *store_status_name(store_status st);
+int store_status_parse(const char *name);
+
+#endif
