@@ -21,24 +21,24 @@ typedef struct http_server http_server;
 
 /* What a handler sees of a request. Strings are valid for the handler's call only. */
 typedef struct http_request {
-    const char *method;  /* "GET", "POST", ... */
-    const char *path;    /* URL path, percent-decoded by libmicrohttpd, without the query */
-    const char *body;    /* request body (NUL-terminated; may contain NULs), "" when none */
+    const char *method; /* "GET", "POST", ... */
+    const char *path;   /* URL path, percent-decoded by libmicrohttpd, without the query */
+    const char *body;   /* request body (NUL-terminated; may contain NULs), "" when none */
     size_t body_len;
     const char *params[4]; /* the path's {...} captures, in order, e.g. the job id */
-    void *conn;          /* the libmicrohttpd connection (for http_query, http_header) */
+    void *conn;            /* the libmicrohttpd connection (for http_query, http_header) */
 } http_request;
 
 /* A reply under construction; handlers fill it with one of the helpers below. */
 typedef struct http_reply {
-    int status;              /* HTTP status */
-    char *body;              /* malloc'd, owned by the reply */
+    int status; /* HTTP status */
+    char *body; /* malloc'd, owned by the reply */
     size_t body_len;
     const char *content_type;
-    char location[128];      /* Location header, "" = none */
-    char allow[64];          /* Allow header (405), "" = none */
-    int retry_after;         /* Retry-After seconds (503), 0 = none */
-    int fd;                  /* static file to send instead of body (>= 0), -1 = none */
+    char location[128]; /* Location header, "" = none */
+    char allow[64];     /* Allow header (405), "" = none */
+    int retry_after;    /* Retry-After seconds (503), 0 = none */
+    int fd;             /* static file to send instead of body (>= 0), -1 = none */
     uint64_t fd_size;
 } http_reply;
 
@@ -51,14 +51,14 @@ typedef struct http_route {
 } http_route;
 
 typedef struct http_config {
-    const char *bind;       /* address to listen on, e.g. "127.0.0.1" or "0.0.0.0" */
-    int port;               /* 1..65535 (0 = any free port; see http_port) */
-    int threads;            /* libmicrohttpd thread pool size, >= 1 */
-    size_t max_body;        /* bytes; larger bodies get 413 */
-    const char *web_root;   /* directory of the static files (web/) */
-    const char *token;      /* NULL/"" = none; else POST and DELETE need "Bearer TOKEN" */
+    const char *bind;         /* address to listen on, e.g. "127.0.0.1" or "0.0.0.0" */
+    int port;                 /* 1..65535 (0 = any free port; see http_port) */
+    int threads;              /* libmicrohttpd thread pool size, >= 1 */
+    size_t max_body;          /* bytes; larger bodies get 413 */
+    const char *web_root;     /* directory of the static files (web/) */
+    const char *token;        /* NULL/"" = none; else POST and DELETE need "Bearer TOKEN" */
     const http_route *routes; /* terminated by a route with method NULL */
-    void *ctx;              /* passed to every handler */
+    void *ctx;                /* passed to every handler */
 } http_config;
 
 /* Starts listening. Returns 0, or -1 with a message (address in use, bad bind address). */

@@ -99,10 +99,10 @@
 #include "sim.h"
 
 #define JOB_MAX_BODIES 4096
-#define JOB_MAX_DURATION 3600.0   /* s of simulated time */
-#define JOB_MAX_SAMPLES 200000    /* output samples */
-#define JOB_MAX_VALUES 20000000   /* samples x values per sample over the recorded channels */
-#define JOB_MAX_NAME 200          /* bytes */
+#define JOB_MAX_DURATION 3600.0 /* s of simulated time */
+#define JOB_MAX_SAMPLES 200000  /* output samples */
+#define JOB_MAX_VALUES 20000000 /* samples x values per sample over the recorded channels */
+#define JOB_MAX_NAME 200        /* bytes */
 
 /* Error codes, stable for clients (the service returns them as error.code). */
 typedef enum job_error_code {
@@ -130,12 +130,12 @@ typedef struct job {
     int nq, nv;            /* sizes of the arrays below */
     ctc_body_spec *bodies; /* (nbodies) */
     ctc_joint_spec *joints;
-    double *q0, *v0;       /* (nq), (nv) */
-    ctc_gains *gains;      /* (nv) designed gains, NULL when passive */
-    ctc_traj *traj;        /* (nv) NULL when passive */
-    ctc_disturb *disturb;  /* (nv) NULL when none */
-    cJSON *normalised;     /* the job with the preset expanded and every default filled in; itself
-                              a valid job document. Owned. */
+    double *q0, *v0;      /* (nq), (nv) */
+    ctc_gains *gains;     /* (nv) designed gains, NULL when passive */
+    ctc_traj *traj;       /* (nv) NULL when passive */
+    ctc_disturb *disturb; /* (nv) NULL when none */
+    cJSON *normalised;    /* the job with the preset expanded and every default filled in; itself
+                             a valid job document. Owned. */
 } job;
 
 /* Parses len bytes of JSON text (need not be terminated). Returns 0 and *out (free with

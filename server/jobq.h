@@ -26,17 +26,17 @@
 typedef struct jobq jobq;
 
 typedef struct jobq_config {
-    const char *db_path; /* the database each worker opens */
-    int workers;         /* >= 1 */
-    int max_queue;       /* >= 1: jobs waiting (not running) at most */
+    const char *db_path;   /* the database each worker opens */
+    int workers;           /* >= 1 */
+    int max_queue;         /* >= 1: jobs waiting (not running) at most */
     double job_time_limit; /* s of wall time per job; 0 = none */
 } jobq_config;
 
 typedef struct jobq_stats {
     int workers;
-    int busy;    /* workers running a job */
-    int queued;  /* jobs waiting */
-    long done;   /* jobs finished since start (any final status) */
+    int busy;   /* workers running a job */
+    int queued; /* jobs waiting */
+    long done;  /* jobs finished since start (any final status) */
 } jobq_stats;
 
 /* Starts the workers. Opens a connection for recovery, re-queues every job the database holds as

@@ -18,8 +18,8 @@
 
 typedef struct preset {
     const char *name;
-    const char *summary;        /* one line for listings */
-    const char *const *params;  /* NULL-terminated keys this preset takes from the request */
+    const char *summary;       /* one line for listings */
+    const char *const *params; /* NULL-terminated keys this preset takes from the request */
     /* builds the job document; request is the whole request object (for the parameters), may be
        NULL (defaults). Returns NULL with *err filled on a bad parameter or out of memory. */
     cJSON *(*build)(const cJSON *request, job_error *err);

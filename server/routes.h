@@ -62,12 +62,12 @@
 /* What the handlers share; one for the whole server. */
 typedef struct routes_ctx {
     jobq *queue;
-    const char *db_path;  /* each HTTP thread opens its own connection on first use; it is
-                             closed when the thread exits (a pthread key destructor) */
-    const char *api_dir;  /* directory holding openapi.yaml */
-    double max_wait;      /* s, the largest ?wait= accepted (300) */
-    atomic_int stopping;  /* set at shutdown (read by the HTTP threads, hence atomic): POST
-                             /api/jobs answers 503 SHUTTING_DOWN */
+    const char *db_path; /* each HTTP thread opens its own connection on first use; it is
+                            closed when the thread exits (a pthread key destructor) */
+    const char *api_dir; /* directory holding openapi.yaml */
+    double max_wait;     /* s, the largest ?wait= accepted (300) */
+    atomic_int stopping; /* set at shutdown (read by the HTTP threads, hence atomic): POST
+                            /api/jobs answers 503 SHUTTING_DOWN */
 } routes_ctx;
 
 /* The route table, terminated by {NULL}. Handlers expect a routes_ctx as their ctx. */

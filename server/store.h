@@ -37,7 +37,7 @@ typedef enum store_status {
     STORE_QUEUED = 0,
     STORE_RUNNING,
     STORE_DONE,
-    STORE_FAILED,    /* integrator failure or the per-job wall-time limit */
+    STORE_FAILED, /* integrator failure or the per-job wall-time limit */
     STORE_DIVERGED,
     STORE_CANCELLED,
     STORE_NSTATUS
@@ -49,19 +49,19 @@ typedef struct store store;
 typedef struct store_job {
     int64_t id;
     char *name;
-    char *preset;      /* NULL when not from a preset */
+    char *preset; /* NULL when not from a preset */
     store_status status;
-    double progress;   /* 0..1 */
-    double created;    /* s since the epoch */
-    double started;    /* 0 until it starts */
-    double finished;   /* 0 until it finishes */
+    double progress; /* 0..1 */
+    double created;  /* s since the epoch */
+    double started;  /* 0 until it starts */
+    double finished; /* 0 until it finishes */
     int nbodies, nv;
-    char *controller;  /* "pid", "none", ... */
-    char *spec;        /* normalised job JSON */
-    char *metrics;     /* metrics JSON (result_out.h) or NULL */
-    char *message;     /* why it failed / diverged / was cancelled, or NULL */
-    double e_max;      /* max over coordinates of metrics.e_max, NaN if none */
-    double wall_s;     /* NaN until finished */
+    char *controller; /* "pid", "none", ... */
+    char *spec;       /* normalised job JSON */
+    char *metrics;    /* metrics JSON (result_out.h) or NULL */
+    char *message;    /* why it failed / diverged / was cancelled, or NULL */
+    double e_max;     /* max over coordinates of metrics.e_max, NaN if none */
+    double wall_s;    /* NaN until finished */
 } store_job;
 
 /* Opens (creating if absent) the database at path, sets WAL mode, foreign keys and a busy
@@ -108,8 +108,8 @@ void store_job_clear(store_job *j);
 /* Lists jobs newest first: those with id < before (0 = from the newest), with the given status
  * (-1 = any), at most limit (1..1000) rows, without spec and metrics (NULL in the rows). *rows
  * receives a new array (free with store_jobs_free), *n its length. */
-int store_list(store *s, int64_t before, int status, int limit, store_job **rows, int *n,
-               char *err, size_t errlen);
+int store_list(store *s, int64_t before, int status, int limit, store_job **rows, int *n, char *err,
+               size_t errlen);
 
 /* Frees an array from store_list. */
 void store_jobs_free(store_job *rows, int n);

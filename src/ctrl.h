@@ -45,8 +45,7 @@ typedef struct ctc_gains {
  * s^3 + kv s^2 + kp s + ki is stable iff all are positive and ki < kv kp; Appendix B, Eq. 96).
  * Errors name the gain, e.g. "kp must be positive and finite (got -1)" or "ki = 250 must be
  * below kv*kp = 200 (Routh-Hurwitz: the closed-loop error dynamics would be unstable)". */
-ctc_status ctc_ctrl_pid(double kp, double kv, double ki, ctc_gains *out, char *err,
-                        size_t errlen);
+ctc_status ctc_ctrl_pid(double kp, double kv, double ki, ctc_gains *out, char *err, size_t errlen);
 
 /* Gains from a damping ratio zeta > 0 and a time constant tau > 0 (Appendix B, Eq. 92-94):
  * wn = 1 / tau, kp = wn^2, kv = 2 zeta wn, plus the given ki >= 0 (0 for PD), then checked as

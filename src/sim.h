@@ -40,14 +40,14 @@ typedef enum ctc_ctrl_type {
 /* Output channels, as bits of ctc_sim_spec.channels. Widths: q nq; energy 2 (kinetic,
  * potential); all others nv. q_des, qd_des, e and w need a controller. */
 typedef enum ctc_channel {
-    CTC_CH_Q = 0,   /* q: joint positions (rad, m; quaternions as w, x, y, z) */
-    CTC_CH_QD,      /* qdot: joint velocities */
-    CTC_CH_Q_DES,   /* q_des: desired positions */
-    CTC_CH_QD_DES,  /* qdot_des: desired velocities */
-    CTC_CH_E,       /* e: tracking error q_des - q */
-    CTC_CH_TAU,     /* tau: applied driving force f + z (N m, N) */
-    CTC_CH_W,       /* w: controller output (commanded minus desired acceleration) */
-    CTC_CH_ENERGY,  /* energy: kinetic and potential (J); potential is zero at the world origin */
+    CTC_CH_Q = 0,  /* q: joint positions (rad, m; quaternions as w, x, y, z) */
+    CTC_CH_QD,     /* qdot: joint velocities */
+    CTC_CH_Q_DES,  /* q_des: desired positions */
+    CTC_CH_QD_DES, /* qdot_des: desired velocities */
+    CTC_CH_E,      /* e: tracking error q_des - q */
+    CTC_CH_TAU,    /* tau: applied driving force f + z (N m, N) */
+    CTC_CH_W,      /* w: controller output (commanded minus desired acceleration) */
+    CTC_CH_ENERGY, /* energy: kinetic and potential (J); potential is zero at the world origin */
     CTC_NCHANNELS
 } ctc_channel;
 
@@ -55,21 +55,21 @@ typedef enum ctc_channel {
 #define CTC_CH_ALL ((1u << CTC_NCHANNELS) - 1u)
 
 typedef struct ctc_sim_spec {
-    ctc_chain_spec chain;        /* the plant */
-    const double *q0;            /* (nq) initial positions; NULL = ctc_model_q_zero */
-    const double *v0;            /* (nv) initial velocities; NULL = 0 */
-    ctc_ctrl_type controller;    /* NONE = passive */
-    const ctc_gains *gains;      /* (nv) designed gains per coordinate (ctrl.h); unused if NONE */
-    double model_mass_scale;     /* controller's model: every mass times this (> 0; 1 = exact) */
-    double model_inertia_scale;  /* controller's model: every inertia about the CoM times this */
-    const ctc_traj *traj;        /* (nv) desired trajectory per coordinate; unused if NONE */
-    const ctc_disturb *disturb;  /* (nv) disturbance per coordinate; NULL = none */
+    ctc_chain_spec chain;       /* the plant */
+    const double *q0;           /* (nq) initial positions; NULL = ctc_model_q_zero */
+    const double *v0;           /* (nv) initial velocities; NULL = 0 */
+    ctc_ctrl_type controller;   /* NONE = passive */
+    const ctc_gains *gains;     /* (nv) designed gains per coordinate (ctrl.h); unused if NONE */
+    double model_mass_scale;    /* controller's model: every mass times this (> 0; 1 = exact) */
+    double model_inertia_scale; /* controller's model: every inertia about the CoM times this */
+    const ctc_traj *traj;       /* (nv) desired trajectory per coordinate; unused if NONE */
+    const ctc_disturb *disturb; /* (nv) disturbance per coordinate; NULL = none */
     ctc_integ_spec integrator;
-    double duration;             /* s, > 0 */
-    double output_interval;      /* s, > 0: samples at t = 0, dt, 2 dt, ... and at duration */
-    unsigned channels;           /* CTC_CH_BIT mask; 0 = every channel that applies */
-    double max_speed;            /* divergence bound on any |v_i| (rad/s, m/s); 0 = 1e6 */
-    double wall_limit;           /* s of wall time before the run stops as "timeout"; 0 = none */
+    double duration;        /* s, > 0 */
+    double output_interval; /* s, > 0: samples at t = 0, dt, 2 dt, ... and at duration */
+    unsigned channels;      /* CTC_CH_BIT mask; 0 = every channel that applies */
+    double max_speed;       /* divergence bound on any |v_i| (rad/s, m/s); 0 = 1e6 */
+    double wall_limit;      /* s of wall time before the run stops as "timeout"; 0 = none */
 } ctc_sim_spec;
 
 typedef enum ctc_run_status {
@@ -81,16 +81,16 @@ typedef enum ctc_run_status {
 } ctc_run_status;
 
 typedef struct ctc_sim_metrics {
-    ctc_form form;        /* the model form the plant was computed in */
-    int nv;               /* length of the per-coordinate arrays below */
-    double *e_max;        /* (nv) max |e| over the samples; NULL when passive */
-    double *e_rms;        /* (nv) RMS of e over the samples; NULL when passive */
-    double *e_final;      /* (nv) e at the last sample; NULL when passive */
-    double energy_drift;  /* passive, no disturbance: max |E(t) - E(0)| / max(|E(0)|, KE scale);
-                             NaN otherwise */
-    double errdyn_dev;    /* exact model, no disturbance: max over samples and coordinates of
-                             |E(t) - expm(Ac t) E(0)| for the error state (int e, e, de), the
-                             deviation from the linear error dynamics; NaN otherwise */
+    ctc_form form;       /* the model form the plant was computed in */
+    int nv;              /* length of the per-coordinate arrays below */
+    double *e_max;       /* (nv) max |e| over the samples; NULL when passive */
+    double *e_rms;       /* (nv) RMS of e over the samples; NULL when passive */
+    double *e_final;     /* (nv) e at the last sample; NULL when passive */
+    double energy_drift; /* passive, no disturbance: max |E(t) - E(0)| / max(|E(0)|, KE scale);
+                            NaN otherwise */
+    double errdyn_dev;   /* exact model, no disturbance: max over samples and coordinates of
+                            |E(t) - expm(Ac t) E(0)| for the error state (int e, e, de), the
+                            deviation from the linear error dynamics; NaN otherwise */
     long steps, rejected, rhs_evals;
     double err_estimate;  /* the integrator's accumulated error estimate (integrator.h) */
     double wall_s, cpu_s; /* time spent in the run */
@@ -101,11 +101,11 @@ typedef struct ctc_sim_metrics {
 
 typedef struct ctc_sim_result {
     ctc_run_status status;
-    char message[256];   /* why a run did not finish, e.g. "t = 1.284 s: joint 2 speed 3.1e+06
-                            rad/s exceeds the bound 1e+06"; empty when done */
+    char message[256]; /* why a run did not finish, e.g. "t = 1.284 s: joint 2 speed 3.1e+06
+                          rad/s exceeds the bound 1e+06"; empty when done */
     int nq, nv;
-    unsigned channels;   /* the channels recorded */
-    int width[CTC_NCHANNELS];  /* values per sample of each channel (0 if not recorded) */
+    unsigned channels;        /* the channels recorded */
+    int width[CTC_NCHANNELS]; /* values per sample of each channel (0 if not recorded) */
     int nsamples;
     double *t;                 /* (nsamples) s */
     double *ch[CTC_NCHANNELS]; /* (nsamples x width[c]) row-major; NULL if not recorded */
@@ -130,8 +130,8 @@ ctc_status ctc_sim_check(const ctc_sim_spec *spec, char *err, size_t errlen);
  * step; otherwise CTC_OK and *out owns a new result (ctc_sim_result_free) whose status says how
  * the run ended - a diverged, failed, cancelled or timed-out run keeps the samples taken up to
  * its end. hooks may be NULL. */
-ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks,
-                       ctc_sim_result **out, char *err, size_t errlen);
+ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc_sim_result **out,
+                       char *err, size_t errlen);
 
 /* Frees a result; NULL is allowed. */
 void ctc_sim_result_free(ctc_sim_result *r);
