@@ -386,15 +386,22 @@ done:
     return rc;
 }
 
-/* reads the schema version and the number of objects that are not SQLite's own */
+/* reads the schema version and the number of objects that are not SQLite's own, both from one
+ * snapshot (a read transaction): read apart, another connection's migration could commit between
+ * them and make a new ctcsim database look foreign */
 static int read_schema(sqlite3 *db, int *version, int *objects)
 {
-    int rc = query_one(db, "PRAGMA user_version", version, NULL, 0);
+    int own = sqlite3_get_autocommit(db); /* not already inside the migration's transaction */
+    int rc = own ? sqlite3_exec(db, "BEGIN", NULL, NULL, NULL) : SQLITE_OK;
     if (rc != SQLITE_OK) return rc;
-    return query_one(db,
-                     "SELECT count(*) FROM sqlite_master WHERE name NOT LIKE 'sqlite\\_%' "
-                     "ESCAPE '\\'",
-                     objects, NULL, 0);
+    rc = query_one(db, "PRAGMA user_version", version, NULL, 0);
+    if (rc == SQLITE_OK)
+        rc = query_one(db,
+                       "SELECT count(*) FROM sqlite_master WHERE name NOT LIKE 'sqlite\\_%' "
+                       "ESCAPE '\\'",
+                       objects, NULL, 0);
+    if (own) sqlite3_exec(db, rc == SQLITE_OK ? "COMMIT" : "ROLLBACK", NULL, NULL, NULL);
+    return rc;
 }
 
 /* 1 with a message when a database of this version and content is not ours to touch */
