@@ -53,7 +53,6 @@ typedef struct sim_ctx {
     double *fz;    /* (nv) applied forces f + z */
     double *w;     /* (nv) controller output */
     double *des;   /* (nv x 3) desired q, qd, qdd */
-    double *qrate; /* (nq) */
     long evals;
 } sim_ctx;
 
@@ -546,7 +545,6 @@ static void ctx_free(sim_ctx *c)
     ctc_model_free(c->ctrl_model);
     free(c->qn);
     free(c->u);
-    free(c->qrate);
 }
 
 static int cmp_double(const void *a, const void *b)
@@ -594,9 +592,8 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     c.dc = c.ctrl_model ? ctc_data_new(c.ctrl_model) : c.dp;
     c.qn = malloc((nq + 1) * sizeof(double));
     c.u = malloc(nv * 7 * sizeof(double));
-    c.qrate = malloc((nq + 1) * sizeof(double));
     ybuf = malloc((size_t)(c.ny + 1) * 2 * sizeof(double) + nv * sizeof(double));
-    if (!c.dp || !c.dc || !c.qn || !c.u || !c.qrate || !ybuf) {
+    if (!c.dp || !c.dc || !c.qn || !c.u || !ybuf) {
         st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
         goto cleanup;
     }
