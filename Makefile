@@ -2,6 +2,7 @@
 #
 #   make deps    install missing Debian packages (as root), or print the apt-get line to run
 #   make         build the library, the ctcsim command line and the ctcsim-server service
+#   make web     assemble the page into build/web (web/ plus uPlot from npm ci)
 #   make run     install what is missing (as root), build, and start the service on
 #                127.0.0.1:8080 with its database in ./ctcsim.db (RUN_ARGS adds flags)
 #   make test    build and run the unit tests, then again under AddressSanitizer + UBSan
@@ -27,9 +28,9 @@ endif
 
 # Debian packages the build and the tests need
 DEB_PACKAGES := gcc make libc6-dev libcriterion-dev libcjson-dev liblapacke-dev libsundials-dev \
-	libmicrohttpd-dev libsqlite3-dev
-# the API tests run on Node's built-in test runner (node >= 18); Debian's nodejs when none
-NODE_PACKAGE := nodejs
+	libmicrohttpd-dev libsqlite3-dev chromium
+# the web page's uPlot and the tests also need node (>= 18) and npm: Debian's nodejs and npm are
+# installed when the machine has none
 BENCH_PACKAGES := wrk curl
 
 LIB_SRC := $(wildcard src/*.c)
@@ -44,6 +45,10 @@ APP_LIB := $(BUILD)/libctcapp.a
 CLI := $(BUILD)/ctcsim
 SERVER := $(BUILD)/ctcsim-server
 SERVER_LDLIBS := -lmicrohttpd -lsqlite3 -lpthread
+# the served page: web/ plus uPlot's files from npm ci (nothing from node_modules is committed)
+WEB_OUT := build/web
+WEB_NPM := build/web-npm
+WEB_SRC := $(filter-out web/package.json web/package-lock.json web/README.md,$(wildcard web/*))
 TEST_SRC := $(wildcard tests/unit/test_*.c)
 TEST_BIN := $(TEST_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 SUPPORT_SRC := $(wildcard tests/support/*.c)
@@ -51,7 +56,7 @@ SUPPORT_OBJ := $(SUPPORT_SRC:tests/support/%.c=$(BUILD)/obj/support/%.o)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all deps bench-deps install-packages run test check check-asan bench clean
+.PHONY: all deps bench-deps install-packages web run test check check-asan bench clean
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -112,7 +117,8 @@ install-packages:
 			|| missing="$$missing $$p"; \
 	done; \
 	if [ -n "$(CHECK_NODE)" ]; then \
-		command -v node >/dev/null 2>&1 || missing="$$missing $(NODE_PACKAGE)"; \
+		command -v node >/dev/null 2>&1 || missing="$$missing nodejs"; \
+		command -v npm >/dev/null 2>&1 || missing="$$missing npm"; \
 	fi; \
 	[ -z "$$missing" ] && exit 0; \
 	if [ "$$(id -u)" != 0 ]; then \
@@ -125,11 +131,29 @@ install-packages:
 	apt-get install -y --no-install-recommends $$missing \
 		|| { apt-get update && apt-get install -y --no-install-recommends $$missing; }
 
+web: $(WEB_OUT)/.stamp
+
+$(WEB_NPM)/node_modules/.package-lock.json: web/package.json web/package-lock.json
+	@mkdir -p $(WEB_NPM)
+	cp web/package.json web/package-lock.json $(WEB_NPM)/
+	cd $(WEB_NPM) && npm ci --no-audit --no-fund --loglevel=error
+
+$(WEB_OUT)/.stamp: $(WEB_SRC) $(WEB_NPM)/node_modules/.package-lock.json
+	@rm -rf $(WEB_OUT) && mkdir -p $(WEB_OUT)/vendor
+	cp $(WEB_SRC) $(WEB_OUT)/
+	cp $(WEB_NPM)/node_modules/uplot/dist/uPlot.esm.js \
+		$(WEB_NPM)/node_modules/uplot/dist/uPlot.min.css $(WEB_OUT)/vendor/
+	@touch $@
+
+tests/web/node_modules/.package-lock.json: tests/web/package.json tests/web/package-lock.json
+	cd tests/web && npm ci --no-audit --no-fund --loglevel=error
+
 # runs the suite as built in $(BUILD)
-check: $(TEST_BIN) $(CLI) $(SERVER)
+check: $(TEST_BIN) $(CLI) $(SERVER) web tests/web/node_modules/.package-lock.json
 	@sh tests/run.sh $(TEST_BIN)
 	@CTCSIM=$(CLI) sh tests/cli/run.sh
 	@CTCSIM=$(CLI) CTCSIM_SERVER=$(SERVER) sh tests/api/run.sh
+	@CTCSIM_SERVER=$(SERVER) WEB_ROOT=$(WEB_OUT) API_DIR=api sh tests/web/run.sh
 
 check-asan:
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan SANITIZE=1 OPT=-O1 check
@@ -140,8 +164,8 @@ test: deps
 	@$(MAKE) --no-print-directory check-asan
 
 run: deps
-	@$(MAKE) --no-print-directory $(SERVER)
-	$(SERVER) $(RUN_ARGS)
+	@$(MAKE) --no-print-directory $(SERVER) web
+	$(SERVER) --web $(WEB_OUT) $(RUN_ARGS)
 
 bench: bench-deps
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/bench-o3 OPT="-O3 -march=native -DNDEBUG" \

@@ -28,7 +28,7 @@ free_port() {
 start() { # start WORKERS: a fresh server with a fresh database
     port=$(free_port)
     rm -f "$tmp"/db*
-    "$SERVER" --port "$port" --db "$tmp/db" --workers "$1" --web web --api api \
+    "$SERVER" --port "$port" --db "$tmp/db" --workers "$1" --web build/web --api api \
         2>"$tmp/server.log" &
     pid=$!
     base="http://127.0.0.1:$port"

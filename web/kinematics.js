@@ -1,0 +1,125 @@
+/*
+ * kinematics.js - forward kinematics of a job's chain for the animation, from the normalised
+ * spec's bodies and one sample of joint coordinates q.
+ *
+ * Conventions (README "Conventions"): body k's frame has its origin at its inboard joint k and,
+ * at q = 0, is parallel to the world; joint k's location and axis are given in body k-1's frame
+ * (the world's for k = 0). Revolute: rotation by q about the axis; prismatic: translation by q
+ * along it; cylindrical: (angle, displacement); spherical: unit quaternion (w, x, y, z), four
+ * entries of q; fixed: nothing. So R_k = R_{k-1} Rot(axis, angle) and
+ * p_k = p_{k-1} + R_{k-1} (location + axis d). Rotations are row-major 3x3 arrays.
+ */
+
+const NQ = {revolute: 1, prismatic: 1, cylindrical: 2, spherical: 4, fixed: 0};
+
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const norm = (a) => Math.hypot(a[0], a[1], a[2]);
+export const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+export const scale = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
+export const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+export function unit(a) { const n = norm(a); return n > 0 ? scale(a, 1 / n) : [0, 0, 0]; }
+
+const mulv = (R, v) => [R[0] * v[0] + R[1] * v[1] + R[2] * v[2],
+  R[3] * v[0] + R[4] * v[1] + R[5] * v[2], R[6] * v[0] + R[7] * v[1] + R[8] * v[2]];
+
+function mul(A, B) {
+  const C = new Array(9);
+  for (let i = 0; i < 3; i++) {
+    for (let j = 0; j < 3; j++) C[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
+  }
+  return C;
+}
+
+/* rotation by angle about the unit axis n (Rodrigues) */
+function rotAxis(n, angle) {
+  const c = Math.cos(angle), s = Math.sin(angle), v = 1 - c;
+  const [x, y, z] = n;
+  return [c + x * x * v, x * y * v - z * s, x * z * v + y * s,
+    y * x * v + z * s, c + y * y * v, y * z * v - x * s,
+    z * x * v - y * s, z * y * v + x * s, c + z * z * v];
+}
+
+/* rotation of the quaternion (w, x, y, z), normalised first (interpolated samples drift) */
+function rotQuat(w, x, y, z) {
+  const n = Math.hypot(w, x, y, z) || 1;
+  w /= n; x /= n; y /= n; z /= n;
+  return [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+    2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+    2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)];
+}
+
+/* The far end of the last body, in its frame: a rod's end, the end of a box along its longest
+ * side or of a cylinder along its axis (the one farther from the joint), else twice the CoM. */
+function tipOf(body) {
+  const sh = body.shape;
+  const c = (sh && sh.centre) || [0, 0, 0];
+  const farther = (a, b) => (norm(a) >= norm(b) ? a : b);
+  if (sh && sh.type === "rod") return sh.end;
+  if (sh && sh.type === "box") {
+    const i = sh.size.indexOf(Math.max(...sh.size));
+    const d = [0, 0, 0];
+    d[i] = sh.size[i] / 2;
+    return farther(add(c, d), add(c, scale(d, -1)));
+  }
+  if (sh && sh.type === "cylinder") {
+    const d = scale(unit(sh.axis), sh.length / 2);
+    return farther(add(c, d), add(c, scale(d, -1)));
+  }
+  return body.com ? scale(body.com, 2) : [0, 0, 0];
+}
+
+/* The chain's constant part: per body its joint (type, unit axis, location), where its
+ * coordinates start in q, and the point its drawn segment ends at (in its own frame). */
+export function chainLayout(bodies) {
+  let qi = 0;
+  return bodies.map((b, k) => {
+    const j = b.joint;
+    const link = {type: j.type, axis: j.axis ? unit(j.axis) : [0, 0, 1],
+      loc: j.location || [0, 0, 0], qi,
+      end: k + 1 < bodies.length ? (bodies[k + 1].joint.location || [0, 0, 0]) : tipOf(b)};
+    qi += NQ[j.type] ?? 0;
+    return link;
+  });
+}
+
+/* World positions for one q (a function i -> q[i]): per body its joint origin, the point on
+ * the parent where the joint sits (differs for prismatic and cylindrical) and its drawn end. */
+export function chainPose(layout, q) {
+  let R = [1, 0, 0, 0, 1, 0, 0, 0, 1];
+  let p = [0, 0, 0];
+  return layout.map((l) => {
+    const attach = add(p, mulv(R, l.loc));
+    let slide = 0;
+    let Rj = null;
+    if (l.type === "revolute") Rj = rotAxis(l.axis, q(l.qi));
+    else if (l.type === "prismatic") slide = q(l.qi);
+    else if (l.type === "cylindrical") { Rj = rotAxis(l.axis, q(l.qi)); slide = q(l.qi + 1); }
+    else if (l.type === "spherical") Rj = rotQuat(q(l.qi), q(l.qi + 1), q(l.qi + 2), q(l.qi + 3));
+    const origin = add(attach, scale(mulv(R, l.axis), slide));
+    if (Rj) R = mul(R, Rj);
+    p = origin;
+    return {attach, origin, end: add(origin, mulv(R, l.end))};
+  });
+}
+
+/* The plane a planar chain moves in: normal = the first rotation axis (z if none), "up" =
+ * against gravity within that plane, "right" = up x normal (so x right, y up for the presets). */
+export function planeBasis(bodies, gravity) {
+  const rot = bodies.find((b) => b.joint.type === "revolute" || b.joint.type === "cylindrical");
+  const n = rot ? unit(rot.joint.axis) : [0, 0, 1];
+  const g = gravity || [0, -9.81, 0];
+  let up = unit(add(scale(g, -1), scale(n, dot(g, n))));
+  if (norm(up) === 0) up = unit(cross(n, Math.abs(n[0]) < 0.9 ? [1, 0, 0] : [0, 1, 0]));
+  return {right: cross(up, n), up};
+}
+
+/* For a spatial view: "up" against gravity (z if none) and two horizontal directions. */
+export function worldBasis(gravity) {
+  let up = unit(scale(gravity || [0, 0, -1], -1));
+  if (norm(up) === 0) up = [0, 0, 1];
+  const ref = Math.abs(up[0]) < 0.9 ? [1, 0, 0] : [0, 1, 0];
+  const h1 = unit(add(ref, scale(up, -dot(ref, up))));
+  return {up, h1, h2: cross(up, h1)};
+}
+
+export {dot, norm};
