@@ -12,8 +12,8 @@
  *   0  the run finished (status "done"), or the job is valid, or the listing was printed
  *   1  usage error (unknown command or option)
  *   2  the job is invalid: "FILE: FIELD: MESSAGE" on standard error
- *   3  the run stopped early: diverged, integrator failure or timeout (the samples up to there
- *      are still written)
+ *   3  the run stopped early: diverged, integrator failure, timeout, or singular (a loop's
+ *      independent joints can no longer drive it) (the samples up to there are still written)
  *   4  input or output error (file not found, disk full)
  */
 #include <errno.h>
@@ -44,12 +44,12 @@ static const char usage[] =
     "  presets   list the ready-made jobs (the paper's scenes)\n"
     "  preset    print a preset's job; KEY=VALUE sets its parameters (e.g. n=16)\n"
     "\n"
-    "  --channels LIST  comma-separated subset of q,qdot,q_des,qdot_des,e,tau,w,energy\n"
+    "  --channels LIST  comma-separated subset of q,qdot,q_des,qdot_des,e,tau,w,energy,loop\n"
     "  --every N        keep every N-th sample (and the last)\n"
     "  --quiet          no summary line on standard error\n"
     "\n"
     "exit codes: 0 done or valid, 1 usage, 2 invalid job, 3 run stopped early (diverged,\n"
-    "failed, timeout), 4 input/output error\n";
+    "failed, timeout, singular), 4 input/output error\n";
 
 /* reads the whole file (or stdin for "-") into a new buffer; NULL with *why on failure */
 static char *read_input(const char *path, size_t *len, const char **why)
@@ -129,6 +129,8 @@ static void print_summary(const job *j, const ctc_sim_result *r)
     if (m->errdyn_dev == m->errdyn_dev)
         fprintf(stderr, ", error-dynamics deviation %.2g", m->errdyn_dev);
     if (m->energy_drift == m->energy_drift) fprintf(stderr, ", energy drift %.2g", m->energy_drift);
+    if (j->spec.chain.loop && m->loop_res_max == m->loop_res_max)
+        fprintf(stderr, ", loop residual %.2g, %ld projections", m->loop_res_max, m->projections);
     fputc('\n', stderr);
     if (r->message[0]) fprintf(stderr, "%s: %s\n", j->name, r->message);
 }
@@ -238,8 +240,15 @@ static int cmd_validate(int argc, char **argv)
     char *text = cJSON_Print(j->normalised);
     if (text) printf("%s\n", text);
     cJSON_free(text);
-    fprintf(stderr, "%s: valid (%d bodies, %d coordinates, controller %s)\n", argv[0],
-            j->spec.chain.nbodies, j->nv, ctc_ctrl_type_name(j->spec.controller));
+    if (j->spec.chain.loop)
+        fprintf(stderr,
+                "%s: valid (%d bodies and a loop, %d coordinates, %d independent, "
+                "controller %s)\n",
+                argv[0], j->spec.chain.nbodies, j->nv, j->nind,
+                ctc_ctrl_type_name(j->spec.controller));
+    else
+        fprintf(stderr, "%s: valid (%d bodies, %d coordinates, controller %s)\n", argv[0],
+                j->spec.chain.nbodies, j->nv, ctc_ctrl_type_name(j->spec.controller));
     job_free(j);
     return text ? 0 : EXIT_IO;
 }

@@ -15,6 +15,14 @@
  * tensors, a planar form asked of a spatial chain - at "scene". ctc_sim_check runs last as a
  * safety net (field "").
  *
+ * A loop ("scene.loop", read after the bodies) changes the sizes that follow: the controller's
+ * per-coordinate arrays and channels cover the nind independent coordinates, counted here from
+ * the joints' "independent" flags as model.h counts them. What only the library can judge of a
+ * loop - its mobility against nind, a singular or over-constrained configuration, a q0 it cannot
+ * close - comes from ctc_model_build or ctc_sim_check; those messages speak of the loop (its
+ * words: "loop", "mobility", "closing joint", "singular", "over-constrained") and are reported at
+ * "scene.loop", or, when the loop "does not close" from q0, at "scene.q0".
+ *
  * While it walks, the parser writes the normalised document: the keys it read in canonical order,
  * every default written out, a preset expanded. It parses to the same spec. Printed with cJSON it
  * parses back to the same text; numbers with more than 15 significant digits may come back one
@@ -51,6 +59,11 @@ _Static_assert(sizeof(((job_error *)0)->field) == PATH_LEN, "paths are written i
 #define DEFAULT_MAX_STEPS 10000000.0
 #define DEFAULT_MAX_SPEED 1e6 /* rad/s or m/s */
 
+/* defaults of a loop (job_json.h) */
+#define DEFAULT_LOOP_TOL 1e-12     /* m or rad: projection trigger and Newton tolerance */
+#define DEFAULT_BAUMGARTE 10.0     /* 1/s, alpha and beta */
+#define DEFAULT_LOOP_COND_MAX 1e10 /* condition estimate beyond which a run stops as singular */
+
 #define MAX_WHOLE 9007199254740992.0 /* 2^53: whole numbers beyond are not exact in a double */
 #define AXIS_MIN_LENGTH 1e-12        /* as ctc_model_build */
 #define QUAT_UNIT_TOL 1e-6           /* |norm - 1| allowed of a quaternion in q0 */
@@ -60,12 +73,13 @@ enum { OPTIONAL = 0, REQUIRED = 1 };
 
 /* the state of one parse */
 typedef struct parser {
-    job *j;             /* the job being filled */
-    job_error *err;     /* the first error */
-    cJSON *norm;        /* the normalised document being written (j->normalised) */
-    int oom;            /* an allocation for the normalised document failed */
-    int spherical_body; /* the first body whose joint is spherical, or -1 */
-    ctc_ctrl_type ctrl; /* the controller's type, once read */
+    job *j;                   /* the job being filled */
+    job_error *err;           /* the first error */
+    cJSON *norm;              /* the normalised document being written (j->normalised) */
+    int oom;                  /* an allocation for the normalised document failed */
+    char spherical[PATH_LEN]; /* the first independent spherical joint's owner
+                                 ("scene.bodies[1]", "scene.loop"), or "" */
+    ctc_ctrl_type ctrl;       /* the controller's type, once read */
 } parser;
 
 /* ---- errors and paths ---- */
@@ -616,20 +630,69 @@ static int parse_inertia(parser *p, const cJSON *v, const char *path, ctc_body_s
     return 0;
 }
 
-static const char *const joint_keys_all[] = {"type", "axis", "location", NULL};
-static const char *const joint_keys_fixed[] = {"type", "location", NULL};
+static const char *const joint_keys_all[] = {"type", "axis", "location", "independent", NULL};
+static const char *const joint_keys_fixed[] = {"type", "location", "independent", NULL};
 static const char *const *const joint_keys[] = {[CTC_JOINT_REVOLUTE] = joint_keys_all,
                                                 [CTC_JOINT_PRISMATIC] = joint_keys_all,
                                                 [CTC_JOINT_CYLINDRICAL] = joint_keys_all,
                                                 [CTC_JOINT_SPHERICAL] = joint_keys_fixed,
                                                 [CTC_JOINT_FIXED] = joint_keys_fixed};
 
+/* *out = v, true or false */
+static int bool_at(parser *p, const cJSON *v, const char *path, int *out)
+{
+    if (!cJSON_IsBool(v)) {
+        return error_at(p->err, JOB_INVALID_FIELD, path, "must be true or false (got %s)", kind(v));
+    }
+    *out = cJSON_IsTrue(v);
+    return 0;
+}
+
+/* A joint's "axis" (joint v at path; the type needs one): any length, but not zero and not
+ * overflowing. Written to out. */
+static int parse_axis(parser *p, const cJSON *v, const char *path, double a[3], cJSON *out)
+{
+    char at[PATH_LEN];
+    if (member_vec3(p, v, path, "axis", REQUIRED, NULL, a) != 0) return -1;
+    double len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    key_path(at, path, "axis");
+    if (!isfinite(len)) {
+        return error_at(p->err, JOB_INVALID_FIELD, at, "is too long (its length overflows)");
+    }
+    if (!(len > AXIS_MIN_LENGTH)) {
+        return error_at(p->err, JOB_INVALID_FIELD, at,
+                        "must have non-zero length (got [%g, %g, %g])", a[0], a[1], a[2]);
+    }
+    put_numbers(p, out, "axis", a, 3);
+    return 0;
+}
+
+/* A joint's "location" (default the origin) and "independent" flag (default def; joint v at
+ * path, owner names it for messages), written to out. The first independent spherical joint is
+ * remembered: a controller cannot drive it. */
+static int parse_joint_rest(parser *p, const cJSON *v, const char *path, const char *owner,
+                            ctc_joint_spec *joint, int def, unsigned char *independent, cJSON *out)
+{
+    static const double origin[3] = {0, 0, 0};
+    char at[PATH_LEN];
+    if (member_vec3(p, v, path, "location", OPTIONAL, origin, joint->location) != 0) return -1;
+    put_numbers(p, out, "location", joint->location, 3);
+    int flag = def;
+    const cJSON *f = member(v, "independent");
+    if (f != NULL && bool_at(p, f, key_path(at, path, "independent"), &flag) != 0) return -1;
+    *independent = (unsigned char)flag;
+    put(p, out, "independent", cJSON_CreateBool(flag));
+    if (flag && joint->type == CTC_JOINT_SPHERICAL && p->spherical[0] == '\0') {
+        snprintf(p->spherical, sizeof p->spherical, "%s", owner);
+    }
+    return 0;
+}
+
 /* body k's inboard joint */
 static int parse_joint(parser *p, const cJSON *body, const char *body_path, int k,
                        ctc_joint_spec *joint, cJSON *out_body)
 {
-    static const double origin[3] = {0, 0, 0};
-    char path[PATH_LEN], at[PATH_LEN];
+    char path[PATH_LEN];
     const char *names[5];
     int type;
     for (int t = 0; t < 5; t++) names[t] = ctc_joint_type_name((ctc_joint_type)t);
@@ -642,27 +705,11 @@ static int parse_joint(parser *p, const cJSON *body, const char *body_path, int 
     joint->type = (ctc_joint_type)type;
     cJSON *out = put(p, out_body, "joint", cJSON_CreateObject());
     put_string(p, out, "type", names[type]);
-
-    /* the axis: any length, but not zero and not overflowing */
-    if (joint->type != CTC_JOINT_SPHERICAL && joint->type != CTC_JOINT_FIXED) {
-        double *a = joint->axis;
-        if (member_vec3(p, v, path, "axis", REQUIRED, NULL, a) != 0) return -1;
-        double len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-        key_path(at, path, "axis");
-        if (!isfinite(len)) {
-            return error_at(p->err, JOB_INVALID_FIELD, at, "is too long (its length overflows)");
-        }
-        if (!(len > AXIS_MIN_LENGTH)) {
-            return error_at(p->err, JOB_INVALID_FIELD, at,
-                            "must have non-zero length (got [%g, %g, %g])", a[0], a[1], a[2]);
-        }
-        put_numbers(p, out, "axis", a, 3);
-    } else if (joint->type == CTC_JOINT_SPHERICAL && p->spherical_body < 0) {
-        p->spherical_body = k;
+    if (joint->type != CTC_JOINT_SPHERICAL && joint->type != CTC_JOINT_FIXED &&
+        parse_axis(p, v, path, joint->axis, out) != 0) {
+        return -1;
     }
-    if (member_vec3(p, v, path, "location", OPTIONAL, origin, joint->location) != 0) return -1;
-    put_numbers(p, out, "location", joint->location, 3);
-    return 0;
+    return parse_joint_rest(p, v, path, body_path, joint, 1, &p->j->independent[k], out);
 }
 
 static const char *const body_keys[] = {"name", "mass", "com", "inertia", "shape", "joint", NULL};
@@ -735,7 +782,8 @@ static int parse_bodies(parser *p, const cJSON *scene, cJSON *out_scene)
     }
     j->bodies = alloc(p, (size_t)n, sizeof *j->bodies);
     j->joints = alloc(p, (size_t)n, sizeof *j->joints);
-    if (j->bodies == NULL || j->joints == NULL) return -1;
+    j->independent = alloc(p, (size_t)n + 1, sizeof *j->independent);
+    if (j->bodies == NULL || j->joints == NULL || j->independent == NULL) return -1;
     j->spec.chain.nbodies = n;
     j->spec.chain.bodies = j->bodies;
     j->spec.chain.joints = j->joints;
@@ -785,7 +833,175 @@ static int parse_initial_state(parser *p, const cJSON *scene, const ctc_model *m
     return 0;
 }
 
-static const char *const scene_keys[] = {"gravity", "form", "bodies", "q0", "v0", NULL};
+/* ---- the loop ---- */
+
+/* the closing joint's types, as the format names them */
+static const ctc_joint_type loop_types[] = {CTC_JOINT_REVOLUTE, CTC_JOINT_PRISMATIC,
+                                            CTC_JOINT_SPHERICAL};
+static const char *const loop_joint_keys_all[] = {"type", "axis", "location", "independent", NULL};
+static const char *const loop_joint_keys_spherical[] = {"type", "location", "independent", NULL};
+static const char *const *const loop_joint_keys[] = {loop_joint_keys_all, loop_joint_keys_all,
+                                                     loop_joint_keys_spherical};
+
+/* "scene.loop.joint": the closing joint, from the tip (body n - 1) to the ground */
+static int parse_loop_joint(parser *p, const cJSON *loop, cJSON *out_loop)
+{
+    static const char *const path = "scene.loop.joint";
+    job *j = p->j;
+    ctc_joint_spec *joint = &j->loop.joint;
+    const char *names[3];
+    int type;
+    for (int t = 0; t < 3; t++) names[t] = ctc_joint_type_name(loop_types[t]);
+    const cJSON *v = required_member(p, loop, "scene.loop", "joint", "");
+    if (v == NULL || typed_object(p, v, path, "type", REQUIRED, 0, names, 3, "joint type",
+                                  loop_joint_keys, loop_joint_keys_all, &type) != 0) {
+        return -1;
+    }
+    joint->type = loop_types[type];
+    cJSON *out = put(p, out_loop, "joint", cJSON_CreateObject());
+    put_string(p, out, "type", names[type]);
+    if (joint->type != CTC_JOINT_SPHERICAL && parse_axis(p, v, path, joint->axis, out) != 0) {
+        return -1;
+    }
+    int n = j->spec.chain.nbodies;
+    return parse_joint_rest(p, v, path, "scene.loop", joint, 0, &j->independent[n], out);
+}
+
+static const char *const stab_keys_all[] = {"method", "tol", "alpha", "beta", NULL};
+static const char *const stab_keys_project[] = {"method", "tol", NULL};
+static const char *const stab_keys_baumgarte[] = {"method", "alpha", "beta", NULL};
+static const char *const stab_keys_none[] = {"method", NULL};
+static const char *const *const stab_keys[] = {[CTC_LOOP_PROJECT] = stab_keys_project,
+                                               [CTC_LOOP_BAUMGARTE] = stab_keys_baumgarte,
+                                               [CTC_LOOP_NONE] = stab_keys_none};
+
+/* "scene.loop.stabilization": how the state is kept on the closure (default project) */
+static int parse_stabilization(parser *p, const cJSON *loop, cJSON *out_loop)
+{
+    static const char *const path = "scene.loop.stabilization";
+    ctc_sim_spec *s = &p->j->spec;
+    const char *names[3];
+    int method;
+    for (int m = 0; m < 3; m++) names[m] = ctc_loop_stab_name((ctc_loop_stab)m);
+    if (typed_object(p, member(loop, "stabilization"), path, "method", OPTIONAL, CTC_LOOP_PROJECT,
+                     names, 3, "method", stab_keys, stab_keys_all, &method) != 0) {
+        return -1;
+    }
+    const cJSON *v = member(loop, "stabilization");
+    s->loop_stab = (ctc_loop_stab)method;
+    cJSON *out = put(p, out_loop, "stabilization", cJSON_CreateObject());
+    put_string(p, out, "method", names[method]);
+    switch (s->loop_stab) {
+    case CTC_LOOP_PROJECT:
+        if (member_number(p, v, path, "tol", OPTIONAL, DEFAULT_LOOP_TOL, &s->loop_tol) != 0) {
+            return -1;
+        }
+        if (!(s->loop_tol > 0)) {
+            return error_at(p->err, JOB_INVALID_FIELD, "scene.loop.stabilization.tol",
+                            "must be positive (got %g)", s->loop_tol);
+        }
+        put_number(p, out, "tol", s->loop_tol);
+        break;
+    case CTC_LOOP_BAUMGARTE: {
+        static const char *const keys[2] = {"alpha", "beta"};
+        char at[PATH_LEN];
+        for (int i = 0; i < 2; i++) {
+            double *x = &s->baumgarte[i];
+            if (member_number(p, v, path, keys[i], OPTIONAL, DEFAULT_BAUMGARTE, x) != 0) return -1;
+            if (!(*x >= 0)) {
+                return error_at(p->err, JOB_INVALID_FIELD, key_path(at, path, keys[i]),
+                                "must not be negative (got %g 1/s)", *x);
+            }
+        }
+        /* the library reads (0, 0) as its defaults: say "none" for no stabilisation */
+        if (s->baumgarte[0] == 0 && s->baumgarte[1] == 0) {
+            return error_at(p->err, JOB_INVALID_FIELD, path,
+                            "alpha and beta must not both be 0 (use {\"method\": \"none\"} "
+                            "for no stabilization)");
+        }
+        put_number(p, out, "alpha", s->baumgarte[0]);
+        put_number(p, out, "beta", s->baumgarte[1]);
+        break;
+    }
+    case CTC_LOOP_NONE:
+        break;
+    }
+    return 0;
+}
+
+static const char *const loop_keys[] = {"joint", "anchor", "stabilization", "cond_max", NULL};
+
+/* "scene.loop" (optional): the closing joint, its anchor and the run's loop settings; then the
+ * independent flags: with a loop they say which coordinates are controlled (nind), without one
+ * every joint must be independent */
+static int parse_loop(parser *p, const cJSON *scene, cJSON *out_scene)
+{
+    job *j = p->j;
+    ctc_sim_spec *s = &j->spec;
+    int n = s->chain.nbodies;
+    const cJSON *v = member(scene, "loop");
+    if (v == NULL) {
+        for (int k = 0; k < n; k++) {
+            if (j->independent[k]) continue;
+            char body[PATH_LEN], joint[PATH_LEN], at[PATH_LEN];
+            index_path(body, "scene.bodies", k);
+            return error_at(p->err, JOB_INVALID_FIELD,
+                            key_path(at, key_path(joint, body, "joint"), "independent"),
+                            "must be true: an open chain is fully actuated (only a chain closed "
+                            "by \"scene.loop\" has dependent joints)");
+        }
+        free(j->independent);
+        j->independent = NULL;
+        j->nind = j->nv;
+        return 0;
+    }
+    if (object_at(p, v, "scene.loop") != 0 ||
+        check_keys(p, v, "scene.loop", loop_keys, NULL, NULL) != 0) {
+        return -1;
+    }
+    cJSON *out = put(p, out_scene, "loop", cJSON_CreateObject());
+    if (parse_loop_joint(p, v, out) != 0 ||
+        member_vec3(p, v, "scene.loop", "anchor", REQUIRED, NULL, j->loop.anchor) != 0) {
+        return -1;
+    }
+    put_numbers(p, out, "anchor", j->loop.anchor, 3);
+    if (parse_stabilization(p, v, out) != 0 ||
+        member_number(p, v, "scene.loop", "cond_max", OPTIONAL, DEFAULT_LOOP_COND_MAX,
+                      &s->loop_cond_max) != 0) {
+        return -1;
+    }
+    if (!(s->loop_cond_max > 1)) {
+        return error_at(p->err, JOB_INVALID_FIELD, "scene.loop.cond_max",
+                        "must be greater than 1 (got %g)", s->loop_cond_max);
+    }
+    put_number(p, out, "cond_max", s->loop_cond_max);
+    s->chain.loop = &j->loop;
+    s->chain.independent = j->independent;
+
+    /* the controlled coordinates: those of the independent joints, the closing joint's last */
+    j->nind = 0;
+    for (int k = 0; k < n; k++) {
+        if (j->independent[k]) j->nind += ctc_joint_nv(j->joints[k].type);
+    }
+    if (j->independent[n]) j->nind += ctc_joint_nv(j->loop.joint.type);
+    return 0;
+}
+
+/* The field of a library error about the scene of a job with a loop: the loop's settings, or
+ * q0 when the loop does not close from it; "scene" for anything else. */
+static const char *loop_error_field(const char *msg)
+{
+    static const char *const loop_words[] = {"loop",     "mobility",         "closing joint",
+                                             "singular", "over-constrained", NULL};
+    if (strncmp(msg, "body ", 5) == 0) return "scene"; /* a body's inertia, even a singular one */
+    if (strstr(msg, "does not close") != NULL) return "scene.q0";
+    for (const char *const *w = loop_words; *w != NULL; w++) {
+        if (strstr(msg, *w) != NULL) return "scene.loop";
+    }
+    return "scene";
+}
+
+static const char *const scene_keys[] = {"gravity", "form", "bodies", "loop", "q0", "v0", NULL};
 
 static int parse_scene(parser *p, const cJSON *doc)
 {
@@ -820,13 +1036,17 @@ static int parse_scene(parser *p, const cJSON *doc)
         return error_at(p->err, JOB_INVALID_FIELD, "scene.bodies",
                         "must have at least one joint that moves (every joint is fixed)");
     }
+    if (parse_loop(p, v, out) != 0) return -1;
 
-    /* what only the builder checks: inertia tensors, the plane of a planar chain */
+    /* what only the builder checks: inertia tensors, the plane of a planar chain, the loop */
     ctc_model *m = NULL;
     char msg[512];
     ctc_status st = ctc_model_build(chain, &m, msg, sizeof msg);
     if (st == CTC_ENOMEM) return out_of_memory(p->err);
-    if (st != CTC_OK) return error_at(p->err, JOB_INVALID_FIELD, "scene", "%s", msg);
+    if (st != CTC_OK) {
+        const char *field = chain->loop != NULL ? loop_error_field(msg) : "scene";
+        return error_at(p->err, JOB_INVALID_FIELD, field, "%s", msg);
+    }
     int rc = parse_initial_state(p, v, m, out);
     ctc_model_free(m);
     return rc;
@@ -1087,7 +1307,13 @@ static void put_gain_params(parser *p, cJSON *out, const gain_params *g)
     if (g->given & G_LAMBDA) put_number(p, out, "lambda", g->lambda);
 }
 
-/* "controller.joints": nv overrides of the shared parameters, one per coordinate */
+/* what one entry of a per-coordinate array stands for, in messages */
+static const char *coordinate_word(const parser *p)
+{
+    return p->j->spec.chain.loop != NULL ? "independent coordinate" : "coordinate";
+}
+
+/* "controller.joints": nind overrides of the shared parameters, one per coordinate */
 static int parse_gain_overrides(parser *p, const cJSON *v, ctc_ctrl_type type,
                                 const gain_params *shared, const char *context, cJSON *out_ctrl)
 {
@@ -1095,13 +1321,14 @@ static int parse_gain_overrides(parser *p, const cJSON *v, ctc_ctrl_type type,
     char path[PATH_LEN];
     if (!cJSON_IsArray(v)) {
         return error_at(p->err, JOB_INVALID_FIELD, "controller.joints",
-                        "must be an array of %d objects, one per coordinate (got %s)", j->nv,
-                        kind(v));
+                        "must be an array of %d objects, one per %s (got %s)", j->nind,
+                        coordinate_word(p), kind(v));
     }
     int len = cJSON_GetArraySize(v);
-    if (len != j->nv) {
+    if (len != j->nind) {
         return error_at(p->err, JOB_INVALID_FIELD, "controller.joints",
-                        "must have %d entries, one per coordinate (got %d)", j->nv, len);
+                        "must have %d entries, one per %s (got %d)", j->nind, coordinate_word(p),
+                        len);
     }
     cJSON *out = put(p, out_ctrl, "joints", cJSON_CreateArray());
     int i = 0;
@@ -1171,12 +1398,15 @@ static int parse_controller(parser *p, const cJSON *doc)
     if (p->ctrl == CTC_CTRL_NONE) return 0;
 
     /* computed torque control per coordinate: not for a spherical joint's quaternion */
-    if (p->spherical_body >= 0) {
+    if (p->spherical[0] != '\0') {
+        const char *allowed = j->spec.chain.loop != NULL
+                                  ? "a spherical joint in a loop must be dependent, or the run "
+                                    "passive (controller \"none\")"
+                                  : "spherical joints are allowed only with controller \"none\"";
         return error_at(p->err, JOB_INVALID_FIELD, "controller.type",
-                        "\"%s\" cannot drive the spherical joint of scene.bodies[%d] (its "
-                        "quaternion error is not a per-coordinate error); spherical joints are "
-                        "allowed only with controller \"none\"",
-                        names[type], p->spherical_body);
+                        "\"%s\" cannot drive the spherical joint of %s (its quaternion error is "
+                        "not a per-coordinate error); %s",
+                        names[type], p->spherical, allowed);
     }
 
     /* the gains the coordinates share, designed once */
@@ -1188,9 +1418,9 @@ static int parse_controller(parser *p, const cJSON *doc)
         return -1;
     }
     put_gain_params(p, out, &shared);
-    j->gains = alloc(p, (size_t)j->nv, sizeof *j->gains);
+    j->gains = alloc(p, (size_t)j->nind, sizeof *j->gains);
     if (j->gains == NULL) return -1;
-    for (int i = 0; i < j->nv; i++) j->gains[i] = gains;
+    for (int i = 0; i < j->nind; i++) j->gains[i] = gains;
     j->spec.gains = j->gains;
 
     /* per-coordinate overrides, then the controller's model */
@@ -1210,22 +1440,22 @@ static int parse_controller(parser *p, const cJSON *doc)
 typedef int (*coord_item_parser)(parser *p, const cJSON *v, const char *path, int first, int count,
                                  cJSON *out);
 
-/* v (the document's key): one object for every coordinate, or an array of nv of them */
+/* v (the document's key): one object for every coordinate, or an array of nind of them */
 static int parse_per_coordinate(parser *p, const cJSON *v, const char *key, coord_item_parser item)
 {
-    int nv = p->j->nv;
+    int nind = p->j->nind;
     if (cJSON_IsObject(v)) {
-        return item(p, v, key, 0, nv, put(p, p->norm, key, cJSON_CreateObject()));
+        return item(p, v, key, 0, nind, put(p, p->norm, key, cJSON_CreateObject()));
     }
     if (!cJSON_IsArray(v)) {
         return error_at(p->err, JOB_INVALID_FIELD, key,
-                        "must be an object or an array of %d objects, one per coordinate (got %s)",
-                        nv, kind(v));
+                        "must be an object or an array of %d objects, one per %s (got %s)", nind,
+                        coordinate_word(p), kind(v));
     }
     int len = cJSON_GetArraySize(v);
-    if (len != nv) {
-        return error_at(p->err, JOB_INVALID_FIELD, key,
-                        "must have %d entries, one per coordinate (got %d)", nv, len);
+    if (len != nind) {
+        return error_at(p->err, JOB_INVALID_FIELD, key, "must have %d entries, one per %s (got %d)",
+                        nind, coordinate_word(p), len);
     }
     cJSON *out = put(p, p->norm, key, cJSON_CreateArray());
     int i = 0;
@@ -1382,7 +1612,7 @@ static int parse_trajectory(parser *p, const cJSON *doc)
         return error_at(p->err, JOB_MISSING_FIELD, "trajectory",
                         "is required with controller \"%s\"", ctc_ctrl_type_name(p->ctrl));
     }
-    j->traj = alloc(p, (size_t)j->nv, sizeof *j->traj);
+    j->traj = alloc(p, (size_t)j->nind, sizeof *j->traj);
     if (j->traj == NULL) return -1;
     j->spec.traj = j->traj;
     return parse_per_coordinate(p, v, "trajectory", parse_traj_item);
@@ -1459,11 +1689,11 @@ static int parse_disturbance(parser *p, const cJSON *doc)
         put_string(p, out, "type", disturb_names[CTC_DISTURB_NONE]);
         return 0;
     }
-    j->disturb = alloc(p, (size_t)j->nv, sizeof *j->disturb);
+    j->disturb = alloc(p, (size_t)j->nind, sizeof *j->disturb);
     if (j->disturb == NULL || parse_per_coordinate(p, v, "disturbance", parse_disturb_item) != 0) {
         return -1;
     }
-    for (int i = 0; i < j->nv; i++) {
+    for (int i = 0; i < j->nind; i++) {
         if (j->disturb[i].type != CTC_DISTURB_NONE) {
             j->spec.disturb = j->disturb;
             return 0;
@@ -1559,11 +1789,38 @@ static unsigned tracking_channels(void)
            CTC_CH_BIT(CTC_CH_W);
 }
 
+/* values per sample of channel c (sim.h): q nq, qdot nv, energy and loop 2, the others one per
+ * controlled coordinate */
+static int channel_width(const job *j, int c)
+{
+    switch (c) {
+    case CTC_CH_Q:
+        return j->nq;
+    case CTC_CH_QD:
+        return j->nv;
+    case CTC_CH_ENERGY:
+    case CTC_CH_LOOP:
+        return 2;
+    default:
+        return j->nind;
+    }
+}
+
+/* why channel c does not apply to this job ("needs a controller (this run is passive)") */
+static const char *why_not_applicable(int c)
+{
+    if (c == CTC_CH_LOOP) return "needs a loop (\"scene.loop\")";
+    if (c == CTC_CH_TAU) return "has no columns (the loop has no independent coordinates)";
+    return "needs a controller (this run is passive)";
+}
+
 /* "output.channels" into spec.channels (explicit; default every channel that applies) */
 static int parse_channels(parser *p, const cJSON *output, const char *const *names, unsigned *mask)
 {
     unsigned applicable = CTC_CH_ALL;
     if (p->ctrl == CTC_CTRL_NONE) applicable &= ~tracking_channels();
+    if (p->j->spec.chain.loop == NULL) applicable &= ~CTC_CH_BIT(CTC_CH_LOOP);
+    if (p->j->nind == 0) applicable &= ~CTC_CH_BIT(CTC_CH_TAU); /* a loop of dependent joints */
     const cJSON *v = member(output, "channels");
     if (v == NULL) {
         *mask = applicable;
@@ -1588,8 +1845,8 @@ static int parse_channels(parser *p, const cJSON *output, const char *const *nam
             return error_at(p->err, JOB_INVALID_FIELD, at, "\"%s\" is listed twice", names[c]);
         }
         if (!(applicable & CTC_CH_BIT(c))) {
-            return error_at(p->err, JOB_INVALID_FIELD, at,
-                            "channel \"%s\" needs a controller (this run is passive)", names[c]);
+            return error_at(p->err, JOB_INVALID_FIELD, at, "channel \"%s\" %s", names[c],
+                            why_not_applicable(c));
         }
         *mask |= CTC_CH_BIT(c);
     }
@@ -1636,7 +1893,7 @@ static int parse_output(parser *p, const cJSON *doc)
     double per_sample = 1; /* t */
     for (int c = 0; c < CTC_NCHANNELS; c++) {
         if (!(s->channels & CTC_CH_BIT(c))) continue;
-        per_sample += c == CTC_CH_Q ? j->nq : c == CTC_CH_ENERGY ? 2 : j->nv;
+        per_sample += channel_width(j, c);
     }
     if (samples * per_sample > JOB_MAX_VALUES) {
         return error_at(p->err, JOB_LIMIT_EXCEEDED, "output",
@@ -1687,14 +1944,21 @@ static const char *const job_keys[] = {"name",        "scene",      "controller"
                                        "disturbance", "integrator", "duration",   "output",
                                        "limits",      NULL};
 
-/* the whole check of the spec by the library, after the format's own */
+/* the whole check of the spec by the library, after the format's own; what it finds wrong with
+ * a loop (the mobility, the configuration at q0) is reported at the loop or at q0 */
 static int check_spec(parser *p)
 {
     char msg[512];
     if (p->oom) return out_of_memory(p->err);
     ctc_status st = ctc_sim_check(&p->j->spec, msg, sizeof msg);
     if (st == CTC_ENOMEM) return out_of_memory(p->err);
-    if (st != CTC_OK) return error_at(p->err, JOB_INVALID_FIELD, "", "%s", msg);
+    if (st != CTC_OK) {
+        const char *field = "";
+        if (p->j->spec.chain.loop != NULL && strcmp(loop_error_field(msg), "scene") != 0) {
+            field = loop_error_field(msg);
+        }
+        return error_at(p->err, JOB_INVALID_FIELD, field, "%s", msg);
+    }
     return 0;
 }
 
@@ -1703,7 +1967,7 @@ static int parse_job(const cJSON *doc, const char *default_name, job **out, job_
 {
     job *j = calloc(1, sizeof *j);
     if (j == NULL) return out_of_memory(err);
-    parser p = {.j = j, .err = err, .spherical_body = -1, .ctrl = CTC_CTRL_NONE};
+    parser p = {.j = j, .err = err, .ctrl = CTC_CTRL_NONE};
     j->normalised = p.norm = cJSON_CreateObject();
     if (p.norm == NULL || check_keys(&p, doc, "", job_keys, NULL, NULL) != 0 ||
         parse_name(&p, doc, default_name) != 0 || parse_scene(&p, doc) != 0 ||
@@ -1910,7 +2174,7 @@ int job_parse(const char *text, size_t len, job **out, job_error *err)
 void job_free(job *j)
 {
     if (j == NULL) return;
-    for (int i = 0; j->traj != NULL && i < j->nv; i++) ctc_traj_free(&j->traj[i]);
+    for (int i = 0; j->traj != NULL && i < j->nind; i++) ctc_traj_free(&j->traj[i]);
     free(j->traj);
     free(j->disturb);
     free(j->gains);
@@ -1918,6 +2182,7 @@ void job_free(job *j)
     free(j->v0);
     free(j->bodies);
     free(j->joints);
+    free(j->independent);
     free(j->name);
     free(j->preset);
     cJSON_Delete(j->normalised);

@@ -26,25 +26,53 @@
  *                      {"type": "revolute"|"prismatic"|"cylindrical"|"spherical"|"fixed",
  *                       "axis": [x,y,z] (required for revolute, prismatic, cylindrical; not
  *                       allowed for spherical and fixed), "location": [x,y,z] m in the parent's
- *                       frame (the world's for the first body; default [0,0,0])}
+ *                       frame (the world's for the first body; default [0,0,0]),
+ *                       "independent": true (default) | false: actuated, or passive (its motion
+ *                       follows from the loop); false only with a "loop" (an open chain is
+ *                       fully actuated)}
+ *       "loop"      optional: closes the chain into one kinematic loop (model.h): a closing
+ *                   joint from the last body (the tip) to a point fixed in the world:
+ *           "joint"    {"type": "revolute"|"prismatic"|"spherical", "axis": [x,y,z] (required
+ *                       for revolute and prismatic, not allowed for spherical; in the tip's
+ *                       frame), "location": [x,y,z] m, the joint's centre in the tip's frame
+ *                       (default [0,0,0]), "independent": false (default) | true}
+ *           "anchor"   [x,y,z] m, required: the joint's centre on the ground, world frame
+ *           "stabilization"  how the state is kept on the closure (sim.h), default "project":
+ *                      {"method": "project", "tol": 1e-12 (m or rad, > 0)}
+ *                    | {"method": "baumgarte", "alpha": 10, "beta": 10 (1/s, >= 0, not both 0)}
+ *                    | {"method": "none"}
+ *           "cond_max" > 1, default 1e10: the run stops as "singular" when the condition
+ *                      estimate of the closed chain's boundary solve passes it
+ *                   A loop needs at least 2 bodies. Its independent coordinates (nind: the
+ *                   velocity coordinates of the independent joints, the closing joint's last; 1
+ *                   for a revolute or prismatic closing joint, 3 for a spherical one) are the
+ *                   ones the controller drives: with a controller their count must equal the
+ *                   loop's mobility; a passive run may leave every joint dependent.
  *       "q0"        array of nq numbers (default: all zero, identity quaternions; a spherical
- *                   joint's quaternion (w, x, y, z) must have unit length to 1e-6)
- *       "v0"        array of nv numbers (default: all zero)
+ *                   joint's quaternion (w, x, y, z) must have unit length to 1e-6). With a loop,
+ *                   the independent joints' entries are exact and the dependent ones a guess:
+ *                   the run first puts q0 onto the closure (the correction is in the metrics)
+ *       "v0"        array of nv numbers (default: all zero); with a loop the dependent joints'
+ *                   velocities are replaced by the ones that keep the loop closed
  *   "controller"  object, required:
  *       "type"      "none" | "pd" | "pid" | "poles" | "lqr"
  *       pd:    "kp", "kv"                   or "zeta", "tau"
  *       pid:   "kp", "kv", "ki"             or "zeta", "tau", "ki"
  *       poles: "poles": three entries, each a number (real pole) or {"re": x, "im": y} (both)
  *       lqr:   "Q": 3x3 array of rows or [q1, q2, q3] (diagonal), "lambda": number > 0
- *       "joints"  optional array of nv objects, one per coordinate, each with any of the type's
+ *       "joints"  optional array of nind objects, one per coordinate, each with any of the type's
  *                 gain keys above to override them for that coordinate ({} keeps them); for pd
  *                 and pid, an override that names the other pair ("zeta"/"tau" where the
  *                 controller has "kp"/"kv", or the reverse) replaces the pair and must give both
  *       "model"   optional {"mass_scale": s > 0, "inertia_scale": s > 0}, default 1 and 1:
  *                 the controller's model of the plant (model error)
- *     "none" allows only "type"; other types need a trajectory, and no spherical joint (error at
- *     "controller.type": a quaternion error is not a per-coordinate error).
- *   "trajectory"  one object for every coordinate, or an array of nv objects (required with a
+ *     "none" allows only "type"; other types need a trajectory, and no independent spherical
+ *     joint (error at "controller.type": a quaternion error is not a per-coordinate error).
+ *     The controlled coordinates (nind of them) are every coordinate of an open chain (nind = nv)
+ *     and the independent coordinates of a loop, in joint order, the closing joint's last; the
+ *     per-coordinate arrays below ("controller.joints", "trajectory", "disturbance") have nind
+ *     entries.
+ *   "trajectory"  one object for every coordinate, or an array of nind objects (required with a
  *                 controller, not allowed without):
  *       {"type": "constant", "value": v}
  *       {"type": "sine"|"cosine", "amplitude": A, "period": T > 0, "phase": 0, "offset": 0}
@@ -52,7 +80,7 @@
  *       {"type": "min_jerk", "from": q0, "to": q1, "start": t0, "end": t1 > t0}
  *       {"type": "spline", "times": [...], "values": [...], "boundary": "clamped"|"natural"}
  *   "disturbance" optional (default {"type": "none"}), one object for every coordinate or an
- *                 array of nv objects:
+ *                 array of nind objects:
  *       {"type": "none"} | {"type": "constant", "value": z}
  *       | {"type": "sine", "amplitude", "period", "phase" (0), "offset" (0)}
  *       | {"type": "step", "value": z, "time": t}
@@ -64,7 +92,8 @@
  *   "duration"    s, required, 0 < duration <= JOB_MAX_DURATION
  *   "output"      optional: {"interval": dt, 0 < dt <= duration (default 0.01 s, or the duration
  *                 when shorter), "channels": ["q", "qdot", "q_des", "qdot_des", "e", "tau", "w",
- *                 "energy"] (default: all that apply; q_des, qdot_des, e and w need a controller)}
+ *                 "energy", "loop"] (default: all that apply; q_des, qdot_des, e and w need a
+ *                 controller, loop a loop, tau at least one controlled coordinate)}
  *   "limits"      optional: {"max_speed": rad/s or m/s, > 0 (default 1e6), "wall_time": s >= 0
  *                 (0 = none)}
  *
@@ -81,11 +110,15 @@
  * the nearest path: a controller's design at "controller" or "controller.joints[i]"; a
  * trajectory's or disturbance's parameters at "trajectory", "trajectory[i]", ...; the integrator
  * at "integrator"; a shape at "scene.bodies[k].shape"; what only ctc_model_build finds (inertia
- * tensors, a planar form asked of a spatial chain) at "scene". A failed allocation is reported as
- * LIMIT_EXCEEDED with the message "out of memory" (there is no code of its own).
+ * tensors, a planar form asked of a spatial chain) at "scene"; what the library finds wrong with a
+ * loop (its closing joint, its mobility against the independent coordinates, a singular or
+ * over-constrained configuration at q0) at "scene.loop", except a q0 from which the loop cannot
+ * be closed, at "scene.q0". A failed allocation is reported as NO_MEMORY with the message "out
+ * of memory".
  *
  * The normalised document has the keys above in the order above, every default written out
- * (q0, v0 and the channel list explicitly), the preset expanded; it parses to the same spec.
+ * (q0, v0, every joint's "independent" flag, a loop's settings and the channel list
+ * explicitly), the preset expanded; it parses to the same spec.
  * cJSON 1.7 prints a number with 15 significant digits when they read back within DBL_EPSILON
  * relative, so a printed document may differ from the spec in the last bit of such numbers.
  */
@@ -128,14 +161,19 @@ typedef struct job {
     char *preset;          /* the preset it came from, or NULL */
     ctc_sim_spec spec;     /* ready for ctc_sim_run */
     int nq, nv;            /* sizes of the arrays below */
+    int nind;              /* controlled coordinates: nv for an open chain, the independent
+                              coordinates of a loop (model.h) */
     ctc_body_spec *bodies; /* (nbodies) */
     ctc_joint_spec *joints;
-    double *q0, *v0;      /* (nq), (nv) */
-    ctc_gains *gains;     /* (nv) designed gains, NULL when passive */
-    ctc_traj *traj;       /* (nv) NULL when passive */
-    ctc_disturb *disturb; /* (nv) NULL when none */
-    cJSON *normalised;    /* the job with the preset expanded and every default filled in; itself
-                             a valid job document. Owned. */
+    ctc_loop_spec loop;         /* the closing joint; spec.chain.loop points here with a loop */
+    unsigned char *independent; /* (nbodies + 1) with a loop, the closing joint last; NULL for an
+                                   open chain (spec.chain.independent) */
+    double *q0, *v0;            /* (nq), (nv) */
+    ctc_gains *gains;           /* (nind) designed gains, NULL when passive */
+    ctc_traj *traj;             /* (nind) NULL when passive */
+    ctc_disturb *disturb;       /* (nind) NULL when none */
+    cJSON *normalised; /* the job with the preset expanded and every default filled in; itself
+                          a valid job document. Owned. */
 } job;
 
 /* Parses len bytes of JSON text (need not be terminated). Returns 0 and *out (free with

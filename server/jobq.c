@@ -182,6 +182,7 @@ static store_status store_status_of(ctc_run_status st)
         return STORE_CANCELLED;
     case CTC_RUN_FAILED:
     case CTC_RUN_TIMEOUT:
+    case CTC_RUN_SINGULAR: /* the message says why; the store keeps no status of its own */
         break;
     }
     return STORE_FAILED;

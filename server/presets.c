@@ -17,8 +17,40 @@
  *    say so in the name and the summary;
  *  - n-link pendulum (section 7.3): n rods as above, q0_k = (-1)^k pi/6 (k = 1..n, Eq. 84),
  *    v0 = 0, q_d = 0, PD, no disturbance.
- * Every preset runs 5 s with dopri5 (the method of MATLAB's ode45, which the paper used) at
- * rtol 1e-8, atol 1e-10, and samples every 0.01 s; all of it is written out, defaults included.
+ * Every preset of the open chains runs 5 s with dopri5 (the method of MATLAB's ode45, which the
+ * paper used) at rtol 1e-8, atol 1e-10, and samples every 0.01 s; all of it is written out,
+ * defaults included. The closed chains (loop presets, model.h) close the chain with a revolute
+ * joint from the last body to an anchor in the world, stabilised by projection (tol 1e-12):
+ *  - planar five-bar (section 7.2, DESIGN.md section 7 scene 3): five uniform rods of lengths
+ *    (1, 1, 0.5, 1, 1) m, 1 kg each, hanging along -y at q = 0, revolute joints about +z, joint
+ *    0 at the origin, each next one at the previous rod's end, gravity -y; joints 0, 1 and 2
+ *    independent (the torques of the paper act at the inboard joints of bodies 1-3), joints 3
+ *    and 4 and the closing joint at the end of rod 5 dependent; q0 = (-pi/8, 5 pi/8, 3 pi/8,
+ *    3 pi/8, 5 pi/8), v0 = 0. The paper omits its ground pivots: the anchor is where q0 puts
+ *    the end of rod 5, sum_k L_k (sin theta_k, -cos theta_k) with theta_k = q_0 + ... + q_k,
+ *    i.e. (-0.28113192973418280, -0.67871251758038230, 0) m. Set point (0, pi/4, -3 pi/4) for
+ *    joints 0-2 (reachable: the end of rod 3 is then 1.14 m from the anchor, within the 2 m of
+ *    rods 4 and 5), PD (kp 100, kv 20), PID, poles or LQR with the gains above, no
+ *    disturbance, 10 s at rtol 1e-8, atol 1e-10;
+ *  - planar four-bar crank-rocker (not in the paper; Grashof: 0.4 + 1 <= 1 + 0.8): ground link
+ *    1 m along +x from the crank's pivot at the origin to the anchor (1, 0, 0), crank 0.4 m,
+ *    coupler 1 m, rocker 0.8 m, uniform rods of 1 kg/m hanging along -y at q = 0, revolute
+ *    joints about +z, gravity -y, every joint dependent (a passive run needs no independent
+ *    one). q0: the crank at 2 pi/3 from hanging down (30 degrees above +x), the coupler-rocker
+ *    joint where the coupler's and the rocker's circles meet above the line from the crank's end
+ *    to the anchor: q0 = (2.0943951023931953, 0.10035043422724721, -2.3935368163015450) (the
+ *    coupler-rocker joint at (1.158, 0.784) m). v0 = 0, no control, 10 s at rtol 1e-10, atol
+ *    1e-12, so the energy drift shows the integration and the projection alone;
+ *  - spatial RSSR linkage (not in the paper): boxes of 1 kg/m with a 0.04 m square section,
+ *    each along its body x axis from its inboard joint: crank 0.3 m, revolute about the world z
+ *    axis at the origin; coupler 1 m, spherical at the crank's end; rocker 0.6 m, spherical at
+ *    the coupler's end; the closing joint revolute about the rocker's y axis at its end, to the
+ *    anchor (0.9, 0.8, 0.6) m: the rocker turns about the world y axis there, square to the
+ *    crank's axis, so the loop is truly spatial (mobility 2: the crank's motion and the
+ *    coupler's idle spin about its own axis). q0 closes exactly: the crank along +x, the
+ *    coupler along (0, 0.8, 0.6) (a quarter turn about (0, -0.6, 0.8), quaternion (1/sqrt 2)
+ *    (1, 0, -0.6, 0.8)), the rocker parallel to the world (the inverse turn); v0 = 0, gravity
+ *    -z, every joint dependent, no control, 5 s at rtol 1e-10, atol 1e-12.
  *
  * Documents are built with cJSON. Every node is added through one helper that remembers a failed
  * allocation, so the builders read as the document they write and check for memory once, at the
@@ -101,14 +133,15 @@ static void put_vec3(doc_builder *b, cJSON *parent, const char *key, double x, d
     put_vector(b, parent, key, 3, v);
 }
 
-/* {"type": "revolute", "axis": axis, "location": location} */
-static void put_revolute(doc_builder *b, cJSON *body, const double axis[3],
-                         const double location[3])
+/* {"type": "revolute", "axis": axis, "location": location} as body's "joint"; returns it */
+static cJSON *put_revolute(doc_builder *b, cJSON *body, const double axis[3],
+                           const double location[3])
 {
     cJSON *joint = put_object(b, body, "joint");
     put_string(b, joint, "type", "revolute");
     put_vector(b, joint, "axis", 3, axis);
     put_vector(b, joint, "location", 3, location);
+    return joint;
 }
 
 /* Returns the finished document, or NULL with an out-of-memory error (the document deleted). */
@@ -193,16 +226,23 @@ static void put_constant_disturbance(doc_builder *b, cJSON *doc, double value)
     put_number(b, z, "value", value);
 }
 
-/* "integrator", "duration" and "output", the same for every preset */
-static void put_run_settings(doc_builder *b, cJSON *doc)
+/* "integrator" (dopri5 at rtol, atol), "duration" and "output" (a sample every 0.01 s) */
+static void put_run_settings_of(doc_builder *b, cJSON *doc, double duration, double rtol,
+                                double atol)
 {
     cJSON *integ = put_object(b, doc, "integrator");
     put_string(b, integ, "method", "dopri5");
-    put_number(b, integ, "rtol", 1e-8);
-    put_number(b, integ, "atol", 1e-10);
-    put_number(b, doc, "duration", 5);
+    put_number(b, integ, "rtol", rtol);
+    put_number(b, integ, "atol", atol);
+    put_number(b, doc, "duration", duration);
     cJSON *out = put_object(b, doc, "output");
     put_number(b, out, "interval", 0.01);
+}
+
+/* the run settings of the paper's open chains: 5 s, rtol 1e-8, atol 1e-10 */
+static void put_run_settings(doc_builder *b, cJSON *doc)
+{
+    put_run_settings_of(b, doc, 5, 1e-8, 1e-10);
 }
 
 /* ---- the scenes ---- */
@@ -351,6 +391,252 @@ static cJSON *n_link_pendulum(const cJSON *request, job_error *err)
     return finish(&b, doc, "n_link_pendulum", err);
 }
 
+/* ---- closed chains ---- */
+
+/* x rounded to 15 significant digits. cJSON 1.7 prints a number with 15 digits whenever they
+ * read back within DBL_EPSILON relative, so a computed number may come back one unit in the last
+ * place off; rounded first, it prints and reads back exactly, and a printed preset parses to the
+ * same job. (The change, below 1e-15 relative, is far inside what putting the initial state
+ * onto the closure corrects.) */
+static double printable(double x)
+{
+    char buf[32];
+    snprintf(buf, sizeof buf, "%.15g", x);
+    return strtod(buf, NULL);
+}
+
+/* "scene.bodies": n uniform rods hanging along -y at q = 0, rod k of length[k] and mass[k],
+ * revolute joints about +z, the first at the world origin, each next one at the end of its
+ * parent; joint k independent when independent[k] */
+static void put_rods(doc_builder *b, cJSON *scene, int n, const double *length, const double *mass,
+                     const unsigned char *independent)
+{
+    static const double axis[3] = {0, 0, 1};
+    cJSON *bodies = put_array(b, scene, "bodies");
+    for (int k = 0; k < n && !b->failed; k++) {
+        char name[32];
+        snprintf(name, sizeof name, "rod %d", k + 1);
+        cJSON *body = put_object(b, bodies, NULL);
+        put_string(b, body, "name", name);
+        put_number(b, body, "mass", mass[k]);
+        cJSON *shape = put_object(b, body, "shape");
+        put_string(b, shape, "type", "rod");
+        put_vec3(b, shape, "end", 0, -length[k], 0);
+        const double location[3] = {0, k == 0 ? 0 : -length[k - 1], 0};
+        cJSON *joint = put_revolute(b, body, axis, location);
+        put(b, joint, "independent", cJSON_CreateBool(independent[k]));
+    }
+}
+
+/* The far end of a planar chain of n rods hanging along -y at q = 0 (put_rods), at q: with the
+ * absolute angle theta_k = q_0 + ... + q_k, rod k runs from the end of rod k-1 (the origin for
+ * k = 0) by length[k] (sin theta_k, -cos theta_k). */
+static void rod_chain_end(int n, const double *length, const double *q, double end[2])
+{
+    double theta = 0;
+    end[0] = end[1] = 0;
+    for (int k = 0; k < n; k++) {
+        theta += q[k];
+        end[0] += length[k] * sin(theta);
+        end[1] -= length[k] * cos(theta);
+    }
+}
+
+/* "scene.loop": a closing joint from the tip, its centre at location (tip frame), to the anchor
+ * (world); dependent; stabilised by projection (the default, written out) */
+static void put_loop(doc_builder *b, cJSON *scene, const char *type, const double *axis,
+                     const double location[3], const double anchor[3])
+{
+    cJSON *loop = put_object(b, scene, "loop");
+    cJSON *joint = put_object(b, loop, "joint");
+    put_string(b, joint, "type", type);
+    if (axis != NULL) put_vector(b, joint, "axis", 3, axis);
+    put_vector(b, joint, "location", 3, location);
+    put(b, joint, "independent", cJSON_CreateFalse());
+    put_vector(b, loop, "anchor", 3, anchor);
+    cJSON *stab = put_object(b, loop, "stabilization");
+    put_string(b, stab, "method", "project");
+    put_number(b, stab, "tol", 1e-12);
+}
+
+/* the planar five-bar of section 7.2 (DESIGN.md section 7, scene 3) */
+#define FIVE_BAR_N 5
+static const double five_bar_length[FIVE_BAR_N] = {1, 1, 0.5, 1, 1}; /* m */
+static const double five_bar_mass[FIVE_BAR_N] = {1, 1, 1, 1, 1};     /* kg */
+
+/* q0 of the five-bar: (-pi/8, 5 pi/8, 3 pi/8, 3 pi/8, 5 pi/8) */
+static void five_bar_q0(double q0[FIVE_BAR_N])
+{
+    const double pi = PRESETS_PI;
+    q0[0] = -pi / 8;
+    q0[1] = 5 * pi / 8;
+    q0[2] = 3 * pi / 8;
+    q0[3] = 3 * pi / 8;
+    q0[4] = 5 * pi / 8;
+}
+
+/* the five-bar's second ground pivot: where q0 puts the end of rod 5 */
+static void five_bar_anchor(double anchor[3])
+{
+    double q0[FIVE_BAR_N], end[2];
+    five_bar_q0(q0);
+    rod_chain_end(FIVE_BAR_N, five_bar_length, q0, end);
+    anchor[0] = printable(end[0]);
+    anchor[1] = printable(end[1]);
+    anchor[2] = 0;
+}
+
+/* Planar five-bar closed chain (section 7.2, Fig. 12): five rods pinned to the ground at both
+ * ends, joints 0-2 driven to the set point (0, pi/4, -3 pi/4), the rest passive. */
+static cJSON *five_bar(const char *preset_name, const char *name, preset_ctrl ctrl, job_error *err)
+{
+    static const double z_axis[3] = {0, 0, 1};
+    static const unsigned char independent[FIVE_BAR_N] = {1, 1, 1, 0, 0};
+    const double rod_end[3] = {0, -five_bar_length[FIVE_BAR_N - 1], 0};
+    const double pi = PRESETS_PI;
+    double q0[FIVE_BAR_N], anchor[3];
+    const double v0[FIVE_BAR_N] = {0, 0, 0, 0, 0};
+    five_bar_q0(q0);
+    five_bar_anchor(anchor);
+    doc_builder b = {0};
+    cJSON *doc = cJSON_CreateObject();
+    put_string(&b, doc, "name", name);
+
+    /* five rods of 1 kg, gravity -y; the closing joint at the tip of rod 5, pinned where q0
+       puts it */
+    cJSON *scene = put_object(&b, doc, "scene");
+    put_vec3(&b, scene, "gravity", 0, -9.81, 0);
+    put_rods(&b, scene, FIVE_BAR_N, five_bar_length, five_bar_mass, independent);
+    put_loop(&b, scene, "revolute", z_axis, rod_end, anchor);
+    put_vector(&b, scene, "q0", FIVE_BAR_N, q0);
+    put_vector(&b, scene, "v0", FIVE_BAR_N, v0);
+
+    /* control of joints 0-2 to a set point, no disturbance */
+    put_controller(&b, doc, ctrl);
+    const double set_point[3] = {0, pi / 4, -3 * pi / 4};
+    cJSON *traj = put_array(&b, doc, "trajectory");
+    for (int i = 0; i < 3; i++) {
+        cJSON *tr = put_object(&b, traj, NULL);
+        put_string(&b, tr, "type", "constant");
+        put_number(&b, tr, "value", set_point[i]);
+    }
+    put_run_settings_of(&b, doc, 10, 1e-8, 1e-10);
+    return finish(&b, doc, preset_name, err);
+}
+
+/* the four-bar crank-rocker: ground link 1 m along +x, crank 0.4 m, coupler 1 m, rocker 0.8 m */
+#define FOUR_BAR_N 3
+static const double four_bar_length[FOUR_BAR_N] = {0.4, 1, 0.8}; /* m: crank, coupler, rocker */
+#define FOUR_BAR_GROUND 1.0                                      /* m */
+#define FOUR_BAR_CRANK_ANGLE (2 * PRESETS_PI / 3) /* rad from hanging down: 30 deg above +x */
+
+/* q0 of the four-bar: the crank at FOUR_BAR_CRANK_ANGLE; the coupler-rocker joint B where the
+ * circles about the crank's end C (radius: the coupler) and about the ground pivot A = (1, 0)
+ * (radius: the rocker) meet, on the left of the line from C to A (above it: elbow up) */
+static void four_bar_q0(double q0[FOUR_BAR_N])
+{
+    const double *len = four_bar_length;
+    double theta1 = FOUR_BAR_CRANK_ANGLE;
+    double cx = len[0] * sin(theta1), cy = -len[0] * cos(theta1);
+    double dx = FOUR_BAR_GROUND - cx, dy = -cy, d = sqrt(dx * dx + dy * dy);
+    double a = (d * d + len[1] * len[1] - len[2] * len[2]) / (2 * d);
+    double h = sqrt(len[1] * len[1] - a * a);
+    double bx = cx + (a * dx - h * dy) / d, by = cy + (a * dy + h * dx) / d;
+    /* absolute angles from hanging down: a rod from P to R has theta = atan2(Rx - Px, Py - Ry);
+       the rocker runs from B to A = (1, 0) */
+    double theta2 = atan2(bx - cx, cy - by), theta3 = atan2(FOUR_BAR_GROUND - bx, by);
+    q0[0] = printable(theta1);
+    q0[1] = printable(theta2 - theta1);
+    q0[2] = printable(theta3 - theta2);
+}
+
+/* Planar four-bar crank-rocker swinging under gravity from rest, every joint passive. */
+static cJSON *four_bar_passive(const cJSON *request, job_error *err)
+{
+    static const double z_axis[3] = {0, 0, 1}, anchor[3] = {FOUR_BAR_GROUND, 0, 0};
+    static const unsigned char independent[FOUR_BAR_N] = {0, 0, 0};
+    const double rocker_end[3] = {0, -four_bar_length[2], 0};
+    const double v0[FOUR_BAR_N] = {0, 0, 0};
+    double q0[FOUR_BAR_N];
+    (void)request;
+    four_bar_q0(q0);
+    doc_builder b = {0};
+    cJSON *doc = cJSON_CreateObject();
+    put_string(&b, doc, "name", "Four-bar linkage (crank-rocker), passive");
+
+    /* rods of 1 kg/m (the masses in kg are the lengths in m), gravity -y; the rocker's end
+       pinned to the ground 1 m from the crank's pivot */
+    cJSON *scene = put_object(&b, doc, "scene");
+    put_vec3(&b, scene, "gravity", 0, -9.81, 0);
+    put_rods(&b, scene, FOUR_BAR_N, four_bar_length, four_bar_length, independent);
+    put_loop(&b, scene, "revolute", z_axis, rocker_end, anchor);
+    put_vector(&b, scene, "q0", FOUR_BAR_N, q0);
+    put_vector(&b, scene, "v0", FOUR_BAR_N, v0);
+    put_controller(&b, doc, PRESET_NONE);
+    put_run_settings_of(&b, doc, 10, 1e-10, 1e-12);
+    return finish(&b, doc, "four_bar_passive", err);
+}
+
+/* the spatial RSSR linkage: crank 0.3 m about the world z axis at the origin, coupler 1 m,
+ * rocker 0.6 m turning about the world y axis at the anchor (0.9, 0.8, 0.6) */
+#define RSSR_CRANK 0.3
+#define RSSR_COUPLER 1.0
+#define RSSR_ROCKER 0.6
+#define RSSR_THICKNESS 0.04 /* m, the boxes' square section */
+
+/* one box body along its own x axis from its inboard joint, 1 kg/m; the joint of the given type
+ * (axis NULL for spherical) at location in the parent's frame, dependent */
+static void put_bar(doc_builder *b, cJSON *bodies, const char *name, double length,
+                    const char *joint_type, const double *axis, const double location[3])
+{
+    cJSON *body = put_object(b, bodies, NULL);
+    put_string(b, body, "name", name);
+    put_number(b, body, "mass", length);
+    cJSON *shape = put_object(b, body, "shape");
+    put_string(b, shape, "type", "box");
+    put_vec3(b, shape, "size", length, RSSR_THICKNESS, RSSR_THICKNESS);
+    put_vec3(b, shape, "centre", length / 2, 0, 0);
+    cJSON *joint = put_object(b, body, "joint");
+    put_string(b, joint, "type", joint_type);
+    if (axis != NULL) put_vector(b, joint, "axis", 3, axis);
+    put_vector(b, joint, "location", 3, location);
+    put(b, joint, "independent", cJSON_CreateFalse());
+}
+
+/* Spatial RSSR linkage swinging under gravity -z from rest, every joint passive. */
+static cJSON *rssr_passive(const cJSON *request, job_error *err)
+{
+    static const double z_axis[3] = {0, 0, 1}, y_axis[3] = {0, 1, 0}, origin[3] = {0, 0, 0};
+    static const double crank_end[3] = {RSSR_CRANK, 0, 0}, coupler_end[3] = {RSSR_COUPLER, 0, 0};
+    static const double rocker_end[3] = {RSSR_ROCKER, 0, 0};
+    /* (crank + rocker, 0.8 coupler, 0.6 coupler), written as the numbers it prints as */
+    static const double anchor[3] = {0.9, 0.8, 0.6};
+    (void)request;
+
+    /* q0: the crank along +x (angle 0); the coupler along u = (0, 0.8, 0.6), a quarter turn of
+       its x axis about x-hat x u = (0, -0.6, 0.8); the rocker back parallel to the world, so its
+       x axis points from the coupler's end to the anchor and its y axis is the closing axis */
+    const double c = printable(sqrt(0.5)), s6 = printable(0.6 * c), s8 = printable(0.8 * c);
+    const double q0[9] = {0, c, 0, -s6, s8, c, 0, s6, -s8};
+    const double v0[7] = {0, 0, 0, 0, 0, 0, 0};
+    doc_builder b = {0};
+    cJSON *doc = cJSON_CreateObject();
+    put_string(&b, doc, "name", "Spatial RSSR linkage, passive (gravity -z)");
+
+    cJSON *scene = put_object(&b, doc, "scene");
+    put_vec3(&b, scene, "gravity", 0, 0, -9.81);
+    cJSON *bodies = put_array(&b, scene, "bodies");
+    put_bar(&b, bodies, "crank", RSSR_CRANK, "revolute", z_axis, origin);
+    put_bar(&b, bodies, "coupler", RSSR_COUPLER, "spherical", NULL, crank_end);
+    put_bar(&b, bodies, "rocker", RSSR_ROCKER, "spherical", NULL, coupler_end);
+    put_loop(&b, scene, "revolute", y_axis, rocker_end, anchor);
+    put_vector(&b, scene, "q0", 9, q0);
+    put_vector(&b, scene, "v0", 7, v0);
+    put_controller(&b, doc, PRESET_NONE);
+    put_run_settings_of(&b, doc, 5, 1e-10, 1e-12);
+    return finish(&b, doc, "rssr_passive", err);
+}
+
 /* ---- the table ---- */
 
 #define TRIPLE(suffix, ctrl, label)                                                                \
@@ -377,6 +663,17 @@ SPATIAL(poles, PRESET_POLES,
         "Spatial double pendulum, pole placement (" PAPER ", sec. 7.1; gravity -z)")
 SPATIAL(lqr, PRESET_LQR, "Spatial double pendulum, LQR (" PAPER ", sec. 7.1; gravity -z)")
 
+#define FIVE_BAR(suffix, ctrl, label)                                                              \
+    static cJSON *build_five_bar_##suffix(const cJSON *request, job_error *err)                    \
+    {                                                                                              \
+        (void)request;                                                                             \
+        return five_bar("five_bar_" #suffix, label, ctrl, err);                                    \
+    }
+FIVE_BAR(pd, PRESET_PD, "Five-bar closed chain, PD (" PAPER ", sec. 7.2)")
+FIVE_BAR(pid, PRESET_PID, "Five-bar closed chain, PID (" PAPER ", sec. 7.2)")
+FIVE_BAR(poles, PRESET_POLES, "Five-bar closed chain, pole placement (" PAPER ", sec. 7.2)")
+FIVE_BAR(lqr, PRESET_LQR, "Five-bar closed chain, LQR (" PAPER ", sec. 7.2)")
+
 static const char *const no_params[] = {NULL};
 static const char *const n_link_params[] = {"n", NULL};
 
@@ -388,6 +685,8 @@ static const char *const n_link_params[] = {"n", NULL};
 #define PD_GAINS "PD kp 100 kv 20"
 #define POLES "poles -2 -2.1 -2.2"
 #define LQR_WEIGHTS "LQR Q = I lambda 0.01"
+#define FIVE_BAR_SUMMARY(ctrl)                                                                     \
+    "Five-bar closed chain of sec. 7.2, joints 0-2 to (0, pi/4, -3 pi/4), " ctrl ", 10 s"
 
 static const preset preset_table[] = {
     {"triple_pendulum_pd", TRIPLE_SUMMARY(PD_GAINS), no_params, build_triple_pendulum_pd},
@@ -408,6 +707,18 @@ static const preset preset_table[] = {
     {"n_link_pendulum",
      "Pendulum of n rods (\"n\" 2..4096, default 8) from +-pi/6 to rest, " PD_GAINS, n_link_params,
      n_link_pendulum},
+    {"five_bar_pd", FIVE_BAR_SUMMARY(PD_GAINS), no_params, build_five_bar_pd},
+    {"five_bar_pid", FIVE_BAR_SUMMARY(PID_GAINS), no_params, build_five_bar_pid},
+    {"five_bar_poles", FIVE_BAR_SUMMARY(POLES), no_params, build_five_bar_poles},
+    {"five_bar_lqr", FIVE_BAR_SUMMARY(LQR_WEIGHTS), no_params, build_five_bar_lqr},
+    {"four_bar_passive",
+     "Four-bar crank-rocker (ground 1, crank 0.4, coupler 1, rocker 0.8 m) falling from rest, "
+     "all joints passive",
+     no_params, four_bar_passive},
+    {"rssr_passive",
+     "Spatial RSSR linkage (crank about z, rocker about y) falling from rest, gravity -z, all "
+     "joints passive",
+     no_params, rssr_passive},
 };
 
 const preset *presets_list(int *count)

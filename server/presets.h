@@ -8,6 +8,10 @@
  *   triple_pendulum_{pd,pid,poles,lqr,passive}   paper 7.1, Fig. 6(a), 7, 8
  *   spatial_double_pendulum_{pd,pid,poles,lqr}   paper 7.1, Fig. 6(b), 9, 10 (gravity -z)
  *   n_link_pendulum                              paper 7.3, PD; parameter "n" (2..4096, default 8)
+ *   five_bar_{pd,pid,poles,lqr}                  paper 7.2, Fig. 12: a planar closed chain
+ *   four_bar_passive                             a planar four-bar crank-rocker, no control
+ *   rssr_passive                                 a spatial RSSR linkage, no control (gravity -z)
+ * presets.c describes each scene's geometry and numbers.
  */
 #ifndef PRESETS_H
 #define PRESETS_H

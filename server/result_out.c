@@ -10,6 +10,7 @@
 #include <string.h>
 
 static const char *const energy_parts[2] = {"kinetic", "potential"};
+static const char *const loop_parts[2] = {"position", "velocity"};
 
 static cJSON *number_or_null(double x)
 {
@@ -24,6 +25,50 @@ static cJSON *array_or_null(const double *x, int n)
     return a;
 }
 
+/* [{"joint": k, "coordinate": c}, ...]: the controlled coordinates of j in joint order, each
+ * with its joint (n: the closing joint) and its index in qdot (the closing joint's: nv on) */
+static cJSON *coordinates_json(const job *j)
+{
+    const ctc_chain_spec *chain = &j->spec.chain;
+    int n = chain->nbodies, vadr = 0;
+    cJSON *a = cJSON_CreateArray();
+    for (int k = 0; a && k <= n; k++) {
+        if (k == n && !chain->loop) break;
+        ctc_joint_type type = k < n ? chain->joints[k].type : chain->loop->joint.type;
+        int nv = ctc_joint_nv(type);
+        if (!chain->independent || chain->independent[k]) {
+            for (int i = 0; i < nv; i++) {
+                cJSON *e = cJSON_CreateObject();
+                cJSON_AddNumberToObject(e, "joint", k);
+                cJSON_AddNumberToObject(e, "coordinate", vadr + i);
+                cJSON_AddItemToArray(a, e);
+            }
+        }
+        vadr += nv;
+    }
+    return a;
+}
+
+/* the loop's figures (sim.h): residuals, condition, projections, the initial correction */
+static cJSON *loop_json(const ctc_sim_metrics *m)
+{
+    cJSON *o = cJSON_CreateObject();
+    if (!o) return NULL;
+    cJSON_AddItemToObject(o, "residual_max", number_or_null(m->loop_res_max));
+    cJSON_AddItemToObject(o, "velocity_residual_max", number_or_null(m->loop_vres_max));
+    cJSON_AddItemToObject(o, "cond_max", number_or_null(m->loop_cond_max));
+    cJSON_AddNumberToObject(o, "projections", (double)m->projections);
+    cJSON *init = cJSON_AddObjectToObject(o, "initial");
+    cJSON_AddNumberToObject(init, "iterations", m->initial.iterations);
+    cJSON_AddItemToObject(init, "dq_max", number_or_null(m->initial.dq_max));
+    cJSON_AddItemToObject(init, "dv_max", number_or_null(m->initial.dv_max));
+    cJSON_AddItemToObject(init, "residual_before", number_or_null(m->initial.res_before));
+    cJSON_AddItemToObject(init, "residual_after", number_or_null(m->initial.res_after));
+    cJSON_AddItemToObject(init, "velocity_residual_before", number_or_null(m->initial.vres_before));
+    cJSON_AddItemToObject(init, "velocity_residual_after", number_or_null(m->initial.vres_after));
+    return o;
+}
+
 cJSON *result_metrics_json(const ctc_sim_result *r, const job *j)
 {
     const ctc_sim_metrics *m = &r->metrics;
@@ -34,6 +79,8 @@ cJSON *result_metrics_json(const ctc_sim_result *r, const job *j)
     cJSON_AddStringToObject(o, "form", ctc_form_name(m->form));
     cJSON_AddNumberToObject(o, "nq", r->nq);
     cJSON_AddNumberToObject(o, "nv", r->nv);
+    cJSON_AddNumberToObject(o, "nind", r->nind);
+    if (j) cJSON_AddItemToObject(o, "coordinates", coordinates_json(j));
     cJSON_AddNumberToObject(o, "samples", r->nsamples);
     cJSON_AddNumberToObject(o, "t_end", m->t_end);
     cJSON_AddItemToObject(o, "e_max", array_or_null(m->e_max, m->nv));
@@ -52,9 +99,11 @@ cJSON *result_metrics_json(const ctc_sim_result *r, const job *j)
         cJSON_AddNumberToObject(o, "diverged_joint", m->diverged_joint);
     else
         cJSON_AddNullToObject(o, "diverged_joint");
+    if (j ? j->spec.chain.loop != NULL : !isnan(m->loop_res_max))
+        cJSON_AddItemToObject(o, "loop", loop_json(m));
     if (j && j->gains) {
         cJSON *g = cJSON_AddArrayToObject(o, "gains");
-        for (int i = 0; g && i < j->nv; i++) {
+        for (int i = 0; g && i < j->nind; i++) {
             cJSON *e = cJSON_CreateObject();
             cJSON_AddNumberToObject(e, "ki", j->gains[i].ki);
             cJSON_AddNumberToObject(e, "kp", j->gains[i].kp);
@@ -107,7 +156,8 @@ static int every_of(const result_select *sel)
 /* column i of channel c is written: the coordinate filter applies to nv-wide channels */
 static int column_kept(const ctc_sim_result *r, const result_select *sel, int c, int i)
 {
-    if (!sel || !sel->coords || c == CTC_CH_ENERGY || r->width[c] != r->nv) return 1;
+    if (!sel || !sel->coords || c == CTC_CH_ENERGY || c == CTC_CH_LOOP || r->width[c] != r->nv)
+        return 1;
     return sel->coords[i] != 0;
 }
 
@@ -115,6 +165,8 @@ static void column_name(char *buf, size_t len, int c, int i)
 {
     if (c == CTC_CH_ENERGY)
         snprintf(buf, len, "energy[%s]", energy_parts[i]);
+    else if (c == CTC_CH_LOOP)
+        snprintf(buf, len, "loop[%s]", loop_parts[i]);
     else
         snprintf(buf, len, "%s[%d]", ctc_channel_name((ctc_channel)c), i);
 }

@@ -935,18 +935,23 @@ static int channel_of(const char *name)
     return -2;
 }
 
-/* the width a channel must have in a job of nv coordinates (0: any, for q, whose nq may differ
- * from nv with spherical joints) */
-static int expected_width(int c, int nv)
+/* the width a channel must have in a job of nv coordinates whose controller's channels have
+ * nind columns (0: any - q, whose nq may differ from nv with spherical joints, and the first of
+ * the controller's channels, which sets nind: nv of an open chain, fewer of a loop) */
+static int expected_width(int c, int nv, int nind)
 {
-    return c == -1 ? 1 : c == CTC_CH_ENERGY ? 2 : c == CTC_CH_Q ? 0 : nv;
+    return c == -1                                  ? 1
+           : c == CTC_CH_ENERGY || c == CTC_CH_LOOP ? 2
+           : c == CTC_CH_QD                         ? nv
+           : c == CTC_CH_Q                          ? 0
+                                                    : nind;
 }
 
 int store_get_series(store *s, int64_t id, ctc_sim_result **out, char *err, size_t errlen)
 {
     sqlite3_stmt *q = s->stmt[ST_SERIES_GET];
     ctc_sim_result *r = NULL;
-    int rc = -1, step, nv = 0;
+    int rc = -1, step, nv = 0, nind = 0;
     *out = NULL;
     sqlite3_bind_int64(q, 1, id);
     /* one statement, one snapshot: the rows are consistent with each other and with the job */
@@ -972,10 +977,21 @@ int store_get_series(store *s, int64_t id, ctc_sim_result **out, char *err, size
                     name ? name : "");
             goto done;
         }
-        if (width < 1 || (expected_width(c, nv) && width != expected_width(c, nv))) {
+        int want = expected_width(c, nv, nind);
+        if (width < 1 || (want && width != want)) {
             set_err(err, errlen, "job %lld: series %s has width %d, expected %d", (long long)id,
-                    name, width, expected_width(c, nv));
+                    name, width, want);
             goto done;
+        }
+        if (c >= 0 && c != CTC_CH_Q && c != CTC_CH_QD && c != CTC_CH_ENERGY && c != CTC_CH_LOOP &&
+            nind == 0) {
+            /* the first of the controller's channels: at most one column per coordinate */
+            if (width > nv) {
+                set_err(err, errlen, "job %lld: series %s has width %d, expected at most %d",
+                        (long long)id, name, width, nv);
+                goto done;
+            }
+            nind = width;
         }
         if (nsamples < 0 || nsamples > INT_MAX || (r->nsamples >= 0 && nsamples != r->nsamples)) {
             set_err(err, errlen, "job %lld: series %s has %lld samples, the others %d",

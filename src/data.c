@@ -10,7 +10,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     ctc_data *d = calloc(1, sizeof *d);
     if (d == NULL) return NULL;
     size_t n = (size_t)m->nbodies, dim = (size_t)m->dim;
-    size_t nt = n > 1 ? n - 1 : 1;
+    size_t nt = n > 1 ? n - 1 : 1, nj = (size_t)m->njoints;
     d->dim = m->dim;
     d->hsize = (int)(3 * dim * dim + 2 * dim);
     d->singular_joint = -1;
@@ -20,9 +20,9 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->xcom = calloc(n * 3, sizeof(double));
     d->omega = calloc(n * 3, sizeof(double));
     d->xvel = calloc(n * 3, sizeof(double));
-    d->jnt_P = calloc(n * 3 * dim, sizeof(double));
-    d->jnt_D = calloc(n * dim * dim, sizeof(double));
-    d->jnt_beta = calloc(n * dim, sizeof(double));
+    d->jnt_P = calloc(nj * 3 * dim, sizeof(double));
+    d->jnt_D = calloc(nj * dim * dim, sizeof(double));
+    d->jnt_beta = calloc(nj * dim, sizeof(double));
     d->hr = calloc(n * 6, sizeof(double));
     d->hbody = calloc(n * (size_t)d->hsize, sizeof(double));
     d->hfwd = calloc(nt * (size_t)d->hsize, sizeof(double));
@@ -35,14 +35,16 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->icomp = calloc((2 * n - 1) * (size_t)d->csize, sizeof(double));
     d->inv_e = calloc(n * dim, sizeof(double));
     d->tload = calloc((2 * n - 1) * 2 * dim, sizeof(double));
-    d->jnt_load = calloc(n * dim, sizeof(double));
-    d->jnt_load_inv = calloc(n * dim, sizeof(double));
+    d->jnt_load = calloc(nj * dim, sizeof(double));
+    d->jnt_load_inv = calloc(nj * dim, sizeof(double));
+    d->loop_cond = 1;
+    d->xbuf = calloc(2 * (size_t)m->nvx + (size_t)m->nq + 1, sizeof(double));
     if (d->xpos == NULL || d->xrot == NULL || d->xcom == NULL || d->omega == NULL ||
         d->xvel == NULL || d->jnt_P == NULL || d->jnt_D == NULL || d->jnt_beta == NULL ||
         d->hr == NULL || d->hbody == NULL || d->hfwd == NULL || d->hinv == NULL ||
         d->fwd_E == NULL || d->fwd_z == NULL || d->inv_E == NULL || d->inv_z == NULL ||
         d->icomp == NULL || d->inv_e == NULL || d->tload == NULL || d->jnt_load == NULL ||
-        d->jnt_load_inv == NULL) {
+        d->jnt_load_inv == NULL || d->xbuf == NULL) {
         ctc_data_free(d);
         return NULL;
     }
@@ -73,5 +75,6 @@ void ctc_data_free(ctc_data *d)
     free(d->tload);
     free(d->jnt_load);
     free(d->jnt_load_inv);
+    free(d->xbuf);
     free(d);
 }

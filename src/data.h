@@ -31,10 +31,26 @@ typedef struct ctc_data {
     double *omega; /* (n x 3) angular velocity, rad/s */
     double *xvel;  /* (n x 3) velocity of the frame origin, m/s */
 
-    /* joint k's maps, world (plane) coordinates: A1(body k) = A2(body k-1) + P qdd + beta */
-    double *jnt_P;    /* (n x 3 x dim) column c at [(3k + c) dim]; nv columns, orthonormal */
-    double *jnt_D;    /* (n x dim x dim) column c at [(dim k + c) dim]; dim - nv columns */
-    double *jnt_beta; /* (n x dim) velocity-product term */
+    /* joint k's maps, world (plane) coordinates: A1(body k) = A2(body k-1) + P qdd + beta; the
+       closing joint of a loop model is k = n (loop.h), with the tip as parent and the ground as
+       child. Sized for njoints. */
+    double *jnt_P;    /* (njoints x 3 x dim) column c at [(3k + c) dim]; nv columns, orthonormal */
+    double *jnt_D;    /* (njoints x dim x dim) column c at [(dim k + c) dim]; dim - nv columns */
+    double *jnt_beta; /* (njoints x dim) velocity-product term */
+
+    /* the closing joint (loop models; loop.h) */
+    double loop_pt[3];   /* m, its centre on the tip, world */
+    double loop_q[4];    /* its coordinates (nq of its type) */
+    double loop_v[3];    /* its velocity coordinates (nv of its type) */
+    double loop_phi[6];  /* position residual D^T delta (dim - nv entries), m / rad */
+    double loop_dphi[6]; /* velocity residual, m/s / rad/s */
+    double baumgarte[2]; /* forward pass: (a, b) adds D^T(A_t + beta) = 2 a dphi + b^2 phi to the
+                            closure, i.e. phi'' + 2 a phi' + b^2 phi = 0 (1/s, 1/s); 0 = none */
+    double *xbuf;        /* (2 nvx + nq) loop models: scratch of the passes and loop.c */
+    int inv_full;        /* 1: the inverse pass of a loop model disassembles every node (no early
+                            stop; for benchmarks and tests). Default 0 */
+    double loop_cond;    /* condition estimate of the last closed-chain boundary solve (1 =
+                            perfect; inf = singular), after diagonal scaling */
 
     /* body handle equations, from ctc_handles */
     double *hr;    /* (n x 6) r1, r2: handle positions relative to the centre of mass, m */
@@ -55,8 +71,10 @@ typedef struct ctc_data {
                       (forward, mobility inverse) or A1 and F2 (composite inverse) */
 
     /* results */
-    double *jnt_load;     /* (n x dim) load on body k at joint k from the forward pass, N m / N */
-    double *jnt_load_inv; /* (n x dim) the same from the inverse pass */
+    double *jnt_load;     /* (njoints x dim) load on body k at joint k from the forward pass,
+                             N m / N; k = n: the load of the closing joint on the ground */
+    double *jnt_load_inv; /* (njoints x dim) the same from the inverse pass (loop models: only
+                             the joints the pruned disassembly reaches, model.h inv_need) */
     int singular_joint;   /* -1, or a joint whose matrix K was not positive definite */
 } ctc_data;
 

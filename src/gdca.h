@@ -13,19 +13,33 @@
  * Neither allocates; both assume a validated model. If a joint's matrix K = h11(right) +
  * h22(left) is not numerically positive definite (it always is for a valid model unless the
  * numbers overflow), d->singular_joint names the joint and the results are NaN.
+ *
+ * Loop models (model.h, paper section 5): forces and accelerations are extended vectors (nvx:
+ * the chain's coordinates, then the closing joint's). The forward pass constrains both terminal
+ * handles - joint 0 to the ground and the closing joint n from the tip to the ground - and
+ * solves the two sets of boundary equations together (the paper's reference [48]); dependent
+ * joints carry no driving force (f of their coordinates is ignored). The inverse pass assembles
+ * across a dependent joint with the forward, projected rule (its acceleration is unknown) and
+ * across an independent joint with the commanded acceleration (Eq. 19), solves the boundary
+ * case of the terminal joints (Eq. 55-65: both independent, one of each, both dependent) and
+ * stops the disassembly where every independent joint's load is known (Fig. 4); it fills f for
+ * the independent coordinates and 0 for the dependent ones. Both record a condition estimate
+ * of the boundary solve in d->loop_cond; when that solve is singular (the independent joints
+ * cannot drive the loop, or its constraints are redundant) d->singular_joint = n and the
+ * results are NaN.
  */
 #ifndef CTC_GDCA_H
 #define CTC_GDCA_H
 
 #include "data.h"
 
-/* Forward dynamics: joint accelerations qacc (nv; rad/s^2, m/s^2) from the driving forces f
- * (nv; N m, N) applied by each joint, gravity included. Also fills d->jnt_load (the whole load
+/* Forward dynamics: joint accelerations qacc (nv, nvx for loops; rad/s^2, m/s^2) from the
+ * driving forces f (nv, nvx for loops; N m, N) applied by each joint, gravity included. Also fills d->jnt_load (the whole load
  * on body k at joint k: constraint plus drive). qacc may not alias f. */
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc);
 
-/* Inverse dynamics for CTC (iGDCA): the driving forces f (nv; N m, N) that make the joint
- * accelerations equal the commanded u (nv), i.e. f = M(q) u + N(q, v) (paper Eq. 18, 44-54).
+/* Inverse dynamics for CTC (iGDCA): the driving forces f (nv, nvx for loops; N m, N) that make
+ * the (independent) joint accelerations equal the commanded u (nv, nvx for loops), i.e. f = M(q) u + N(q, v) (paper Eq. 18, 44-54).
  * Each assembly's handle equations are held in composite form (gdca_inverse.c), which is
  * algebraically the paper's Eq. 32-39 and keeps full accuracy on long chains. Needs
  * ctc_kinematics and ctc_handles for the state. Also fills d->jnt_load_inv. f may not alias u. */
@@ -33,7 +47,9 @@ void ctc_gdca_inverse(const ctc_model *m, ctc_data *d, const double *u, double *
 
 /* The same driving forces by the paper's iGDCA in its literal mobility form (Eq. 26-39), which
  * shares the body records with the forward pass (Eq. 42-43) but loses accuracy on long or
- * stiffly proportioned chains (about eps cond(M)); for comparison and benchmarks. */
+ * stiffly proportioned chains (about eps cond(M)); for comparison and benchmarks. Loop models
+ * always use this form (ctc_gdca_inverse calls it): an assembly with a dependent joint inside is
+ * not a rigid composite. */
 void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u, double *f);
 
 #endif

@@ -11,9 +11,15 @@
  * disassembly each node's joint load gives its acceleration
  *     qdd = P^T (A1^R - A2^L - beta),
  *     A1^R = h11^R F + h12^R F2 + h13^R,   A2^L = h21^L F1 - h22^L F + h23^L.
+ * A loop model's root has both handles jointed to the ground (gdca_loop.h): joint 0 and the
+ * closing joint, each with its constraint load unknown and its driving force known; dependent
+ * joints' driving forces are taken as zero.
  */
 #include "gdca.h"
 
+#include <string.h>
+
+#include "gdca_loop.h"
 #include "gdca_tree.h"
 
 /* the factor E of W = E E^T and z = W Y + P f of joint j between left (NULL: ground) and right */
@@ -54,6 +60,49 @@ static inline void forward_qacc(const ctc_model *m, const ctc_data *d, int j, co
     }
 }
 
+/* P f of joint j (f extended) */
+static inline void joint_drive(const ctc_model *m, const ctc_data *d, int j, const double *f,
+                               double *pf, const int dim)
+{
+    const double *P = d->jnt_P + 3 * dim * j, *fj = f + m->jnt_vadr[j];
+    for (int i = 0; i < dim; i++) pf[i] = 0;
+    for (int c = 0; c < m->jnt_nv[j]; c++) {
+        for (int i = 0; i < dim; i++) pf[i] += P[c * dim + i] * fj[c];
+    }
+}
+
+/* a loop model's root: joint 0 and the closing joint n both join the ground (gdca_loop.h) */
+static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
+                                     const int dim)
+{
+    const int n = m->nbodies;
+    const double *root = ctc_data_handles(m, d, m->root, 0);
+    double *tl = d->tload + (size_t)m->root * 2 * dim;
+    double pf1[CTC_DENSE_MAX], pf2[CTC_DENSE_MAX], a1[CTC_DENSE_MAX], a2[CTC_DENSE_MAX];
+    double off[CTC_DENSE_MAX];
+    static const double rest[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+    const int nc2 = dim - m->jnt_nv[n];
+
+    joint_drive(m, d, 0, f, pf1, dim);
+    joint_drive(m, d, n, f, pf2, dim);
+    for (int c = 0; c < nc2; c++) {
+        off[c] = 2 * d->baumgarte[0] * d->loop_dphi[c] +
+                 d->baumgarte[1] * d->baumgarte[1] * d->loop_phi[c];
+    }
+    gdca_end e1 = {d->jnt_D, dim - m->jnt_nv[0], pf1, d->jnt_beta, NULL};
+    gdca_end e2 = {d->jnt_D + dim * dim * n, nc2, pf2, d->jnt_beta + dim * n, off};
+    if (gdca_loop_boundary(dim, root, &e1, &e2, tl, tl + dim, a1, a2, &d->loop_cond) != 0) {
+        if (d->singular_joint < 0) d->singular_joint = n;
+    }
+    for (int i = 0; i < dim; i++) {
+        d->jnt_load[i] = tl[i];
+        d->jnt_load[dim * n + i] = -tl[dim + i];
+    }
+    /* the closing joint: A(ground) = 0 = A2 + P qdd + beta */
+    forward_qacc(m, d, 0, a1, rest, qacc, dim);
+    forward_qacc(m, d, n, rest, a2, qacc, dim);
+}
+
 static inline void forward_pass(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
                                 const int dim)
 {
@@ -71,19 +120,22 @@ static inline void forward_pass(const ctc_model *m, ctc_data *d, const double *f
                       d->fwd_z + dim * j, d->hfwd + (size_t)i * hs);
     }
 
-    /* root: the ground joint 0 with the free end's load F2 = 0 */
-    const double *root = ctc_data_handles(m, d, m->root, 0);
-    double *tl = d->tload + (size_t)m->root * 2 * dim, a1[CTC_DENSE_MAX];
-    static const double rest[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
-    forward_joint(m, d, 0, NULL, root, f, dim);
-    for (int i = 0; i < dim; i++) {
-        tl[i] = d->fwd_z[i];
-        tl[dim + i] = 0;
-        d->jnt_load[i] = tl[i];
+    if (m->has_loop) {
+        forward_loop_root(m, d, f, qacc, dim);
+    } else { /* root: the ground joint 0 with the free end's load F2 = 0 */
+        const double *root = ctc_data_handles(m, d, m->root, 0);
+        double *tl = d->tload + (size_t)m->root * 2 * dim, a1[CTC_DENSE_MAX];
+        static const double rest[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+        forward_joint(m, d, 0, NULL, root, f, dim);
+        for (int i = 0; i < dim; i++) {
+            tl[i] = d->fwd_z[i];
+            tl[dim + i] = 0;
+            d->jnt_load[i] = tl[i];
+        }
+        ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
+        for (int i = 0; i < dim; i++) a1[i] += root[H13(dim) + i];
+        forward_qacc(m, d, 0, a1, rest, qacc, dim);
     }
-    ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
-    for (int i = 0; i < dim; i++) a1[i] += root[H13(dim) + i];
-    forward_qacc(m, d, 0, a1, rest, qacc, dim);
 
     /* disassembly, parents before children */
     for (int i = m->ntree - 1; i >= 0; i--) {
@@ -124,6 +176,12 @@ static CTC_SPECIALISE void forward_spatial(const ctc_model *m, ctc_data *d, cons
 
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
 {
+    if (m->has_loop) { /* dependent joints carry no driving force */
+        double *fm = d->xbuf;
+        memset(fm, 0, (size_t)m->nvx * sizeof *fm);
+        for (int i = 0; i < m->nind; i++) fm[m->ind_coord[i]] = f[m->ind_coord[i]];
+        f = fm;
+    }
     if (m->form == CTC_FORM_PLANAR) {
         forward_planar(m, d, f, qacc);
     } else {

@@ -248,6 +248,10 @@ static CTC_SPECIALISE void inverse_spatial(const ctc_model *m, ctc_data *d, cons
 
 void ctc_gdca_inverse(const ctc_model *m, ctc_data *d, const double *u, double *f)
 {
+    if (m->has_loop) { /* a dependent joint inside makes an assembly non-rigid */
+        ctc_gdca_inverse_mobility(m, d, u, f);
+        return;
+    }
     if (m->form == CTC_FORM_PLANAR) {
         inverse_planar(m, d, u, f);
     } else {

@@ -15,9 +15,21 @@
  * assembled by the shared rule of gdca_tree.h (Eq. 34-39). At the root the ground joint gives
  * F1 = (h11)^-1 (P u + beta - h13) (Eq. 46). The disassembly recovers each joint's load and its
  * driving force f = P^T F (Eq. 51-52: D^T P = 0, P^T P = 1).
+ *
+ * Loop models (paper section 5) use this form only. Across a dependent joint the acceleration
+ * is unknown, so the joint is assembled with the forward, projected rule and no driving force:
+ *     W = D (D^T K D)^-1 D^T,   F = W (h21^L F1 - h12^R F2 + h23^L - h13^R + beta);
+ * across an independent one with the commanded acceleration as above. The root's two handles
+ * are jointed to the ground (gdca_loop.h), each end's case (independent or dependent terminal
+ * joint, Eq. 55-65) choosing its unknowns. The disassembly visits only the nodes on the way to
+ * an independent joint (model.h inv_need, Fig. 4); the loads of the others are not needed.
  */
 #include "gdca.h"
 
+#include <math.h>
+#include <string.h>
+
+#include "gdca_loop.h"
 #include "gdca_tree.h"
 
 /* the factor E of X = E E^T = K^-1 and z = X Y' of joint j between left (NULL: ground) and right */
@@ -27,16 +39,59 @@ static inline void inverse_joint(const ctc_model *m, ctc_data *d, int j, const d
     const double *P = d->jnt_P + 3 * dim * j, *uj = u + m->jnt_vadr[j];
     double *e = d->inv_E + dim * dim * j, *z = d->inv_z + dim * j;
     double k[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX];
+    const int indep = m->jnt_indep[j], nc = indep ? dim : dim - m->jnt_nv[j];
 
     gdca_joint_K(dim, left, right, k);
-    if (gdca_joint_factor(dim, k, NULL, dim, e) != 0 && d->singular_joint < 0) {
+    if (gdca_joint_factor(dim, k, indep ? NULL : d->jnt_D + dim * dim * j, nc, e) != 0 &&
+        d->singular_joint < 0) {
         d->singular_joint = j;
     }
     gdca_joint_Y0(dim, left, right, d->jnt_beta + dim * j, y);
-    for (int c = 0; c < m->jnt_nv[j]; c++) {
+    for (int c = 0; indep && c < m->jnt_nv[j]; c++) {
         for (int i = 0; i < dim; i++) y[i] += P[c * dim + i] * uj[c];
     }
-    gdca_factor_apply(dim, dim, e, y, z);
+    gdca_factor_apply(dim, nc, e, y, z);
+}
+
+/* the factor's column count of joint j: dim across an independent joint, dim - nv otherwise */
+static inline int inverse_nc(const ctc_model *m, int j, const int dim)
+{
+    return m->jnt_indep[j] ? dim : dim - m->jnt_nv[j];
+}
+
+/* a loop model's root: both handles jointed to the ground, each end independent or dependent */
+static inline void inverse_loop_root(const ctc_model *m, ctc_data *d, const double *u,
+                                     const int dim)
+{
+    const int n = m->nbodies;
+    const double *root = ctc_data_handles(m, d, m->root, 1);
+    double *tl = d->tload + (size_t)m->root * 2 * dim;
+    double a1[CTC_DENSE_MAX], a2[CTC_DENSE_MAX], acc1[CTC_DENSE_MAX], acc2[CTC_DENSE_MAX];
+    static const double zero[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+    gdca_end ends[2];
+
+    for (int side = 0; side < 2; side++) {
+        int j = side ? n : 0;
+        double *a = side ? a2 : a1;
+        const double *P = d->jnt_P + 3 * dim * j, *uj = u + m->jnt_vadr[j];
+        memcpy(a, d->jnt_beta + dim * j, (size_t)dim * sizeof *a);
+        if (m->jnt_indep[j]) { /* commanded: the whole load is unknown (Eq. 55-65) */
+            for (int c = 0; c < m->jnt_nv[j]; c++) {
+                for (int i = 0; i < dim; i++) a[i] += P[c * dim + i] * uj[c];
+            }
+            ends[side] = (gdca_end){NULL, dim, zero, a, NULL};
+        } else {
+            ends[side] = (gdca_end){d->jnt_D + dim * dim * j, dim - m->jnt_nv[j], zero, a, NULL};
+        }
+    }
+    if (gdca_loop_boundary(dim, root, &ends[0], &ends[1], tl, tl + dim, acc1, acc2,
+                           &d->loop_cond) != 0) {
+        if (d->singular_joint < 0) d->singular_joint = n;
+    }
+    for (int i = 0; i < dim; i++) {
+        d->jnt_load_inv[i] = tl[i];
+        d->jnt_load_inv[dim * n + i] = -tl[dim + i];
+    }
 }
 
 /* f_j = P^T F */
@@ -64,33 +119,45 @@ static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u
         const double *right = ctc_data_handles(m, d, node->right, 1);
         int j = node->joint;
         inverse_joint(m, d, j, left, right, u, dim);
-        gdca_assemble(dim, dim, left, right, d->inv_E + dim * dim * j, d->inv_z + dim * j,
-                      d->hinv + (size_t)i * hs);
+        gdca_assemble(dim, inverse_nc(m, j, dim), left, right, d->inv_E + dim * dim * j,
+                      d->inv_z + dim * j, d->hinv + (size_t)i * hs);
     }
 
-    /* root: ground joint 0, free end F2 = 0 */
-    const double *root = ctc_data_handles(m, d, m->root, 1);
     double *tl = d->tload + (size_t)m->root * 2 * dim;
-    inverse_joint(m, d, 0, NULL, root, u, dim);
-    for (int i = 0; i < dim; i++) {
-        tl[i] = d->inv_z[i];
-        tl[dim + i] = 0;
-        d->jnt_load_inv[i] = tl[i];
+    if (m->has_loop) {
+        inverse_loop_root(m, d, u, dim);
+        for (int j = 0; j < m->nvx; j++) f[j] = 0; /* dependent coordinates */
+        if (m->jnt_indep[0]) inverse_drive(m, d, 0, tl, f, dim);
+        if (m->jnt_indep[n]) inverse_drive(m, d, n, d->jnt_load_inv + dim * n, f, dim);
+    } else { /* root: ground joint 0, free end F2 = 0 */
+        const double *root = ctc_data_handles(m, d, m->root, 1);
+        inverse_joint(m, d, 0, NULL, root, u, dim);
+        for (int i = 0; i < dim; i++) {
+            tl[i] = d->inv_z[i];
+            tl[dim + i] = 0;
+            d->jnt_load_inv[i] = tl[i];
+        }
+        inverse_drive(m, d, 0, tl, f, dim);
     }
-    inverse_drive(m, d, 0, tl, f, dim);
 
-    /* disassembly, parents before children */
+    /* disassembly, parents before children; a loop model's stops where no independent joint
+       is left below (Fig. 4) */
+    const int prune = m->has_loop && !d->inv_full;
     for (int i = m->ntree - 1; i >= 0; i--) {
+        if (prune && !m->inv_need[i]) continue;
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 1);
         const double *right = ctc_data_handles(m, d, node->right, 1);
         const double *f1 = d->tload + (size_t)(n + i) * 2 * dim, *f2 = f1 + dim;
         int j = node->joint;
         double *fj = d->jnt_load_inv + dim * j;
-        gdca_joint_load(dim, dim, left, right, d->inv_E + dim * dim * j, d->inv_z + dim * j, f1, f2,
-                        fj);
-        inverse_drive(m, d, j, fj, f, dim);
+        gdca_joint_load(dim, inverse_nc(m, j, dim), left, right, d->inv_E + dim * dim * j,
+                        d->inv_z + dim * j, f1, f2, fj);
+        if (m->jnt_indep[j]) inverse_drive(m, d, j, fj, f, dim);
         gdca_pass_loads(dim, d->tload, node, f1, f2, fj);
+    }
+    if (m->has_loop && d->singular_joint >= 0) {
+        for (int j = 0; j < m->nvx; j++) f[j] = NAN;
     }
 }
 

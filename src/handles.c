@@ -30,7 +30,9 @@ static void handles_planar(const ctc_model *m, ctc_data *d)
     for (int k = 0; k < m->nbodies; k++) {
         const ctc_planar_body *b = &m->planar[k];
         const double *c = d->xcom + 3 * k;
-        const double *next = k + 1 < m->nbodies ? d->xpos + 3 * (k + 1) : c;
+        const double *next = k + 1 < m->nbodies ? d->xpos + 3 * (k + 1)
+                             : m->has_loop      ? d->loop_pt
+                                                : c;
         double *hr = d->hr + 6 * k;
         double r1[2] = {d->xpos[3 * k] - c[0], d->xpos[3 * k + 1] - c[1]};
         double r2[2] = {next[0] - c[0], next[1] - c[1]};
@@ -69,7 +71,9 @@ static void handles_spatial(const ctc_model *m, ctc_data *d)
     for (int k = 0; k < m->nbodies; k++) {
         const ctc_body_spec *body = &m->bodies[k];
         const double *rot = d->xrot + 9 * k, *w = d->omega + 3 * k, *c = d->xcom + 3 * k;
-        const double *next = k + 1 < m->nbodies ? d->xpos + 3 * (k + 1) : c;
+        const double *next = k + 1 < m->nbodies ? d->xpos + 3 * (k + 1)
+                             : m->has_loop      ? d->loop_pt
+                                                : c;
         double *r1 = d->hr + 6 * k, *r2 = d->hr + 6 * k + 3;
         ctc_v3_sub(r1, d->xpos + 3 * k, c);
         ctc_v3_sub(r2, next, c);

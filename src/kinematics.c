@@ -8,6 +8,7 @@
 
 #include <string.h>
 
+#include "loop.h"
 #include "spatial.h"
 
 static void kinematics_planar(const ctc_model *m, ctc_data *d, const double *q, const double *v)
@@ -177,4 +178,5 @@ void ctc_kinematics(const ctc_model *m, ctc_data *d, const double *q, const doub
     } else {
         kinematics_spatial(m, d, q, v);
     }
+    if (m->has_loop) ctc_loop_kinematics(m, d);
 }

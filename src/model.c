@@ -177,7 +177,7 @@ static void plane_normal(const ctc_model *m, double n[3])
 {
     const double *u = NULL;
     ctc_v3_set(n, 0, 0, 1);
-    for (int k = 0; k < m->nbodies; k++) {
+    for (int k = 0; k < m->njoints; k++) {
         const ctc_joint_spec *j = &m->joints[k];
         if (j->type == CTC_JOINT_REVOLUTE) {
             ctc_v3_copy(n, j->axis);
@@ -216,7 +216,7 @@ static void plane_normal(const ctc_model *m, double n[3])
 /* Returns 1 if the chain moves in the plane normal to n; otherwise 0 and why in why. */
 static int chain_is_planar(const ctc_model *m, const double n[3], char *why, size_t whylen)
 {
-    for (int k = 0; k < m->nbodies; k++) {
+    for (int k = 0; k < m->njoints; k++) {
         const ctc_joint_spec *j = &m->joints[k];
         double c[3];
         switch (j->type) {
@@ -293,6 +293,17 @@ static ctc_status setup_planar(ctc_model *m, const double n[3], char *err, size_
         p->axis[1] = ctc_v3_dot(j->axis, e2);
         p->sign = ctc_v3_dot(j->axis, n) < 0 ? -1.0 : 1.0;
     }
+    if (m->has_loop) {
+        const ctc_joint_spec *j = &m->joints[m->nbodies];
+        ctc_planar_body *p = &m->loop_planar;
+        p->loc[0] = ctc_v3_dot(j->location, e1);
+        p->loc[1] = ctc_v3_dot(j->location, e2);
+        p->axis[0] = ctc_v3_dot(j->axis, e1);
+        p->axis[1] = ctc_v3_dot(j->axis, e2);
+        p->sign = ctc_v3_dot(j->axis, n) < 0 ? -1.0 : 1.0;
+        m->loop_anchor2[0] = ctc_v3_dot(m->loop_anchor, e1);
+        m->loop_anchor2[1] = ctc_v3_dot(m->loop_anchor, e2);
+    }
     return CTC_OK;
 }
 
@@ -362,6 +373,38 @@ static ctc_status build_tree(ctc_model *m, char *err, size_t errlen)
     return CTC_OK;
 }
 
+/* Counts the independent coordinates, lists them, computes the Gruebler-Kutzbach mobility and
+ * marks the tree nodes the pruned inverse disassembly must visit: a node whose joint is
+ * independent, or one with such a node below it (Fig. 4). */
+static ctc_status setup_independent(ctc_model *m, char *err, size_t errlen)
+{
+    m->nvx = m->nv + (m->has_loop ? m->jnt_nv[m->nbodies] : 0);
+    m->mobility = m->has_loop ? m->nvx - m->dim : m->nv;
+    m->nind = 0;
+    for (int k = 0; k < m->njoints; k++) m->nind += m->jnt_indep[k] ? m->jnt_nv[k] : 0;
+    m->ind_joint = malloc(((size_t)m->nind + 1) * sizeof(int));
+    m->ind_coord = malloc(((size_t)m->nind + 1) * sizeof(int));
+    m->inv_need = calloc((size_t)m->ntree + 1, 1);
+    if (!m->ind_joint || !m->ind_coord || !m->inv_need) {
+        return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    }
+    int i = 0;
+    for (int k = 0; k < m->njoints; k++) {
+        for (int c = 0; m->jnt_indep[k] && c < m->jnt_nv[k]; c++, i++) {
+            m->ind_joint[i] = k;
+            m->ind_coord[i] = m->jnt_vadr[k] + c;
+        }
+    }
+    for (int t = 0; t < m->ntree; t++) { /* children come before parents */
+        const ctc_tree_node *node = &m->tree[t];
+        int need = m->jnt_indep[node->joint];
+        if (node->left >= m->nbodies) need |= m->inv_need[node->left - m->nbodies];
+        if (node->right >= m->nbodies) need |= m->inv_need[node->right - m->nbodies];
+        m->inv_need[t] = (unsigned char)need;
+    }
+    return CTC_OK;
+}
+
 ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *err, size_t errlen)
 {
     ctc_status st;
@@ -385,38 +428,76 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
         return ctc_fail(CTC_EINVAL, err, errlen, "chain: unknown form %d", (int)spec->form);
     }
 
+    if (spec->loop && n < 2) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "loop: a loop needs at least 2 bodies (got %d)",
+                        n);
+    }
+
     ctc_model *m = calloc(1, sizeof *m);
     if (m == NULL) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     m->nbodies = n;
+    m->has_loop = spec->loop != NULL;
+    int nj = m->njoints = n + m->has_loop;
     ctc_v3_copy(m->gravity, spec->gravity);
     m->bodies = malloc((size_t)n * sizeof *m->bodies);
-    m->joints = malloc((size_t)n * sizeof *m->joints);
-    m->jnt_qadr = malloc((size_t)n * sizeof(int));
-    m->jnt_vadr = malloc((size_t)n * sizeof(int));
-    m->jnt_nq = malloc((size_t)n * sizeof(int));
-    m->jnt_nv = malloc((size_t)n * sizeof(int));
+    m->joints = malloc((size_t)nj * sizeof *m->joints);
+    m->jnt_qadr = malloc((size_t)nj * sizeof(int));
+    m->jnt_vadr = malloc((size_t)nj * sizeof(int));
+    m->jnt_nq = malloc((size_t)nj * sizeof(int));
+    m->jnt_nv = malloc((size_t)nj * sizeof(int));
+    m->jnt_indep = malloc((size_t)nj);
     m->body_inertia_inv = calloc((size_t)n * 9, sizeof(double));
-    m->jnt_perp = calloc((size_t)n * 6, sizeof(double));
+    m->jnt_perp = calloc((size_t)nj * 6, sizeof(double));
     double *moments = malloc((size_t)n * 3 * sizeof(double));
     if (m->bodies == NULL || m->joints == NULL || m->jnt_qadr == NULL || m->jnt_vadr == NULL ||
-        m->jnt_nq == NULL || m->jnt_nv == NULL || m->body_inertia_inv == NULL ||
-        m->jnt_perp == NULL || moments == NULL) {
+        m->jnt_nq == NULL || m->jnt_nv == NULL || m->jnt_indep == NULL ||
+        m->body_inertia_inv == NULL || m->jnt_perp == NULL || moments == NULL) {
         st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
         goto fail;
     }
     memcpy(m->bodies, spec->bodies, (size_t)n * sizeof *m->bodies);
     memcpy(m->joints, spec->joints, (size_t)n * sizeof *m->joints);
-
-    /* validate each body and joint; count coordinates; normalise axes */
-    for (int k = 0; k < n; k++) {
-        if ((st = check_joint(&m->joints[k], k, err, errlen)) != CTC_OK) goto fail;
-        if ((st = check_body(&m->bodies[k], k, &moments[3 * k], err, errlen)) != CTC_OK) {
+    if (m->has_loop) {
+        const ctc_loop_spec *lp = spec->loop;
+        m->joints[n] = lp->joint;
+        if (lp->joint.type != CTC_JOINT_REVOLUTE && lp->joint.type != CTC_JOINT_PRISMATIC &&
+            lp->joint.type != CTC_JOINT_SPHERICAL) {
+            st = ctc_fail(CTC_EINVAL, err, errlen,
+                          "loop: the closing joint must be revolute, prismatic or spherical "
+                          "(got %s)",
+                          is_joint_type((int)lp->joint.type) ? ctc_joint_type_name(lp->joint.type)
+                                                             : "an unknown type");
             goto fail;
         }
-        double *in = m->bodies[k].inertia; /* symmetric to 1e-9: make it exact */
-        for (int a = 0; a < 3; a++) {
-            for (int b = a + 1; b < 3; b++) {
-                in[3 * a + b] = in[3 * b + a] = 0.5 * (in[3 * a + b] + in[3 * b + a]);
+        if (!all_finite(lp->anchor, 3, &bad)) {
+            st = ctc_fail(CTC_EINVAL, err, errlen, "loop: anchor[%d] is not finite", bad);
+            goto fail;
+        }
+        ctc_v3_copy(m->loop_anchor, lp->anchor);
+    }
+    for (int k = 0; k < nj; k++) {
+        m->jnt_indep[k] = spec->independent ? spec->independent[k] != 0 : 1;
+        if (!m->has_loop && !m->jnt_indep[k]) {
+            st = ctc_fail(CTC_EINVAL, err, errlen,
+                          "joint %d: an open chain is fully actuated: every joint is "
+                          "independent",
+                          k);
+            goto fail;
+        }
+    }
+
+    /* validate each body and joint; count coordinates; normalise axes */
+    for (int k = 0; k < nj; k++) {
+        if ((st = check_joint(&m->joints[k], k, err, errlen)) != CTC_OK) goto fail;
+        if (k < n && (st = check_body(&m->bodies[k], k, &moments[3 * k], err, errlen)) != CTC_OK) {
+            goto fail;
+        }
+        if (k < n) {
+            double *in = m->bodies[k].inertia; /* symmetric to 1e-9: make it exact */
+            for (int a = 0; a < 3; a++) {
+                for (int b = a + 1; b < 3; b++) {
+                    in[3 * a + b] = in[3 * b + a] = 0.5 * (in[3 * a + b] + in[3 * b + a]);
+                }
             }
         }
         ctc_joint_spec *j = &m->joints[k];
@@ -430,8 +511,10 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
         m->jnt_vadr[k] = m->nv;
         m->jnt_nq[k] = ctc_joint_nq(j->type);
         m->jnt_nv[k] = ctc_joint_nv(j->type);
-        m->nq += m->jnt_nq[k];
-        m->nv += m->jnt_nv[k];
+        if (k < n) { /* the closing joint's coordinates are extended ones, not state */
+            m->nq += m->jnt_nq[k];
+            m->nv += m->jnt_nv[k];
+        }
     }
 
     /* choose the form: model only what the scene needs */
@@ -479,6 +562,7 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
     }
 
     if ((st = build_tree(m, err, errlen)) != CTC_OK) goto fail;
+    if ((st = setup_independent(m, err, errlen)) != CTC_OK) goto fail;
     free(moments);
     *out = m;
     return CTC_OK;
@@ -503,6 +587,10 @@ void ctc_model_free(ctc_model *m)
     free(m->planar);
     free(m->tree);
     free(m->height_start);
+    free(m->jnt_indep);
+    free(m->ind_joint);
+    free(m->ind_coord);
+    free(m->inv_need);
     free(m);
 }
 
@@ -512,6 +600,29 @@ void ctc_model_q_zero(const ctc_model *m, double *q)
     for (int k = 0; k < m->nbodies; k++) {
         if (m->joints[k].type == CTC_JOINT_SPHERICAL) q[m->jnt_qadr[k]] = 1.0;
     }
+}
+
+void ctc_model_q_add(const ctc_model *m, double *q, const double *dv, double s)
+{
+    for (int k = 0; k < m->nbodies; k++) {
+        double *qk = q + m->jnt_qadr[k];
+        const double *vk = dv + m->jnt_vadr[k];
+        if (m->joints[k].type != CTC_JOINT_SPHERICAL) {
+            for (int i = 0; i < m->jnt_nv[k]; i++) qk[i] += s * vk[i];
+            continue;
+        }
+        /* quat (x) exp(s dv / 2), dv in the child frame */
+        double r[3] = {s * vk[0], s * vk[1], s * vk[2]};
+        double th = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+        double c = cos(0.5 * th), sn = th > 1e-300 ? sin(0.5 * th) / th : 0.5;
+        double b[4] = {c, sn * r[0], sn * r[1], sn * r[2]};
+        double a[4] = {qk[0], qk[1], qk[2], qk[3]};
+        qk[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+        qk[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+        qk[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+        qk[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+    }
+    ctc_model_q_normalize(m, q);
 }
 
 void ctc_model_q_rate(const ctc_model *m, const double *q, const double *v, double *qdot)

@@ -30,6 +30,22 @@
  *    first revolute axis; without one, the normal of two non-parallel prismatic axes, or of a
  *    prismatic axis and gravity, or any normal of a lone prismatic axis; its sign is chosen so its
  *    largest component is positive, so a chain with +z or -z axes moves in the x-y plane itself.
+ *  - One kinematic loop (optional, ctc_loop_spec): a closing joint, numbered n, joins the tip body
+ *    n-1 (its parent) to the ground (its child), so bodies 0..n-1 and the ground form a loop. It
+ *    follows the same conventions as a chain joint with the tip as the parent: its axis and
+ *    centre are given in the tip's frame, its coordinate is the ground's motion relative to the
+ *    tip (for a revolute closing joint the world frame is Rot(axis, q_n) of the tip's frame, so a
+ *    planar loop of revolute joints has q_0 + ... + q_n = 0 mod 2 pi), and its generalised force
+ *    is applied by the tip on the ground. The closing joint's coordinates are not part of the
+ *    state q, v: they follow from the chain's (loop.h). The ground's side of the joint is the
+ *    anchor, a fixed point in the world; when the loop is closed the anchor coincides with the
+ *    closing joint's centre on the tip.
+ *  - Independent and dependent joints: in a loop model each joint, the closing one included, is
+ *    independent (actuated: a controller drives its coordinates along a trajectory) or dependent
+ *    (passive: no driving force; its motion follows from the loop). An open chain's joints are
+ *    all independent. "Extended" coordinate vectors list the chain's nv velocity coordinates and
+ *    then the closing joint's (nvx = nv + loop_nv); forces and accelerations of loop models are
+ *    extended vectors (gdca.h).
  */
 #ifndef CTC_MODEL_H
 #define CTC_MODEL_H
@@ -70,12 +86,24 @@ typedef struct ctc_joint_spec {
     double location[3]; /* m, the joint's centre in the parent frame (world for joint 0) */
 } ctc_joint_spec;
 
+/* The closing joint of a loop from the tip body n-1 to the ground. */
+typedef struct ctc_loop_spec {
+    ctc_joint_spec joint; /* REVOLUTE, PRISMATIC or SPHERICAL; axis and location (the joint's
+                             centre) in the tip body's frame */
+    double anchor[3];     /* m, the joint's centre on the ground, world frame */
+} ctc_loop_spec;
+
 typedef struct ctc_chain_spec {
-    int nbodies;                  /* n >= 1 */
-    const ctc_body_spec *bodies;  /* (n) */
-    const ctc_joint_spec *joints; /* (n) joint k joins body k-1 (ground for k = 0) to body k */
-    double gravity[3];            /* m/s^2, world frame (e.g. 0, -9.81, 0) */
-    ctc_form form;                /* AUTO (recommended), or force PLANAR / SPATIAL */
+    int nbodies;                      /* n >= 1 (>= 2 with a loop) */
+    const ctc_body_spec *bodies;      /* (n) */
+    const ctc_joint_spec *joints;     /* (n) joint k joins body k-1 (ground for k = 0) to body k */
+    double gravity[3];                /* m/s^2, world frame (e.g. 0, -9.81, 0) */
+    ctc_form form;                    /* AUTO (recommended), or force PLANAR / SPATIAL */
+    const ctc_loop_spec *loop;        /* NULL: an open chain */
+    const unsigned char *independent; /* (n + 1) with a loop: 1 = independent, 0 = dependent,
+                                         per joint, the closing joint last; the count of
+                                         independent coordinates must equal the loop's mobility.
+                                         NULL: every joint independent (open chains) */
 } ctc_chain_spec;
 
 /* One internal node of the balanced binary assembly tree. An "assembly index" a < n names body a
@@ -128,6 +156,24 @@ typedef struct ctc_model {
     int *height_start;   /* (height + 2) nodes of height h are tree[height_start[h-1] ..
                             height_start[h] - 1] for h >= 1; height_start[0] = 0 */
     int root;            /* assembly index of the whole chain */
+
+    /* loop models (has_loop = 1); open chains have has_loop = 0, njoints = n, nvx = nv, nind = nv,
+       every joint independent and the loop fields zero / NULL */
+    int has_loop;
+    int njoints;                 /* n + has_loop: joint arrays above run to njoints, the closing
+                                    joint last (joints[n] has its type, unit axis and centre in the
+                                    tip's frame; jnt_qadr[n] = nq, jnt_vadr[n] = nv, jnt_perp too) */
+    int nvx;                     /* nv + the closing joint's nv: the length of extended vectors */
+    double loop_anchor[3];       /* m, world */
+    ctc_planar_body loop_planar; /* form PLANAR: the closing joint's loc (on the tip), axis, sign */
+    double loop_anchor2[2];      /* form PLANAR: the anchor in plane coordinates */
+    int mobility; /* Gruebler-Kutzbach: sum of joint freedoms - dim (loops), nv (open) */
+    unsigned char *jnt_indep; /* (njoints) 1 = independent */
+    int nind;                 /* number of independent coordinates */
+    int *ind_joint;           /* (nind) joint of each independent coordinate, in joint order */
+    int *ind_coord;           /* (nind) its extended velocity index (jnt_vadr + offset) */
+    unsigned char *inv_need;  /* (ntree) loop models: 1 if the inverse pass must disassemble
+                                 node i to reach every independent joint's load (Fig. 4) */
 } ctc_model;
 
 /* Builds and validates a model from spec. On success returns CTC_OK and *out owns a new model
@@ -150,6 +196,10 @@ const char *ctc_form_name(ctc_form f);
 /* Writes the reference configuration (all angles and displacements 0, identity quaternions)
  * into q (nq). */
 void ctc_model_q_zero(const ctc_model *m, double *q);
+
+/* q (nq) moved by the velocity-space increment dv (nv) times s: q_i += s dv_i, and a spherical
+ * joint's quaternion is turned by the rotation vector s dv (child frame) and renormalised. */
+void ctc_model_q_add(const ctc_model *m, double *q, const double *dv, double s);
 
 /* Position-coordinate rate qdot (nq) from q (nq) and velocities v (nv): equal to v except for
  * spherical joints, whose quaternion rate is 0.5 * quat (x) (0, v). */

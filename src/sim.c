@@ -24,6 +24,13 @@
  * energy drift; for an exact model without disturbance, the deviation of each coordinate's error
  * from the exact solution E(t) = expm(Ac t) E(0) of the linear error dynamics (ctrl.h), computed
  * here by propagating the 3x3 transition matrix of one output interval.
+ *
+ * Loop models: the controller's coordinates are the independent ones (c->nind; the closing
+ * joint's position and rate come from the loop kinematics), the forces and accelerations of the
+ * passes are extended vectors (nvx), and after each accepted step the state is checked against
+ * the closure and, with projection, put back onto it (ctc_loop_assemble) and the integrator
+ * restarted there. An evaluation whose boundary solve is singular beyond loop_cond_max returns
+ * SIM_RHS_SINGULAR, which ends the run as "singular" with the time.
  */
 #include "sim.h"
 
@@ -41,6 +48,11 @@
 
 #define SIM_DEFAULT_MAX_SPEED 1e6
 #define SIM_MAX_SAMPLES 50000000L
+#define SIM_DEFAULT_LOOP_TOL 1e-12
+#define SIM_DEFAULT_BAUMGARTE 10.0
+#define SIM_DEFAULT_COND_MAX 1e10
+#define SIM_LOOP_MAX_ITER 50
+#define SIM_RHS_SINGULAR 2 /* the right-hand side's code for a singular loop */
 
 typedef struct sim_ctx {
     const ctc_sim_spec *spec;
@@ -48,18 +60,25 @@ typedef struct sim_ctx {
     ctc_model *ctrl_model; /* NULL when the controller's model is the plant */
     ctc_data *dp, *dc;     /* dc == dp when the model is exact */
     int nq, nv, ny, active, has_quat;
-    double *qn;    /* (nq) normalised positions */
-    double *u, *f; /* (nv) commanded accelerations, controller forces */
-    double *fz;    /* (nv) applied forces f + z */
-    double *w;     /* (nv) controller output */
-    double *des;   /* (nv x 3) desired q, qd, qdd */
+    int nvx, nind;   /* extended and controlled coordinates (nv and nv for an open chain) */
+    double *qn;      /* (nq) normalised positions */
+    double *u, *f;   /* (nvx) commanded accelerations, controller forces */
+    double *fz;      /* (nvx) applied forces f + z */
+    double *acc;     /* (nvx) accelerations from the forward pass */
+    double *w;       /* (nind) controller output */
+    double *des;     /* (nind x 3) desired q, qd, qdd */
+    double *qi, *vi; /* (nind) the controlled coordinates' positions and rates */
+    double cond_max; /* loop models: singular beyond this condition estimate */
+    double cond;     /* loop models: the last evaluation's condition estimate (max of passes) */
     long evals;
 } sim_ctx;
 
 static const char *const ctrl_names[] = {"none", "pd", "pid", "poles", "lqr"};
-static const char *const channel_names[] = {"q", "qdot", "q_des", "qdot_des",
-                                            "e", "tau",  "w",     "energy"};
-static const char *const run_names[] = {"done", "diverged", "failed", "cancelled", "timeout"};
+static const char *const channel_names[] = {"q",   "qdot", "q_des",  "qdot_des", "e",
+                                            "tau", "w",    "energy", "loop"};
+static const char *const run_names[] = {"done",      "diverged", "failed",
+                                        "cancelled", "timeout",  "singular"};
+static const char *const stab_names[] = {"project", "baumgarte", "none"};
 
 const char *ctc_ctrl_type_name(ctc_ctrl_type t)
 {
@@ -73,7 +92,12 @@ const char *ctc_channel_name(ctc_channel c)
 
 const char *ctc_run_status_name(ctc_run_status s)
 {
-    return (unsigned)s < 5 ? run_names[s] : "unknown";
+    return (unsigned)s <= CTC_RUN_SINGULAR ? run_names[s] : "unknown";
+}
+
+const char *ctc_loop_stab_name(ctc_loop_stab s)
+{
+    return (unsigned)s <= CTC_LOOP_NONE ? stab_names[s] : "unknown";
 }
 
 static double now(clockid_t clock)
@@ -91,10 +115,11 @@ static int has_disturbance(const ctc_sim_spec *s, int nv)
     return 0;
 }
 
-/* the channels that apply: q, qdot, tau and energy always; the tracking ones with a controller */
+/* the channels that apply: q, qdot, tau and energy always; the tracking ones with a controller;
+ * loop with a loop model (added by the caller that knows the model) */
 static unsigned channels_applicable(ctc_ctrl_type c)
 {
-    unsigned all = CTC_CH_ALL;
+    unsigned all = CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_LOOP);
     if (c == CTC_CTRL_NONE)
         all &= ~(CTC_CH_BIT(CTC_CH_Q_DES) | CTC_CH_BIT(CTC_CH_QD_DES) | CTC_CH_BIT(CTC_CH_E) |
                  CTC_CH_BIT(CTC_CH_W));
@@ -139,7 +164,7 @@ static ctc_status check_run(const ctc_sim_spec *s, char *err, size_t errlen)
                         s->wall_limit);
     if ((unsigned)s->controller > CTC_CTRL_LQR)
         return ctc_fail(CTC_EINVAL, err, errlen, "unknown controller type %d", (int)s->controller);
-    unsigned bad = s->channels & ~channels_applicable(s->controller);
+    unsigned bad = s->channels & ~channels_applicable(s->controller) & ~CTC_CH_BIT(CTC_CH_LOOP);
     if (s->channels & ~CTC_CH_ALL)
         return ctc_fail(CTC_EINVAL, err, errlen, "unknown output channel bits 0x%x",
                         s->channels & ~CTC_CH_ALL);
@@ -158,6 +183,20 @@ static ctc_status check_run(const ctc_sim_spec *s, char *err, size_t errlen)
         return ctc_fail(CTC_EINVAL, err, errlen,
                         "model inertia scale must be positive and finite (got %g)",
                         s->model_inertia_scale);
+    if ((unsigned)s->loop_stab > CTC_LOOP_NONE)
+        return ctc_fail(CTC_EINVAL, err, errlen, "unknown loop stabilisation %d",
+                        (int)s->loop_stab);
+    if (!(s->loop_tol >= 0) || isinf(s->loop_tol))
+        return ctc_fail(CTC_EINVAL, err, errlen, "loop tolerance must be >= 0 and finite (got %g)",
+                        s->loop_tol);
+    for (int i = 0; i < 2; i++)
+        if (!(s->baumgarte[i] >= 0) || isinf(s->baumgarte[i]))
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "Baumgarte gains must be >= 0 and finite (got %g)", s->baumgarte[i]);
+    if (!(s->loop_cond_max == 0 || s->loop_cond_max > 1) || isinf(s->loop_cond_max))
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "loop condition limit must be > 1 and finite, or 0 (got %g)",
+                        s->loop_cond_max);
     return ctc_integ_check(&s->integrator, err, errlen);
 }
 
@@ -179,17 +218,22 @@ static ctc_status check_with_model(const ctc_sim_spec *s, const ctc_model *m, ch
     for (int i = 0; s->v0 && i < m->nv; i++)
         if (!isfinite(s->v0[i]))
             return ctc_fail(CTC_EINVAL, err, errlen, "v0[%d] is not finite", i);
+    if ((s->channels & CTC_CH_BIT(CTC_CH_LOOP)) && !m->has_loop)
+        return ctc_fail(CTC_EINVAL, err, errlen, "channel \"loop\" needs a loop in the scene");
     if (s->controller != CTC_CTRL_NONE) {
-        for (int k = 0; k < m->nbodies; k++)
-            if (m->joints[k].type == CTC_JOINT_SPHERICAL)
+        for (int k = 0; k < m->njoints; k++)
+            if (m->joints[k].type == CTC_JOINT_SPHERICAL && m->jnt_indep[k])
                 return ctc_fail(CTC_EINVAL, err, errlen,
                                 "joint %d: spherical joints are allowed in passive runs only "
-                                "(controller \"none\")",
-                                k);
+                                "(controller \"none\")%s",
+                                k, m->has_loop ? ", or as dependent joints of a loop" : "");
+        if (m->nind == 0)
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "a controller needs at least one independent coordinate");
         if (!s->gains || !s->traj)
             return ctc_fail(CTC_EINVAL, err, errlen,
                             "a controller needs gains and a trajectory for every coordinate");
-        for (int i = 0; i < m->nv; i++) {
+        for (int i = 0; i < m->nind; i++) {
             const ctc_gains *g = &s->gains[i];
             if (!isfinite(g->ki) || !isfinite(g->kp) || !isfinite(g->kv))
                 return ctc_fail(CTC_EINVAL, err, errlen, "coordinate %d: gains are not finite", i);
@@ -216,10 +260,43 @@ static ctc_status check_with_model(const ctc_sim_spec *s, const ctc_model *m, ch
             }
         }
     }
-    for (int i = 0; s->disturb && i < m->nv; i++)
+    for (int i = 0; s->disturb && i < m->nind; i++)
         if (ctc_disturb_check(&s->disturb[i], why, sizeof why) != CTC_OK)
             return ctc_fail(CTC_EINVAL, err, errlen, "coordinate %d: disturbance: %s", i, why);
     return CTC_OK;
+}
+
+/* The spec's initial state (q0 normalised, v0) in q (nq) and v (nv), put onto the loop's closure
+ * and checked there (loop.h). A closure that fails is explained by the mobility checks at q0
+ * when they fail too. */
+static ctc_status close_initial_state(const ctc_sim_spec *s, const ctc_model *m, ctc_data *d,
+                                      double *q, double *v, ctc_loop_fix *fix, char *err,
+                                      size_t errlen)
+{
+    if (s->q0)
+        memcpy(q, s->q0, (size_t)m->nq * sizeof *q);
+    else
+        ctc_model_q_zero(m, q);
+    ctc_model_q_normalize(m, q);
+    for (int i = 0; i < m->nv; i++) v[i] = s->v0 ? s->v0[i] : 0;
+    if (!m->has_loop) return CTC_OK;
+
+    double tol = s->loop_tol > 0 ? s->loop_tol : SIM_DEFAULT_LOOP_TOL;
+    char why[300];
+    if (ctc_loop_assemble(m, d, q, v, tol, SIM_LOOP_MAX_ITER, fix, why, sizeof why) != CTC_OK) {
+        double *q0 = malloc(((size_t)m->nq + 1) * sizeof *q0);
+        if (!q0) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+        if (s->q0)
+            memcpy(q0, s->q0, (size_t)m->nq * sizeof *q0);
+        else
+            ctc_model_q_zero(m, q0);
+        ctc_model_q_normalize(m, q0);
+        ctc_status st = ctc_loop_check(m, d, q0, NULL, err, errlen);
+        free(q0);
+        if (st != CTC_OK) return st;
+        return ctc_fail(CTC_EINVAL, err, errlen, "q0: %s", why);
+    }
+    return ctc_loop_check(m, d, q, NULL, err, errlen);
 }
 
 ctc_status ctc_sim_check(const ctc_sim_spec *spec, char *err, size_t errlen)
@@ -230,6 +307,18 @@ ctc_status ctc_sim_check(const ctc_sim_spec *spec, char *err, size_t errlen)
     st = ctc_model_build(&spec->chain, &m, err, errlen);
     if (st != CTC_OK) return st;
     st = check_with_model(spec, m, err, errlen);
+    if (st == CTC_OK && m->has_loop) {
+        ctc_data *d = ctc_data_new(m);
+        double *qv = malloc(((size_t)m->nq + (size_t)m->nv + 1) * sizeof *qv);
+        if (!d || !qv) {
+            st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+        } else {
+            ctc_loop_fix fix;
+            st = close_initial_state(spec, m, d, qv, qv + m->nq, &fix, err, errlen);
+        }
+        free(qv);
+        ctc_data_free(d);
+    }
     ctc_model_free(m);
     return st;
 }
@@ -257,56 +346,85 @@ static ctc_status build_controller_model(const ctc_sim_spec *s, ctc_model **out,
     return CTC_OK;
 }
 
-/* driving forces and accelerations of state (q, v, ie) at time t; fills ctx's force arrays */
-static void evaluate(sim_ctx *c, double t, const double *y, double *qacc)
+/* the controlled coordinates' positions and rates into c->qi, c->vi (after the kinematics) */
+static void controlled_coords(const sim_ctx *c, const double *q, const double *v)
+{
+    const ctc_model *m = c->plant;
+    for (int i = 0; i < c->nind; i++) {
+        int k = m->ind_joint[i], off = m->ind_coord[i] - m->jnt_vadr[k];
+        if (k < m->nbodies) {
+            c->qi[i] = q[m->jnt_qadr[k] + off];
+            c->vi[i] = v[m->ind_coord[i]];
+        } else {
+            c->qi[i] = c->dp->loop_q[off];
+            c->vi[i] = c->dp->loop_v[off];
+        }
+    }
+}
+
+/* driving forces and accelerations of state (q, v, ie) at time t; fills ctx's force arrays and
+ * c->acc (nvx); returns 0, or SIM_RHS_SINGULAR when a loop's boundary solve is singular */
+static int evaluate(sim_ctx *c, double t, const double *y)
 {
     const ctc_sim_spec *s = c->spec;
+    const ctc_model *m = c->plant;
     const double *q = y, *v = y + c->nq;
     if (c->has_quat) {
         memcpy(c->qn, q, (size_t)c->nq * sizeof *q);
-        ctc_model_q_normalize(c->plant, c->qn);
+        ctc_model_q_normalize(m, c->qn);
         q = c->qn;
     }
 
-    ctc_kinematics(c->plant, c->dp, q, v);
-    ctc_handles(c->plant, c->dp);
+    ctc_kinematics(m, c->dp, q, v);
+    ctc_handles(m, c->dp);
+    controlled_coords(c, q, v);
+    c->cond = 1;
 
     /* controller: u = qdd_d + K (int e, e, de), f = iGDCA(u) */
+    memset(c->u, 0, (size_t)c->nvx * sizeof *c->u);
     if (c->active) {
         const double *ie = y + c->nq + c->nv;
-        for (int i = 0; i < c->nv; i++) {
+        for (int i = 0; i < c->nind; i++) {
             double *d = c->des + 3 * i;
             ctc_traj_eval(&s->traj[i], t, d);
             const ctc_gains *g = &s->gains[i];
-            c->w[i] = g->ki * ie[i] + g->kp * (d[0] - q[i]) + g->kv * (d[1] - v[i]);
-            c->u[i] = d[2] + c->w[i];
+            c->w[i] = g->ki * ie[i] + g->kp * (d[0] - c->qi[i]) + g->kv * (d[1] - c->vi[i]);
+            c->u[m->ind_coord[i]] = d[2] + c->w[i];
         }
         if (c->ctrl_model) {
             ctc_kinematics(c->ctrl_model, c->dc, q, v);
             ctc_handles(c->ctrl_model, c->dc);
             ctc_gdca_inverse(c->ctrl_model, c->dc, c->u, c->f);
         } else {
-            ctc_gdca_inverse(c->plant, c->dp, c->u, c->f);
+            ctc_gdca_inverse(m, c->dp, c->u, c->f);
         }
+        if (m->has_loop) c->cond = c->dc->loop_cond;
     } else {
-        memset(c->f, 0, (size_t)c->nv * sizeof *c->f);
+        memset(c->f, 0, (size_t)c->nvx * sizeof *c->f);
     }
 
     /* plant: qdd = GDCA(f + z) */
-    for (int i = 0; i < c->nv; i++)
-        c->fz[i] = c->f[i] + (s->disturb ? ctc_disturb_eval(&s->disturb[i], t) : 0);
-    ctc_gdca_forward(c->plant, c->dp, c->fz, qacc);
+    memcpy(c->fz, c->f, (size_t)c->nvx * sizeof *c->fz);
+    for (int i = 0; s->disturb && i < c->nind; i++)
+        c->fz[m->ind_coord[i]] += ctc_disturb_eval(&s->disturb[i], t);
+    ctc_gdca_forward(m, c->dp, c->fz, c->acc);
     c->evals++;
+    if (m->has_loop) {
+        c->cond = fmax(c->cond, c->dp->loop_cond);
+        if (!(c->cond <= c->cond_max)) return SIM_RHS_SINGULAR;
+    }
+    return 0;
 }
 
 static int sim_rhs(double t, const double *y, double *ydot, void *ctx)
 {
     sim_ctx *c = ctx;
-    evaluate(c, t, y, ydot + c->nq);
+    int rc = evaluate(c, t, y);
+    memcpy(ydot + c->nq, c->acc, (size_t)c->nv * sizeof *ydot);
     ctc_model_q_rate(c->plant, c->has_quat ? c->qn : y, y + c->nq, ydot);
     if (c->active)
-        for (int i = 0; i < c->nv; i++) ydot[c->nq + c->nv + i] = c->des[3 * i] - y[i];
-    return 0;
+        for (int i = 0; i < c->nind; i++) ydot[c->nq + c->nv + i] = c->des[3 * i] - c->qi[i];
+    return rc;
 }
 
 /* the joint that owns velocity coordinate i */
@@ -323,9 +441,11 @@ static int diverged(const sim_ctx *c, double t, const double *y, double bound, c
     const double *v = y + c->nq;
     for (int i = 0; i < c->ny; i++) {
         if (isfinite(y[i])) continue;
-        int vi = i < c->nq ? -1 : (i - c->nq) % c->nv;
+        int vi = i < c->nq ? -1 : i < c->nq + c->nv ? i - c->nq : -2;
         int k = 0;
-        if (vi >= 0) {
+        if (vi == -2) { /* an integral state: its controlled coordinate's joint */
+            k = c->plant->ind_joint[i - c->nq - c->nv];
+        } else if (vi >= 0) {
             k = joint_of(c->plant, vi);
         } else {
             while (k + 1 < c->plant->nbodies && c->plant->jnt_qadr[k + 1] <= i) k++;
@@ -394,8 +514,8 @@ typedef struct recorder {
     ctc_sim_result *r;
     long count, next; /* samples in all, the next to take */
     double dt;
-    double *ysample; /* (ny) */
-    double *qacc;    /* (nv) */
+    double *ysample;  /* (ny) */
+    double *loop_max; /* loop models: the max residuals (position, velocity) so far */
     /* error-dynamics reference (exact model, no disturbance) */
     int track_errdyn;
     double *phi;  /* (nv x 9) transition matrix over one interval */
@@ -411,9 +531,17 @@ static void record_sample(sim_ctx *c, recorder *rec, double t, const double *y)
 {
     ctc_sim_result *r = rec->r;
     long j = r->nsamples;
-    evaluate(c, t, y, rec->qacc);
+    evaluate(c, t, y);
     r->t[j] = t;
     const double *q = c->has_quat ? c->qn : y, *v = y + c->nq;
+    const int *ic = c->plant->ind_coord;
+    double res[2] = {0, 0};
+    if (c->plant->has_loop) {
+        ctc_loop_residual_norms(c->plant, c->dp, &res[0], &res[1]);
+        rec->loop_max[0] = fmax(rec->loop_max[0], res[0]);
+        rec->loop_max[1] = fmax(rec->loop_max[1], res[1]);
+        r->metrics.loop_cond_max = fmax(r->metrics.loop_cond_max, c->cond);
+    }
     for (int ch = 0; ch < CTC_NCHANNELS; ch++) {
         double *out = r->ch[ch];
         if (!out) continue;
@@ -433,10 +561,13 @@ static void record_sample(sim_ctx *c, recorder *rec, double t, const double *y)
                 out[i] = c->des[3 * i + 1];
                 break;
             case CTC_CH_E:
-                out[i] = c->des[3 * i] - q[i];
+                out[i] = c->des[3 * i] - c->qi[i];
                 break;
             case CTC_CH_TAU:
-                out[i] = c->fz[i];
+                out[i] = c->fz[ic[i]];
+                break;
+            case CTC_CH_LOOP:
+                out[i] = res[i];
                 break;
             case CTC_CH_W:
                 out[i] = c->w[i];
@@ -456,8 +587,8 @@ static void record_sample(sim_ctx *c, recorder *rec, double t, const double *y)
     }
     ctc_sim_metrics *mt = &r->metrics;
     if (c->active) {
-        for (int i = 0; i < c->nv; i++) {
-            double e = c->des[3 * i] - q[i];
+        for (int i = 0; i < c->nind; i++) {
+            double e = c->des[3 * i] - c->qi[i];
             mt->e_max[i] = fmax(mt->e_max[i], fabs(e));
             rec->e_sq[i] += e * e;
             mt->e_final[i] = e;
@@ -470,11 +601,12 @@ static void record_sample(sim_ctx *c, recorder *rec, double t, const double *y)
     }
     if (rec->track_errdyn) {
         const double *ie = y + c->nq + c->nv;
-        for (int i = 0; i < c->nv; i++) {
+        for (int i = 0; i < c->nind; i++) {
             double *er = rec->eref + 3 * i;
             if (j == 0) {
                 mt->errdyn_dev = 0;
-                er[0] = ie[i], er[1] = c->des[3 * i] - q[i], er[2] = c->des[3 * i + 1] - v[i];
+                er[0] = ie[i], er[1] = c->des[3 * i] - c->qi[i];
+                er[2] = c->des[3 * i + 1] - c->vi[i];
             } else {
                 double phi[9], next[3];
                 const double *p = rec->phi + 9 * i;
@@ -487,7 +619,7 @@ static void record_sample(sim_ctx *c, recorder *rec, double t, const double *y)
                 for (int k = 0; k < 3; k++)
                     next[k] = p[3 * k] * er[0] + p[3 * k + 1] * er[1] + p[3 * k + 2] * er[2];
                 memcpy(er, next, sizeof next);
-                mt->errdyn_dev = fmax(mt->errdyn_dev, fabs(c->des[3 * i] - q[i] - er[1]));
+                mt->errdyn_dev = fmax(mt->errdyn_dev, fabs(c->des[3 * i] - c->qi[i] - er[1]));
             }
         }
         rec->t_ref = t;
@@ -501,27 +633,32 @@ static ctc_status alloc_result(const sim_ctx *c, unsigned channels, long count,
     ctc_sim_result *r = calloc(1, sizeof *r);
     if (!r) return CTC_ENOMEM;
     *out = r;
-    r->nq = c->nq, r->nv = c->nv, r->channels = channels;
+    r->nq = c->nq, r->nv = c->nv, r->nind = c->nind, r->channels = channels;
     r->t = malloc((size_t)count * sizeof *r->t);
     if (!r->t) return CTC_ENOMEM;
     for (int ch = 0; ch < CTC_NCHANNELS; ch++) {
         if (!(channels & CTC_CH_BIT(ch))) continue;
-        r->width[ch] = ch == CTC_CH_Q ? c->nq : ch == CTC_CH_ENERGY ? 2 : c->nv;
+        r->width[ch] = ch == CTC_CH_Q                             ? c->nq
+                       : ch == CTC_CH_QD                          ? c->nv
+                       : ch == CTC_CH_ENERGY || ch == CTC_CH_LOOP ? 2
+                                                                  : c->nind;
         if (r->width[ch] == 0) continue;
         r->ch[ch] = malloc((size_t)count * (size_t)r->width[ch] * sizeof(double));
         if (!r->ch[ch]) return CTC_ENOMEM;
     }
     ctc_sim_metrics *mt = &r->metrics;
     mt->form = c->plant->form;
-    mt->nv = c->nv;
+    mt->nv = c->nind;
     mt->energy_drift = NAN;
+    mt->loop_res_max = mt->loop_vres_max = mt->loop_cond_max = NAN;
+    if (c->plant->has_loop) mt->loop_cond_max = 0;
     mt->errdyn_dev = NAN;
     mt->err_estimate = NAN;
     mt->diverged_joint = -1;
     if (c->active) {
-        mt->e_max = calloc((size_t)c->nv + 1, sizeof(double));
-        mt->e_rms = calloc((size_t)c->nv + 1, sizeof(double));
-        mt->e_final = calloc((size_t)c->nv + 1, sizeof(double));
+        mt->e_max = calloc((size_t)c->nind + 1, sizeof(double));
+        mt->e_rms = calloc((size_t)c->nind + 1, sizeof(double));
+        mt->e_final = calloc((size_t)c->nind + 1, sizeof(double));
         if (!mt->e_max || !mt->e_rms || !mt->e_final) return CTC_ENOMEM;
     }
     return CTC_OK;
@@ -545,6 +682,15 @@ static void ctx_free(sim_ctx *c)
     ctc_model_free(c->ctrl_model);
     free(c->qn);
     free(c->u);
+}
+
+/* the message of a run stopped as singular at time t */
+static void singular_message(ctc_sim_result *r, double t, const sim_ctx *c)
+{
+    snprintf(r->message, sizeof r->message,
+             "t = %.6g s: the independent joints cannot drive the loop here (condition estimate "
+             "%.3g > %g)",
+             t, c->cond, c->cond_max);
 }
 
 static int cmp_double(const void *a, const void *b)
@@ -577,9 +723,10 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     if (st != CTC_OK) goto cleanup;
 
     /* sizes and scratch */
-    c.nq = plant->nq, c.nv = plant->nv;
+    c.nq = plant->nq, c.nv = plant->nv, c.nvx = plant->nvx, c.nind = plant->nind;
     c.active = spec->controller != CTC_CTRL_NONE;
-    c.ny = c.nq + c.nv + (c.active ? c.nv : 0);
+    c.ny = c.nq + c.nv + (c.active ? c.nind : 0);
+    c.cond_max = spec->loop_cond_max > 0 ? spec->loop_cond_max : SIM_DEFAULT_COND_MAX;
     for (int k = 0; k < plant->nbodies; k++)
         c.has_quat |= plant->joints[k].type == CTC_JOINT_SPHERICAL;
     int exact = !c.active || (spec->model_mass_scale == 1 && spec->model_inertia_scale == 1);
@@ -587,22 +734,30 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
         st = build_controller_model(spec, &c.ctrl_model, err, errlen);
         if (st != CTC_OK) goto cleanup;
     }
-    size_t nq = (size_t)c.nq, nv = (size_t)c.nv + 1;
+    size_t nq = (size_t)c.nq, nv = (size_t)c.nind + 1, nvx = (size_t)c.nvx + 1;
     c.dp = ctc_data_new(plant);
     c.dc = c.ctrl_model ? ctc_data_new(c.ctrl_model) : c.dp;
     c.qn = malloc((nq + 1) * sizeof(double));
-    c.u = malloc(nv * 7 * sizeof(double));
-    ybuf = malloc((size_t)(c.ny + 1) * 2 * sizeof(double) + nv * sizeof(double));
+    c.u = malloc((nvx * 4 + nv * 6) * sizeof(double));
+    ybuf = malloc((size_t)(c.ny + 1) * 3 * sizeof(double) + 2 * sizeof(double));
     if (!c.dp || !c.dc || !c.qn || !c.u || !ybuf) {
         st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
         goto cleanup;
     }
-    c.f = c.u + nv, c.fz = c.f + nv, c.w = c.fz + nv, c.des = c.w + nv;
-    memset(c.des, 0, 3 * nv * sizeof(double));
-    memset(c.w, 0, nv * sizeof(double));
+    c.f = c.u + nvx, c.fz = c.f + nvx, c.acc = c.fz + nvx, c.w = c.acc + nvx;
+    c.des = c.w + nv, c.qi = c.des + 3 * nv, c.vi = c.qi + nv;
+    memset(c.w, 0, nv * 6 * sizeof(double));
+    if (plant->has_loop) {
+        ctc_loop_stab stab = spec->loop_stab;
+        double a = spec->baumgarte[0], b = spec->baumgarte[1];
+        if (a == 0 && b == 0) a = b = SIM_DEFAULT_BAUMGARTE;
+        c.dp->baumgarte[0] = stab == CTC_LOOP_BAUMGARTE ? a : 0;
+        c.dp->baumgarte[1] = stab == CTC_LOOP_BAUMGARTE ? b : 0;
+    }
 
     /* the result, sized for every sample */
     unsigned channels = spec->channels ? spec->channels : channels_applicable(spec->controller);
+    if (!spec->channels && plant->has_loop) channels |= CTC_CH_BIT(CTC_CH_LOOP);
     rec.count = sample_count(spec->duration, spec->output_interval);
     rec.dt = spec->output_interval;
     st = alloc_result(&c, channels, rec.count, &r);
@@ -612,9 +767,11 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     }
     rec.r = r;
     rec.ysample = ybuf + c.ny + 1;
-    rec.qacc = rec.ysample + c.ny + 1;
-    rec.track_energy = !c.active && !has_disturbance(spec, c.nv);
-    rec.track_errdyn = c.active && exact && !has_disturbance(spec, c.nv);
+    double *yproj = rec.ysample + c.ny + 1;
+    rec.loop_max = yproj + c.ny + 1;
+    rec.loop_max[0] = rec.loop_max[1] = 0;
+    rec.track_energy = !c.active && !has_disturbance(spec, c.nind);
+    rec.track_errdyn = c.active && exact && !has_disturbance(spec, c.nind);
     rec.e_sq = calloc(nv, sizeof(double));
     rec.phi = calloc(nv * 12, sizeof(double));
     if (!rec.e_sq || !rec.phi) {
@@ -623,7 +780,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     }
     rec.eref = rec.phi + 9 * nv;
     if (rec.track_errdyn) {
-        for (int i = 0; i < c.nv; i++) {
+        for (int i = 0; i < c.nind; i++) {
             double a[9];
             closed_loop_matrix(&spec->gains[i], a);
             expm3(a, rec.dt, rec.phi + 9 * i);
@@ -644,7 +801,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
         st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
         goto cleanup;
     }
-    for (int i = 0; i < c.nv; i++) {
+    for (int i = 0; i < c.nind; i++) {
         double tb[3] = {spec->disturb ? ctc_disturb_breakpoint(&spec->disturb[i]) : INFINITY,
                         INFINITY, INFINITY};
         if (c.active && spec->traj[i].type == CTC_TRAJ_SPLINE) {
@@ -656,21 +813,22 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     }
     qsort(breaks, (size_t)nbreaks, sizeof(double), cmp_double);
 
-    /* initial state */
+    /* initial state, on the loop's closure */
     double *y0 = ybuf;
-    if (spec->q0)
-        memcpy(y0, spec->q0, nq * sizeof(double));
-    else
-        ctc_model_q_zero(plant, y0);
-    ctc_model_q_normalize(plant, y0);
-    for (int i = 0; i < c.nv; i++) y0[c.nq + i] = spec->v0 ? spec->v0[i] : 0;
+    st = close_initial_state(spec, plant, c.dp, y0, y0 + c.nq, &r->metrics.initial, err, errlen);
+    if (st != CTC_OK) goto cleanup;
     for (int i = c.nq + c.nv; i < c.ny; i++) y0[i] = 0;
+    double loop_tol = spec->loop_tol > 0 ? spec->loop_tol : SIM_DEFAULT_LOOP_TOL;
 
     double bound = spec->max_speed > 0 ? spec->max_speed : SIM_DEFAULT_MAX_SPEED;
     ctc_run_status status = CTC_RUN_DONE;
     char why[200] = "";
     double t = 0;
-    if (sim_rhs(0, y0, rec.ysample, &c) != 0 || diverged(&c, 0, y0, bound, r)) {
+    int rc0 = sim_rhs(0, y0, rec.ysample, &c);
+    if (rc0 == SIM_RHS_SINGULAR) {
+        status = CTC_RUN_SINGULAR;
+        singular_message(r, 0, &c);
+    } else if (rc0 != 0 || diverged(&c, 0, y0, bound, r)) {
         status = CTC_RUN_DIVERGED;
     } else {
         record_sample(&c, &rec, 0, y0);
@@ -685,6 +843,11 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
         int rc = ctc_integrator_step(integ, tstop, why, sizeof why);
         t = ctc_integrator_time(integ);
         const double *y = ctc_integrator_state(integ);
+        if (rc == SIM_RHS_SINGULAR) {
+            status = CTC_RUN_SINGULAR;
+            singular_message(r, t, &c);
+            break;
+        }
         if (rc != 0) {
             status = CTC_RUN_FAILED;
             snprintf(r->message, sizeof r->message, "integrator: %s", why);
@@ -703,9 +866,38 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
             rec.next++;
             if (hooks->progress) hooks->progress(hooks->ctx, ts / spec->duration);
         }
+        int restart = 0;
         if (ib < nbreaks && t >= breaks[ib]) {
             while (ib < nbreaks && breaks[ib] <= t) ib++;
-            if (ctc_integrator_reset(integ, t, y) != 0) {
+            restart = 1;
+        }
+        if (plant->has_loop) { /* the drift at the step's end, and the projection */
+            double pos, vel;
+            ctc_kinematics(plant, c.dp, y, y + c.nq);
+            ctc_loop_residual_norms(plant, c.dp, &pos, &vel);
+            rec.loop_max[0] = fmax(rec.loop_max[0], pos);
+            rec.loop_max[1] = fmax(rec.loop_max[1], vel);
+            if (spec->loop_stab == CTC_LOOP_PROJECT && (pos > loop_tol || vel > loop_tol)) {
+                memcpy(yproj, y, (size_t)c.ny * sizeof *y);
+                if (ctc_loop_assemble(plant, c.dp, yproj, yproj + c.nq, loop_tol, SIM_LOOP_MAX_ITER,
+                                      NULL, why, sizeof why) != CTC_OK) {
+                    status = CTC_RUN_SINGULAR;
+                    snprintf(r->message, sizeof r->message, "t = %.6g s: projection: %s", t, why);
+                    break;
+                }
+                r->metrics.projections++;
+                y = yproj;
+                restart = 1;
+            }
+        }
+        if (restart) {
+            int rcr = ctc_integrator_reset(integ, t, y);
+            if (rcr == SIM_RHS_SINGULAR) {
+                status = CTC_RUN_SINGULAR;
+                singular_message(r, t, &c);
+                break;
+            }
+            if (rcr != 0) {
                 status = CTC_RUN_FAILED;
                 break;
             }
@@ -730,8 +922,12 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     mt->rejected = stats->rejected;
     mt->rhs_evals = c.evals;
     mt->err_estimate = stats->err_estimate;
-    for (int i = 0; c.active && i < c.nv; i++)
+    for (int i = 0; c.active && i < c.nind; i++)
         mt->e_rms[i] = r->nsamples ? sqrt(rec.e_sq[i] / (double)r->nsamples) : 0;
+    if (plant->has_loop) {
+        mt->loop_res_max = rec.loop_max[0];
+        mt->loop_vres_max = rec.loop_max[1];
+    }
     if (rec.track_energy && r->nsamples)
         mt->energy_drift = rec.drift / fmax(fmax(fabs(rec.e0), rec.ke_max), 1e-300);
     if (!rec.track_errdyn || r->nsamples < 2) mt->errdyn_dev = NAN;

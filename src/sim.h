@@ -14,6 +14,19 @@
  * Spherical joints are allowed in passive runs only (their quaternion error is not a linear
  * coordinate error, so CTC per coordinate does not apply).
  *
+ * Loop models (model.h, loop.h): the controller works on the independent coordinates only (nind
+ * of them, in joint order; the closing joint's, computed from the state, included), so gains,
+ * trajectories, disturbances, the integral state and the per-coordinate channels have nind
+ * entries; the state is the chain's (q, v) and dependent joints move with the loop. The initial
+ * state is put onto the closure first (ctc_loop_assemble: q0 of the independent joints is
+ * exact, of the dependent ones a guess; v0 of the dependent ones is replaced), and the
+ * correction is reported. After every accepted step the stabilisation keeps the state on the
+ * closure: "project" (default) moves (q, v) back when the position residual exceeds loop_tol
+ * and restarts the integrator there; "baumgarte" adds phi'' + 2 a phi' + b^2 phi = 0 to the
+ * forward dynamics; "none" integrates as it is and reports the residuals honestly. A run
+ * stops as "singular" when the independent joints can no longer drive the loop (the boundary
+ * solve's condition estimate beyond loop_cond_max).
+ *
  * A run is single-threaded and allocates everything before its first step. Any number of runs
  * may go on at once in different threads.
  */
@@ -25,6 +38,7 @@
 #include "ctrl.h"
 #include "disturb.h"
 #include "integrator.h"
+#include "loop.h"
 #include "model.h"
 #include "status.h"
 #include "traj.h"
@@ -37,8 +51,9 @@ typedef enum ctc_ctrl_type {
     CTC_CTRL_LQR,
 } ctc_ctrl_type;
 
-/* Output channels, as bits of ctc_sim_spec.channels. Widths: q nq; energy 2 (kinetic,
- * potential); all others nv. q_des, qd_des, e and w need a controller. */
+/* Output channels, as bits of ctc_sim_spec.channels. Widths: q nq; qdot nv; energy 2 (kinetic,
+ * potential); loop 2; all others nind (the controlled coordinates: nv for an open chain). q_des,
+ * qd_des, e and w need a controller, loop a loop model. */
 typedef enum ctc_channel {
     CTC_CH_Q = 0,  /* q: joint positions (rad, m; quaternions as w, x, y, z) */
     CTC_CH_QD,     /* qdot: joint velocities */
@@ -48,28 +63,43 @@ typedef enum ctc_channel {
     CTC_CH_TAU,    /* tau: applied driving force f + z (N m, N) */
     CTC_CH_W,      /* w: controller output (commanded minus desired acceleration) */
     CTC_CH_ENERGY, /* energy: kinetic and potential (J); potential is zero at the world origin */
+    CTC_CH_LOOP,   /* loop: position and velocity residual max-norms of the closure (m or rad,
+                      m/s or rad/s); loop models only */
     CTC_NCHANNELS
 } ctc_channel;
 
 #define CTC_CH_BIT(c) (1u << (c))
 #define CTC_CH_ALL ((1u << CTC_NCHANNELS) - 1u)
 
+/* How a loop model's state is kept on the closure. */
+typedef enum ctc_loop_stab {
+    CTC_LOOP_PROJECT = 0, /* project q and v after a step whose residual exceeds loop_tol */
+    CTC_LOOP_BAUMGARTE,   /* Baumgarte terms in the forward dynamics */
+    CTC_LOOP_NONE,        /* neither: the residuals show the drift */
+} ctc_loop_stab;
+
 typedef struct ctc_sim_spec {
     ctc_chain_spec chain;       /* the plant */
     const double *q0;           /* (nq) initial positions; NULL = ctc_model_q_zero */
     const double *v0;           /* (nv) initial velocities; NULL = 0 */
     ctc_ctrl_type controller;   /* NONE = passive */
-    const ctc_gains *gains;     /* (nv) designed gains per coordinate (ctrl.h); unused if NONE */
+    const ctc_gains *gains;     /* (nind) designed gains per coordinate (ctrl.h); unused if NONE */
     double model_mass_scale;    /* controller's model: every mass times this (> 0; 1 = exact) */
     double model_inertia_scale; /* controller's model: every inertia about the CoM times this */
-    const ctc_traj *traj;       /* (nv) desired trajectory per coordinate; unused if NONE */
-    const ctc_disturb *disturb; /* (nv) disturbance per coordinate; NULL = none */
+    const ctc_traj *traj;       /* (nind) desired trajectory per coordinate; unused if NONE */
+    const ctc_disturb *disturb; /* (nind) disturbance per coordinate; NULL = none */
     ctc_integ_spec integrator;
     double duration;        /* s, > 0 */
     double output_interval; /* s, > 0: samples at t = 0, dt, 2 dt, ... and at duration */
     unsigned channels;      /* CTC_CH_BIT mask; 0 = every channel that applies */
     double max_speed;       /* divergence bound on any |v_i| (rad/s, m/s); 0 = 1e6 */
     double wall_limit;      /* s of wall time before the run stops as "timeout"; 0 = none */
+    /* loop models only */
+    ctc_loop_stab loop_stab;
+    double loop_tol;      /* projection: position residual (m, rad) that triggers it, and the
+                             Newton tolerance; 0 = 1e-12 */
+    double baumgarte[2];  /* a, b (1/s) for CTC_LOOP_BAUMGARTE; 0, 0 = 10, 10 */
+    double loop_cond_max; /* stop as singular beyond this condition estimate; 0 = 1e10 */
 } ctc_sim_spec;
 
 typedef enum ctc_run_status {
@@ -78,11 +108,12 @@ typedef enum ctc_run_status {
     CTC_RUN_FAILED,    /* the integrator failed (step size underflow, too many steps) */
     CTC_RUN_CANCELLED, /* the hooks asked to stop */
     CTC_RUN_TIMEOUT,   /* wall_limit reached */
+    CTC_RUN_SINGULAR,  /* loop models: the independent joints cannot drive the loop here */
 } ctc_run_status;
 
 typedef struct ctc_sim_metrics {
     ctc_form form;       /* the model form the plant was computed in */
-    int nv;              /* length of the per-coordinate arrays below */
+    int nv;              /* length of the per-coordinate arrays below (nind) */
     double *e_max;       /* (nv) max |e| over the samples; NULL when passive */
     double *e_rms;       /* (nv) RMS of e over the samples; NULL when passive */
     double *e_final;     /* (nv) e at the last sample; NULL when passive */
@@ -97,13 +128,21 @@ typedef struct ctc_sim_metrics {
     double us_per_eval;   /* wall microseconds per right-hand-side evaluation */
     double t_end;         /* time reached */
     int diverged_joint;   /* joint index (0-based) when DIVERGED, else -1 */
+    /* loop models (NaN / 0 otherwise) */
+    double loop_res_max;  /* max position residual over the samples and over the ends of the
+                             accepted steps before any projection - the drift of one step
+                             (m, rad) */
+    double loop_vres_max; /* max velocity residual (m/s, rad/s) */
+    double loop_cond_max; /* max condition estimate of the boundary solves at the samples */
+    long projections;     /* steps after which the state was projected */
+    ctc_loop_fix initial; /* what putting the initial state onto the closure did (loop.h) */
 } ctc_sim_metrics;
 
 typedef struct ctc_sim_result {
     ctc_run_status status;
     char message[256]; /* why a run did not finish, e.g. "t = 1.284 s: joint 2 speed 3.1e+06
                           rad/s exceeds the bound 1e+06"; empty when done */
-    int nq, nv;
+    int nq, nv, nind;
     unsigned channels;        /* the channels recorded */
     int width[CTC_NCHANNELS]; /* values per sample of each channel (0 if not recorded) */
     int nsamples;
@@ -136,7 +175,9 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
 /* Frees a result; NULL is allowed. */
 void ctc_sim_result_free(ctc_sim_result *r);
 
-/* Names: "none", "pd", "pid", "poles", "lqr"; "q", "qdot", ...; "done", "diverged", ... */
+/* Names: "none", "pd", "pid", "poles", "lqr"; "q", "qdot", ...; "done", "diverged", ...;
+ * "project", "baumgarte", "none" */
+const char *ctc_loop_stab_name(ctc_loop_stab s);
 const char *ctc_ctrl_type_name(ctc_ctrl_type t);
 const char *ctc_channel_name(ctc_channel c);
 const char *ctc_run_status_name(ctc_run_status s);

@@ -9,6 +9,11 @@
  * that dragging, or the arrow keys on the focused canvas, rotates, over a floor grid through
  * the base. The canvas carries data-mode ("planar" | "spatial") and data-time (the time drawn,
  * s, updated on every frame). The scale fits the largest reach over the whole run.
+ *
+ * A closed chain (scene.loop) has its second ground pivot, the anchor, drawn like the base, and
+ * a thin line from the last body's closing point to it (a visible gap is the closure residual).
+ * It has no ghost: q_des holds only the independent coordinates, and the desired pose of the
+ * dependent joints is not recorded.
  */
 import {el} from "./dom.js";
 import {chainLayout, chainPose, planeBasis, worldBasis, dot, norm, add, scale, cross} from "./kinematics.js";
@@ -36,16 +41,19 @@ function sampler(ts, rows, t) {
 /* Draws into host; returns {destroy()}. series: {t, q, q_des?}; form: "planar" | "spatial". */
 export function createAnimation(host, {spec, form, series, timeline}) {
   const bodies = spec.scene.bodies;
-  const layout = chainLayout(bodies);
+  const loop = spec.scene.loop || null;
+  const layout = chainLayout(bodies, loop);
+  const ghost = loop ? null : series.q_des;
   const ts = series.t;
   const spatial = form !== "planar";
   const canvas = el("canvas", {id: "anim", tabindex: "0", "data-mode": spatial ? "spatial" : "planar",
     "data-time": "0", role: "img",
-    "aria-label": `animation of the chain (${spatial ? "3-D, drag or arrow keys to rotate" : "planar"}); ` +
-      "blue: actual pose, dashed orange: desired pose"});
+    "aria-label": `animation of the ${loop ? "closed chain" : "chain"} (${spatial ? "3-D, drag or arrow keys to rotate" : "planar"}); ` +
+      (ghost ? "blue: actual pose, dashed orange: desired pose" : "blue: actual pose")});
   host.append(el("div", {class: "anim-wrap"}, canvas),
     el("p", {class: "muted small"}, el("span", {class: "key-actual", text: "━ actual"}), "  ",
-      series.q_des ? el("span", {class: "key-ghost", text: "┅ desired"}) : null, "  ·  ",
+      ghost ? el("span", {class: "key-ghost", text: "┅ desired"}) : null,
+      loop ? "■ ground pivots" : null, "  ·  ",
       spatial ? "drag or use the arrow keys to rotate" : "x right, y up (against gravity)"));
 
   let yaw = -0.6, pitch = 0.35;
@@ -60,9 +68,9 @@ export function createAnimation(host, {spec, form, series, timeline}) {
   basis = spatial ? worldBasis(spec.scene.gravity) : planeBasis(bodies, spec.scene.gravity);
 
   /* the largest distance from the base over the run, actual and desired */
-  let reach = 1e-3;
+  let reach = loop ? Math.max(1e-3, norm(loop.anchor || [0, 0, 0])) : 1e-3;
   const stride = Math.max(1, Math.floor(ts.length / 400));
-  for (const rows of [series.q, series.q_des]) {
+  for (const rows of [series.q, ghost]) {
     if (!rows) continue;
     for (let k = 0; k < ts.length; k += stride) {
       for (const b of chainPose(layout, (i) => (rows[i] ? rows[i][k] ?? 0 : 0))) {
@@ -134,8 +142,17 @@ export function createAnimation(host, {spec, form, series, timeline}) {
     const [bx, by] = toXY([0, 0, 0]);
     g.fillStyle = "#3d434a"; g.fillRect(bx - 7, by - 7, 14, 14);
 
-    if (series.q_des) chain(chainPose(layout, sampler(ts, series.q_des, t)), toXY, GHOST, 3, [7, 5], 0.85);
-    chain(chainPose(layout, sampler(ts, series.q, t)), toXY, ACTUAL, 5, [], 1);
+    if (ghost) chain(chainPose(layout, sampler(ts, ghost, t)), toXY, GHOST, 3, [7, 5], 0.85);
+    const pose = chainPose(layout, sampler(ts, series.q, t));
+    if (loop) {
+      /* the anchor, and the closing joint from the last body's closing point to it */
+      const [ax, ay] = toXY(loop.anchor || [0, 0, 0]);
+      const [ex, ey] = toXY(pose[pose.length - 1].end);
+      g.fillStyle = "#3d434a"; g.fillRect(ax - 7, ay - 7, 14, 14);
+      g.strokeStyle = "#3d434a"; g.lineWidth = 1.5;
+      g.beginPath(); g.moveTo(ex, ey); g.lineTo(ax, ay); g.stroke();
+    }
+    chain(pose, toXY, ACTUAL, 5, [], 1);
 
     g.fillStyle = "#1f2328"; g.font = "bold 14px system-ui, sans-serif";
     g.fillText(`t = ${t.toFixed(2)} s`, 10, 20);

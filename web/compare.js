@@ -94,7 +94,8 @@ export async function compareView(root, ctx) {
   await Promise.all(entries.filter((e) => e.job).map(async (e) => {
     try {
       const d = await loadPlotSeries(e.job, host.clientWidth, ctx.signal);
-      e.source = {label: `#${e.id}`, color: e.color, series: d.series, joints: d.joints};
+      e.source = {label: `#${e.id}`, color: e.color, series: d.series, joints: d.joints,
+        coords: d.coords, loop: d.loop};
     } catch (err) {
       if (err.name === "AbortError") throw err;
       e.li.append(el("span", {class: "error", text: ` (no series: ${err.message})`}));
@@ -112,8 +113,10 @@ export async function compareView(root, ctx) {
   const timeline = createTimeline(duration);
   const plots = createPlots(host, sources, timeline, {compare: true});
   ctx.onCleanup(() => plots.destroy());
+  /* rows of q, and beyond them the closing joints' controlled coordinates */
   const ncoord = Math.max(...entries.filter((e) => e.source).map((e) =>
-    (e.source.joints ? e.source.joints.length : Math.max(e.job.metrics?.nv ?? 0, e.job.metrics?.nq ?? 0))));
+    (e.source.joints ? e.source.joints.length : Math.max(e.job.metrics?.nv ?? 0, e.job.metrics?.nq ?? 0,
+      ...(e.source.loop ? e.source.coords.map((c) => c.row + 1) : [])))));
   toolbar.append(timeSlider(timeline, step), zoomButtons(plots));
   host.prepend(jointToggles(plots, Array.from({length: ncoord}, (_, i) => i), () => null),
     el("p", {class: "muted small", text: "Colour: job. Coordinates 0, 1, 2, 3: solid, long dash, dotted, dash-dot. Thin dotted: desired q_d."}));

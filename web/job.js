@@ -6,6 +6,8 @@
  * (status, progress, spec), and again after the plots are drawn when it finishes. The time
  * cursor (input#time-cursor), the player and the joint toggles sit in a toolbar that stays
  * at the top while the plots scroll; the animation, metrics and spec are beside the plots.
+ * A finished job's status is shown with how its run ended when that says more ("failed
+ * (singular)": a closed chain whose independent joints could no longer drive it).
  */
 import {getJob, deleteJob, seriesUrl} from "./api.js";
 import {el, errorBox, fmtList, fmtNum, fmtTime, isFinished, prettyJson, sleep} from "./dom.js";
@@ -20,12 +22,25 @@ export function metricsList(m) {
   const add = (term, value) => dl.append(el("dt", {text: term}), el("dd", {text: value}));
   if (!m) { add("metrics", "none yet: the job has not run to the end"); return dl; }
   add("status", m.message ? `${m.status}: ${m.message}` : m.status);
-  add("form", `${m.form} (nq ${m.nq}, nv ${m.nv})`);
+  const loop = m.loop;
+  add("form", `${m.form} (nq ${m.nq}, nv ${m.nv}${loop ? `, ${m.nind} independent` : ""})`);
+  if (loop && Array.isArray(m.coordinates)) {
+    add("controlled coordinates", m.coordinates.length ?
+      m.coordinates.map((c, i) => `${i}: joint ${c.joint}`).join(", ") : "none (every joint passive)");
+  }
   add("samples", `${m.samples} to t = ${fmtNum(m.t_end)} s`);
   if (m.e_max) {
-    add("max |e| per joint", fmtList(m.e_max));
+    add(loop ? "max |e| per independent coordinate" : "max |e| per joint", fmtList(m.e_max));
     add("RMS e", fmtList(m.e_rms));
     add("final e", fmtList(m.e_final));
+  }
+  if (loop) {
+    add("loop residual max", `${fmtNum(loop.residual_max)} (position), ${fmtNum(loop.velocity_residual_max)} (velocity)`);
+    add("loop condition max", fmtNum(loop.cond_max));
+    add("projections onto the loop", String(loop.projections));
+    const init = loop.initial || {};
+    add("initial correction", `${init.iterations ?? "–"} Newton iterations, |dq| ≤ ${fmtNum(init.dq_max)}, ` +
+      `|dv| ≤ ${fmtNum(init.dv_max)}, residual ${fmtNum(init.residual_before)} → ${fmtNum(init.residual_after)}`);
   }
   if (m.errdyn_dev !== null) add("deviation from the exact error dynamics", fmtNum(m.errdyn_dev));
   if (m.energy_drift !== null) add("relative energy drift", fmtNum(m.energy_drift));
@@ -81,7 +96,9 @@ export async function jobView(root, ctx) {
       `${j.scene.coordinates} coordinates · controller ${j.controller} · created ${fmtTime(j.created)}` +
       (j.finished ? ` · finished ${fmtTime(j.finished)}` : "") +
       (j.wall_s !== null ? ` · wall ${fmtNum(j.wall_s)} s` : "");
-    statusEl.textContent = j.status;
+    const ended = j.metrics && j.metrics.status;
+    statusEl.textContent = ended && isFinished(j.status) && ended !== j.status && ended !== "done" ?
+      `${j.status} (${ended})` : j.status;
     statusEl.className = `status status-${j.status}`;
     const running = !isFinished(j.status);
     progress.hidden = !running;
@@ -138,16 +155,20 @@ export async function jobView(root, ctx) {
 
   const m = job.metrics || {};
   const timeline = createTimeline(job.spec.duration);
-  const plots = createPlots(plotsHost, [{label: `#${id}`, color: PALETTE[0], series: data.series, joints: data.joints}], timeline);
+  const plots = createPlots(plotsHost, [{label: `#${id}`, color: PALETTE[0], series: data.series,
+    joints: data.joints, coords: data.coords, loop: data.loop}], timeline);
   ctx.onCleanup(() => plots.destroy());
   const ncoord = Math.max(m.nv ?? 0, m.nq ?? 0);
   const coords = (data.joints || Array.from({length: ncoord}, (_, i) => i));
+  /* a closing joint's controlled coordinate has a row beyond q's */
+  for (const c of data.loop ? data.coords : []) if (c.row >= ncoord && !data.joints) coords.push(c.row);
   const tEnd = data.series.t.length ? data.series.t[data.series.t.length - 1] : 0;
   const player = createPlayer(timeline, tEnd);
   ctx.onCleanup(() => player.destroy());
   toolbar.append(timeSlider(timeline, job.spec.output ? job.spec.output.interval : 0), player.node,
     zoomButtons(plots));
-  plotsHost.prepend(jointToggles(plots, coords, (j) => PALETTE[j % PALETTE.length]));
+  plotsHost.prepend(jointToggles(plots, coords, (j) => PALETTE[j % PALETTE.length],
+    (j) => (j >= ncoord ? "closing joint" : `joint ${j}`)));
   if (data.joints) {
     plotsHost.prepend(el("p", {class: "muted", text: `The plots show the first ${data.joints.length} of ${m.nv} coordinates.`}));
   }

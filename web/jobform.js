@@ -9,7 +9,9 @@
  * Choosing another controller type, trajectory or disturbance type or integrator method
  * replaces that object with the new type's defaults (as the server's preset overrides do) and
  * redraws the form; other fields change one key. The document is the truth: anything the form
- * does not show (bodies, per-joint gains, limits) is kept as it is.
+ * does not show (bodies, the loop, per-joint gains, limits) is kept as it is. The trajectory and
+ * the disturbance have an entry per controlled coordinate: every coordinate of an open chain,
+ * the independent ones of a closed chain (scene.loop), the closing joint's last.
  */
 import {el} from "./dom.js";
 
@@ -72,10 +74,19 @@ function parseQ(s) {
 }
 const showQ = (v) => (Array.isArray(v) && Array.isArray(v[0]) ? v.map((r) => r.join(", ")).join("; ") : showList(v));
 
-/* The number of velocity coordinates of doc's scene, or 0 when it has no bodies. */
+/* The names of the controlled coordinates of doc's scene, one per coordinate ("" when its body
+ * has no name): every coordinate of an open chain, the independent ones of a closed chain. */
+function controlledNames(doc) {
+  const bodies = doc.scene && Array.isArray(doc.scene.bodies) ? doc.scene.bodies : [];
+  const loop = doc.scene && doc.scene.loop;
+  const joints = bodies.map((b) => ({joint: b?.joint, name: b?.name || "", independent: !loop || b?.joint?.independent !== false}));
+  if (loop && typeof loop === "object") joints.push({joint: loop.joint, name: "closing joint", independent: loop.joint?.independent === true});
+  return joints.flatMap((j) => (j.independent ? Array(NV[j.joint?.type] ?? 0).fill(j.name) : []));
+}
+
+/* The number of controlled coordinates of doc's scene, or 0 when it has no bodies. */
 function coordinates(doc) {
-  const bodies = doc.scene && doc.scene.bodies;
-  return Array.isArray(bodies) ? bodies.reduce((n, b) => n + (NV[b?.joint?.type] ?? 0), 0) : 0;
+  return controlledNames(doc).length;
 }
 
 /* Binds a form to a document: render() draws the fields of getDoc(); edits change the
@@ -142,7 +153,7 @@ export function jobForm(host, getDoc, edited) {
     if (!each) {
       fs.append(el("div", {class: "row"}, ...entry(doc, key, table)));
     } else {
-      const names = (doc.scene.bodies || []).flatMap((b) => Array(NV[b.joint.type] ?? 0).fill(b.name || ""));
+      const names = controlledNames(doc);
       value.forEach((_, i) => {
         fs.append(el("fieldset", {name: `${key}[${i}]`, class: "entry"},
           el("legend", {text: `coordinate ${i}${names[i] ? ` (${names[i]})` : ""}`}),

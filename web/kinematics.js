@@ -7,7 +7,9 @@
  * (the world's for k = 0). Revolute: rotation by q about the axis; prismatic: translation by q
  * along it; cylindrical: (angle, displacement); spherical: unit quaternion (w, x, y, z), four
  * entries of q; fixed: nothing. So R_k = R_{k-1} Rot(axis, angle) and
- * p_k = p_{k-1} + R_{k-1} (location + axis d). Rotations are row-major 3x3 arrays.
+ * p_k = p_{k-1} + R_{k-1} (location + axis d). Rotations are row-major 3x3 arrays. A closed
+ * chain (scene.loop) ends its last body at the closing joint's centre (loop.joint.location, in
+ * the last body's frame), which the loop keeps at loop.anchor in the world.
  */
 
 const NQ = {revolute: 1, prismatic: 1, cylindrical: 2, spherical: 4, fixed: 0};
@@ -69,14 +71,16 @@ function tipOf(body) {
 }
 
 /* The chain's constant part: per body its joint (type, unit axis, location), where its
- * coordinates start in q, and the point its drawn segment ends at (in its own frame). */
-export function chainLayout(bodies) {
+ * coordinates start in q, and the point its drawn segment ends at (in its own frame): the next
+ * joint's centre, or for the last body its tip, or the closing joint's centre of a loop. */
+export function chainLayout(bodies, loop) {
   let qi = 0;
+  const last = loop ? (loop.joint && loop.joint.location) || [0, 0, 0] : null;
   return bodies.map((b, k) => {
     const j = b.joint;
     const link = {type: j.type, axis: j.axis ? unit(j.axis) : [0, 0, 1],
       loc: j.location || [0, 0, 0], qi,
-      end: k + 1 < bodies.length ? (bodies[k + 1].joint.location || [0, 0, 0]) : tipOf(b)};
+      end: k + 1 < bodies.length ? (bodies[k + 1].joint.location || [0, 0, 0]) : last || tipOf(b)};
     qi += NQ[j.type] ?? 0;
     return link;
   });

@@ -1,8 +1,14 @@
 /*
  * plots.js - the time plots of one job or of several overlaid (uPlot): joint coordinates q with
- * the desired q_d, tracking error e, driving torques f (channel "tau"), controller output w and
- * energy, one div.plot[data-channel] each, with data-points (samples drawn) and data-series
- * (lines drawn, desired ones included).
+ * the desired q_d, tracking error e, driving torques f (channel "tau"), controller output w,
+ * energy and, for a closed chain, the loop's closure residuals, one div.plot[data-channel] each,
+ * with data-points (samples drawn) and data-series (lines drawn, desired ones included).
+ *
+ * Every line of a coordinate carries its row of q (the joint toggles and the colours follow
+ * it). The controller's channels have a column per controlled coordinate: for an open chain
+ * every coordinate, so e[i] goes with q[i]; for a closed chain its independent coordinates,
+ * labelled as the server names the columns (e[i], the i-th independent coordinate) with the
+ * joint they belong to ("e[1] (joint 2)") and drawn in that joint's colour.
  *
  * Colours come from the Okabe-Ito palette (safe for the common colour vision deficiencies,
  * dark enough on white): in a job's plots each coordinate has its colour and q_d is dashed;
@@ -28,16 +34,46 @@ export const CHANNELS = [
   {key: "tau", title: "Driving torques f (channel tau)", axis: "f [N m | N]"},
   {key: "w", title: "Controller output w (commanded acceleration)", axis: "w [rad/s² | m/s²]"},
   {key: "energy", title: "Energy", axis: "energy [J]"},
+  {key: "loop", title: "Loop closure residuals (max-norms)", axis: "residual [m | rad, /s]"},
 ];
+const LOOP_PARTS = ["position residual", "velocity residual"];
 
-/* The lines of one channel: [{src, label, values, stroke, dash, width, joint, desired}] (joint
- * null for energy). Each source is {label, color, series, joints (coordinate index of each
- * row, or null)}. */
+/* The row of q (joint toggle, colour) and the label of row r of a channel of src. */
+function rowOf(key, src, rows, r) {
+  const name = key === "tau" ? "f" : key;
+  const coords = src.coords;
+  if (key !== "q" && src.loop && coords && rows.length === coords.length) {
+    return {j: coords[r].row, label: `${name}[${r}] (${coords[r].label})`};
+  }
+  const j = src.joints && rows.length === src.joints.length ? src.joints[r] : r;
+  return {j, label: `${name}[${j}]`};
+}
+
+/* The desired q_d of q's row r (coordinate row j) in src, or null: q_des has a column per
+ * controlled coordinate, every one of an open chain (fetched with the same joints as q). */
+function desiredOf(src, r, j) {
+  const des = src.series.q_des;
+  if (!des) return null;
+  if (!src.loop || !src.coords) return des[r] || null;
+  const i = src.coords.findIndex((c) => c.row === j);
+  return i >= 0 ? des[i] || null : null;
+}
+
+/* The lines of one channel: [{src, label, values, stroke, dash, width, joint, desired}] (joint:
+ * the row of q the line belongs to, null for energy and the loop). Each source is {label,
+ * color, series, joints (coordinate index of each row, or null), coords (series.js
+ * controlledCoordinates), loop (a closed chain)}. */
 function linesFor(key, sources, compare) {
   const lines = [];
   sources.forEach((src, s) => {
     const S = src.series;
     const pre = compare ? `${src.label} ` : "";
+    if (key === "loop") {
+      if (!S.loop || S.loop.length < 2) return;
+      S.loop.forEach((values, i) => lines.push({src: s, label: `${pre}${LOOP_PARTS[i]}`, values,
+        stroke: compare ? src.color : PALETTE[i], dash: compare ? DASHES[i] : [], width: 2, joint: null}));
+      return;
+    }
     if (key === "energy") {
       if (!S.energy || S.energy.length < 2) return;
       const [kin, pot] = S.energy;
@@ -53,13 +89,12 @@ function linesFor(key, sources, compare) {
     }
     const rows = S[key];
     if (!rows) return;
-    const name = key === "tau" ? "f" : key;
     rows.forEach((values, r) => {
-      const j = src.joints && rows.length === src.joints.length ? src.joints[r] : r;
+      const {j, label} = rowOf(key, src, rows, r);
       const stroke = compare ? src.color : PALETTE[j % PALETTE.length];
       const dash = compare ? DASHES[j % DASHES.length] : (j >= PALETTE.length ? [14, 3] : []);
-      lines.push({src: s, label: `${pre}${name}[${j}]`, values, stroke, dash, width: 2, joint: j});
-      const des = key === "q" && S.q_des ? S.q_des[r] : null;
+      lines.push({src: s, label: `${pre}${label}`, values, stroke, dash, width: 2, joint: j});
+      const des = key === "q" ? desiredOf(src, r, j) : null;
       if (des) {
         lines.push({src: s, label: `${pre}q_d[${j}]`, values: des, stroke,
           dash: compare ? [2, 3] : [7, 5], width: compare ? 1 : 1.5, joint: j, desired: true});
@@ -172,14 +207,14 @@ export function createPlots(host, sources, timeline, {compare = false} = {}) {
 }
 
 /* The per-coordinate toggles (button.joint-toggle[data-joint], aria-pressed) for a plot set;
- * colorOf(j) gives a swatch colour (null: none). */
-export function jointToggles(plotSet, coords, colorOf) {
+ * colorOf(j) gives a swatch colour (null: none), labelOf(j) the button's text. */
+export function jointToggles(plotSet, coords, colorOf, labelOf = (j) => `joint ${j}`) {
   const bar = el("div", {class: "joint-toggles", role: "group", "aria-label": "coordinates shown"});
   for (const j of coords) {
     const color = colorOf(j);
     const b = el("button", {type: "button", class: "joint-toggle", "data-joint": j,
       "aria-pressed": "true", title: `show or hide coordinate ${j} in every plot`},
-    color ? el("span", {class: "swatch", style: `background:${color}`}) : null, `joint ${j}`);
+    color ? el("span", {class: "swatch", style: `background:${color}`}) : null, labelOf(j));
     b.addEventListener("click", () => {
       const show = b.getAttribute("aria-pressed") !== "true";
       b.setAttribute("aria-pressed", String(show));

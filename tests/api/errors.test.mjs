@@ -79,13 +79,13 @@ const CASES = [
     { name: 'unstable pid', json: ctrlJob({ type: 'pid', kp: 100, kv: 20, ki: 2000 }), status: 400, code: 'INVALID_FIELD', field: 'controller', message: 'ki = 2000 must be below kv*kp = 2000 (Routh-Hurwitz: the closed-loop error dynamics would be unstable)' },
     { name: 'controller without a trajectory', json: { scene: SCENE2, controller: PD, duration: 1 }, status: 400, code: 'MISSING_FIELD', field: 'trajectory', message: 'is required with controller "pd"' },
     { name: 'unknown integrator method', json: passiveJob({ integrator: { method: 'euler' } }), status: 400, code: 'INVALID_FIELD', field: 'integrator.method', message: 'must be one of "rk4", "dopri5", "bdf" (got "euler")' },
-    { name: 'unknown channel', json: passiveJob({ output: { channels: ['x'] } }), status: 400, code: 'INVALID_FIELD', field: 'output.channels[0]', message: 'must be one of "q", "qdot", "q_des", "qdot_des", "e", "tau", "w", "energy" (got "x")' },
+    { name: 'unknown channel', json: passiveJob({ output: { channels: ['x'] } }), status: 400, code: 'INVALID_FIELD', field: 'output.channels[0]', message: 'must be one of "q", "qdot", "q_des", "qdot_des", "e", "tau", "w", "energy", "loop" (got "x")' },
     { name: 'two hours', json: { scene: SCENE2, controller: PASSIVE, duration: 7200 }, status: 400, code: 'LIMIT_EXCEEDED', field: 'duration', message: 'must be at most 3600 s (got 7200 s)' },
     { name: 'too many samples', json: { scene: SCENE2, controller: PASSIVE, duration: 3600 }, status: 400, code: 'LIMIT_EXCEEDED', field: 'output.interval', message: 'gives up to 360002 samples over 3600 s; the limit is 200000 (use a longer interval)' },
     { name: 'too many bodies (4097)', server: 'B', headers: { 'content-type': J, authorization: `Bearer ${TOKEN}` }, body: tooManyBodies(), status: 400, code: 'LIMIT_EXCEEDED', field: 'scene.bodies', message: 'has 4097 bodies; the limit is 4096' },
 
     /* presets in a body */
-    { name: 'unknown preset', json: { preset: 'nope' }, status: 400, code: 'UNKNOWN_PRESET', field: 'preset', message: /^unknown preset "nope" \(the presets are: triple_pendulum_pd, .*n_link_pendulum\)$/ },
+    { name: 'unknown preset', json: { preset: 'nope' }, status: 400, code: 'UNKNOWN_PRESET', field: 'preset', message: /^unknown preset "nope" \(the presets are: triple_pendulum_pd, .*n_link_pendulum, five_bar_pd, .*rssr_passive\)$/ },
     { name: 'preset not a string', json: { preset: 5 }, status: 400, code: 'INVALID_FIELD', field: 'preset', message: 'must be a string (got a number)' },
     { name: 'preset parameter out of range', json: { preset: 'n_link_pendulum', n: 1 }, status: 400, code: 'INVALID_FIELD', field: 'n', message: 'must be an integer from 2 to 4096 (got 1)' },
     { name: 'validate: negative mass', path: '/api/validate', json: bodyJob(unitBody({ mass: -1 })), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].mass', message: 'must be positive (got -1 kg)' },

@@ -13,7 +13,13 @@ const KNOWN = [
     'triple_pendulum_pd', 'triple_pendulum_pid', 'triple_pendulum_poles', 'triple_pendulum_lqr',
     'triple_pendulum_passive', 'spatial_double_pendulum_pd', 'spatial_double_pendulum_pid',
     'spatial_double_pendulum_poles', 'spatial_double_pendulum_lqr', 'n_link_pendulum',
+    'five_bar_pd', 'five_bar_pid', 'five_bar_poles', 'five_bar_lqr', 'four_bar_passive',
+    'rssr_passive',
 ];
+/* bodies of each preset's chain (n_link_pendulum with n = 4) */
+const BODIES = (name) =>
+    name === 'n_link_pendulum' ? 4 : name.startsWith('five_bar') ? 5 : name.startsWith('spatial') ? 2 : 3;
+const PASSIVE = new Set(['triple_pendulum_passive', 'four_bar_passive', 'rssr_passive']);
 
 let srv;
 let presets = [];
@@ -75,7 +81,7 @@ test('every preset is accepted (202, Location, queued row) and runs to done', as
         assert.equal(row.preset, p.name);
         assert.ok(['queued', 'running', 'done'].includes(row.status), row.status);
         assert.match(row.created, /^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z$/);
-        assert.equal(row.scene.bodies, p.name === 'n_link_pendulum' ? 4 : p.name.startsWith('triple') ? 3 : 2);
+        assert.equal(row.scene.bodies, BODIES(p.name), p.name);
         ids.set(p.name, row.id);
     }
     assert.equal(new Set(ids.values()).size, presets.length, 'distinct ids');
@@ -93,7 +99,7 @@ test('every preset is accepted (202, Location, queued row) and runs to done', as
         assert.equal(job.message, null);
         assert.equal(job.spec.duration, DURATION);
         assert.equal(job.preset, name);
-        if (name === 'triple_pendulum_passive') assert.equal(job.e_max, null);
+        if (PASSIVE.has(name)) assert.equal(job.e_max, null);
         else assert.equal(job.e_max, Math.max(...job.metrics.e_max));
         jobs.set(name, job);
     }
@@ -133,9 +139,11 @@ test('series JSON has t and every channel with duration/interval + 1 samples', a
         assert.deepEqual(Object.keys(s), ['t', ...job.spec.output.channels], name);
         const nq = job.metrics.nq;
         const nv = job.metrics.nv;
+        const nind = job.metrics.nind; /* the controller's channels: every coordinate, or a loop's independent ones */
         assert.equal(nv, job.scene.coordinates);
+        assert.equal(nind, job.spec.scene.loop ? job.metrics.coordinates.length : nv, name);
         for (const ch of job.spec.output.channels) {
-            const width = ch === 'energy' ? 2 : ch === 'q' ? nq : nv;
+            const width = ch === 'energy' || ch === 'loop' ? 2 : ch === 'q' ? nq : ch === 'qdot' ? nv : nind;
             assert.equal(s[ch].length, width, `${name} ${ch} columns`);
             for (const col of s[ch]) assert.equal(col.length, n, `${name} ${ch} samples`);
         }

@@ -104,5 +104,37 @@ sed 's/"duration": 0.5/"duration": 0.5, "limits": {"max_speed": 0.01}/' "$tmp/jo
 expect_exit 3 "a diverging run" "$CTCSIM" run "$tmp/diverge.json"
 expect_grep "divergence reported" "$tmp/err" "exceeds the bound 0.01"
 
+# closed chains: the five-bar runs with one e column per independent coordinate and the loop's
+# residuals; a loop whose independent coordinates do not match its mobility is invalid (exit 2)
+expect_exit 0 "presets lists the five-bar" "$CTCSIM" presets
+expect_grep "presets lists the five-bar" "$tmp/out" "five_bar_pd"
+expect_grep "presets lists the RSSR linkage" "$tmp/out" "rssr_passive"
+echo '{"preset": "five_bar_pd", "duration": 0.5, "output": {"interval": 0.1}}' >"$tmp/five_bar.json"
+expect_exit 0 "run five_bar_pd" "$CTCSIM" run "$tmp/five_bar.json"
+head -n 1 "$tmp/out" | grep -q ',e\[0\],e\[1\],e\[2\],tau\[0\],' && pass ||
+    fail "five-bar header: no e[0..2] before tau: $(head -n 1 "$tmp/out")"
+head -n 1 "$tmp/out" | grep -q 'e\[3\]' && fail "five-bar header has e[3]: three coordinates are independent" || pass
+head -n 1 "$tmp/out" | grep -q ',loop\[position\],loop\[velocity\]$' && pass ||
+    fail "five-bar header: no loop columns at the end: $(head -n 1 "$tmp/out")"
+[ "$(wc -l <"$tmp/out")" -eq 7 ] && pass || fail "run five_bar_pd: $(wc -l <"$tmp/out") lines, expected 7"
+expect_grep "five-bar summary" "$tmp/err" "Five-bar closed chain, PD (Kingsley et al. 2017, sec. 7.2): done, planar pd"
+expect_grep "five-bar summary reports the loop" "$tmp/err" ", loop residual "
+expect_exit 0 "five-bar json" "$CTCSIM" run "$tmp/five_bar.json" --format json -o "$tmp/five_bar_out.json" --quiet
+expect_grep "json has the loop metrics" "$tmp/five_bar_out.json" '"loop":{"residual_max":'
+expect_grep "json names the controlled coordinates" "$tmp/five_bar_out.json" '"coordinates":[{"joint":0,"coordinate":0},{"joint":1,"coordinate":1},{"joint":2,"coordinate":2}]'
+expect_exit 0 "run five_bar_pd --channels loop" "$CTCSIM" run "$tmp/five_bar.json" --channels loop
+[ "$(head -n 1 "$tmp/out")" = "t,loop[position],loop[velocity]" ] && pass ||
+    fail "run --channels loop header: $(head -n 1 "$tmp/out")"
+echo '{"preset": "five_bar_pd", "scene": {"loop": {"joint": {"independent": true}}},
+  "trajectory": {"type": "constant", "value": 0}}' >"$tmp/mobility.json"
+expect_exit 2 "a loop of 4 independent coordinates and mobility 3" "$CTCSIM" run "$tmp/mobility.json"
+expect_grep "the mobility is named" "$tmp/err" "mobility.json: scene.loop: "
+expect_grep "the mobility is named" "$tmp/err" "mobility"
+expect_exit 2 "validate the same" "$CTCSIM" validate "$tmp/mobility.json"
+echo '{"preset": "five_bar_pd", "duration": 0.1}' >"$tmp/five_bar_short.json"
+expect_exit 0 "validate a loop" "$CTCSIM" validate "$tmp/five_bar_short.json"
+expect_grep "validate counts the independent coordinates" "$tmp/err" "valid (5 bodies and a loop, 5 coordinates, 3 independent, controller pd)"
+expect_grep "the normalised loop" "$tmp/out" '"cond_max":'
+
 echo "cli: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -41,6 +41,22 @@
 #define TRAJ_JOB(traj) "{" SCENE2 "," PD ",'trajectory':" traj "," DUR "}"
 #define BODY_JOB(body) "{'scene':{'bodies':[" body "]}," PASSIVE "," DUR "}"
 
+/* a square four-bar of unit links: body 0 hangs from the origin (joint 0, independent), body 1
+ * points along +x, body 2 up to the anchor (1, 0, 0) where the closing joint pins its far end;
+ * joints 1, 2 and the closing joint dependent: mobility 1 (4 freedoms - 3) = nind */
+#define DEP_BODY                                                                                   \
+    "{'mass':1,'com':[0,-0.5,0],'inertia':[0.1,0.1,0.1],'joint':{'type':'revolute','axis':[0,0,"   \
+    "1],'location':[0,-1,0],'independent':false}}"
+#define CLOSING "'joint':{'type':'revolute','axis':[0,0,1],'location':[0,-1,0]}"
+#define LOOP "{" CLOSING ",'anchor':[1,0,0]}"
+#define SQUARE_Q0 "'q0':[0,1.5707963267948966,1.5707963267948966]"
+#define LOOP_SCENE_WITH(loop)                                                                      \
+    "'scene':{'bodies':[" BODY "," DEP_BODY "," DEP_BODY "],'loop':" loop "," SQUARE_Q0 "}"
+#define LOOP_SCENE LOOP_SCENE_WITH(LOOP)
+#define LOOP_PD_JOB(extra) "{" LOOP_SCENE "," PD "," HOLD "," DUR extra "}"
+#define LOOP_PASSIVE_JOB(extra) "{" LOOP_SCENE "," PASSIVE "," DUR extra "}"
+#define BAD_LOOP_JOB(loop) "{" LOOP_SCENE_WITH(loop) "," PASSIVE "," DUR "}"
+
 /* text with every ' turned into " (malloc'd) */
 static char *json(const char *text)
 {
@@ -414,8 +430,8 @@ static const bad_job bad_jobs[] = {
      "channel \"e\" needs a controller (this run is passive)"},
     {"unknown channel", PASSIVE_JOB(",'output':{'channels':['x']}"), NULL, JOB_INVALID_FIELD,
      "output.channels[0]",
-     "must be one of \"q\", \"qdot\", \"q_des\", \"qdot_des\", \"e\", \"tau\", \"w\", \"energy\" "
-     "(got \"x\")"},
+     "must be one of \"q\", \"qdot\", \"q_des\", \"qdot_des\", \"e\", \"tau\", \"w\", \"energy\", "
+     "\"loop\" (got \"x\")"},
     {"channel twice", PASSIVE_JOB(",'output':{'channels':['q','q']}"), NULL, JOB_INVALID_FIELD,
      "output.channels[1]", "\"q\" is listed twice"},
     {"no channels", PASSIVE_JOB(",'output':{'channels':[]}"), NULL, JOB_INVALID_FIELD,
@@ -426,6 +442,101 @@ static const bad_job bad_jobs[] = {
      "limits.max_speed", "must be positive (got 0)"},
     {"negative wall time", PASSIVE_JOB(",'limits':{'wall_time':-1}"), NULL, JOB_INVALID_FIELD,
      "limits.wall_time", "must not be negative (got -1 s)"},
+
+    /* the loop */
+    {"dependent joint of an open chain",
+     "{'scene':{'bodies':[" BODY "," DEP_BODY "]}," PASSIVE "," DUR "}", NULL, JOB_INVALID_FIELD,
+     "scene.bodies[1].joint.independent",
+     "must be true: an open chain is fully actuated (only a chain closed by \"scene.loop\" has "
+     "dependent joints)"},
+    {"independent not a boolean",
+     BODY_JOB("{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{'type':'revolute','axis':[0,0,"
+              "1],'independent':1}}"),
+     NULL, JOB_INVALID_FIELD, "scene.bodies[0].joint.independent",
+     "must be true or false (got a number)"},
+    {"loop a number", BAD_LOOP_JOB("1"), NULL, JOB_INVALID_FIELD, "scene.loop",
+     "must be an object (got a number)"},
+    {"loop without an anchor", BAD_LOOP_JOB("{" CLOSING "}"), NULL, JOB_MISSING_FIELD,
+     "scene.loop.anchor", "is required"},
+    {"loop without a joint", BAD_LOOP_JOB("{'anchor':[1,0,0]}"), NULL, JOB_MISSING_FIELD,
+     "scene.loop.joint", "is required"},
+    {"misspelt loop key", BAD_LOOP_JOB("{" CLOSING ",'anchr':[1,0,0]}"), NULL, JOB_UNKNOWN_FIELD,
+     "scene.loop.anchr", "unknown key \"anchr\" (did you mean \"anchor\"?)"},
+    {"anchor of 2 numbers", BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0]}"), NULL, JOB_INVALID_FIELD,
+     "scene.loop.anchor", "must be an array of 3 numbers (got 2 entries)"},
+    {"cylindrical closing joint",
+     BAD_LOOP_JOB("{'joint':{'type':'cylindrical','axis':[0,0,1]},'anchor':[1,0,0]}"), NULL,
+     JOB_INVALID_FIELD, "scene.loop.joint.type",
+     "must be one of \"revolute\", \"prismatic\", \"spherical\" (got \"cylindrical\")"},
+    {"closing joint without an axis",
+     BAD_LOOP_JOB("{'joint':{'type':'revolute','location':[0,-1,0]},'anchor':[1,0,0]}"), NULL,
+     JOB_MISSING_FIELD, "scene.loop.joint.axis", "is required"},
+    {"zero closing axis",
+     BAD_LOOP_JOB("{'joint':{'type':'prismatic','axis':[0,0,0]},'anchor':[1,0,0]}"), NULL,
+     JOB_INVALID_FIELD, "scene.loop.joint.axis", "must have non-zero length (got [0, 0, 0])"},
+    {"axis of a spherical closing joint",
+     BAD_LOOP_JOB("{'joint':{'type':'spherical','axis':[0,0,1]},'anchor':[1,0,0]}"), NULL,
+     JOB_UNKNOWN_FIELD, "scene.loop.joint.axis",
+     "key \"axis\" does not apply to joint type \"spherical\""},
+    {"closing joint independent flag a string",
+     BAD_LOOP_JOB("{'joint':{'type':'revolute','axis':[0,0,1],'independent':'no'},'anchor':[1,0,"
+                  "0]}"),
+     NULL, JOB_INVALID_FIELD, "scene.loop.joint.independent",
+     "must be true or false (got a string)"},
+    {"unknown stabilization",
+     BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'stabilization':{'method':'projection'}}"), NULL,
+     JOB_INVALID_FIELD, "scene.loop.stabilization.method",
+     "must be one of \"project\", \"baumgarte\", \"none\" (got \"projection\")"},
+    {"projection tolerance 0",
+     BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'stabilization':{'tol':0}}"), NULL,
+     JOB_INVALID_FIELD, "scene.loop.stabilization.tol", "must be positive (got 0)"},
+    {"tolerance of baumgarte",
+     BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'stabilization':{'method':'baumgarte','tol':"
+                  "1e-9}}"),
+     NULL, JOB_UNKNOWN_FIELD, "scene.loop.stabilization.tol",
+     "key \"tol\" does not apply to method \"baumgarte\""},
+    {"negative baumgarte alpha",
+     BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'stabilization':{'method':'baumgarte','alpha':"
+                  "-1}}"),
+     NULL, JOB_INVALID_FIELD, "scene.loop.stabilization.alpha",
+     "must not be negative (got -1 1/s)"},
+    {"baumgarte of nothing",
+     BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'stabilization':{'method':'baumgarte','alpha':0,"
+                  "'beta':0}}"),
+     NULL, JOB_INVALID_FIELD, "scene.loop.stabilization",
+     "alpha and beta must not both be 0 (use {\"method\": \"none\"} for no stabilization)"},
+    {"condition bound 1", BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'cond_max':1}"), NULL,
+     JOB_INVALID_FIELD, "scene.loop.cond_max", "must be greater than 1 (got 1)"},
+    {"loop of one body", "{'scene':{'bodies':[" BODY "],'loop':" LOOP "}," PASSIVE "," DUR "}",
+     NULL, JOB_INVALID_FIELD, "scene.loop", "loop: a loop needs at least 2 bodies (got 1)"},
+    {"trajectory of every coordinate of a loop",
+     "{" LOOP_SCENE "," PD ",'trajectory':[{'type':'constant','value':0},{'type':'constant','"
+     "value':0},{'type':'constant','value':0}]," DUR "}",
+     NULL, JOB_INVALID_FIELD, "trajectory",
+     "must have 1 entries, one per independent coordinate (got 3)"},
+    {"gain overrides of every coordinate of a loop",
+     "{" LOOP_SCENE ",'controller':{'type':'pd','kp':100,'kv':20,'joints':[{},{}]}," HOLD "," DUR
+     "}",
+     NULL, JOB_INVALID_FIELD, "controller.joints",
+     "must have 1 entries, one per independent coordinate (got 2)"},
+    {"disturbance of a loop not an array", LOOP_PASSIVE_JOB(",'disturbance':3"), NULL,
+     JOB_INVALID_FIELD, "disturbance",
+     "must be an object or an array of 1 objects, one per independent coordinate (got a number)"},
+    {"loop channel of an open chain", PASSIVE_JOB(",'output':{'channels':['q','loop']}"), NULL,
+     JOB_INVALID_FIELD, "output.channels[1]", "channel \"loop\" needs a loop (\"scene.loop\")"},
+    {"torques of a loop without independent joints",
+     "{'scene':{'bodies':[" DEP_BODY "," DEP_BODY "," DEP_BODY "],'loop':" LOOP "," SQUARE_Q0
+     "}," PASSIVE "," DUR ",'output':{'channels':['q','tau']}}",
+     NULL, JOB_INVALID_FIELD, "output.channels[1]",
+     "channel \"tau\" has no columns (the loop has no independent coordinates)"},
+    {"controller of an independent spherical closing joint",
+     "{'scene':{'bodies':[" BODY "," DEP_BODY "," DEP_BODY "],'loop':{'joint':{'type':'spherical',"
+     "'location':[0,-1,0],'independent':true},'anchor':[1,0,0]}," SQUARE_Q0 "}," PD "," HOLD "," DUR
+     "}",
+     NULL, JOB_INVALID_FIELD, "controller.type",
+     "\"pd\" cannot drive the spherical joint of scene.loop (its quaternion error is not a "
+     "per-coordinate error); a spherical joint in a loop must be dependent, or the run passive "
+     "(controller \"none\")"},
 
     /* presets */
     {"preset not a string", "{'preset':3}", NULL, JOB_INVALID_FIELD, "preset",
@@ -569,7 +680,73 @@ Test(job_json, fills_every_default_of_a_minimal_planar_job)
     j = parse_ok("{" SCENE1 "," PD "," HOLD ",'duration':0.004,'integrator':{'method':'rk4'}}");
     cr_assert_eq(j->spec.integrator.step, 1e-3);
     cr_assert_eq(j->spec.output_interval, 0.004);
-    cr_assert_eq(j->spec.channels, CTC_CH_ALL);
+    cr_assert_eq(j->spec.channels, CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_LOOP), "loop: no loop");
+    cr_assert_null(j->spec.chain.loop);
+    cr_assert_null(j->spec.chain.independent);
+    cr_assert_eq(j->nind, j->nv);
+    job_free(j);
+}
+
+Test(job_json, a_loop_counts_its_independent_coordinates_and_fills_its_defaults)
+{
+    job *j = parse_ok(LOOP_PD_JOB(""));
+    const ctc_sim_spec *s = &j->spec;
+    cr_assert_eq(j->nq, 3);
+    cr_assert_eq(j->nv, 3);
+    cr_assert_eq(j->nind, 1, "joint 0 alone is independent");
+    cr_assert_eq(s->chain.loop, &j->loop);
+    cr_assert_eq(s->chain.independent, j->independent);
+    static const unsigned char flags[4] = {1, 0, 0, 0};
+    for (int k = 0; k < 4; k++) cr_assert_eq(j->independent[k], flags[k], "joint %d", k);
+    cr_assert_eq(j->loop.joint.type, CTC_JOINT_REVOLUTE);
+    cr_assert(j->loop.joint.axis[2] == 1 && j->loop.joint.location[1] == -1);
+    cr_assert(j->loop.anchor[0] == 1 && j->loop.anchor[1] == 0 && j->loop.anchor[2] == 0);
+    cr_assert_eq(s->loop_stab, CTC_LOOP_PROJECT);
+    cr_assert_eq(s->loop_tol, 1e-12);
+    cr_assert_eq(s->loop_cond_max, 1e10);
+    cr_assert_eq(s->channels, CTC_CH_ALL, "every channel, the loop's included");
+    cr_assert(j->gains[0].kp == 100 && j->gains[0].kv == 20 && j->gains[0].ki == 0);
+    cr_assert_eq(j->traj[0].type, CTC_TRAJ_CONSTANT);
+
+    /* the normalised loop: every key in order, defaults written */
+    const cJSON *scene = cJSON_GetObjectItemCaseSensitive(j->normalised, "scene");
+    char *text = cJSON_PrintUnformatted(cJSON_GetObjectItemCaseSensitive(scene, "loop"));
+    char *want = json("{'joint':{'type':'revolute','axis':[0,0,1],'location':[0,-1,0],"
+                      "'independent':false},'anchor':[1,0,0],'stabilization':{'method':'project',"
+                      "'tol':1e-12},'cond_max':10000000000}");
+    cr_assert_str_eq(text, want);
+    free(text);
+    free(want);
+    job_free(j);
+
+    /* baumgarte with its defaults; no stabilization; the closing joint independent instead of
+       joint 0: still one coordinate, the closing joint's */
+    j = parse_ok("{'scene':{'bodies':[" DEP_BODY "," DEP_BODY "," DEP_BODY "],'loop':{'joint':{"
+                 "'type':'revolute','axis':[0,0,1],'location':[0,-1,0],'independent':true},"
+                 "'anchor':[1,0,0],'stabilization':{'method':'baumgarte','beta':5},'cond_max':1e8}"
+                 "," SQUARE_Q0 "}," PD "," HOLD "," DUR "}");
+    cr_assert_eq(j->nind, 1);
+    cr_assert(j->independent[0] == 0 && j->independent[3] == 1);
+    cr_assert_eq(j->spec.loop_stab, CTC_LOOP_BAUMGARTE);
+    cr_assert(j->spec.baumgarte[0] == 10 && j->spec.baumgarte[1] == 5);
+    cr_assert_eq(j->spec.loop_cond_max, 1e8);
+    job_free(j);
+    j = parse_ok("{" LOOP_SCENE_WITH("{" CLOSING ",'anchor':[1,0,0],'stabilization':{'method':"
+                                     "'none'}}") "," PASSIVE "," DUR "}");
+    cr_assert_eq(j->spec.loop_stab, CTC_LOOP_NONE);
+    cr_assert_eq(j->spec.channels, CTC_CH_BIT(CTC_CH_Q) | CTC_CH_BIT(CTC_CH_QD) |
+                                       CTC_CH_BIT(CTC_CH_TAU) | CTC_CH_BIT(CTC_CH_ENERGY) |
+                                       CTC_CH_BIT(CTC_CH_LOOP));
+    job_free(j);
+
+    /* a passive loop may leave every joint dependent: no coordinate, no torque channel */
+    j = parse_ok("{'scene':{'bodies':[" DEP_BODY "," DEP_BODY "," DEP_BODY "],'loop':" LOOP
+                 "," SQUARE_Q0 "}," PASSIVE ",'disturbance':{'type':'constant','value':1}," DUR
+                 "}");
+    cr_assert_eq(j->nind, 0);
+    cr_assert_null(j->spec.disturb, "a disturbance of no coordinate is none");
+    cr_assert_eq(j->spec.channels, CTC_CH_BIT(CTC_CH_Q) | CTC_CH_BIT(CTC_CH_QD) |
+                                       CTC_CH_BIT(CTC_CH_ENERGY) | CTC_CH_BIT(CTC_CH_LOOP));
     job_free(j);
 }
 
@@ -829,7 +1006,7 @@ static void expect_same_job(const job *a, const job *b)
 {
     const ctc_sim_spec *s = &a->spec, *t = &b->spec;
     cr_assert_str_eq(a->name, b->name);
-    cr_assert(a->nq == b->nq && a->nv == b->nv);
+    cr_assert(a->nq == b->nq && a->nv == b->nv && a->nind == b->nind);
     cr_assert_eq(s->chain.nbodies, t->chain.nbodies);
     cr_assert_eq(s->chain.form, t->chain.form);
     for (int i = 0; i < 3; i++) cr_assert_eq(s->chain.gravity[i], t->chain.gravity[i]);
@@ -845,11 +1022,29 @@ static void expect_same_job(const job *a, const job *b)
             cr_assert_eq(p->location[i], q->location[i], "joint %d location", k);
         }
     }
+    cr_assert_eq(s->chain.loop == NULL, t->chain.loop == NULL);
+    cr_assert_eq(s->chain.independent == NULL, t->chain.independent == NULL);
+    for (int k = 0; s->chain.independent && k <= s->chain.nbodies; k++) {
+        cr_assert_eq(s->chain.independent[k], t->chain.independent[k], "independent[%d]", k);
+    }
+    if (s->chain.loop) {
+        const ctc_loop_spec *x = s->chain.loop, *y = t->chain.loop;
+        cr_assert_eq(x->joint.type, y->joint.type);
+        for (int i = 0; i < 3; i++) {
+            cr_assert_eq(x->joint.axis[i], y->joint.axis[i], "loop axis");
+            cr_assert_eq(x->joint.location[i], y->joint.location[i], "loop location");
+            cr_assert_eq(x->anchor[i], y->anchor[i], "anchor");
+        }
+        cr_assert_eq(s->loop_stab, t->loop_stab);
+        cr_assert_eq(s->loop_tol, t->loop_tol);
+        cr_assert(s->baumgarte[0] == t->baumgarte[0] && s->baumgarte[1] == t->baumgarte[1]);
+        cr_assert_eq(s->loop_cond_max, t->loop_cond_max);
+    }
     for (int i = 0; i < a->nq; i++) cr_assert_eq(s->q0[i], t->q0[i], "q0[%d]", i);
     for (int i = 0; i < a->nv; i++) cr_assert_eq(s->v0[i], t->v0[i], "v0[%d]", i);
     cr_assert_eq(s->controller, t->controller);
     cr_assert_eq(s->gains == NULL, t->gains == NULL);
-    for (int i = 0; s->gains != NULL && i < a->nv; i++) {
+    for (int i = 0; s->gains != NULL && i < a->nind; i++) {
         cr_assert(s->gains[i].ki == t->gains[i].ki && s->gains[i].kp == t->gains[i].kp &&
                       s->gains[i].kv == t->gains[i].kv,
                   "gains[%d]", i);
@@ -857,10 +1052,10 @@ static void expect_same_job(const job *a, const job *b)
     cr_assert_eq(s->model_mass_scale, t->model_mass_scale);
     cr_assert_eq(s->model_inertia_scale, t->model_inertia_scale);
     cr_assert_eq(s->traj == NULL, t->traj == NULL);
-    for (int i = 0; s->traj != NULL && i < a->nv; i++)
+    for (int i = 0; s->traj != NULL && i < a->nind; i++)
         expect_same_traj(&s->traj[i], &t->traj[i], i);
     cr_assert_eq(s->disturb == NULL, t->disturb == NULL);
-    for (int i = 0; s->disturb != NULL && i < a->nv; i++) {
+    for (int i = 0; s->disturb != NULL && i < a->nind; i++) {
         const ctc_disturb *x = &s->disturb[i], *y = &t->disturb[i];
         cr_assert(x->type == y->type && x->value == y->value && x->amplitude == y->amplitude &&
                       x->period == y->period && x->phase == y->phase && x->offset == y->offset &&
@@ -941,6 +1136,19 @@ Test(job_json, normalised_documents_parse_back_to_the_same_job)
                       ",'integrator':{'method':'bdf','rtol':1e-6,'atol':1e-8,'max_step':0.1}}",
                       0);
 
+    /* loops: every setting of the loop, a passive loop of dependent joints only */
+    expect_round_trip(LOOP_PD_JOB(",'disturbance':{'type':'sine','amplitude':0.1,'period':1}"), 0);
+    expect_round_trip(
+        "{" LOOP_SCENE_WITH("{'joint':{'type':'revolute','axis':[0,0,2],'location':"
+                            "[0,-1,0],'independent':false},'anchor':[1,0,0],"
+                            "'stabilization':{'method':'baumgarte','alpha':3,"
+                            "'beta':4},'cond_max':1e6}") "," PASSIVE "," DUR
+                                                         ",'output':{'channels':['loop','q']}}",
+        0);
+    expect_round_trip("{'scene':{'bodies':[" DEP_BODY "," DEP_BODY "," DEP_BODY "],'loop':" LOOP
+                      "," SQUARE_Q0 "}," PASSIVE "," DUR "}",
+                      0);
+
     /* every preset, printed numbers of 17 digits (q0 = 5 pi / 6) included */
     int count;
     const preset *list = presets_list(&count);
@@ -960,7 +1168,8 @@ Test(job_json, normalised_keys_come_in_canonical_order)
     char *text = cJSON_PrintUnformatted(j->normalised);
     char *want = json(
         "{'name':'job','scene':{'gravity':[0,-9.81,0],'form':'auto','bodies':[{'mass':1,'com':[0,"
-        "0,0],'inertia':[1,1,1],'joint':{'type':'revolute','axis':[0,0,1],'location':[0,0,0]}}],"
+        "0,0],'inertia':[1,1,1],'joint':{'type':'revolute','axis':[0,0,1],'location':[0,0,0],"
+        "'independent':true}}],"
         "'q0':[0],'v0':[1]},'controller':{'type':'none'},'disturbance':{'type':'none'},"
         "'integrator':{'method':'dopri5','rtol':1e-08,'atol':1e-10,'initial_step':0,'max_step':0,"
         "'max_steps':10000000},'duration':1,'output':{'interval':0.01,'channels':['q','qdot']},"

@@ -1,8 +1,9 @@
 /*
  * test_presets.c - the paper's scenes as job documents (server/presets.c): every preset builds a
  * document that the job format (server/job_json.c) accepts, the documents hold the values of
- * Kingsley et al. 2017 sections 7.1 and 7.3, and the n-link pendulum's parameter is checked with
- * exact messages.
+ * Kingsley et al. 2017 sections 7.1, 7.2 and 7.3, the closed chains close at their q0 and build
+ * loop models of the expected mobility, and the n-link pendulum's parameter is checked with exact
+ * messages.
  *
  * Oracles, each written apart from the code under test:
  *  - the paper's numbers, typed in here (q0, trajectories, gains, disturbance, duration), read
@@ -12,7 +13,11 @@
  *  - the scene geometry: the parsed chain built with ctc_model_build and posed with
  *    ctc_kinematics, against hand-worked positions (rods hanging along -y; the tip of a planar
  *    chain at sum_k (sin theta_k, -cos theta_k) with theta_k the absolute angle of rod k; the
- *    spatial pendulum's second cuboid pointing down after a quarter turn about body 1's y).
+ *    spatial pendulum's second cuboid pointing down after a quarter turn about body 1's y);
+ *  - the closure of the loop presets: the tip's closing point at q0, by forward kinematics
+ *    worked here (planar) and by ctc_kinematics, against the anchor in the document, and the
+ *    rotation of the RSSR's rocker about the closing axis; the mobility by Gruebler-Kutzbach
+ *    counted here against the model's.
  * Positions are compared to 1e-12 m, numbers read back to 1e-15 relative.
  */
 #include <criterion/criterion.h>
@@ -33,13 +38,52 @@
 static const double pi = 3.14159265358979323846;
 
 static const char *const all_names[] = {
-    "triple_pendulum_pd",          "triple_pendulum_pid",
-    "triple_pendulum_poles",       "triple_pendulum_lqr",
-    "triple_pendulum_passive",     "spatial_double_pendulum_pd",
-    "spatial_double_pendulum_pid", "spatial_double_pendulum_poles",
-    "spatial_double_pendulum_lqr", "n_link_pendulum",
+    "triple_pendulum_pd",
+    "triple_pendulum_pid",
+    "triple_pendulum_poles",
+    "triple_pendulum_lqr",
+    "triple_pendulum_passive",
+    "spatial_double_pendulum_pd",
+    "spatial_double_pendulum_pid",
+    "spatial_double_pendulum_poles",
+    "spatial_double_pendulum_lqr",
+    "n_link_pendulum",
+    "five_bar_pd",
+    "five_bar_pid",
+    "five_bar_poles",
+    "five_bar_lqr",
+    "four_bar_passive",
+    "rssr_passive",
 };
 #define NPRESETS ((int)(sizeof all_names / sizeof all_names[0]))
+
+/* what each preset of all_names holds, in the same order */
+static const struct preset_want {
+    int paper;           /* cites Kingsley et al. 2017 in its name */
+    int nbodies, nq, nv; /* the chain */
+    int loop, nind;      /* closed by a loop; the controlled coordinates */
+    ctc_ctrl_type ctrl;  /* the controller */
+    int disturbed;       /* 0.2 N m on every coordinate */
+    double duration, rtol, atol;
+} preset_want[] = {
+    {1, 3, 3, 3, 0, 3, CTC_CTRL_PD, 1, 5, 1e-8, 1e-10},
+    {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
+    {1, 3, 3, 3, 0, 3, CTC_CTRL_POLES, 1, 5, 1e-8, 1e-10},
+    {1, 3, 3, 3, 0, 3, CTC_CTRL_LQR, 1, 5, 1e-8, 1e-10},
+    {1, 3, 3, 3, 0, 3, CTC_CTRL_NONE, 0, 5, 1e-8, 1e-10},
+    {1, 2, 2, 2, 0, 2, CTC_CTRL_PD, 1, 5, 1e-8, 1e-10},
+    {1, 2, 2, 2, 0, 2, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
+    {1, 2, 2, 2, 0, 2, CTC_CTRL_POLES, 1, 5, 1e-8, 1e-10},
+    {1, 2, 2, 2, 0, 2, CTC_CTRL_LQR, 1, 5, 1e-8, 1e-10},
+    {1, 8, 8, 8, 0, 8, CTC_CTRL_PD, 0, 5, 1e-8, 1e-10},
+    {1, 5, 5, 5, 1, 3, CTC_CTRL_PD, 0, 10, 1e-8, 1e-10},
+    {1, 5, 5, 5, 1, 3, CTC_CTRL_PID, 0, 10, 1e-8, 1e-10},
+    {1, 5, 5, 5, 1, 3, CTC_CTRL_POLES, 0, 10, 1e-8, 1e-10},
+    {1, 5, 5, 5, 1, 3, CTC_CTRL_LQR, 0, 10, 1e-8, 1e-10},
+    {0, 3, 3, 3, 1, 0, CTC_CTRL_NONE, 0, 10, 1e-10, 1e-12},
+    {0, 3, 9, 7, 1, 0, CTC_CTRL_NONE, 0, 5, 1e-10, 1e-12},
+};
+_Static_assert(sizeof preset_want / sizeof preset_want[0] == NPRESETS, "one row per preset");
 
 /* ---- helpers ---- */
 
@@ -225,20 +269,23 @@ Test(presets, lists_every_paper_scene_once_in_order)
 Test(presets, every_preset_builds_a_complete_job_document)
 {
     for (int i = 0; i < NPRESETS; i++) {
+        const struct preset_want *w = &preset_want[i];
         cJSON *doc = build(all_names[i], NULL);
         const char *name = string_at(doc, "name");
         cr_assert_leq(strlen(name), JOB_MAX_NAME, "%s: name too long", all_names[i]);
-        cr_assert(strstr(name, "Kingsley et al. 2017") != NULL, "%s: name \"%s\" cites no paper",
-                  all_names[i], name);
+        cr_assert_eq(strstr(name, "Kingsley et al. 2017") != NULL, w->paper,
+                     "%s: name \"%s\" (cites the paper: %d)", all_names[i], name, w->paper);
         cr_assert(cJSON_IsArray(at(doc, "scene.bodies")));
         cr_assert(cJSON_IsArray(at(doc, "scene.gravity")));
         cr_assert(cJSON_IsArray(at(doc, "scene.q0")));
         cr_assert(cJSON_IsArray(at(doc, "scene.v0")));
         cr_assert(cJSON_IsString(at(doc, "controller.type")));
-        cr_assert_eq(number_at(doc, "duration"), 5.0, "%s: duration", all_names[i]);
+        cr_assert_eq(cJSON_GetObjectItemCaseSensitive(at(doc, "scene"), "loop") != NULL, w->loop,
+                     "%s: loop", all_names[i]);
+        cr_assert_eq(number_at(doc, "duration"), w->duration, "%s: duration", all_names[i]);
         cr_assert_str_eq(string_at(doc, "integrator.method"), "dopri5");
-        cr_assert_eq(number_at(doc, "integrator.rtol"), 1e-8);
-        cr_assert_eq(number_at(doc, "integrator.atol"), 1e-10);
+        cr_assert_eq(number_at(doc, "integrator.rtol"), w->rtol, "%s: rtol", all_names[i]);
+        cr_assert_eq(number_at(doc, "integrator.atol"), w->atol, "%s: atol", all_names[i]);
         cr_assert_eq(number_at(doc, "output.interval"), 0.01);
 
         /* keys that are not the preset's parameters do not change the document */
@@ -254,15 +301,7 @@ Test(presets, every_preset_builds_a_complete_job_document)
 
 Test(presets, every_preset_parses_as_a_job)
 {
-    static const struct {
-        int nbodies;
-        ctc_ctrl_type ctrl;
-        int disturbed;
-    } want[] = {
-        {3, CTC_CTRL_PD, 1},   {3, CTC_CTRL_PID, 1}, {3, CTC_CTRL_POLES, 1}, {3, CTC_CTRL_LQR, 1},
-        {3, CTC_CTRL_NONE, 0}, {2, CTC_CTRL_PD, 1},  {2, CTC_CTRL_PID, 1},   {2, CTC_CTRL_POLES, 1},
-        {2, CTC_CTRL_LQR, 1},  {8, CTC_CTRL_PD, 0},
-    };
+    const struct preset_want *want = preset_want;
     for (int i = 0; i < NPRESETS; i++) {
         cJSON *doc = build(all_names[i], NULL);
 
@@ -281,8 +320,10 @@ Test(presets, every_preset_parses_as_a_job)
             cr_assert_str_eq(p->name, string_at(doc, "name"));
             cr_assert_eq(p->spec.chain.nbodies, nb, "%s: %d bodies", all_names[i],
                          p->spec.chain.nbodies);
-            cr_assert_eq(p->nq, nb);
-            cr_assert_eq(p->nv, nb);
+            cr_assert_eq(p->nq, want[i].nq, "%s: nq", all_names[i]);
+            cr_assert_eq(p->nv, want[i].nv, "%s: nv", all_names[i]);
+            cr_assert_eq(p->nind, want[i].nind, "%s: nind", all_names[i]);
+            cr_assert_eq(p->spec.chain.loop != NULL, want[i].loop, "%s: loop", all_names[i]);
             cr_assert_eq(p->spec.controller, want[i].ctrl, "%s: controller", all_names[i]);
             cr_assert_eq(p->gains == NULL, want[i].ctrl == CTC_CTRL_NONE, "%s: gains",
                          all_names[i]);
@@ -295,16 +336,16 @@ Test(presets, every_preset_parses_as_a_job)
                     cr_assert_eq(p->disturb[k].value, 0.2, "%s: disturbance %d", all_names[i], k);
                 }
             } else if (p->disturb != NULL) {
-                for (int k = 0; k < nb; k++) {
+                for (int k = 0; k < p->nind; k++) {
                     cr_assert_eq(ctc_disturb_eval(&p->disturb[k], 1.0), 0.0, "%s: disturbance %d",
                                  all_names[i], k);
                 }
             }
-            cr_assert_eq(p->spec.duration, 5.0);
+            cr_assert_eq(p->spec.duration, want[i].duration);
             cr_assert_eq(p->spec.output_interval, 0.01);
             cr_assert_eq(p->spec.integrator.method, CTC_INTEG_DOPRI5);
-            cr_assert_eq(p->spec.integrator.rtol, 1e-8);
-            cr_assert_eq(p->spec.integrator.atol, 1e-10);
+            cr_assert_eq(p->spec.integrator.rtol, want[i].rtol);
+            cr_assert_eq(p->spec.integrator.atol, want[i].atol);
             cr_assert_not_null(p->normalised);
         }
 
@@ -421,11 +462,13 @@ Test(presets, pole_and_lqr_presets_give_the_papers_gains)
         {"spatial_double_pendulum_poles", 9.24, 13.22, 6.3, 1e-12},
         {"triple_pendulum_lqr", 10, 18.2674, 11.6848, 5e-5},
         {"spatial_double_pendulum_lqr", 10, 18.2674, 11.6848, 5e-5},
+        {"five_bar_poles", 9.24, 13.22, 6.3, 1e-12},
+        {"five_bar_lqr", 10, 18.2674, 11.6848, 5e-5},
     };
     for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
         cJSON *doc = build(want[i].name, NULL);
         job *j = parse_doc(doc, want[i].name);
-        for (int k = 0; k < j->nv; k++) {
+        for (int k = 0; k < j->nind; k++) {
             expect_close(j->gains[k].ki, want[i].ki, want[i].tol, "ki");
             expect_close(j->gains[k].kp, want[i].kp, want[i].tol, "kp");
             expect_close(j->gains[k].kv, want[i].kv, want[i].tol, "kv");
@@ -660,6 +703,223 @@ Test(presets, spatial_double_pendulum_poses_as_drawn)
     expect_point(com, 0, 1, -0.5, "body 2 centre of mass at (pi/2, pi/2)");
     pose_free(&p);
 
+    job_free(j);
+    cJSON_Delete(doc);
+}
+
+/* ---- the closed chains ---- */
+
+/* the closed chain presets: the tip's closing point at q0 against the anchor, and the model */
+static const struct {
+    const char *name;
+    int tip;           /* the tip body */
+    ctc_form form;     /* the model's */
+    int freedoms, dim; /* Gruebler-Kutzbach: sum of the joint freedoms, closing one included */
+    int nind;          /* independent coordinates */
+} loop_want[] = {
+    {"five_bar_pd", 4, CTC_FORM_PLANAR, 6, 3, 3},
+    {"five_bar_lqr", 4, CTC_FORM_PLANAR, 6, 3, 3},
+    {"four_bar_passive", 2, CTC_FORM_PLANAR, 4, 3, 0},
+    {"rssr_passive", 2, CTC_FORM_SPATIAL, 8, 6, 0},
+};
+
+/* element i of the array at path as a 3-vector */
+static void vec3_at(const cJSON *doc, const char *path, double out[3])
+{
+    const cJSON *v = at(doc, path);
+    cr_assert_eq(cJSON_GetArraySize(v), 3, "%s is not a 3-vector", path);
+    for (int i = 0; i < 3; i++) out[i] = element(v, i, path);
+}
+
+Test(presets, five_bar_holds_the_papers_values)
+{
+    static const double length[5] = {1, 1, 0.5, 1, 1};
+    static const int independent[5] = {1, 1, 1, 0, 0};
+    const double q0[5] = {-pi / 8, 5 * pi / 8, 3 * pi / 8, 3 * pi / 8, 5 * pi / 8};
+    const double set_point[3] = {0, pi / 4, -3 * pi / 4};
+    cJSON *doc = build("five_bar_pd", NULL);
+    cr_assert_str_eq(string_at(doc, "name"),
+                     "Five-bar closed chain, PD (Kingsley et al. 2017, sec. 7.2)");
+
+    /* five uniform rods of 1 kg along -y, each joint at the previous rod's end, joints 0-2
+       independent, gravity -y */
+    const cJSON *bodies = at(doc, "scene.bodies"), *dq0 = at(doc, "scene.q0");
+    cr_assert_eq(cJSON_GetArraySize(bodies), 5);
+    cr_assert_eq(element(at(doc, "scene.gravity"), 1, "gravity"), -9.81);
+    for (int k = 0; k < 5; k++) {
+        const cJSON *b = cJSON_GetArrayItem(bodies, k);
+        double end[3], axis[3], loc[3];
+        cr_assert_eq(number_at(b, "mass"), 1.0, "rod %d mass", k);
+        cr_assert_str_eq(string_at(b, "shape.type"), "rod");
+        vec3_at(b, "shape.end", end);
+        vec3_at(b, "joint.axis", axis);
+        vec3_at(b, "joint.location", loc);
+        expect_point(end, 0, -length[k], 0, "rod end");
+        expect_point(axis, 0, 0, 1, "joint axis");
+        expect_point(loc, 0, k == 0 ? 0 : -length[k - 1], 0, "joint location");
+        cr_assert_str_eq(string_at(b, "joint.type"), "revolute");
+        cr_assert_eq(cJSON_IsTrue(at(b, "joint.independent")), independent[k], "joint %d", k);
+        expect_close(element(dq0, k, "q0"), q0[k], 1e-15, "q0");
+        cr_assert_eq(element(at(doc, "scene.v0"), k, "v0"), 0.0);
+    }
+
+    /* the closing joint: dependent, revolute about z at the end of rod 5 */
+    double axis[3], loc[3];
+    cr_assert_str_eq(string_at(doc, "scene.loop.joint.type"), "revolute");
+    cr_assert(cJSON_IsFalse(at(doc, "scene.loop.joint.independent")));
+    vec3_at(doc, "scene.loop.joint.axis", axis);
+    vec3_at(doc, "scene.loop.joint.location", loc);
+    expect_point(axis, 0, 0, 1, "closing axis");
+    expect_point(loc, 0, -1, 0, "closing joint on rod 5");
+
+    /* the set point (0, pi/4, -3 pi/4) by PD, no disturbance, 10 s */
+    const cJSON *traj = at(doc, "trajectory");
+    cr_assert_eq(cJSON_GetArraySize(traj), 3);
+    for (int i = 0; i < 3; i++) {
+        const cJSON *tr = cJSON_GetArrayItem(traj, i);
+        cr_assert_str_eq(string_at(tr, "type"), "constant");
+        expect_close(number_at(tr, "value"), set_point[i], 1e-15, "set point");
+    }
+    cr_assert_eq(number_at(doc, "controller.kp"), 100.0);
+    cr_assert_eq(number_at(doc, "controller.kv"), 20.0);
+    cr_assert_null(cJSON_GetObjectItemCaseSensitive(doc, "disturbance"));
+    cr_assert_eq(number_at(doc, "duration"), 10.0);
+
+    /* the job: three controlled coordinates, joints 0, 1 and 2 */
+    job *j = parse_doc(doc, "five_bar_pd");
+    cr_assert_eq(j->nind, 3);
+    static const unsigned char flags[6] = {1, 1, 1, 0, 0, 0};
+    for (int k = 0; k < 6; k++) cr_assert_eq(j->independent[k], flags[k], "independent[%d]", k);
+    for (int i = 0; i < 3; i++) {
+        double out[3];
+        ctc_traj_eval(&j->traj[i], 3.0, out);
+        expect_close(out[0], set_point[i], 1e-15, "q_d");
+        cr_assert_eq(j->gains[i].ki, 0.0);
+    }
+    cr_assert_null(j->spec.disturb);
+    job_free(j);
+    cJSON_Delete(doc);
+}
+
+Test(presets, five_bar_anchor_is_where_q0_puts_the_end_of_rod_5)
+{
+    /* forward kinematics by hand: rod k from the end of rod k-1 by L_k (sin theta_k, -cos
+       theta_k), theta_k = q_0 + ... + q_k */
+    static const double length[5] = {1, 1, 0.5, 1, 1};
+    const double q0[5] = {-pi / 8, 5 * pi / 8, 3 * pi / 8, 3 * pi / 8, 5 * pi / 8};
+    double theta = 0, x = 0, y = 0;
+    for (int k = 0; k < 5; k++) {
+        theta += q0[k];
+        x += length[k] * sin(theta);
+        y -= length[k] * cos(theta);
+    }
+    for (int i = 0; i < 2; i++) {
+        cJSON *doc = build(i ? "five_bar_lqr" : "five_bar_pd", NULL);
+        double anchor[3];
+        vec3_at(doc, "scene.loop.anchor", anchor);
+        expect_point(anchor, x, y, 0, "anchor against forward kinematics");
+        /* the numbers presets.c documents */
+        expect_point(anchor, -0.28113192973418280, -0.67871251758038230, 0, "documented anchor");
+        cJSON_Delete(doc);
+    }
+}
+
+Test(presets, every_loop_preset_closes_at_q0_and_builds_its_loop_model)
+{
+    for (size_t i = 0; i < sizeof loop_want / sizeof loop_want[0]; i++) {
+        const char *name = loop_want[i].name;
+        cJSON *doc = build(name, NULL);
+        job *j = parse_doc(doc, name);
+        double anchor[3], loc[3], got[3];
+        vec3_at(doc, "scene.loop.anchor", anchor);
+        vec3_at(doc, "scene.loop.joint.location", loc);
+
+        /* the model: a loop of the expected form, mobility and independent coordinates */
+        posed p = pose(j, j->q0);
+        cr_assert_eq(p.m->has_loop, 1, "%s: no loop", name);
+        cr_assert_eq(p.m->form, loop_want[i].form, "%s: form %s", name, ctc_form_name(p.m->form));
+        cr_assert_eq(p.m->njoints, p.m->nbodies + 1, "%s", name);
+        cr_assert_eq(p.m->nvx, loop_want[i].freedoms, "%s: nvx", name);
+        cr_assert_eq(p.m->mobility, loop_want[i].freedoms - loop_want[i].dim, "%s: mobility", name);
+        cr_assert_eq(p.m->nind, loop_want[i].nind, "%s: nind", name);
+        cr_assert_eq(p.m->nind, j->nind, "%s: the format's count", name);
+
+        /* the tip's closing point at q0 is the anchor */
+        body_point(p.m, p.d, loop_want[i].tip, loc, got);
+        expect_point(got, anchor[0], anchor[1], anchor[2], name);
+        pose_free(&p);
+        job_free(j);
+        cJSON_Delete(doc);
+    }
+}
+
+Test(presets, four_bar_is_a_crank_rocker_closed_at_q0)
+{
+    cJSON *doc = build("four_bar_passive", NULL);
+    cr_assert_str_eq(string_at(doc, "controller.type"), "none");
+    cr_assert_null(cJSON_GetObjectItemCaseSensitive(doc, "trajectory"));
+    job *j = parse_doc(doc, "four_bar_passive");
+
+    /* crank 0.4, coupler 1, rocker 0.8 m of 1 kg/m; ground 1 m; Grashof s + l <= p + q with
+       the crank the shortest link */
+    static const double length[3] = {0.4, 1, 0.8};
+    for (int k = 0; k < 3; k++) {
+        cr_assert_eq(j->bodies[k].mass, length[k], "rod %d mass", k);
+        cr_assert_eq(j->independent[k], 0, "joint %d dependent", k);
+    }
+    cr_assert_eq(j->independent[3], 0, "the closing joint dependent");
+    cr_assert(0.4 + 1 <= 1 + 0.8);
+    expect_close(j->q0[0], 2 * pi / 3, 1e-14, "crank at 2 pi/3");
+
+    /* the joints at q0: C at the crank's end, B (coupler-rocker) 1 m from C and 0.8 m from the
+       anchor A = (1, 0), above the line C-A (elbow up) */
+    posed p = pose(j, j->q0);
+    const double origin[3] = {0, 0, 0};
+    double c[3], b[3];
+    body_point(p.m, p.d, 1, origin, c);
+    body_point(p.m, p.d, 2, origin, b);
+    expect_point(c, 0.4 * sin(2 * pi / 3), -0.4 * cos(2 * pi / 3), 0, "crank end");
+    expect_close(hypot(b[0] - c[0], b[1] - c[1]), 1, POS_TOL, "coupler length");
+    expect_close(hypot(b[0] - 1, b[1]), 0.8, POS_TOL, "rocker length");
+    double side = (1 - c[0]) * (b[1] - c[1]) - (0 - c[1]) * (b[0] - c[0]);
+    cr_assert_gt(side, 0, "B is on the left of C -> A");
+    expect_close(b[0], 1.158, 5e-4, "B x, as documented");
+    expect_close(b[1], 0.784, 5e-4, "B y, as documented");
+    pose_free(&p);
+    job_free(j);
+    cJSON_Delete(doc);
+}
+
+Test(presets, rssr_rocker_turns_about_the_closing_axis_at_q0)
+{
+    cJSON *doc = build("rssr_passive", NULL);
+    job *j = parse_doc(doc, "rssr_passive");
+    cr_assert_eq(j->spec.chain.gravity[2], -9.81);
+    cr_assert_eq(j->joints[0].type, CTC_JOINT_REVOLUTE);
+    cr_assert_eq(j->joints[1].type, CTC_JOINT_SPHERICAL);
+    cr_assert_eq(j->joints[2].type, CTC_JOINT_SPHERICAL);
+    cr_assert_eq(j->loop.joint.type, CTC_JOINT_REVOLUTE);
+
+    /* the crank turns about z, the rocker about y: not parallel, so the loop is spatial */
+    const double *crank = j->joints[0].axis, *a = j->loop.joint.axis;
+    double cross[3] = {crank[1] * a[2] - crank[2] * a[1], crank[2] * a[0] - crank[0] * a[2],
+                       crank[0] * a[1] - crank[1] * a[0]};
+    cr_assert_gt(fabs(cross[0]) + fabs(cross[1]) + fabs(cross[2]), 0.5, "axes not parallel");
+
+    /* at q0 the coupler runs 1 m from the crank's end to the rocker's joint, and the rocker's
+       orientation leaves the closing axis where it is in the world (the closure's rotation) */
+    posed p = pose(j, j->q0);
+    const double origin[3] = {0, 0, 0};
+    double b[3], c[3];
+    body_point(p.m, p.d, 1, origin, b);
+    body_point(p.m, p.d, 2, origin, c);
+    expect_point(b, 0.3, 0, 0, "crank end");
+    expect_point(c, 0.3, 0.8, 0.6, "coupler end");
+    const double *r = p.d->xrot + 9 * 2;
+    double ra[3];
+    for (int i = 0; i < 3; i++) ra[i] = r[3 * i] * a[0] + r[3 * i + 1] * a[1] + r[3 * i + 2] * a[2];
+    expect_point(ra, a[0], a[1], a[2], "closing axis carried by the rocker");
+    pose_free(&p);
     job_free(j);
     cJSON_Delete(doc);
 }

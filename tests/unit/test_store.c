@@ -1031,11 +1031,19 @@ Test(store, a_damaged_series_row_is_an_error_not_a_crash)
     cr_assert_str_eq(err, want);
     cr_assert_null(got);
 
-    raw_exec(path, "UPDATE series SET width = 2, data = zeroblob(32) WHERE channel = 'tau'");
+    raw_exec(path, "UPDATE series SET width = 3, data = zeroblob(48) WHERE channel = 'energy'");
     raw_exec(path, "DELETE FROM series WHERE channel = 'q'");
     cr_assert_eq(store_get_series(s, id, &got, err, sizeof err), -1);
-    snprintf(want, sizeof want, "job %lld: series tau has width 2, expected 3", (long long)id);
+    snprintf(want, sizeof want, "job %lld: series energy has width 3, expected 2", (long long)id);
     cr_assert_str_eq(err, want);
+    raw_exec(path, "UPDATE series SET width = 2, data = zeroblob(32) WHERE channel = 'energy'");
+
+    raw_exec(path, "UPDATE series SET width = 4, data = zeroblob(64) WHERE channel = 'tau'");
+    cr_assert_eq(store_get_series(s, id, &got, err, sizeof err), -1);
+    snprintf(want, sizeof want, "job %lld: series tau has width 4, expected at most 3",
+             (long long)id);
+    cr_assert_str_eq(err, want);
+    raw_exec(path, "UPDATE series SET width = 3, data = zeroblob(48) WHERE channel = 'tau'");
 
     raw_exec(path, "UPDATE series SET channel = 'torque' WHERE channel = 'tau'");
     cr_assert_eq(store_get_series(s, id, &got, err, sizeof err), -1);

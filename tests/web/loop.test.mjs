@@ -1,0 +1,95 @@
+/*
+ * loop.test.mjs - closed chains in the page: the five-bar's job view plots its loop residuals,
+ * draws one e, tau and w line per independent coordinate labelled with its joint and q_d only
+ * for the driven joints, animates the chain between its two ground pivots, lists the loop's
+ * metrics; a run that stopped as singular says so in its status; a passive four-bar (every joint
+ * dependent) has no torque plot.
+ */
+import assert from 'node:assert/strict';
+import { after, before, test } from 'node:test';
+
+import { animImage, launchBrowser, plots, screenshot, startWebServer, text, withView } from './lib.mjs';
+
+let srv;
+let browser;
+let five; /* five-bar PD, 1 s */
+let singular; /* five-bar driven out of reach: stops as singular (job status failed) */
+let four; /* passive four-bar, 1 s */
+
+before(async () => {
+    srv = await startWebServer();
+    browser = await launchBrowser();
+    const post = async (job) => {
+        const res = await srv.post('/api/jobs?wait=60', job);
+        if (res.status !== 200) throw new Error(`POST ${JSON.stringify(job)}: ${res.status} ${res.text.slice(0, 300)}`);
+        return res.json;
+    };
+    five = await post({ preset: 'five_bar_pd', duration: 1 });
+    singular = await post({
+        preset: 'five_bar_pd', duration: 3, scene: { loop: { cond_max: 100 } },
+        trajectory: [{ type: 'constant', value: 1.5 }, { type: 'constant', value: 0.785 }, { type: 'constant', value: -2.356 }],
+    });
+    four = await post({ preset: 'four_bar_passive', duration: 1 });
+});
+
+after(async () => {
+    await browser?.close();
+    await srv?.stop();
+});
+
+/* the legend labels of the plot of a channel */
+function labels(page, channel) {
+    return page.evaluate((ch) =>
+        [...document.querySelectorAll(`div.plot[data-channel="${ch}"] .u-legend .u-series .u-label`)].map((l) => l.textContent.trim()),
+    channel);
+}
+
+test('the five-bar: loop residuals, one e per independent coordinate with its joint, q_d for the driven joints', async () => {
+    assert.equal(five.status, 'done', five.message);
+    await withView(browser, srv, `#/jobs/${five.id}`, 'loop-five-bar', async (page) => {
+        const by = Object.fromEntries((await plots(page)).map((p) => [p.channel, p]));
+        for (const ch of ['q', 'e', 'tau', 'w', 'energy', 'loop']) {
+            assert.ok(by[ch]?.uplot, `no drawn div.plot[data-channel="${ch}"]`);
+        }
+        assert.equal(by.q.series, 5 + 3, 'q: five coordinates, desired for the three driven ones');
+        for (const ch of ['e', 'tau', 'w']) assert.equal(by[ch].series, 3, `${ch} data-series`);
+        assert.equal(by.loop.series, 2, 'loop: position and velocity residuals');
+        assert.deepEqual((await labels(page, 'e')).slice(1), ['e[0] (joint 0)', 'e[1] (joint 1)', 'e[2] (joint 2)']);
+        assert.deepEqual((await labels(page, 'loop')).slice(1), ['position residual', 'velocity residual']);
+        const qLabels = await labels(page, 'q');
+        assert.ok(qLabels.includes('q_d[2]') && !qLabels.includes('q_d[3]'), `q legend: ${qLabels}`);
+
+        /* toggles per coordinate of q; the metrics name the loop */
+        const joints = await page.evaluate(() =>
+            [...new Set([...document.querySelectorAll('button.joint-toggle[data-joint]')].map((b) => b.getAttribute('data-joint')))]);
+        assert.deepEqual(joints, ['0', '1', '2', '3', '4']);
+        const metrics = await text(page, 'dl#metrics');
+        assert.match(metrics, /loop residual max/);
+        assert.match(metrics, /3 independent/);
+
+        /* the chain is drawn */
+        const img = await animImage(page);
+        assert.notEqual(img.image, img.blank, 'canvas#anim is blank');
+        await screenshot(page, 'loop-five-bar.png');
+    });
+});
+
+test('a run stopped as singular shows it in its status and message', async () => {
+    assert.equal(singular.status, 'failed');
+    assert.equal(singular.metrics.status, 'singular');
+    await withView(browser, srv, `#/jobs/${singular.id}`, 'loop-singular', async (page) => {
+        assert.equal(await text(page, '#job-status'), 'failed (singular)');
+        assert.match(await text(page, 'dl#metrics'), /singular: .*cannot drive the loop/);
+        const by = Object.fromEntries((await plots(page)).map((p) => [p.channel, p]));
+        assert.ok(by.loop?.uplot, 'the samples up to the stop are plotted');
+    });
+});
+
+test('a passive loop of dependent joints has no torque plot, and its residuals are plotted', async () => {
+    assert.equal(four.status, 'done', four.message);
+    await withView(browser, srv, `#/jobs/${four.id}`, 'loop-four-bar', async (page) => {
+        const channels = (await plots(page)).map((p) => p.channel);
+        assert.deepEqual(channels, ['q', 'energy', 'loop']);
+        assert.match(await text(page, 'dl#metrics'), /none \(every joint passive\)/);
+    });
+});
