@@ -639,18 +639,17 @@ static cJSON *rssr_passive(const cJSON *request, job_error *err)
 
 /* ---- the table ---- */
 
-#define TRIPLE(suffix, ctrl, label)                                                                \
-    static cJSON *build_triple_pendulum_##suffix(const cJSON *request, job_error *err)             \
+/* build_SCENE_SUFFIX: the preset "SCENE_SUFFIX", made by the scene's builder SCENE(name, label,
+   controller, err) */
+#define PRESET(scene, suffix, ctrl, label)                                                         \
+    static cJSON *build_##scene##_##suffix(const cJSON *request, job_error *err)                   \
     {                                                                                              \
         (void)request;                                                                             \
-        return triple_pendulum("triple_pendulum_" #suffix, label, ctrl, err);                      \
+        return scene(#scene "_" #suffix, label, ctrl, err);                                        \
     }
-#define SPATIAL(suffix, ctrl, label)                                                               \
-    static cJSON *build_spatial_double_pendulum_##suffix(const cJSON *request, job_error *err)     \
-    {                                                                                              \
-        (void)request;                                                                             \
-        return spatial_double_pendulum("spatial_double_pendulum_" #suffix, label, ctrl, err);      \
-    }
+#define TRIPLE(suffix, ctrl, label) PRESET(triple_pendulum, suffix, ctrl, label)
+#define SPATIAL(suffix, ctrl, label) PRESET(spatial_double_pendulum, suffix, ctrl, label)
+#define FIVE_BAR(suffix, ctrl, label) PRESET(five_bar, suffix, ctrl, label)
 
 TRIPLE(pd, PRESET_PD, "Triple pendulum, PD (" PAPER ", sec. 7.1)")
 TRIPLE(pid, PRESET_PID, "Triple pendulum, PID (" PAPER ", sec. 7.1)")
@@ -663,12 +662,6 @@ SPATIAL(poles, PRESET_POLES,
         "Spatial double pendulum, pole placement (" PAPER ", sec. 7.1; gravity -z)")
 SPATIAL(lqr, PRESET_LQR, "Spatial double pendulum, LQR (" PAPER ", sec. 7.1; gravity -z)")
 
-#define FIVE_BAR(suffix, ctrl, label)                                                              \
-    static cJSON *build_five_bar_##suffix(const cJSON *request, job_error *err)                    \
-    {                                                                                              \
-        (void)request;                                                                             \
-        return five_bar("five_bar_" #suffix, label, ctrl, err);                                    \
-    }
 FIVE_BAR(pd, PRESET_PD, "Five-bar closed chain, PD (" PAPER ", sec. 7.2)")
 FIVE_BAR(pid, PRESET_PID, "Five-bar closed chain, PID (" PAPER ", sec. 7.2)")
 FIVE_BAR(poles, PRESET_POLES, "Five-bar closed chain, pole placement (" PAPER ", sec. 7.2)")

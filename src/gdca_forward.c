@@ -27,7 +27,6 @@ static inline void forward_joint(const ctc_model *m, ctc_data *d, int j, const d
                                  const double *right, const double *f, const int dim)
 {
     const int nv = m->jnt_nv[j];
-    const double *P = d->jnt_P + 3 * dim * j, *fj = f + m->jnt_vadr[j];
     double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
     double k[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX], pf[CTC_DENSE_MAX];
     double kpf[CTC_DENSE_MAX];
@@ -37,10 +36,7 @@ static inline void forward_joint(const ctc_model *m, ctc_data *d, int j, const d
         d->singular_joint < 0) {
         d->singular_joint = j;
     }
-    for (int i = 0; i < dim; i++) pf[i] = 0;
-    for (int c = 0; c < nv; c++) {
-        for (int i = 0; i < dim; i++) pf[i] += P[c * dim + i] * fj[c];
-    }
+    gdca_joint_map(dim, nv, d->jnt_P + 3 * dim * j, f + m->jnt_vadr[j], pf);
     ctc_dense_mulv(dim, dim, k, pf, kpf);
     gdca_joint_Y0(dim, left, right, d->jnt_beta + dim * j, y);
     for (int i = 0; i < dim; i++) y[i] -= kpf[i];
@@ -60,17 +56,6 @@ static inline void forward_qacc(const ctc_model *m, const ctc_data *d, int j, co
     }
 }
 
-/* P f of joint j (f extended) */
-static inline void joint_drive(const ctc_model *m, const ctc_data *d, int j, const double *f,
-                               double *pf, const int dim)
-{
-    const double *P = d->jnt_P + 3 * dim * j, *fj = f + m->jnt_vadr[j];
-    for (int i = 0; i < dim; i++) pf[i] = 0;
-    for (int c = 0; c < m->jnt_nv[j]; c++) {
-        for (int i = 0; i < dim; i++) pf[i] += P[c * dim + i] * fj[c];
-    }
-}
-
 /* a loop model's root: joint 0 and the closing joint n both join the ground (gdca_loop.h) */
 static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
                                      const int dim)
@@ -83,8 +68,8 @@ static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const doub
     static const double rest[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
     const int nc2 = dim - m->jnt_nv[n];
 
-    joint_drive(m, d, 0, f, pf1, dim);
-    joint_drive(m, d, n, f, pf2, dim);
+    gdca_joint_map(dim, m->jnt_nv[0], d->jnt_P, f, pf1);
+    gdca_joint_map(dim, m->jnt_nv[n], d->jnt_P + 3 * dim * n, f + m->jnt_vadr[n], pf2);
     for (int c = 0; c < nc2; c++) {
         off[c] = 2 * d->baumgarte[0] * d->loop_dphi[c] +
                  d->baumgarte[1] * d->baumgarte[1] * d->loop_phi[c];
@@ -98,9 +83,8 @@ static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const doub
         d->jnt_load[i] = tl[i];
         d->jnt_load[dim * n + i] = -tl[dim + i];
     }
-    /* the closing joint: A(ground) = 0 = A2 + P qdd + beta */
     forward_qacc(m, d, 0, a1, rest, qacc, dim);
-    forward_qacc(m, d, n, rest, a2, qacc, dim);
+    forward_qacc(m, d, n, rest, a2, qacc, dim); /* A(ground) = 0 = A2 + P qdd + beta */
 }
 
 static inline void forward_pass(const ctc_model *m, ctc_data *d, const double *f, double *qacc,

@@ -32,14 +32,19 @@
 #include "gdca_loop.h"
 #include "gdca_tree.h"
 
+/* the factor's column count of joint j: dim across an independent joint, dim - nv otherwise */
+static inline int inverse_nc(const ctc_model *m, int j, const int dim)
+{
+    return m->jnt_indep[j] ? dim : dim - m->jnt_nv[j];
+}
+
 /* the factor E of X = E E^T = K^-1 and z = X Y' of joint j between left (NULL: ground) and right */
 static inline void inverse_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
                                  const double *right, const double *u, const int dim)
 {
-    const double *P = d->jnt_P + 3 * dim * j, *uj = u + m->jnt_vadr[j];
     double *e = d->inv_E + dim * dim * j, *z = d->inv_z + dim * j;
-    double k[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX];
-    const int indep = m->jnt_indep[j], nc = indep ? dim : dim - m->jnt_nv[j];
+    double k[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX], pu[CTC_DENSE_MAX];
+    const int indep = m->jnt_indep[j], nc = inverse_nc(m, j, dim);
 
     gdca_joint_K(dim, left, right, k);
     if (gdca_joint_factor(dim, k, indep ? NULL : d->jnt_D + dim * dim * j, nc, e) != 0 &&
@@ -47,16 +52,11 @@ static inline void inverse_joint(const ctc_model *m, ctc_data *d, int j, const d
         d->singular_joint = j;
     }
     gdca_joint_Y0(dim, left, right, d->jnt_beta + dim * j, y);
-    for (int c = 0; indep && c < m->jnt_nv[j]; c++) {
-        for (int i = 0; i < dim; i++) y[i] += P[c * dim + i] * uj[c];
+    if (indep) {
+        gdca_joint_map(dim, m->jnt_nv[j], d->jnt_P + 3 * dim * j, u + m->jnt_vadr[j], pu);
+        for (int i = 0; i < dim; i++) y[i] += pu[i];
     }
     gdca_factor_apply(dim, nc, e, y, z);
-}
-
-/* the factor's column count of joint j: dim across an independent joint, dim - nv otherwise */
-static inline int inverse_nc(const ctc_model *m, int j, const int dim)
-{
-    return m->jnt_indep[j] ? dim : dim - m->jnt_nv[j];
 }
 
 /* a loop model's root: both handles jointed to the ground, each end independent or dependent */
@@ -73,14 +73,12 @@ static inline void inverse_loop_root(const ctc_model *m, ctc_data *d, const doub
     for (int side = 0; side < 2; side++) {
         int j = side ? n : 0;
         double *a = side ? a2 : a1;
-        const double *P = d->jnt_P + 3 * dim * j, *uj = u + m->jnt_vadr[j];
-        memcpy(a, d->jnt_beta + dim * j, (size_t)dim * sizeof *a);
         if (m->jnt_indep[j]) { /* commanded: the whole load is unknown (Eq. 55-65) */
-            for (int c = 0; c < m->jnt_nv[j]; c++) {
-                for (int i = 0; i < dim; i++) a[i] += P[c * dim + i] * uj[c];
-            }
+            gdca_joint_map(dim, m->jnt_nv[j], d->jnt_P + 3 * dim * j, u + m->jnt_vadr[j], a);
+            for (int i = 0; i < dim; i++) a[i] += d->jnt_beta[dim * j + i];
             ends[side] = (gdca_end){NULL, dim, zero, a, NULL};
         } else {
+            memcpy(a, d->jnt_beta + dim * j, (size_t)dim * sizeof *a);
             ends[side] = (gdca_end){d->jnt_D + dim * dim * j, dim - m->jnt_nv[j], zero, a, NULL};
         }
     }

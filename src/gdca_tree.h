@@ -35,6 +35,16 @@ static inline void gdca_joint_K(int dim, const double *left, const double *right
     }
 }
 
+/* out = P x (dim): the motion (or load) of a joint's coordinates x (nv) through its map P (column
+ * c at p[c dim]) - P qdd, P u, P f */
+static inline void gdca_joint_map(int dim, int nv, const double *p, const double *x, double *out)
+{
+    for (int i = 0; i < dim; i++) out[i] = 0;
+    for (int c = 0; c < nv; c++) {
+        for (int i = 0; i < dim; i++) out[i] += p[c * dim + i] * x[c];
+    }
+}
+
 /* Y0 = h23^L - h13^R + beta (the part of Y common to both passes) */
 static inline void gdca_joint_Y0(int dim, const double *left, const double *right,
                                  const double *beta, double *y)

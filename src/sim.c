@@ -266,6 +266,12 @@ static ctc_status check_with_model(const ctc_sim_spec *s, const ctc_model *m, ch
     return CTC_OK;
 }
 
+/* the projection's trigger and Newton's tolerance (m, rad) */
+static double loop_tol_of(const ctc_sim_spec *s)
+{
+    return s->loop_tol > 0 ? s->loop_tol : SIM_DEFAULT_LOOP_TOL;
+}
+
 /* The spec's initial state (q0 normalised, v0) in q (nq) and v (nv), put onto the loop's closure
  * and checked there (loop.h). A closure that fails is explained by the mobility checks at q0
  * when they fail too. */
@@ -281,7 +287,7 @@ static ctc_status close_initial_state(const ctc_sim_spec *s, const ctc_model *m,
     for (int i = 0; i < m->nv; i++) v[i] = s->v0 ? s->v0[i] : 0;
     if (!m->has_loop) return CTC_OK;
 
-    double tol = s->loop_tol > 0 ? s->loop_tol : SIM_DEFAULT_LOOP_TOL;
+    double tol = loop_tol_of(s);
     char why[300];
     if (ctc_loop_assemble(m, d, q, v, tol, SIM_LOOP_MAX_ITER, fix, why, sizeof why) != CTC_OK) {
         double *q0 = malloc(((size_t)m->nq + 1) * sizeof *q0);
@@ -818,7 +824,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     st = close_initial_state(spec, plant, c.dp, y0, y0 + c.nq, &r->metrics.initial, err, errlen);
     if (st != CTC_OK) goto cleanup;
     for (int i = c.nq + c.nv; i < c.ny; i++) y0[i] = 0;
-    double loop_tol = spec->loop_tol > 0 ? spec->loop_tol : SIM_DEFAULT_LOOP_TOL;
+    double loop_tol = loop_tol_of(spec);
 
     double bound = spec->max_speed > 0 ? spec->max_speed : SIM_DEFAULT_MAX_SPEED;
     ctc_run_status status = CTC_RUN_DONE;
