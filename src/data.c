@@ -29,6 +29,8 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->hinv = calloc(nt * (size_t)d->hsize, sizeof(double));
     d->fwd_E = calloc(n * dim * dim, sizeof(double));
     d->fwd_z = calloc(n * dim, sizeof(double));
+    d->fwd_refine = -1;
+    d->fwd_res = calloc(2 * (size_t)m->nvx + 1, sizeof(double));
     d->inv_E = calloc(n * dim * dim, sizeof(double));
     d->inv_z = calloc(n * dim, sizeof(double));
     d->csize = (int)(dim * dim + 2 * dim + 3);
@@ -42,7 +44,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     if (d->xpos == NULL || d->xrot == NULL || d->xcom == NULL || d->omega == NULL ||
         d->xvel == NULL || d->jnt_P == NULL || d->jnt_D == NULL || d->jnt_beta == NULL ||
         d->hr == NULL || d->hbody == NULL || d->hfwd == NULL || d->hinv == NULL ||
-        d->fwd_E == NULL || d->fwd_z == NULL || d->inv_E == NULL || d->inv_z == NULL ||
+        d->fwd_E == NULL || d->fwd_z == NULL || d->fwd_res == NULL || d->inv_E == NULL || d->inv_z == NULL ||
         d->icomp == NULL || d->inv_e == NULL || d->tload == NULL || d->jnt_load == NULL ||
         d->jnt_load_inv == NULL || d->xbuf == NULL) {
         ctc_data_free(d);
@@ -68,6 +70,7 @@ void ctc_data_free(ctc_data *d)
     free(d->hinv);
     free(d->fwd_E);
     free(d->fwd_z);
+    free(d->fwd_res);
     free(d->inv_E);
     free(d->inv_z);
     free(d->icomp);

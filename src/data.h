@@ -61,6 +61,9 @@ typedef struct ctc_data {
     double *hinv;  /* (ntree x hsize) inverse assemblies of the mobility form */
     double *fwd_E; /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
     double *fwd_z; /* (n x dim)   joint k: W Y + P f */
+    int fwd_refine;  /* refinement steps of ctc_gdca_forward (gdca_refine.h): -1 (default) = 1
+                        on chains of CTC_REFINE_MIN_BODIES bodies or more, else 0; >= 0: that many */
+    double *fwd_res; /* (2 nv) the refinement's force residual and correction */
     double *inv_E; /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
     double *inv_z; /* (n x dim)   joint k: X Y' (mobility form) */
     int csize;     /* doubles in one composite record: dim^2 + 2 dim + 3 */

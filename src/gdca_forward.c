@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "gdca_loop.h"
+#include "gdca_refine.h"
 #include "gdca_tree.h"
 
 /* the factor E of W = E E^T and z = W Y + P f of joint j between left (NULL: ground) and right */
@@ -170,5 +171,15 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         forward_planar(m, d, f, qacc);
     } else {
         forward_spatial(m, d, f, qacc);
+    }
+
+    /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r */
+    const int steps = gdca_refine_steps(m, d);
+    double *r = d->fwd_res, *dq = d->fwd_res + m->nv;
+    for (int s = 0; s < steps && d->singular_joint < 0; s++) {
+        ctc_gdca_inverse(m, d, qacc, r);
+        for (int i = 0; i < m->nv; i++) r[i] = f[i] - r[i];
+        gdca_forward_correct(m, d, r, dq);
+        for (int i = 0; i < m->nv; i++) qacc[i] += dq[i];
     }
 }

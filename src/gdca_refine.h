@@ -1,0 +1,42 @@
+/*
+ * gdca_refine.h - iterative refinement of forward GDCA on long open chains (internal to the
+ * library; ctc_gdca_forward calls it).
+ *
+ * The forward pass assembles each node's bias terms h13, h23 from the bodies' velocity and
+ * gravity terms and the driving forces. In a CTC step the forces nearly balance those terms, so
+ * the assembled biases are differences of large numbers and the accelerations lose digits in
+ * proportion to the chain's conditioning (bench/README.md, "Accuracy of the same evaluations").
+ * The refinement measures how far the result misses the equations of motion with the composite
+ * inverse pass, which is accurate to rounding because composite inertias add,
+ *     r = f - (M(q) qdd + N(q, v))            (ctc_gdca_inverse of qdd),
+ * and corrects qdd by the forward pass's own operator on r with every bias term zero:
+ *     dq = M^-1 r,   qdd <- qdd + dq.
+ * That correction pass reuses the joint factors E and the assembled matrices h11, h12, h22 of
+ * the forward pass just made, so it costs vector work only (about a third of a forward pass
+ * plus one composite inverse). The forward operator's relative error on a bias-free right-hand
+ * side is many orders smaller than on the cancelling one, so one step brings the accelerations
+ * to the accuracy of the forces' residual.
+ */
+#ifndef CTC_GDCA_REFINE_H
+#define CTC_GDCA_REFINE_H
+
+#include "data.h"
+
+/* Chains with at least this many bodies are refined once by default (d->fwd_refine < 0). From
+ * bench_accuracy: below it the unrefined round trip GDCA(iGDCA(u)) is already within 1e-11 of u
+ * on random planar and spatial chains, and a refinement would add about a third to the cost. */
+#define CTC_REFINE_MIN_BODIES 32
+
+/* The number of refinement steps ctc_gdca_forward makes on model m with settings d: d->fwd_refine
+ * when >= 0, else 1 from CTC_REFINE_MIN_BODIES bodies on and 0 below; always 0 for loop models
+ * (their accurate residual would need the closure's multipliers; not implemented). */
+int gdca_refine_steps(const ctc_model *m, const ctc_data *d);
+
+/* The correction dq (nv; rad/s^2, m/s^2) = M^-1 r for joint forces r (nv; N m, N), by the
+ * forward pass with all bias terms zero, reusing the factors and records of the last
+ * ctc_gdca_forward at this state (open chains). Adds the correction's joint loads to
+ * d->jnt_load, and overwrites the bias parts (h13, h23) of the forward node records, d->fwd_z
+ * and d->tload. dq may not alias r. */
+void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, double *dq);
+
+#endif
