@@ -203,3 +203,26 @@ void test_random_state(const ctc_model *m, uint64_t *rng, double vmax, double *q
     }
     for (int i = 0; i < m->nv; i++) v[i] = test_uniform(rng, -vmax, vmax);
 }
+
+void test_chain_scale_bodies(test_chain *c, const double *factor)
+{
+    for (int k = 0; k < c->spec.nbodies; k++) {
+        c->bodies[k].mass *= factor[k];
+        for (int i = 0; i < 9; i++) c->bodies[k].inertia[i] *= factor[k];
+    }
+}
+
+test_chain *test_chain_spatial_double_pendulum(ctc_joint_type type)
+{
+    test_chain *c = chain_alloc(2);
+    ctc_v3_set(c->spec.gravity, 0, 0, -9.81);
+    c->spec.form = CTC_FORM_AUTO;
+    const double size[3] = {1, 0.1, 0.1}, centre[3] = {0.5, 0, 0};
+    for (int k = 0; k < 2; k++) {
+        if (ctc_shape_box(1.0, size, centre, &c->bodies[k], NULL, 0) != CTC_OK) abort();
+        c->joints[k].type = type;
+        ctc_v3_set(c->joints[k].axis, 0, k ? 1 : 0, k ? 0 : 1);
+        ctc_v3_set(c->joints[k].location, k ? 1 : 0, 0, 0);
+    }
+    return c;
+}

@@ -59,4 +59,15 @@ void test_chain_free(test_chain *c);
  * quaternions; v (nv) in [-vmax, vmax]. */
 void test_random_state(const ctc_model *m, uint64_t *rng, double vmax, double *q, double *v);
 
+/* Multiplies body k's mass and inertia by factor[k] (n entries, > 0), keeping its centre of mass
+ * and shape: a chain with the given mass and inertia ratios between neighbours. */
+void test_chain_scale_bodies(test_chain *c, const double *factor);
+
+/* The paper's spatial double pendulum (section 7.1): two uniform 1 kg cuboids of 1 x 0.1 x 0.1 m
+ * along their body x axes, joint 0 at the origin about the world z axis, joint 1 at body 0's far
+ * end (1, 0, 0) about its y axis; gravity (0, 0, -9.81). With type SPHERICAL both joints are
+ * spherical at the same centres (the axes are then unused). form is AUTO (spatial). Free with
+ * test_chain_free. */
+test_chain *test_chain_spatial_double_pendulum(ctc_joint_type type);
+
 #endif
