@@ -60,9 +60,8 @@ _Static_assert(sizeof(((job_error *)0)->field) == PATH_LEN, "paths are written i
 #define DEFAULT_MAX_SPEED 1e6 /* rad/s or m/s */
 
 /* defaults of a loop (job_json.h) */
-#define DEFAULT_LOOP_TOL 1e-12     /* m or rad: projection trigger and Newton tolerance */
-#define DEFAULT_BAUMGARTE 10.0     /* 1/s, alpha and beta */
-#define DEFAULT_LOOP_COND_MAX 1e10 /* condition estimate beyond which a run stops as singular */
+#define DEFAULT_LOOP_TOL 1e-12 /* m or rad: projection trigger and Newton tolerance */
+#define DEFAULT_BAUMGARTE 10.0 /* 1/s, alpha and beta */
 
 #define MAX_WHOLE 9007199254740992.0 /* 2^53: whole numbers beyond are not exact in a double */
 #define AXIS_MIN_LENGTH 1e-12        /* as ctc_model_build */
@@ -966,7 +965,7 @@ static int parse_loop(parser *p, const cJSON *scene, cJSON *out_scene)
     }
     put_numbers(p, out, "anchor", j->loop.anchor, 3);
     if (parse_stabilization(p, v, out) != 0 ||
-        member_number(p, v, "scene.loop", "cond_max", OPTIONAL, DEFAULT_LOOP_COND_MAX,
+        member_number(p, v, "scene.loop", "cond_max", OPTIONAL, CTC_SIM_DEFAULT_COND_MAX,
                       &s->loop_cond_max) != 0) {
         return -1;
     }

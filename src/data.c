@@ -44,9 +44,9 @@ ctc_data *ctc_data_new(const ctc_model *m)
     if (d->xpos == NULL || d->xrot == NULL || d->xcom == NULL || d->omega == NULL ||
         d->xvel == NULL || d->jnt_P == NULL || d->jnt_D == NULL || d->jnt_beta == NULL ||
         d->hr == NULL || d->hbody == NULL || d->hfwd == NULL || d->hinv == NULL ||
-        d->fwd_E == NULL || d->fwd_z == NULL || d->fwd_res == NULL || d->inv_E == NULL || d->inv_z == NULL ||
-        d->icomp == NULL || d->inv_e == NULL || d->tload == NULL || d->jnt_load == NULL ||
-        d->jnt_load_inv == NULL || d->xbuf == NULL) {
+        d->fwd_E == NULL || d->fwd_z == NULL || d->fwd_res == NULL || d->inv_E == NULL ||
+        d->inv_z == NULL || d->icomp == NULL || d->inv_e == NULL || d->tload == NULL ||
+        d->jnt_load == NULL || d->jnt_load_inv == NULL || d->xbuf == NULL) {
         ctc_data_free(d);
         return NULL;
     }

@@ -57,16 +57,18 @@ typedef struct ctc_data {
     double *hbody; /* (n x hsize) */
 
     /* GDCA tree records and joint solutions */
-    double *hfwd;  /* (ntree x hsize) forward assemblies */
-    double *hinv;  /* (ntree x hsize) inverse assemblies of the mobility form */
-    double *fwd_E; /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
-    double *fwd_z; /* (n x dim)   joint k: W Y + P f */
-    int fwd_refine;  /* refinement steps of ctc_gdca_forward (gdca_refine.h): -1 (default) = 1
-                        on chains of CTC_REFINE_MIN_BODIES bodies or more, else 0; >= 0: that many */
-    double *fwd_res; /* (2 nv) the refinement's force residual and correction */
-    double *inv_E; /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
-    double *inv_z; /* (n x dim)   joint k: X Y' (mobility form) */
-    int csize;     /* doubles in one composite record: dim^2 + 2 dim + 3 */
+    double *hfwd;        /* (ntree x hsize) forward assemblies */
+    double *hinv;        /* (ntree x hsize) inverse assemblies of the mobility form */
+    double *fwd_E;       /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
+    double *fwd_z;       /* (n x dim)   joint k: W Y + P f */
+    int fwd_refine;      /* most refinement steps of ctc_gdca_forward (gdca_refine.h): -1 (default)
+                            = CTC_REFINE_MAX_STEPS on long or stiffly proportioned open chains, else
+                            0; >= 0: at most that many */
+    int fwd_refine_done; /* steps the last ctc_gdca_forward made */
+    double *fwd_res;     /* (2 nv) the refinement's force residual and correction */
+    double *inv_E;       /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
+    double *inv_z;       /* (n x dim)   joint k: X Y' (mobility form) */
+    int csize;           /* doubles in one composite record: dim^2 + 2 dim + 3 */
     double *icomp; /* ((2n - 1) x csize) inverse assemblies in composite form (gdca_inverse.c):
                       I (dim x dim), w (dim), c (dim), r12 (3) */
     double *inv_e; /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */

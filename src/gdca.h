@@ -34,15 +34,17 @@
 #include "data.h"
 
 /* Forward dynamics: joint accelerations qacc (nv, nvx for loops; rad/s^2, m/s^2) from the
- * driving forces f (nv, nvx for loops; N m, N) applied by each joint, gravity included. Also fills d->jnt_load (the whole load
- * on body k at joint k: constraint plus drive). qacc may not alias f. */
+ * driving forces f (nv, nvx for loops; N m, N) applied by each joint, gravity included. Also fills
+ * d->jnt_load (the whole load on body k at joint k: constraint plus drive). qacc may not alias f.
+ */
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc);
 
 /* Inverse dynamics for CTC (iGDCA): the driving forces f (nv, nvx for loops; N m, N) that make
- * the (independent) joint accelerations equal the commanded u (nv, nvx for loops), i.e. f = M(q) u + N(q, v) (paper Eq. 18, 44-54).
- * Each assembly's handle equations are held in composite form (gdca_inverse.c), which is
- * algebraically the paper's Eq. 32-39 and keeps full accuracy on long chains. Needs
- * ctc_kinematics and ctc_handles for the state. Also fills d->jnt_load_inv. f may not alias u. */
+ * the (independent) joint accelerations equal the commanded u (nv, nvx for loops), i.e. f = M(q) u
+ * + N(q, v) (paper Eq. 18, 44-54). Each assembly's handle equations are held in composite form
+ * (gdca_inverse.c), which is algebraically the paper's Eq. 32-39 and keeps full accuracy on long
+ * chains. Needs ctc_kinematics and ctc_handles for the state. Also fills d->jnt_load_inv. f may not
+ * alias u. */
 void ctc_gdca_inverse(const ctc_model *m, ctc_data *d, const double *u, double *f);
 
 /* The same driving forces by the paper's iGDCA in its literal mobility form (Eq. 26-39), which

@@ -17,6 +17,7 @@
  */
 #include "gdca.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "gdca_loop.h"
@@ -173,13 +174,23 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         forward_spatial(m, d, f, qacc);
     }
 
-    /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r */
+    /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r,
+       until the correction converges or stalls */
     const int steps = gdca_refine_steps(m, d);
-    double *r = d->fwd_res, *dq = d->fwd_res + m->nv;
+    double *r = d->fwd_res, *dq = d->fwd_res + m->nv, last = INFINITY;
+    d->fwd_refine_done = 0;
     for (int s = 0; s < steps && d->singular_joint < 0; s++) {
         ctc_gdca_inverse(m, d, qacc, r);
         for (int i = 0; i < m->nv; i++) r[i] = f[i] - r[i];
         gdca_forward_correct(m, d, r, dq);
-        for (int i = 0; i < m->nv; i++) qacc[i] += dq[i];
+        double amax = 0, dmax = 0;
+        for (int i = 0; i < m->nv; i++) {
+            qacc[i] += dq[i];
+            amax = fmax(amax, fabs(qacc[i]));
+            dmax = fmax(dmax, fabs(dq[i]));
+        }
+        d->fwd_refine_done++;
+        if (dmax <= CTC_REFINE_CONVERGED * amax || dmax * CTC_REFINE_STALL > last) break;
+        last = dmax;
     }
 }

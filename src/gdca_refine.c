@@ -19,7 +19,8 @@ int gdca_refine_steps(const ctc_model *m, const ctc_data *d)
 {
     if (m->has_loop) return 0;
     if (d->fwd_refine >= 0) return d->fwd_refine;
-    return m->nbodies >= CTC_REFINE_MIN_BODIES ? 1 : 0;
+    int needed = m->nbodies >= CTC_REFINE_MIN_BODIES || m->mass_ratio >= CTC_REFINE_MASS_RATIO;
+    return needed ? CTC_REFINE_MAX_STEPS : 0;
 }
 
 /* the bias b13 (which = 0) or b23 (which = 1) of assembly a: zero for a body */

@@ -22,14 +22,23 @@
 
 #include "data.h"
 
-/* Chains with at least this many bodies are refined once by default (d->fwd_refine < 0). From
- * bench_accuracy: below it the unrefined round trip GDCA(iGDCA(u)) is already within 1e-11 of u
- * on random planar and spatial chains, and a refinement would add about a third to the cost. */
-#define CTC_REFINE_MIN_BODIES 32
+/* By default (d->fwd_refine < 0) a chain is refined when it has at least CTC_REFINE_MIN_BODIES
+ * bodies, or its body masses or inertias span a ratio of CTC_REFINE_MASS_RATIO or more (model.h
+ * mass_ratio). Below both, the unrefined round trip GDCA(iGDCA(u)) is within about 1e-9 of u on
+ * random planar and spatial chains and on Featherstone's coil (bench_accuracy), while a step
+ * adds 40-65% to a CTC evaluation. With extreme proportions a chain of 32 bodies loses all but
+ * three digits unrefined (test_hard), one step recovers most of them and a second the rest.
+ * Steps stop early once a correction is below CTC_REFINE_CONVERGED of the accelerations, or
+ * shrinks by less than a factor CTC_REFINE_STALL (the residual has reached its rounding level). */
+#define CTC_REFINE_MIN_BODIES 64
+#define CTC_REFINE_MASS_RATIO 100.0
+#define CTC_REFINE_MAX_STEPS 3
+#define CTC_REFINE_CONVERGED 1e-13
+#define CTC_REFINE_STALL 10.0
 
-/* The number of refinement steps ctc_gdca_forward makes on model m with settings d: d->fwd_refine
- * when >= 0, else 1 from CTC_REFINE_MIN_BODIES bodies on and 0 below; always 0 for loop models
- * (their accurate residual would need the closure's multipliers; not implemented). */
+/* The most refinement steps ctc_gdca_forward makes on model m with settings d: d->fwd_refine
+ * when >= 0, else CTC_REFINE_MAX_STEPS or 0 by the rule above; always 0 for loop models (their
+ * accurate residual would need the closure's multipliers; not implemented). */
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d);
 
 /* The correction dq (nv; rad/s^2, m/s^2) = M^-1 r for joint forces r (nv; N m, N), by the

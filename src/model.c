@@ -517,6 +517,16 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
         }
     }
 
+    /* the spread of masses and inertias over the chain (gdca_refine.h decides on it) */
+    double mlo = INFINITY, mhi = 0, tlo = INFINITY, thi = 0;
+    for (int k = 0; k < n; k++) {
+        const ctc_body_spec *b = &m->bodies[k];
+        double tr = b->inertia[0] + b->inertia[4] + b->inertia[8];
+        mlo = fmin(mlo, b->mass), mhi = fmax(mhi, b->mass);
+        if (tr > 0) tlo = fmin(tlo, tr), thi = fmax(thi, tr);
+    }
+    m->mass_ratio = fmax(mhi / mlo, thi > 0 ? thi / tlo : 1.0);
+
     /* choose the form: model only what the scene needs */
     double normal[3];
     char why[160] = "";

@@ -146,6 +146,8 @@ typedef struct ctc_model {
     int *jnt_nq;            /* (n) */
     int *jnt_nv;            /* (n) */
 
+    double mass_ratio;        /* the larger of max/min body mass and max/min inertia trace over
+                                 the chain (>= 1) */
     double *body_inertia_inv; /* (n x 9) inverse inertia about the CoM, body frame (spatial) */
     double *jnt_perp;         /* (n x 6) two unit vectors normal to joint k's axis, parent frame */
     ctc_planar_body *planar;  /* (n) form PLANAR, else NULL */

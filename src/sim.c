@@ -50,7 +50,6 @@
 #define SIM_MAX_SAMPLES 50000000L
 #define SIM_DEFAULT_LOOP_TOL 1e-12
 #define SIM_DEFAULT_BAUMGARTE 10.0
-#define SIM_DEFAULT_COND_MAX 1e10
 #define SIM_LOOP_MAX_ITER 50
 #define SIM_RHS_SINGULAR 2 /* the right-hand side's code for a singular loop */
 
@@ -693,6 +692,8 @@ static void ctx_free(sim_ctx *c)
 /* the message of a run stopped as singular at time t */
 static void singular_message(ctc_sim_result *r, double t, const sim_ctx *c)
 {
+    /* the estimate that stopped the run belongs in the metrics, not only the samples' */
+    r->metrics.loop_cond_max = fmax(r->metrics.loop_cond_max, c->cond);
     snprintf(r->message, sizeof r->message,
              "t = %.6g s: the independent joints cannot drive the loop here (condition estimate "
              "%.3g > %g)",
@@ -732,7 +733,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     c.nq = plant->nq, c.nv = plant->nv, c.nvx = plant->nvx, c.nind = plant->nind;
     c.active = spec->controller != CTC_CTRL_NONE;
     c.ny = c.nq + c.nv + (c.active ? c.nind : 0);
-    c.cond_max = spec->loop_cond_max > 0 ? spec->loop_cond_max : SIM_DEFAULT_COND_MAX;
+    c.cond_max = spec->loop_cond_max > 0 ? spec->loop_cond_max : CTC_SIM_DEFAULT_COND_MAX;
     for (int k = 0; k < plant->nbodies; k++)
         c.has_quat |= plant->joints[k].type == CTC_JOINT_SPHERICAL;
     int exact = !c.active || (spec->model_mass_scale == 1 && spec->model_inertia_scale == 1);

@@ -99,8 +99,18 @@ typedef struct ctc_sim_spec {
     double loop_tol;      /* projection: position residual (m, rad) that triggers it, and the
                              Newton tolerance; 0 = 1e-12 */
     double baumgarte[2];  /* a, b (1/s) for CTC_LOOP_BAUMGARTE; 0, 0 = 10, 10 */
-    double loop_cond_max; /* stop as singular beyond this condition estimate; 0 = 1e10 */
+    double loop_cond_max; /* stop as singular beyond this condition estimate; 0 =
+                             CTC_SIM_DEFAULT_COND_MAX */
 } ctc_sim_spec;
+
+/* The default limit on the condition estimate of a closed chain's boundary solve (gdca_loop.h,
+ * scaled). Regular loops stay far below it: 1.4 for the paper's five-bar, 2.5e3 for an arch of
+ * 4096 rods (bench_loop). Near a singular configuration it grows like the dependent joints'
+ * speeds, about 1 / distance from it, so the run must stop on it before those speeds reach the
+ * divergence bound of 1e6 rad/s (test_hard drives the five-bar into a straightened dyad: the
+ * estimate passes 1e6 at the same time step as the speeds pass 1e6 rad/s). At 1e5 the forces
+ * still carry about 11 correct digits. */
+#define CTC_SIM_DEFAULT_COND_MAX 1e5
 
 typedef enum ctc_run_status {
     CTC_RUN_DONE = 0,
