@@ -55,7 +55,18 @@
 #include "loop_oracle.h"
 #include "spatial.h"
 
-enum { T_CTC, T_CTC_FULL, T_INV, T_INV_FULL, T_OPEN_CTC, T_OPEN_INV, T_OPEN_MOB, T_PROJ, NT };
+enum {
+    T_CTC,
+    T_CTC_PAPER,
+    T_INV,
+    T_INV_PAPER,
+    T_INV_FULL,
+    T_OPEN_CTC,
+    T_OPEN_INV,
+    T_OPEN_MOB,
+    T_PROJ,
+    NT
+};
 
 #define PROJ_TOL 1e-12
 #define PROJ_ITER 20
@@ -90,7 +101,8 @@ typedef struct bench_row {
     char label[16];
     int n, ntree, visited, mobility, iterations;
     double med[NT], cond, res_after;
-    double f_oracle;              /* max |f - f_oracle| / max |f_oracle|; -1: not computed */
+    double f_oracle, f_paper;     /* max |f - f_oracle| / max |f_oracle| of the default and the
+                                     paper's iGDCA; -1: not computed */
     double round_trip, open_trip; /* max |qacc - u| / max |u| over the independent coordinates */
 } bench_row;
 
@@ -103,12 +115,25 @@ static double now(void)
 
 static volatile double sink;
 
+/* the inverse pass: which = 0 the library's default (ctc_gdca_inverse: for loops the open
+   chain's composite pass and the closure), 1 the paper's iGDCA with its early stop, 2 the paper's
+   iGDCA disassembling every node */
+static void inverse(const ctc_model *m, ctc_data *d, const double *u, double *f, int which)
+{
+    d->inv_full = which == 2;
+    if (which == 0)
+        ctc_gdca_inverse(m, d, u, f);
+    else
+        ctc_gdca_inverse_mobility(m, d, u, f);
+    d->inv_full = 0;
+}
+
 static void ctc_eval(const ctc_model *m, ctc_data *d, const double *q, const double *v,
-                     const double *u, double *f, double *a)
+                     const double *u, double *f, double *a, int which)
 {
     ctc_kinematics(m, d, q, v);
     ctc_handles(m, d);
-    ctc_gdca_inverse(m, d, u, f);
+    inverse(m, d, u, f, which);
     ctc_gdca_forward(m, d, f, a);
 }
 
@@ -117,23 +142,16 @@ static void run_once(bench_case *c, int what)
     const ctc_model *m = c->m;
     switch (what) {
     case T_CTC:
-        ctc_eval(m, c->d, c->q, c->v, c->u, c->f, c->a);
-        break;
-    case T_CTC_FULL:
-        c->d->inv_full = 1;
-        ctc_eval(m, c->d, c->q, c->v, c->u, c->f, c->a);
-        c->d->inv_full = 0;
+    case T_CTC_PAPER:
+        ctc_eval(m, c->d, c->q, c->v, c->u, c->f, c->a, what == T_CTC_PAPER);
         break;
     case T_INV:
-        ctc_gdca_inverse(m, c->d, c->u, c->f);
-        break;
+    case T_INV_PAPER:
     case T_INV_FULL:
-        c->d->inv_full = 1;
-        ctc_gdca_inverse(m, c->d, c->u, c->f);
-        c->d->inv_full = 0;
+        inverse(m, c->d, c->u, c->f, what - T_INV);
         break;
     case T_OPEN_CTC:
-        ctc_eval(c->open, c->d_open, c->q, c->v, c->u, c->fo, c->ao);
+        ctc_eval(c->open, c->d_open, c->q, c->v, c->u, c->fo, c->ao, 0);
         break;
     case T_OPEN_INV:
         ctc_gdca_inverse(c->open, c->d_open, c->u, c->fo);
@@ -164,7 +182,7 @@ static void measure(bench_case *c, int batches, double med[NT])
     double t0 = now();
     int probe = 0;
     while (now() - t0 < 2e-3 || probe < 1) {
-        run_once(c, T_CTC_FULL);
+        run_once(c, T_CTC_PAPER);
         run_once(c, T_OPEN_CTC);
         run_once(c, T_PROJ);
         probe++;
@@ -339,9 +357,9 @@ static int bench_loop_case(const char *label, const ctc_chain_spec *spec, const 
     c.fo = calloc(nv, sizeof(double)), c.ao = calloc(nv, sizeof(double));
     c.qd = calloc(nq, sizeof(double)), c.vd = calloc(nv, sizeof(double));
     c.qp = calloc(nq, sizeof(double)), c.vp = calloc(nv, sizeof(double));
-    double *f_full = calloc(nvx, sizeof(double));
+    double *f_full = calloc(nvx, sizeof(double)), *f_paper = calloc(nvx, sizeof(double));
     if (!c.d || !c.d_open || !c.d_proj || !c.q || !c.v || !c.u || !c.f || !c.a || !c.fo || !c.ao ||
-        !c.qd || !c.vd || !c.qp || !c.vp || !f_full)
+        !c.qd || !c.vd || !c.qp || !c.vp || !f_full || !f_paper)
         abort();
 
     /* the loop is closed at q0 and the independent joints drive it there */
@@ -359,13 +377,14 @@ static int bench_loop_case(const char *label, const ctc_chain_spec *spec, const 
     if (ctc_loop_assemble(m, c.d, c.q, c.v, PROJ_TOL, PROJ_ITER, NULL, err, sizeof err) != CTC_OK)
         goto done;
 
-    /* both inverse passes give the same forces, finite and equal to the loop oracle's (up to
-       n = ORACLE_MAX_N); the forward pass turns them into the commanded accelerations */
-    c.d->inv_full = 1;
-    ctc_eval(m, c.d, c.q, c.v, c.u, f_full, c.a);
-    c.d->inv_full = 0;
-    ctc_eval(m, c.d, c.q, c.v, c.u, c.f, c.a);
-    if (!all_finite(c.f, m->nvx) || !all_finite(f_full, m->nvx) || !all_finite(c.a, m->nvx)) {
+    /* the paper's iGDCA gives the same forces with and without its early stop; all are finite
+       and against the loop oracle's (up to n = ORACLE_MAX_N); the forward pass turns the
+       default's into the commanded accelerations */
+    ctc_eval(m, c.d, c.q, c.v, c.u, f_full, c.a, 2);
+    ctc_eval(m, c.d, c.q, c.v, c.u, f_paper, c.a, 1);
+    ctc_eval(m, c.d, c.q, c.v, c.u, c.f, c.a, 0);
+    if (!all_finite(c.f, m->nvx) || !all_finite(f_full, m->nvx) || !all_finite(c.a, m->nvx) ||
+        !all_finite(f_paper, m->nvx)) {
         ctc_gdca_inverse(m, c.d, c.u, c.f); /* for its singular_joint and loop_cond */
         snprintf(err, sizeof err,
                  "non-finite driving forces or accelerations (inverse pass: singular_joint %d, "
@@ -373,12 +392,12 @@ static int bench_loop_case(const char *label, const ctc_chain_spec *spec, const 
                  c.d->singular_joint, c.d->loop_cond);
         goto done;
     }
-    if (memcmp(c.f, f_full, nvx * sizeof(double)) != 0) {
+    if (memcmp(f_paper, f_full, nvx * sizeof(double)) != 0) {
         snprintf(err, sizeof err, "the early-stopped inverse pass changed the driving forces");
         goto done;
     }
     row->round_trip = trip_error(m, c.u, c.a);
-    row->f_oracle = -1;
+    row->f_oracle = row->f_paper = -1;
     if (n <= ORACLE_MAX_N) {
         loop_oracle *o = loop_oracle_new(spec);
         int st = o ? loop_oracle_inverse(o, c.q, c.v, c.u, f_full, NULL) : -1;
@@ -387,11 +406,14 @@ static int bench_loop_case(const char *label, const ctc_chain_spec *spec, const 
             snprintf(err, sizeof err, "the loop oracle failed");
             goto done;
         }
-        for (size_t i = 0; i < nvx; i++)
+        for (size_t i = 0; i < nvx; i++) {
             row->f_oracle = fmax(row->f_oracle, fabs(c.f[i] - f_full[i]));
+            row->f_paper = fmax(row->f_paper, fabs(f_paper[i] - f_full[i]));
+        }
         row->f_oracle /= max_abs(f_full, m->nvx);
+        row->f_paper /= max_abs(f_full, m->nvx);
     }
-    ctc_eval(open, c.d_open, c.q, c.v, c.u, c.fo, c.ao);
+    ctc_eval(open, c.d_open, c.q, c.v, c.u, c.fo, c.ao, 0);
     if (!all_finite(c.fo, m->nv) || !all_finite(c.ao, m->nv)) {
         snprintf(err, sizeof err, "open chain: non-finite driving forces or accelerations");
         goto done;
@@ -422,7 +444,7 @@ static int bench_loop_case(const char *label, const ctc_chain_spec *spec, const 
 done:
     if (err[0]) fprintf(stderr, "bench_loop: %s n = %d: %s\n", label, n, err);
     free(c.q), free(c.v), free(c.u), free(c.f), free(c.a), free(c.fo), free(c.ao);
-    free(c.qd), free(c.vd), free(c.qp), free(c.vp), free(f_full);
+    free(c.qd), free(c.vd), free(c.qp), free(c.vp), free(f_full), free(f_paper);
     ctc_data_free(c.d), ctc_data_free(c.d_open), ctc_data_free(c.d_proj);
     ctc_model_free(m), ctc_model_free(open);
     return err[0] ? -1 : 0;
@@ -435,41 +457,42 @@ static double saving(double early, double full)
 
 static void print_rows(const bench_row *rows, int nrows)
 {
-    printf("| chain    |    n | nodes visited | ctc early (us) | ctc full (us) | saving | "
-           "iGDCA early (us) | iGDCA full (us) | saving | open ctc (us) | closed / open | "
-           "ctc/n ns | open iGDCA composite (us) | open iGDCA mobility (us) |\n");
-    printf("| -------- | ---: | ------------: | ---------: | ---------: | ----: | -------: | "
+    printf("| chain    |    n | ctc (us) | ctc, paper's iGDCA (us) | iGDCA (us) | paper's iGDCA "
+           "(us) | nodes visited | paper's, no early stop (us) | saving | open ctc (us) | "
+           "closed / open | ctc/n ns | open iGDCA composite (us) | open iGDCA mobility (us) |\n");
+    printf("| -------- | ---: | ---------: | ---------: | -------: | -------: | ------------: | "
            "-------: | ----: | ---------: | ----: | -----: | -------: | -------: |\n");
     for (int i = 0; i < nrows; i++) {
         const bench_row *r = &rows[i];
         const double *t = r->med;
         char nodes[32];
         snprintf(nodes, sizeof nodes, "%d / %d", r->visited, r->ntree);
-        printf("| %-8s | %4d | %13s | %10.2f | %10.2f | %4.1f%% | %8.2f | %8.2f | %4.1f%% | %10.2f "
+        printf("| %-8s | %4d | %10.2f | %10.2f | %8.2f | %8.2f | %13s | %8.2f | %4.1f%% | %10.2f "
                "| %5.2f | %6.1f | %8.2f | %8.2f |\n",
-               r->label, r->n, nodes, 1e6 * t[T_CTC], 1e6 * t[T_CTC_FULL],
-               saving(t[T_CTC], t[T_CTC_FULL]), 1e6 * t[T_INV], 1e6 * t[T_INV_FULL],
-               saving(t[T_INV], t[T_INV_FULL]), 1e6 * t[T_OPEN_CTC], t[T_CTC] / t[T_OPEN_CTC],
+               r->label, r->n, 1e6 * t[T_CTC], 1e6 * t[T_CTC_PAPER], 1e6 * t[T_INV],
+               1e6 * t[T_INV_PAPER], nodes, 1e6 * t[T_INV_FULL],
+               saving(t[T_INV_PAPER], t[T_INV_FULL]), 1e6 * t[T_OPEN_CTC], t[T_CTC] / t[T_OPEN_CTC],
                1e9 * t[T_CTC] / r->n, 1e6 * t[T_OPEN_INV], 1e6 * t[T_OPEN_MOB]);
     }
     printf("\nProjection (ctc_loop_assemble, tol %g, from a drift of %g on every dependent chain "
-           "coordinate and rate) against one DOPRI5 step (6 ctc evaluations, early stop), and "
+           "coordinate and rate) against one DOPRI5 step (6 ctc evaluations), and "
            "the accuracy of what was timed:\n\n",
            PROJ_TOL, DRIFT);
     printf("| chain    |    n | mobility | cond (dependent) | projection (us) | Newton its | "
-           "residual after (m) | 6 ctc (us) | projection / 6 ctc | f vs oracle | round trip | "
-           "open round trip |\n");
+           "residual after (m) | 6 ctc (us) | projection / 6 ctc | f vs oracle | paper's f vs "
+           "oracle | round trip | open round trip |\n");
     printf("| -------- | ---: | ---: | ---: | ---------: | ---: | ---: | ---------: | ----: | ---: "
-           "| ---: | ---: |\n");
+           "| ---: | ---: | ---: |\n");
     for (int i = 0; i < nrows; i++) {
         const bench_row *r = &rows[i];
         const double *t = r->med;
-        char oracle[16] = "-";
+        char oracle[16] = "-", paper[16] = "-";
         if (r->f_oracle >= 0) snprintf(oracle, sizeof oracle, "%7.1e", r->f_oracle);
-        printf("| %-8s | %4d | %4d | %6.1e | %10.2f | %d | %7.1e | %10.2f | %5.1f%% | %7s | "
+        if (r->f_paper >= 0) snprintf(paper, sizeof paper, "%7.1e", r->f_paper);
+        printf("| %-8s | %4d | %4d | %6.1e | %10.2f | %d | %7.1e | %10.2f | %5.1f%% | %7s | %7s | "
                "%7.1e | %7.1e |\n",
                r->label, r->n, r->mobility, r->cond, 1e6 * t[T_PROJ], r->iterations, r->res_after,
-               6e6 * t[T_CTC], 100.0 * t[T_PROJ] / (6 * t[T_CTC]), oracle, r->round_trip,
+               6e6 * t[T_CTC], 100.0 * t[T_PROJ] / (6 * t[T_CTC]), oracle, paper, r->round_trip,
                r->open_trip);
     }
 }
@@ -483,8 +506,9 @@ int main(int argc, char **argv)
         return 2;
     }
     printf("One CTC evaluation of a closed chain (one loop): ctc = kinematics + handles + iGDCA + "
-           "GDCA, with the early stop of the inverse disassembly (early) and without (full); the "
-           "same chain open for reference.\nMedians of %d interleaved batches; times in "
+           "GDCA, with the library's inverse (the open chain's composite pass and the closure) and "
+           "with the paper's iGDCA, with and without its early stop; the same chain open for "
+           "reference.\nMedians of %d interleaved batches; times in "
            "microseconds, per body in nanoseconds.\n\n",
            batches);
     static const int arch_n[] = {5, 16, 64, 256, 1024, 4096};

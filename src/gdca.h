@@ -18,15 +18,17 @@
  * the chain's coordinates, then the closing joint's). The forward pass constrains both terminal
  * handles - joint 0 to the ground and the closing joint n from the tip to the ground - and
  * solves the two sets of boundary equations together (the paper's reference [48]); dependent
- * joints carry no driving force (f of their coordinates is ignored). The inverse pass assembles
- * across a dependent joint with the forward, projected rule (its acceleration is unknown) and
- * across an independent joint with the commanded acceleration (Eq. 19), solves the boundary
- * case of the terminal joints (Eq. 55-65: both independent, one of each, both dependent) and
- * stops the disassembly where every independent joint's load is known (Fig. 4); it fills f for
- * the independent coordinates and 0 for the dependent ones. Both record a condition estimate
- * of the boundary solve in d->loop_cond; when that solve is singular (the independent joints
- * cannot drive the loop, or its constraints are redundant) d->singular_joint = n and the
- * results are NaN.
+ * joints carry no driving force (f of their coordinates is ignored). The paper's inverse pass
+ * (ctc_gdca_inverse_mobility) assembles across a dependent joint with the forward, projected rule
+ * (its acceleration is unknown) and across an independent joint with the commanded acceleration
+ * (Eq. 19), solves the boundary case of the terminal joints (Eq. 55-65: both independent, one of
+ * each, both dependent) and stops the disassembly where every independent joint's load is known
+ * (Fig. 4). ctc_gdca_inverse gets the same forces from the open chain's composite pass and one
+ * dim x dim solve at the closing joint (gdca_inverse_loop.h), which keeps full accuracy on long
+ * loops. Both fill f for the independent coordinates and 0 for the dependent ones, and record a
+ * condition estimate of their solve in d->loop_cond; when it is singular (the independent joints
+ * cannot drive the loop, or its constraints are redundant) d->singular_joint = n and the results
+ * are NaN.
  */
 #ifndef CTC_GDCA_H
 #define CTC_GDCA_H
@@ -49,9 +51,10 @@ void ctc_gdca_inverse(const ctc_model *m, ctc_data *d, const double *u, double *
 
 /* The same driving forces by the paper's iGDCA in its literal mobility form (Eq. 26-39), which
  * shares the body records with the forward pass (Eq. 42-43) but loses accuracy on long or
- * stiffly proportioned chains (about eps cond(M)); for comparison and benchmarks. Loop models
- * always use this form (ctc_gdca_inverse calls it): an assembly with a dependent joint inside is
- * not a rigid composite. */
+ * stiffly proportioned chains (about eps cond(M)); for comparison and benchmarks. For loop models
+ * it is the paper's closed-chain iGDCA with the mixed assembly rule and the early stop
+ * (d->inv_full = 1 turns the early stop off); ctc_gdca_inverse uses it only for loops whose
+ * dependent coordinates do not number dim (passive ones). */
 void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u, double *f);
 
 #endif

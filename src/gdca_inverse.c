@@ -27,6 +27,7 @@
  * kappa = (0; w x (w x rho)), b = (-w x I_c w; m g), c = (0; w x (w x r12)).
  */
 #include "gdca.h"
+#include "gdca_inverse_loop.h"
 
 #include "dense.h"
 #include "spatial.h"
@@ -246,15 +247,28 @@ static CTC_SPECIALISE void inverse_spatial(const ctc_model *m, ctc_data *d, cons
     inverse_pass(m, d, u, f, 6);
 }
 
-void ctc_gdca_inverse(const ctc_model *m, ctc_data *d, const double *u, double *f)
+void gdca_inverse_composite(const ctc_model *m, ctc_data *d, const double *u, double *f)
 {
-    if (m->has_loop) { /* a dependent joint inside makes an assembly non-rigid */
-        ctc_gdca_inverse_mobility(m, d, u, f);
-        return;
-    }
     if (m->form == CTC_FORM_PLANAR) {
         inverse_planar(m, d, u, f);
     } else {
         inverse_spatial(m, d, u, f);
     }
+}
+
+void gdca_inverse_tip_accel(const ctc_model *m, const ctc_data *d, double *a)
+{
+    const int dim = m->dim, tip = m->nbodies - 1;
+    const double *rec = record(d, tip), *a1 = d->tload + (size_t)tip * 2 * dim;
+    transfer_motion(dim, rec + CR(dim), a1, a);
+    for (int r = 0; r < dim; r++) a[r] += rec[CC(dim) + r];
+}
+
+void ctc_gdca_inverse(const ctc_model *m, ctc_data *d, const double *u, double *f)
+{
+    if (m->has_loop) { /* gdca_inverse_loop.h: the open chain's composite pass, then the loop */
+        gdca_inverse_loop(m, d, u, f);
+        return;
+    }
+    gdca_inverse_composite(m, d, u, f);
 }

@@ -231,8 +231,7 @@ void ctc_loop_residual_norms(const ctc_model *m, const ctc_data *d, double *pos,
     }
 }
 
-/* the unit twist of chain coordinate (joint k, column c) at the tip's handle (dim) */
-static void coord_twist(const ctc_model *m, const ctc_data *d, int k, int c, double *tw)
+void ctc_loop_coord_twist(const ctc_model *m, const ctc_data *d, int k, int c, double *tw)
 {
     const int dim = m->dim;
     const double *col = d->jnt_P + 3 * dim * k + c * dim, *x = d->xpos + 3 * k, *pt = d->loop_pt;
@@ -255,7 +254,7 @@ static void loop_column(const ctc_model *m, const ctc_data *d, int k, int c, dou
     const int dim = m->dim, nc = loop_nc(m);
     const double *D = d->jnt_D + dim * dim * m->nbodies;
     double tw[CTC_DENSE_MAX];
-    coord_twist(m, d, k, c, tw);
+    ctc_loop_coord_twist(m, d, k, c, tw);
     for (int a = 0; a < nc; a++) {
         double s = 0;
         for (int i = 0; i < dim; i++) s += D[a * dim + i] * tw[i];
@@ -404,7 +403,7 @@ static ctc_status twist_svd(const ctc_model *m, const ctc_data *d, int dep_only,
         for (int c = 0; c < m->jnt_nv[k]; c++, col++) {
             double tw[CTC_DENSE_MAX];
             if (k < n) {
-                coord_twist(m, d, k, c, tw);
+                ctc_loop_coord_twist(m, d, k, c, tw);
             } else {
                 memcpy(tw, d->jnt_P + 3 * dim * n + c * dim, (size_t)dim * sizeof *tw);
             }

@@ -45,6 +45,12 @@
  * residuals d->loop_phi, d->loop_dphi. Nothing for open chains. */
 void ctc_loop_kinematics(const ctc_model *m, ctc_data *d);
 
+/* The unit twist tw (dim) of chain coordinate c of joint k (k < n) at the closing joint's point
+ * on the tip, d->loop_pt: the tip's velocity there per unit rate of that coordinate, and (its
+ * transpose) the coordinate's generalised force per unit load at that point. Needs the state's
+ * ctc_kinematics. */
+void ctc_loop_coord_twist(const ctc_model *m, const ctc_data *d, int k, int c, double *tw);
+
 /* Max-norms of the position residual (m or rad) and the velocity residual (m/s or rad/s) of the
  * state last given to ctc_kinematics; 0 and 0 for an open chain. */
 void ctc_loop_residual_norms(const ctc_model *m, const ctc_data *d, double *pos, double *vel);

@@ -103,13 +103,12 @@ typedef struct ctc_sim_spec {
                              CTC_SIM_DEFAULT_COND_MAX */
 } ctc_sim_spec;
 
-/* The default limit on the condition estimate of a closed chain's boundary solve (gdca_loop.h,
- * scaled). Regular loops stay far below it: 1.4 for the paper's five-bar, 2.5e3 for an arch of
- * 4096 rods (bench_loop). Near a singular configuration it grows like the dependent joints'
- * speeds, about 1 / distance from it, so the run must stop on it before those speeds reach the
- * divergence bound of 1e6 rad/s (test_hard drives the five-bar into a straightened dyad: the
- * estimate passes 1e6 at the same time step as the speeds pass 1e6 rad/s). At 1e5 the forces
- * still carry about 11 correct digits. */
+/* The default limit on the condition estimates of a closed chain's solves: the inverse pass's
+ * closure matrix (gdca_inverse_loop.h) and the forward pass's boundary system (gdca_loop.h), both
+ * equilibrated. Regular loops stay well below it: 5 for the paper's five-bar, 1.1e4 for an arch
+ * of 4096 rods (bench_loop). Near a singular configuration it grows like 1 / distance from it;
+ * a run whose dependent joints pass the speed bound there, before the estimate reaches the
+ * limit, is reported as singular too (sim.c). At 1e5 the forces still carry about 11 digits. */
 #define CTC_SIM_DEFAULT_COND_MAX 1e5
 
 typedef enum ctc_run_status {

@@ -394,15 +394,16 @@ Test(hard, five_bar_driven_into_a_straightened_dyad_stops_as_singular)
     cr_assert_eq(ctc_sim_run(&j->spec, NULL, &res, err, sizeof err), CTC_OK, "%s", err);
 
     /* it stops before the end, as singular, and the metrics carry the condition estimate that
-       stopped it (beyond the loop's limit, CTC_SIM_DEFAULT_COND_MAX by default), not only those of
-       the samples before: a user reads why the run stopped from its metrics */
-    double limit = j->spec.loop_cond_max;
+       stopped it, not only those of the samples before: a user reads why the run stopped from
+       its metrics. Near the straightened dyad the dependent joints' speeds grow like
+       1 / distance and pass the speed bound while the estimate is about 6e4 (from 5 at the
+       start: sim.c, singular_divergence) */
     cr_expect_eq(res->status, CTC_RUN_SINGULAR, "status %s: %s", ctc_run_status_name(res->status),
                  res->message);
     cr_expect(strstr(res->message, "condition estimate") != NULL, "message: %s", res->message);
     cr_expect_lt(res->metrics.t_end, 2.0);
-    cr_expect(isfinite(res->metrics.loop_cond_max) && res->metrics.loop_cond_max > limit,
-              "metrics.loop_cond_max %g, the limit %g", res->metrics.loop_cond_max, limit);
+    cr_expect(isfinite(res->metrics.loop_cond_max) && res->metrics.loop_cond_max > 1e4,
+              "metrics.loop_cond_max %g", res->metrics.loop_cond_max);
 
     /* the recorded output: finite, torques bounded, and the run came near the singular
        configuration (joint 4 within 0.5 rad of straight at some sample) */

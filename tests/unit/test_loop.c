@@ -366,14 +366,19 @@ Test(loop_oracle, forward_dynamics_conserve_energy_at_fourth_order)
 
 /* ---- iGDCA against the oracle ---- */
 
-/* iGDCA f (nvx) at (q, v) for u (nvx); inv_full as given */
-static void library_inverse(fixture *f, const double *q, const double *v, const double *u, int full,
-                            double *out)
+/* f (nvx) at (q, v) for u (nvx) by the library's inverse for loops: which = 0 the default
+ * (ctc_gdca_inverse: the open chain's composite pass and the closure, gdca_inverse_loop.h), 1 the
+ * paper's iGDCA with the early-stopping disassembly, 2 the same disassembling every node */
+static void library_inverse(fixture *f, const double *q, const double *v, const double *u,
+                            int which, double *out)
 {
     ctc_kinematics(f->m, f->d, q, v);
     ctc_handles(f->m, f->d);
-    f->d->inv_full = full;
-    ctc_gdca_inverse(f->m, f->d, u, out);
+    f->d->inv_full = which == 2;
+    if (which == 0)
+        ctc_gdca_inverse(f->m, f->d, u, out);
+    else
+        ctc_gdca_inverse_mobility(f->m, f->d, u, out);
     f->d->inv_full = 0;
     cr_assert_eq(f->d->singular_joint, -1, "%s: iGDCA reports a singular joint %d", f->what,
                  f->d->singular_joint);
@@ -391,8 +396,8 @@ static void library_forward(fixture *f, const double *q, const double *v, const 
 
 /* worst errors of one boundary case over random consistent states */
 typedef struct inverse_errors {
-    double torque;    /* |f - f_oracle| / max |f_oracle| */
-    double full;      /* |f(inv_full) - f| / max |f| */
+    double torque;    /* |f - f_oracle| / max |f_oracle|, the worse of both inverse forms */
+    double full;      /* the paper's form: |f(inv_full) - f| / max |f| */
     double round;     /* |forward(f)_i - u_i| / max(1, |u|) on independent coordinates */
     double dependent; /* |forward(f)_d - qacc_oracle_d| / max |qacc_oracle| */
 } inverse_errors;
@@ -409,14 +414,18 @@ static inverse_errors check_inverse(fixture *f, uint64_t seed, int states, doubl
             u[i] = coord_independent(f, i) ? test_uniform(&rng, -5, 5) : 0;
         cr_assert_eq(loop_oracle_inverse(f->o, q, v, u, fo, ao), 0, "%s: oracle: singular",
                      f->what);
-        library_inverse(f, q, v, u, 0, fl);
-        e.torque = fmax(e.torque, test_rel_err(fl, fo, nvx));
-        for (int i = 0; i < nvx; i++)
-            if (!coord_independent(f, i))
-                cr_expect_eq(fl[i], 0.0, "%s: dependent coordinate %d has a driving force %g",
-                             f->what, i, fl[i]);
-        library_inverse(f, q, v, u, 1, ff);
-        e.full = fmax(e.full, test_rel_err(ff, fl, nvx));
+        for (int which = 1; which >= 0; which--) { /* the paper's form, then the default */
+            library_inverse(f, q, v, u, which, fl);
+            e.torque = fmax(e.torque, test_rel_err(fl, fo, nvx));
+            for (int i = 0; i < nvx; i++)
+                if (!coord_independent(f, i))
+                    cr_expect_eq(fl[i], 0.0, "%s: dependent coordinate %d has a driving force %g",
+                                 f->what, i, fl[i]);
+            if (which == 1) {
+                library_inverse(f, q, v, u, 2, ff);
+                e.full = fmax(e.full, test_rel_err(ff, fl, nvx));
+            }
+        }
         library_forward(f, q, v, fl, a);
         double uscale = fmax(1, max_abs(u, nvx)), ascale = fmax(1, max_abs(ao, nvx));
         for (int i = 0; i < nvx; i++) {
