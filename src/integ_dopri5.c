@@ -21,6 +21,23 @@
  * estimate or new state is not finite is retried with a fifth of its size, at most
  * CTC_DOPRI5_MAX_NONFINITE times in a row.
  *
+ * Stiffness (E. Hairer and G. Wanner, Solving Ordinary Differential Equations II, 2nd ed.,
+ * section IV.2, "Automatic stiffness detection", as in their DOPRI5 code; the idea is Shampine's,
+ * ACM TOMS 3, 1977). Stages 6 and 7 are both evaluated at t + h, at y6 (stage 6's argument) and
+ * at y_new, so rho = ||k7 - k6|| / ||y_new - y6|| estimates the largest |lambda| of the Jacobian
+ * (a power iteration for free). DOPRI5's stability region meets the negative real axis at
+ * about -3.31, so h rho > 3.25 on an accepted step says that stability, not accuracy, holds the
+ * step down. Such steps are counted; six steps in a row below the bound clear the count, and
+ * the 15th counted step confirms stiffness (Hairer's numbers). Hairer's code then returns (or
+ * only warns, if asked to); we stop only when, in addition, reaching tstop at that step would
+ * take more than CTC_DOPRI5_STIFF_STEPS_LEFT further steps, so a stiff run that would end soon
+ * is finished. (Hairer's code tests every 1000th step, and every step while a count is open, to
+ * save the quotient; it costs two n-vector norms, so we test every step.) The step is then not
+ * accepted and the message names it: "stiff: step size below the stability limit, h = ... s at
+ * t = ... s ...: use \"method\": \"bdf\"". The counts survive a reset: stiffness belongs to the
+ * system. A high-gain CTC run at a tight rtol can be expensive without tripping this test:
+ * order reduction on the fast error dynamics keeps h rho well under 3.25 (bench/README.md).
+ *
  * Dense output on [t0, t0 + h] with theta = (s - t0) / h, theta1 = 1 - theta:
  *     y(s) = y0 + theta (dy + theta1 (h k1 - dy + theta (dy - h k7 - (h k1 - dy)
  *                                                        + theta1 h sum d_i k_i)))
@@ -34,6 +51,13 @@
 #include "integrator_internal.h"
 
 #define CTC_DOPRI5_MAX_NONFINITE 10
+
+/* stiffness test: bound on h rho, counted steps to confirm, uncounted steps in a row to clear,
+ * and the steps still to go to tstop (at the current h) beyond which a confirmed stiff run stops */
+#define CTC_DOPRI5_STIFF_H_RHO 3.25
+#define CTC_DOPRI5_STIFF_CONFIRM 15
+#define CTC_DOPRI5_STIFF_CLEAR 6
+#define CTC_DOPRI5_STIFF_STEPS_LEFT 1e5
 
 /* nodes */
 static const double C2 = 1.0 / 5, C3 = 3.0 / 10, C4 = 4.0 / 5, C5 = 8.0 / 9;
@@ -173,6 +197,14 @@ int ctc_dopri5_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
         }
         if ((rc = ctc_integ_call_rhs(it, t_stage = t_new, y_new, k7)) != 0) break;
 
+        /* the stiffness quotient's two squared norms, while ys still holds stage 6's argument */
+        double dk_sq = 0, dy_sq = 0;
+        for (int i = 0; i < n; i++) {
+            double dk = k7[i] - k6[i], dy = y_new[i] - ys[i];
+            dk_sq += dk * dk;
+            dy_sq += dy * dy;
+        }
+
         /* error estimate: the scaled errors into ys (free now) in a loop that vectorises, then
          * their rms for the test; the max-norm of the raw errors for the statistics */
         double err_max = 0;
@@ -204,6 +236,27 @@ int ctc_dopri5_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
         }
 
         if (err_norm <= 1.0) {
+            /* stiffness: count the steps held down by stability; stop a long stiff run */
+            const double h_rho = dy_sq > 0 ? hs * sqrt(dk_sq / dy_sq) : 0.0;
+            if (h_rho > CTC_DOPRI5_STIFF_H_RHO) {
+                it->stiff_miss = 0;
+                if (it->stiff_hits < CTC_DOPRI5_STIFF_CONFIRM) it->stiff_hits++;
+                if (it->stiff_hits == CTC_DOPRI5_STIFF_CONFIRM &&
+                    tstop - t_new > CTC_DOPRI5_STIFF_STEPS_LEFT * hs) {
+                    it->h = hs;
+                    ctc_fail(CTC_EINVAL, err, errlen,
+                             "stiff: step size below the stability limit, h = %.3g s at t = "
+                             "%.10g s (h |lambda| > %g on %d steps), %.2g steps short of t = "
+                             "%.10g s: use \"method\": \"bdf\"",
+                             hs, t, CTC_DOPRI5_STIFF_H_RHO, it->stiff_hits, (tstop - t) / hs,
+                             tstop);
+                    return -1;
+                }
+            } else if (it->stiff_miss < CTC_DOPRI5_STIFF_CLEAR &&
+                       ++it->stiff_miss == CTC_DOPRI5_STIFF_CLEAR) {
+                it->stiff_hits = 0;
+            }
+
             /* accepted: PI control of the next step size */
             double q = pow(err_norm, 0.2 - 0.75 * BETA) / pow(it->err_old, BETA) / SAFETY;
             q = fmin(Q_MAX, fmax(Q_MIN, q));

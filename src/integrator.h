@@ -11,6 +11,8 @@
  *           FSAL (6 evaluations an accepted step), PI step-size control, and the method's
  *           4th-order continuous extension for dense output - MATLAB's ode45, which the paper
  *           used. Error test: ||err_i / (atol + rtol max(|y_i|, |y_new_i|))||_rms <= 1.
+ *           Stops a run that turns out stiff (Hairer's test: the step held at the stability
+ *           limit on 15 steps) when reaching tstop would take more than 1e5 further steps.
  *   bdf     SUNDIALS CVODE, variable-order variable-step BDF (orders 1-5) with Newton iteration
  *           and a dense direct linear solver on a difference-quotient Jacobian; for stiff
  *           systems (very high gains). Dense output by CVodeGetDky.
@@ -84,8 +86,10 @@ int ctc_integrator_reset(ctc_integrator *it, double t0, const double *y0);
 /* Takes one step from the current time t towards tstop > t, never past it (a step that would
  * pass it is shortened to end exactly on it). Returns 0 after an accepted step; the rhs's
  * non-zero code if it failed; -1 with a message in err when the method fails (step size below
- * the round-off limit, too many steps, bdf convergence failure) - e.g. "step size 1.2e-15 s at
- * t = 0.73 s fell below the round-off limit". */
+ * the round-off limit, too many steps, bdf convergence failure, dopri5 on a stiff problem) - e.g.
+ * "step size 1.2e-15 s at t = 0.73 s fell below the round-off limit", or "stiff: step size below
+ * the stability limit, h = 2.39e-05 s at t = 0.0594776982 s (h |lambda| > 3.25 on 15 steps),
+ * 2.1e+05 steps short of t = 5 s: use \"method\": \"bdf\"" (integ_dopri5.c). */
 int ctc_integrator_step(ctc_integrator *it, double tstop, char *err, size_t errlen);
 
 /* Current time (end of the last accepted step) and state (n; valid until the next call). */

@@ -47,6 +47,8 @@ struct ctc_integrator {
     double *block;                          /* the one allocation all the arrays above live in */
 
     double err_old; /* dopri5: the previous accepted step's error norm (PI control), >= 1e-4 */
+    int stiff_hits; /* dopri5: stiffness test (integ_dopri5.c): stability-bound steps counted */
+    int stiff_miss; /* and the run of steps since the last one; neither is cleared by a reset */
 
     ctc_bdf *bdf; /* bdf: CVODE's memory and vectors; NULL otherwise */
 
