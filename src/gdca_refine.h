@@ -28,12 +28,14 @@
  * random planar and spatial chains and on Featherstone's coil (bench_accuracy), while a step
  * adds 40-65% to a CTC evaluation. With extreme proportions a chain of 32 bodies loses all but
  * three digits unrefined (test_hard), one step recovers most of them and a second the rest.
- * Steps stop early once a correction is below CTC_REFINE_CONVERGED of the accelerations, or
- * shrinks by less than a factor CTC_REFINE_STALL (the residual has reached its rounding level). */
+ * Steps stop once a correction is below CTC_REFINE_CONVERGED of the accelerations (the next
+ * one would be smaller by the bias-free pass's own relative error, far below rounding of the
+ * result), or shrinks by less than a factor CTC_REFINE_STALL (the residual has reached its
+ * rounding level): one step on most chains, up to three on the coil of 4096 bodies. */
 #define CTC_REFINE_MIN_BODIES 64
 #define CTC_REFINE_MASS_RATIO 100.0
 #define CTC_REFINE_MAX_STEPS 3
-#define CTC_REFINE_CONVERGED 1e-13
+#define CTC_REFINE_CONVERGED 1e-8
 #define CTC_REFINE_STALL 10.0
 
 /* The most refinement steps ctc_gdca_forward makes on model m with settings d: d->fwd_refine
