@@ -31,7 +31,7 @@ DEB_PACKAGES := gcc make libc6-dev libcriterion-dev libcjson-dev liblapacke-dev 
 	libmicrohttpd-dev libsqlite3-dev chromium
 # the web page's uPlot and the tests also need node (>= 18) and npm: Debian's nodejs and npm are
 # installed when the machine has none
-BENCH_PACKAGES := wrk curl
+BENCH_PACKAGES := wrk curl libmujoco-dev
 
 LIB_SRC := $(wildcard src/*.c)
 LIB_OBJ := $(LIB_SRC:src/%.c=$(BUILD)/obj/%.o)
@@ -95,18 +95,21 @@ $(BUILD)/tests/%: tests/unit/%.c $(SUPPORT_OBJ) $(APP_LIB) $(LIB)
 	$(CC) $(CFLAGS) -Itests/support -Iserver -MMD -MP $< $(SUPPORT_OBJ) $(APP_LIB) $(LIB) -o $@ \
 		$(LDFLAGS) -lcriterion $(SERVER_LDLIBS) $(LDLIBS)
 
-# benchmarks also link SUNDIALS ARKODE, to measure it against the in-house explicit steppers
+# benchmarks also link SUNDIALS ARKODE, to measure it against the in-house explicit steppers;
+# bench_mujoco alone links MuJoCo (libmujoco-dev), to measure ctcsim against it
+BENCH_LDLIBS := -lsundials_arkode
+$(BUILD)/bench/bench_mujoco: BENCH_LDLIBS += -lmujoco
 $(BUILD)/bench/%: bench/%.c $(SUPPORT_OBJ) $(APP_LIB) $(LIB)
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) -Itests/support -Iserver -MMD -MP $< $(SUPPORT_OBJ) $(APP_LIB) $(LIB) -o $@ \
-		$(LDFLAGS) -lsundials_arkode $(SERVER_LDLIBS) $(LDLIBS)
+		$(LDFLAGS) $(BENCH_LDLIBS) $(SERVER_LDLIBS) $(LDLIBS)
 
 # installs what is missing: apt-get as root (updating the package lists first when there are
 # none, or when a package is not found), otherwise prints the command to run and fails
 deps:
 	@$(MAKE) --no-print-directory install-packages PACKAGES="$(DEB_PACKAGES)" CHECK_NODE=1
 
-# the benchmarks also need wrk and curl (bench/bench_server.sh)
+# the benchmarks also need wrk and curl (bench/bench_server.sh) and MuJoCo (bench_mujoco)
 bench-deps: deps
 	@$(MAKE) --no-print-directory install-packages PACKAGES="$(BENCH_PACKAGES)"
 

@@ -1,0 +1,1088 @@
+/*
+ * bench_mujoco.c - ctcsim against MuJoCo 2.2.2 (Debian's libmujoco): one CTC right-hand side on
+ * serial chains of 2 ... 1024 bodies, whole CTC simulations at equal error, and a stiff 64-link
+ * chain on which MuJoCo's RK4 at 1 ms diverges.
+ *
+ * The chains are built once as ctcsim specs (tests/support/chains.h) and written out as MJCF with
+ * the same masses, centres of mass, inertias, joint axes and locations and gravity: one body per
+ * ctcsim body, a hinge at its frame origin, an explicit <inertial>, no geoms, contacts disabled,
+ * no damping or armature. Debian's tinyxml2 (9.0) refuses XML nested more than 100 elements
+ * deep, so the body tree is split into files of MJCF_SEGMENT bodies, each <include>d inside the
+ * innermost body of the one before, all in a MuJoCo virtual file system. A slender rod's inertia
+ * is singular, which MuJoCo's compiler rejects; such a body gets a tiny moment along its own
+ * axis (the direction of its centre of mass), which a planar chain never turns about, so the
+ * dynamics are unchanged (checked against ctcsim to 1e-8, below).
+ *
+ * 1. One CTC right-hand side, f = M(q) u + c(q, v), then qdd = M(q)^-1 (f - c(q, v)):
+ *      ctcsim  kinematics + handles + iGDCA (composite form) + GDCA forward, as bench_dynamics's
+ *              "ctc" column;
+ *      MuJoCo  as a CTC loop would call it: mj_fwdPosition and mj_fwdVelocity once, shared by
+ *              both halves (kinematics, composite inertias, the factorisation of M and the bias
+ *              forces), then mj_inverseSkip(mjSTAGE_VEL) for qfrc_inverse (2.2.2: inverse
+ *              constraint forces, none here, and RNE with accelerations), then the forward
+ *              acceleration stages mj_fwdActuation, mj_fwdAcceleration (solve with the LDL'
+ *              factor) and mj_fwdConstraint (no constraints: qacc = qacc_smooth).
+ *    MuJoCo's stages are also timed alone, and within the position stage mj_crb and mj_factorM.
+ *    Before timing, each case checks that ctcsim's iGDCA forces equal MuJoCo's qfrc_inverse for
+ *    random u, and ctcsim's GDCA accelerations MuJoCo's qacc for random torques, both to 1e-8
+ *    relative to the largest entry; a case that fails is reported and not timed, and the run ends
+ *    with status 1. Timing as in bench_loop: batches of every timing interleaved, each batch
+ *    starting one timing further on, each timing run untimed for SETTLE_S before it is timed;
+ *    medians over the batches. MuJoCo is skipped beyond MJ_MAX_N (its factorisation is O(n^3)
+ *    on a serial chain) and calls slower than SLOW_S get fewer batches (SLOW_BATCHES).
+ *
+ * 2. Whole 5 s CTC simulations, sampled every 0.01 s: the paper's triple pendulum PID run
+ *    (bench_sim) and a 64-link planar rod chain under PD. ctcsim: ctc_sim_run with DOPRI5 at
+ *    several tolerances. MuJoCo: mj_step with its RK4 at several dt, the same controller in
+ *    mjcb_control, its torques from MuJoCo's own inverse dynamics (mj_inverseSkip after the
+ *    velocity stage: CTC with MuJoCo's model). Two ways:
+ *      stagewise  the controller is evaluated at every RK4 stage (mjcb_control runs in each of
+ *                 the four mj_forwardSkip calls of a step), so MuJoCo integrates the same ODE as
+ *                 ctcsim, continuous controller included; the PID integral state is the
+ *                 activation of an integrator actuator of zero gain per joint (ctrl = e, so
+ *                 act = int e, integrated by RK4 with the rest of the state);
+ *      hold       the controller is evaluated once per step, at its start, and its torque and e
+ *                 are held over the step (a zero-order hold, as a loop computing tau before each
+ *                 mj_step would do, without evaluating the position stage twice).
+ *    Error = max over the samples and joints of |q - q_ref|, q_ref from ctcsim's DOPRI5 at
+ *    rtol 1e-12, which is first compared with MuJoCo stagewise at dt = 1e-4. The hold runs
+ *    converge to q_ref only as dt -> 0 (first order): their error is mostly the hold's. Times
+ *    are medians over interleaved rounds; ctcsim's is ctc_sim_run's own (metrics.cpu_s, model
+ *    build to last sample), MuJoCo's the loop from mj_resetData to the last sample (the XML is
+ *    loaded once, outside). ctcsim RK4 at MuJoCo's dt integrates the same ODE with the same
+ *    method, so its errors equal MuJoCo stagewise's and the times compare the evaluations.
+ *    Equal error: each ctcsim run's error is placed on MuJoCo stagewise's work-precision curve,
+ *    interpolated linearly in log(time) against log(error) between neighbouring dt.
+ *
+ * 3. The 64-link chain with stiff PD gains kp = w^2, kv = 2 w (a double closed-loop pole at -w):
+ *    at dt = 1 ms, which w makes MuJoCo diverge (stagewise and hold), and on the first w where
+ *    stagewise diverges, what ctcsim's adaptive DOPRI5 (and BDF) do, against MuJoCo at smaller
+ *    dt. The reference there is DOPRI5 at rtol 1e-10: at 1e-12 it took 456,766 steps in a trial
+ *    run (1e-10: about 150,000). Single runs.
+ *
+ * Every time here is this thread's CPU time (CLOCK_THREAD_CPUTIME_ID), not wall time: on the
+ * 2 shared cores this was written on, other work ran at a load average of 3-4, and a wall clock
+ * charges its time slices to whichever timing they interrupt - often to more than half of the
+ * batches of a case, which medians cannot remove. On an idle machine the two clocks agree.
+ *
+ * Usage: bench_mujoco [max_n [batches [parts]]]; parts: any of r (right-hand side), s
+ * (simulations), d (divergence); default 4096 15 rsd.
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <mujoco/mujoco.h>
+
+#include "chains.h"
+#include "ctc.h"
+#include "sim.h"
+
+#define PI 3.14159265358979323846
+#define MJCF_SEGMENT 40 /* bodies per MJCF file: keeps every file under tinyxml2's depth 100 */
+#define MJ_MAX_N 1024   /* MuJoCo is timed up to this n */
+#define CHECK_TOL 1e-8  /* agreement of ctcsim and MuJoCo, relative to the largest entry */
+#define SETTLE_S 5e-3   /* s, untimed runs before each timing in a batch */
+#define BATCH_S 2e-3    /* s, length of one timed batch of fast calls */
+#define SLOW_S 10e-3    /* s, a call slower than this gets SLOW_BATCHES batches */
+#define SLOW_BATCHES 7  /* batches for a timing slower than SLOW_S */
+#define MAX_SPEED 1e6   /* rad/s, divergence bound (ctc_sim_spec's default) */
+#define REF_DT 1e-4     /* s, MuJoCo stagewise run checked against the reference */
+#define MAX_CONFIGS 32
+
+static volatile double sink;
+
+static double clock_s(clockid_t clock)
+{
+    struct timespec ts;
+    clock_gettime(clock, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* the clock every timing here uses: this thread's CPU time (see the top of the file) */
+static double now(void)
+{
+    return clock_s(CLOCK_THREAD_CPUTIME_ID);
+}
+
+static int cmp_double(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return (a > b) - (a < b);
+}
+
+/* median of x (n), which it sorts */
+static double median_sort(double *x, int n)
+{
+    qsort(x, (size_t)n, sizeof *x, cmp_double);
+    return n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
+}
+
+static void *xcalloc(size_t n, size_t size)
+{
+    void *p = calloc(n ? n : 1, size);
+    if (!p) {
+        fprintf(stderr, "bench_mujoco: out of memory\n");
+        exit(1);
+    }
+    return p;
+}
+
+/* max |a - b| / max(|b|, tiny) over n entries */
+static double rel_diff(const double *a, const double *b, int n)
+{
+    double d = 0, s = 0;
+    for (int i = 0; i < n; i++) {
+        d = fmax(d, fabs(a[i] - b[i]));
+        s = fmax(s, fabs(b[i]));
+    }
+    return d / fmax(s, 1e-300);
+}
+
+/* ---------------------------------------------------------------------------------------------
+ * MJCF from a ctcsim chain
+ */
+
+/* a growing text buffer */
+typedef struct strbuf {
+    char *s;
+    size_t len, cap;
+} strbuf;
+
+static void sb_printf(strbuf *b, const char *fmt, ...)
+{
+    for (;;) {
+        va_list ap;
+        va_start(ap, fmt);
+        int k = vsnprintf(b->s ? b->s + b->len : NULL, b->s ? b->cap - b->len : 0, fmt, ap);
+        va_end(ap);
+        if (k < 0) abort();
+        if (b->s && b->len + (size_t)k < b->cap) {
+            b->len += (size_t)k;
+            return;
+        }
+        b->cap = 2 * (b->cap + (size_t)k) + 256;
+        b->s = realloc(b->s, b->cap);
+        if (!b->s) abort();
+    }
+}
+
+/* Body k's inertia for MuJoCo: as given, or for a singular (slender rod) inertia plus a tiny
+ * moment along the direction of its centre of mass, which must be normal to every joint axis
+ * (a planar chain), so that no angular velocity of the chain ever has a component along it. */
+static void mj_inertia(const ctc_chain_spec *s, int k, double out[9])
+{
+    const ctc_body_spec *b = &s->bodies[k];
+    const double *in = b->inertia;
+    memcpy(out, in, sizeof b->inertia);
+    double det = in[0] * (in[4] * in[8] - in[5] * in[7]) - in[1] * (in[3] * in[8] - in[5] * in[6]) +
+                 in[2] * (in[3] * in[7] - in[4] * in[6]);
+    double tr = in[0] + in[4] + in[8];
+    if (det > 1e-9 * tr * tr * tr) return;
+    double c = sqrt(b->com[0] * b->com[0] + b->com[1] * b->com[1] + b->com[2] * b->com[2]);
+    for (int j = 0; j < s->nbodies && c > 0; j++) {
+        const double *a = s->joints[j].axis;
+        double an = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        if (fabs(a[0] * b->com[0] + a[1] * b->com[1] + a[2] * b->com[2]) > 1e-12 * an * c) c = 0;
+    }
+    if (c == 0) {
+        fprintf(stderr, "bench_mujoco: body %d: singular inertia off a planar chain\n", k);
+        exit(1);
+    }
+    double eps = 1e-6 * tr;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) out[3 * i + j] += eps * b->com[i] * b->com[j] / (c * c);
+}
+
+/* Loads the chain into MuJoCo (revolute joints only): RK4, the given timestep, contacts off.
+ * integral != 0 adds one integrator actuator of zero gain per joint, whose activation holds the
+ * integral of the joint's tracking error (act_dot = ctrl). Returns a new model or ends the run. */
+static mjModel *mj_load_chain(const ctc_chain_spec *s, int integral, double timestep)
+{
+    int n = s->nbodies, nseg = (n + MJCF_SEGMENT - 1) / MJCF_SEGMENT;
+    mjVFS *vfs = xcalloc(1, sizeof *vfs);
+    mj_defaultVFS(vfs);
+    strbuf b = {0};
+    for (int seg = 0; seg < nseg; seg++) {
+        b.len = 0;
+        sb_printf(&b, "<mujoco model='ctcsim_chain'>\n");
+        if (seg == 0)
+            sb_printf(&b,
+                      "<option timestep='%.17g' integrator='RK4' gravity='%.17g %.17g %.17g'>"
+                      "<flag contact='disable'/></option>\n<worldbody>\n",
+                      timestep, s->gravity[0], s->gravity[1], s->gravity[2]);
+        int k0 = seg * MJCF_SEGMENT, k1 = k0 + MJCF_SEGMENT < n ? k0 + MJCF_SEGMENT : n;
+        for (int k = k0; k < k1; k++) {
+            const ctc_joint_spec *j = &s->joints[k];
+            const ctc_body_spec *bd = &s->bodies[k];
+            if (j->type != CTC_JOINT_REVOLUTE) {
+                fprintf(stderr, "bench_mujoco: joint %d is not revolute\n", k);
+                exit(1);
+            }
+            double in[9];
+            mj_inertia(s, k, in);
+            /* the body frame sits on the joint, parallel to the parent's at q = 0 (model.h) */
+            sb_printf(&b,
+                      "<body name='b%d' pos='%.17g %.17g %.17g'>"
+                      "<joint name='j%d' type='hinge' axis='%.17g %.17g %.17g'/>"
+                      "<inertial pos='%.17g %.17g %.17g' mass='%.17g' "
+                      "fullinertia='%.17g %.17g %.17g %.17g %.17g %.17g'/>\n",
+                      k, j->location[0], j->location[1], j->location[2], k, j->axis[0], j->axis[1],
+                      j->axis[2], bd->com[0], bd->com[1], bd->com[2], bd->mass, in[0], in[4], in[8],
+                      in[1], in[2], in[5]);
+        }
+        if (seg + 1 < nseg) sb_printf(&b, "<include file='chain%d.xml'/>\n", seg + 1);
+        for (int k = k0; k < k1; k++) sb_printf(&b, "</body>");
+        if (seg == 0) {
+            sb_printf(&b, "\n</worldbody>\n");
+            if (integral) {
+                sb_printf(&b, "<actuator>\n");
+                for (int k = 0; k < n; k++)
+                    sb_printf(&b,
+                              "<general joint='j%d' dyntype='integrator' gainprm='0' "
+                              "biasprm='0 0 0'/>\n",
+                              k);
+                sb_printf(&b, "</actuator>\n");
+            }
+        }
+        sb_printf(&b, "</mujoco>\n");
+        char name[32];
+        snprintf(name, sizeof name, "chain%d.xml", seg);
+        if (mj_makeEmptyFileVFS(vfs, name, (int)b.len) != 0) {
+            fprintf(stderr, "bench_mujoco: MuJoCo's VFS is full\n");
+            exit(1);
+        }
+        memcpy(vfs->filedata[mj_findFileVFS(vfs, name)], b.s, b.len);
+    }
+    char err[1000] = "";
+    mjModel *m = mj_loadXML("chain0.xml", vfs, err, sizeof err);
+    mj_deleteVFS(vfs);
+    free(vfs);
+    free(b.s);
+    if (!m || m->nv != n) {
+        fprintf(stderr, "bench_mujoco: MuJoCo cannot load the %d-body chain: %s\n", n, err);
+        exit(1);
+    }
+    return m;
+}
+
+static double inertia_adjust_max; /* largest relative change of an inertia in MuJoCo's hands */
+
+/* Gives the ctcsim chain the inertias (and masses and centres of mass) MuJoCo compiled. MuJoCo
+ * stores each body's inertia as principal moments in a principal frame found by an iterative
+ * eigen-decomposition, which moves the random spatial inertias here by up to 1e-6 relative and,
+ * alone, the accelerations of the spatial chains by 1e-8 to 5e-7 (n = 4 ... 256). With the same
+ * numbers on both sides, the checks compare the algorithms, not the inputs. */
+static void adopt_mj_inertia(test_chain *chain, const mjModel *m)
+{
+    for (int k = 0; k < chain->spec.nbodies; k++) {
+        ctc_body_spec *b = &chain->bodies[k];
+        double rot[9], in[9], given[9], scale = 0, change = 0;
+        mj_inertia(&chain->spec, k, given);
+        const double *moments = m->body_inertia + 3 * (k + 1);
+        mju_quat2Mat(rot, m->body_iquat + 4 * (k + 1));
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                in[3 * i + j] = 0;
+                for (int l = 0; l < 3; l++)
+                    in[3 * i + j] += rot[3 * i + l] * moments[l] * rot[3 * j + l];
+            }
+        for (int i = 0; i < 9; i++) {
+            scale = fmax(scale, fabs(given[i]));
+            change = fmax(change, fabs(in[i] - given[i]));
+        }
+        for (int i = 0; i < 3; i++) b->com[i] = m->body_ipos[3 * (k + 1) + i];
+        b->mass = m->body_mass[k + 1];
+        /* symmetric to the last bit */
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < i; j++) in[3 * i + j] = in[3 * j + i];
+        memcpy(b->inertia, in, sizeof in);
+        inertia_adjust_max = fmax(inertia_adjust_max, change / scale);
+    }
+}
+
+/* MuJoCo's warnings (bad qacc resets the state, for example) are counted in mjData; this keeps
+ * them off stdout and out of MUJOCO_LOG.TXT */
+static void mj_quiet(const char *msg)
+{
+    (void)msg;
+}
+
+/* ---------------------------------------------------------------------------------------------
+ * 1. One CTC right-hand side
+ */
+
+enum { T_CTC, T_MJ, T_MJ_POS, T_MJ_CRB, T_MJ_FACT, T_MJ_VEL, T_MJ_INV, T_MJ_ACC, NT };
+
+typedef struct rhs_case {
+    const ctc_model *cm;
+    ctc_data *cd;
+    mjModel *m; /* NULL: ctcsim only */
+    mjData *d;
+    double *q, *v, *u;  /* the state and the commanded accelerations */
+    double *f, *a;      /* ctcsim's forces and accelerations */
+    double *tau, *qacc; /* MuJoCo's */
+} rhs_case;
+
+static void run_once(rhs_case *c, int what)
+{
+    const mjModel *m = c->m;
+    mjData *d = c->d;
+    int nv = c->cm->nv;
+    switch (what) {
+    case T_CTC:
+        ctc_kinematics(c->cm, c->cd, c->q, c->v);
+        ctc_handles(c->cm, c->cd);
+        ctc_gdca_inverse(c->cm, c->cd, c->u, c->f);
+        ctc_gdca_forward(c->cm, c->cd, c->f, c->a);
+        sink += c->a[0];
+        return;
+    case T_MJ:
+        /* shared: kinematics, composite inertias, M and its factor, bias forces */
+        mju_copy(d->qpos, c->q, nv);
+        mju_copy(d->qvel, c->v, nv);
+        mj_fwdPosition(m, d);
+        mj_fwdVelocity(m, d);
+        /* inverse: tau = M u + c */
+        mju_copy(d->qacc, c->u, nv);
+        mj_inverseSkip(m, d, mjSTAGE_VEL, 1);
+        /* forward: qacc = M^-1 (tau - c) */
+        mju_copy(d->qfrc_applied, d->qfrc_inverse, nv);
+        mj_fwdActuation(m, d);
+        mj_fwdAcceleration(m, d);
+        mj_fwdConstraint(m, d);
+        break;
+    case T_MJ_POS:
+        mju_copy(d->qpos, c->q, nv);
+        mju_copy(d->qvel, c->v, nv);
+        mj_fwdPosition(m, d);
+        break;
+    case T_MJ_CRB:
+        mj_crb(m, d);
+        break;
+    case T_MJ_FACT:
+        mj_factorM(m, d);
+        break;
+    case T_MJ_VEL:
+        mj_fwdVelocity(m, d);
+        break;
+    case T_MJ_INV:
+        mju_copy(d->qacc, c->u, nv);
+        mj_inverseSkip(m, d, mjSTAGE_VEL, 1);
+        break;
+    case T_MJ_ACC:
+        mju_copy(d->qfrc_applied, c->tau, nv);
+        mj_fwdActuation(m, d);
+        mj_fwdAcceleration(m, d);
+        mj_fwdConstraint(m, d);
+        break;
+    }
+    sink += d->qacc[0] + d->qfrc_inverse[0] + d->qLD[0];
+}
+
+/* median seconds per call of each of the first nt timings, from interleaved batches */
+static void measure(rhs_case *c, int nt, int batches, double med[NT])
+{
+    int reps[NT], nb[NT];
+    for (int w = 0; w < nt; w++) {
+        run_once(c, w);
+        double s = now();
+        run_once(c, w);
+        double t = now() - s;
+        reps[w] = t < BATCH_S ? (int)(BATCH_S / fmax(t, 1e-9)) : 1;
+        /* slow timings take part in the first SLOW_BATCHES batches only */
+        nb[w] = t > SLOW_S && batches > SLOW_BATCHES ? SLOW_BATCHES : batches;
+    }
+    double *samples = xcalloc((size_t)batches * NT, sizeof(double));
+    for (int b = 0; b < batches; b++) {
+        for (int i = 0; i < nt; i++) {
+            int w = (b + i) % nt;
+            if (b >= nb[w]) continue;
+            double s = now();
+            do {
+                run_once(c, w);
+            } while (now() - s < SETTLE_S);
+            s = now();
+            for (int r = 0; r < reps[w]; r++) run_once(c, w);
+            samples[w * batches + b] = (now() - s) / reps[w];
+        }
+    }
+    for (int w = 0; w < nt; w++) med[w] = median_sort(samples + w * batches, nb[w]);
+    free(samples);
+}
+
+/* one row's results, kept for the slopes and the targets */
+typedef struct rhs_row {
+    int n;
+    double ctc, mj; /* s per call; mj = 0 when not timed */
+} rhs_row;
+
+/* Checks ctcsim against MuJoCo at c's state: iGDCA f(u) against qfrc_inverse, and GDCA
+ * accelerations against qacc for the torques tq (nv). Writes the two relative differences. */
+static void check_case(rhs_case *c, const double *tq, double *f_err, double *a_err)
+{
+    int nv = c->cm->nv;
+    run_once(c, T_CTC);
+    run_once(c, T_MJ);
+    *f_err = rel_diff(c->d->qfrc_inverse, c->f, nv);
+    mju_copy(c->tau, c->d->qfrc_inverse, nv);
+    ctc_gdca_forward(c->cm, c->cd, tq, c->a);
+    mju_copy(c->d->qfrc_applied, tq, nv);
+    mj_fwdActuation(c->m, c->d);
+    mj_fwdAcceleration(c->m, c->d);
+    mj_fwdConstraint(c->m, c->d);
+    *a_err = rel_diff(c->d->qacc, c->a, nv);
+    run_once(c, T_CTC);
+}
+
+/* times one chain; returns 0, or 1 when ctcsim and MuJoCo disagree */
+static int bench_rhs_chain(const char *label, test_chain *chain, int batches, const rhs_row *prev,
+                           rhs_row *row)
+{
+    char err[256];
+    rhs_case c = {0};
+    if (chain->spec.nbodies <= MJ_MAX_N) {
+        c.m = mj_load_chain(&chain->spec, 0, 1e-3);
+        c.d = mj_makeData(c.m);
+        adopt_mj_inertia(chain, c.m);
+    }
+    ctc_model *cm = NULL;
+    if (ctc_model_build(&chain->spec, &cm, err, sizeof err) != CTC_OK) {
+        fprintf(stderr, "bench_mujoco: %s: %s\n", label, err);
+        exit(1);
+    }
+    int n = cm->nbodies, nv = cm->nv;
+    c.cm = cm;
+    c.cd = ctc_data_new(cm);
+    c.q = xcalloc((size_t)cm->nq, sizeof(double));
+    c.v = xcalloc((size_t)nv, sizeof(double));
+    c.u = xcalloc((size_t)nv, sizeof(double));
+    c.f = xcalloc((size_t)nv, sizeof(double));
+    c.a = xcalloc((size_t)nv, sizeof(double));
+    c.tau = xcalloc((size_t)nv, sizeof(double));
+    double *tq = xcalloc((size_t)nv, sizeof(double));
+    uint64_t rng = 1;
+    test_random_state(cm, &rng, 1.0, c.q, c.v);
+    for (int i = 0; i < nv; i++) c.u[i] = test_uniform(&rng, -1, 1);
+    for (int i = 0; i < nv; i++) tq[i] = test_uniform(&rng, -1, 1);
+
+    int failed = 0;
+    double f_err = NAN, a_err = NAN;
+    if (c.m) {
+        check_case(&c, tq, &f_err, &a_err);
+        failed = !(f_err <= CHECK_TOL && a_err <= CHECK_TOL);
+    }
+    double med[NT] = {0};
+    if (!failed) measure(&c, c.m ? NT : 1, batches, med);
+    *row = (rhs_row){.n = n, .ctc = med[T_CTC], .mj = c.m && !failed ? med[T_MJ] : 0};
+
+    char slope_c[16] = "-", slope_m[16] = "-";
+    if (prev && prev->ctc > 0 && row->ctc > 0)
+        snprintf(slope_c, sizeof slope_c, "%.2f", log(row->ctc / prev->ctc) / log(n / prev->n));
+    if (prev && prev->mj > 0 && row->mj > 0)
+        snprintf(slope_m, sizeof slope_m, "%.2f", log(row->mj / prev->mj) / log(n / prev->n));
+    if (failed) {
+        printf("| %-7s | %4d | FAILED: f vs MuJoCo %.1e, qacc vs MuJoCo %.1e (limit %.0e): not "
+               "timed |\n",
+               label, n, f_err, a_err, CHECK_TOL);
+    } else if (c.m) {
+        printf("| %-7s | %4d | %9.2f | %10.2f | %7.4f | %6.1f | %8.1f | %5s | %5s | %10.2f | "
+               "%8.2f | %10.2f | %7.2f | %7.2f | %7.2f | %.1e | %.1e |\n",
+               label, n, 1e6 * med[T_CTC], 1e6 * med[T_MJ], med[T_CTC] / med[T_MJ],
+               1e9 * med[T_CTC] / n, 1e9 * med[T_MJ] / n, slope_c, slope_m, 1e6 * med[T_MJ_POS],
+               1e6 * med[T_MJ_CRB], 1e6 * med[T_MJ_FACT], 1e6 * med[T_MJ_VEL], 1e6 * med[T_MJ_INV],
+               1e6 * med[T_MJ_ACC], f_err, a_err);
+    } else {
+        printf("| %-7s | %4d | %9.2f | - | - | %6.1f | - | %5s | - | - | - | - | - | - | - | - | "
+               "- |\n",
+               label, n, 1e6 * med[T_CTC], 1e9 * med[T_CTC] / n, slope_c);
+    }
+    fflush(stdout);
+    if (c.m) {
+        mj_deleteData(c.d);
+        mj_deleteModel(c.m);
+    }
+    free(c.q), free(c.v), free(c.u), free(c.f), free(c.a), free(c.tau), free(tq);
+    ctc_data_free(c.cd);
+    ctc_model_free(cm);
+    return failed;
+}
+
+/* the ratio ctcsim / MuJoCo at n, or NaN when not measured */
+static double ratio_at(const rhs_row *rows, int nrows, int n)
+{
+    for (int i = 0; i < nrows; i++)
+        if (rows[i].n == n && rows[i].mj > 0) return rows[i].ctc / rows[i].mj;
+    return NAN;
+}
+
+/* prints one target: the worst ratio over n in [n0, n1] against the limit */
+static void print_target(const char *label, const rhs_row *rows, int nrows, int n0, int n1,
+                         double limit)
+{
+    double worst = -INFINITY;
+    int at = 0;
+    for (int n = n0; n <= n1; n *= 2) {
+        double r = ratio_at(rows, nrows, n);
+        if (isnan(r)) return;
+        if (r > worst) worst = r, at = n;
+    }
+    char range[32];
+    if (n0 == n1)
+        snprintf(range, sizeof range, "n = %d", n0);
+    else
+        snprintf(range, sizeof range, "n = %d..%d", n0, n1);
+    printf("| %s | %s | <= %g | %.4f (n = %d) | %s |\n", label, range, limit, worst, at,
+           worst <= limit ? "met" : "not met");
+}
+
+static int bench_rhs(int max_n, int batches)
+{
+    printf("## 1. One CTC right-hand side: ctcsim against MuJoCo %s\n\n", mj_versionString());
+    printf("ctcsim = kinematics + handles + iGDCA (composite) + GDCA forward. MuJoCo = "
+           "mj_fwdPosition + mj_fwdVelocity (shared) + mj_inverseSkip(mjSTAGE_VEL) + "
+           "mj_fwdActuation + mj_fwdAcceleration + mj_fwdConstraint. Medians of %d interleaved "
+           "batches (%d for a call over %.0f ms); thread CPU times in us, per body in ns. "
+           "Slope = d log(time) / d log(n) from the row above. MuJoCo only up to n = %d.\n\n",
+           batches, batches < SLOW_BATCHES ? batches : SLOW_BATCHES, 1e3 * SLOW_S, MJ_MAX_N);
+    printf("| chain   |    n | ctcsim (us) | MuJoCo (us) | ratio | ctcsim/n ns | MuJoCo/n ns | "
+           "slope ctcsim | slope MuJoCo | MuJoCo position | of which crb | of which factorM | "
+           "velocity | inverse | forward acc | f vs MuJoCo | qacc vs MuJoCo |\n");
+    printf("| ------- | ---: | --------: | ---------: | ------: | -----: | -------: | ----: | "
+           "----: | ---------: | -------: | ---------: | ------: | ------: | ------: | ---: | "
+           "---: |\n");
+    enum { MAXROWS = 32 };
+    rhs_row planar[MAXROWS], spatial[MAXROWS];
+    int np = 0, ns = 0, failed = 0;
+    for (int n = 2; n <= max_n && np < MAXROWS; n *= 2, np++) {
+        test_chain *c = test_chain_rod_pendulum(n, 1.0, 1.0);
+        failed |= bench_rhs_chain("planar", c, batches, np ? &planar[np - 1] : NULL, &planar[np]);
+        test_chain_free(c);
+    }
+    for (int n = 2; n <= max_n && ns < MAXROWS; n *= 2, ns++) {
+        test_chain *c = test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE);
+        failed |=
+            bench_rhs_chain("spatial", c, batches, ns ? &spatial[ns - 1] : NULL, &spatial[ns]);
+        test_chain_free(c);
+    }
+    printf("\nctcsim was given the inertias as MuJoCo compiled them (largest change %.1e relative "
+           "to the body's largest entry).\n",
+           inertia_adjust_max);
+    printf("\nTargets (ratio = ctcsim / MuJoCo; the worst n of each range):\n\n");
+    printf("| chain | range | target | measured | |\n| --- | --- | ---: | ---: | --- |\n");
+    print_target("planar", planar, np, 2, 64, 0.5);
+    print_target("planar", planar, np, 256, 256, 0.05);
+    print_target("planar", planar, np, 1024, 1024, 0.002);
+    print_target("spatial", spatial, ns, 2, 16, 1.0);
+    print_target("spatial", spatial, ns, 256, 256, 0.1);
+    printf("\n");
+    return failed;
+}
+
+/* ---------------------------------------------------------------------------------------------
+ * 2 and 3. Whole simulations
+ */
+
+/* one CTC tracking problem, for ctcsim and MuJoCo alike */
+typedef struct sim_problem {
+    const char *name;
+    test_chain *chain;
+    int n;
+    const double *q0;  /* (n) rad; v0 = 0 */
+    ctc_gains *gains;  /* (n) */
+    ctc_traj *traj;    /* (n) */
+    ctc_disturb *dist; /* (n) or NULL */
+    double duration;   /* s */
+    double interval;   /* s, sampling */
+    int nsamples;      /* duration / interval + 1 */
+    mjModel *m;        /* with integral actuators when any ki != 0 */
+    mjData *d;
+    double ref_rtol; /* the reference's rtol (atol = rtol / 100) */
+    double *ref;     /* (nsamples x n) ctcsim DOPRI5 at ref_rtol */
+    long ref_steps;
+} sim_problem;
+
+/* MuJoCo's controller: what mjcb_control runs, for the problem being simulated */
+typedef struct mj_ctrl {
+    const sim_problem *p;
+    int hold;  /* 1: evaluate at the first stage of each step and hold over the step */
+    int stage; /* stages of the current step so far (the loop clears it before each mj_step) */
+} mj_ctrl;
+
+static mj_ctrl *active;
+
+/* u = qdd_d + ki int e + kp e + kv de; qfrc_applied = MuJoCo's inverse dynamics of u + z(t);
+ * ctrl = e, the rate of the integral state (act) when the model has integrator actuators */
+static void mj_ctc_control(const mjModel *m, mjData *d)
+{
+    mj_ctrl *c = active;
+    if (c->hold && c->stage++ > 0) return;
+    const sim_problem *p = c->p;
+    for (int i = 0; i < m->nv; i++) {
+        double des[3];
+        ctc_traj_eval(&p->traj[i], d->time, des);
+        double e = des[0] - d->qpos[i], de = des[1] - d->qvel[i];
+        double ie = m->na ? d->act[i] : 0;
+        const ctc_gains *g = &p->gains[i];
+        d->qacc[i] = des[2] + g->ki * ie + g->kp * e + g->kv * de;
+        if (m->nu) d->ctrl[i] = e;
+    }
+    mj_inverseSkip(m, d, mjSTAGE_VEL, 1);
+    for (int i = 0; i < m->nv; i++)
+        d->qfrc_applied[i] =
+            d->qfrc_inverse[i] + (p->dist ? ctc_disturb_eval(&p->dist[i], d->time) : 0);
+}
+
+/* the outcome of one run */
+typedef struct run_out {
+    int done; /* 0: diverged at t_fail */
+    double t_fail;
+    double cpu; /* s of this thread's CPU time */
+    long steps, evals;
+    long rejected;
+    double error; /* max |q - q_ref| over the samples and joints; NaN when not computed */
+} run_out;
+
+static double max_error(const sim_problem *p, const double *q, int nsamples)
+{
+    double e = 0;
+    for (int j = 0; j < nsamples * p->n; j++) e = fmax(e, fabs(q[j] - p->ref[j]));
+    return nsamples == p->nsamples ? e : NAN;
+}
+
+/* MuJoCo RK4 at step dt (dividing the sampling interval) with the stagewise or held controller;
+ * samples q into qs (nsamples x n) */
+static run_out mj_run(sim_problem *p, double dt, int hold, double *qs)
+{
+    mjModel *m = p->m;
+    mjData *d = p->d;
+    int n = p->n;
+    long spp = lround(p->interval / dt), nsteps = spp * (p->nsamples - 1);
+    if (fabs((double)spp * dt - p->interval) > 1e-9 * p->interval) {
+        fprintf(stderr, "bench_mujoco: dt = %g does not divide %g\n", dt, p->interval);
+        exit(1);
+    }
+    mj_ctrl c = {.p = p, .hold = hold};
+    active = &c;
+    m->opt.timestep = dt;
+    run_out r = {.done = 1, .error = NAN};
+    double t0 = now();
+    mj_resetData(m, d);
+    memset(d->warning, 0, sizeof d->warning);
+    mju_copy(d->qpos, p->q0, n);
+    mjcb_control = mj_ctc_control;
+    mju_copy(qs, d->qpos, n);
+    int ns = 1;
+    for (long k = 1; k <= nsteps; k++) {
+        c.stage = 0;
+        mj_step(m, d);
+        int bad = d->warning[mjWARN_BADQPOS].number || d->warning[mjWARN_BADQVEL].number ||
+                  d->warning[mjWARN_BADQACC].number;
+        for (int i = 0; i < n && !bad; i++) bad = !(fabs(d->qvel[i]) <= MAX_SPEED);
+        if (bad) {
+            r.done = 0, r.t_fail = (double)k * dt, r.steps = k;
+            break;
+        }
+        if (k % spp == 0) mju_copy(qs + (size_t)ns++ * n, d->qpos, n);
+    }
+    r.cpu = now() - t0;
+    mjcb_control = NULL;
+    if (r.done) {
+        r.steps = nsteps;
+        r.error = p->ref ? max_error(p, qs, ns) : NAN;
+    }
+    r.evals = 4 * r.steps;
+    return r;
+}
+
+static ctc_sim_spec ctc_spec(const sim_problem *p, ctc_integ_spec integ)
+{
+    int pid = 0;
+    for (int i = 0; i < p->n; i++) pid |= p->gains[i].ki != 0;
+    return (ctc_sim_spec){.chain = p->chain->spec,
+                          .q0 = p->q0,
+                          .controller = pid ? CTC_CTRL_PID : CTC_CTRL_PD,
+                          .gains = p->gains,
+                          .model_mass_scale = 1,
+                          .model_inertia_scale = 1,
+                          .traj = p->traj,
+                          .disturb = p->dist,
+                          .integrator = integ,
+                          .duration = p->duration,
+                          .output_interval = p->interval,
+                          .channels = CTC_CH_BIT(CTC_CH_Q)};
+}
+
+/* ctcsim's run; samples q into qs (nsamples x n) when it finishes */
+static run_out ctc_run(const sim_problem *p, ctc_integ_spec integ, double *qs)
+{
+    ctc_sim_spec spec = ctc_spec(p, integ);
+    ctc_sim_result *res = NULL;
+    char err[256];
+    if (ctc_sim_run(&spec, NULL, &res, err, sizeof err) != CTC_OK) {
+        fprintf(stderr, "bench_mujoco: %s: %s\n", p->name, err);
+        exit(1);
+    }
+    run_out r = {.done = res->status == CTC_RUN_DONE,
+                 .t_fail = res->metrics.t_end,
+                 .cpu = res->metrics.cpu_s,
+                 .steps = res->metrics.steps,
+                 .evals = res->metrics.rhs_evals,
+                 .rejected = res->metrics.rejected,
+                 .error = NAN};
+    if (r.done) {
+        memcpy(qs, res->ch[CTC_CH_Q], (size_t)res->nsamples * p->n * sizeof *qs);
+        r.error = p->ref ? max_error(p, qs, res->nsamples) : NAN;
+    }
+    ctc_sim_result_free(res);
+    return r;
+}
+
+/* makes p's MuJoCo model and its reference run at rtol */
+static void problem_setup(sim_problem *p, double rtol)
+{
+    p->ref_rtol = rtol;
+    int integral = 0;
+    for (int i = 0; i < p->n; i++) integral |= p->gains[i].ki != 0;
+    p->m = mj_load_chain(&p->chain->spec, integral, 1e-3);
+    p->d = mj_makeData(p->m);
+    adopt_mj_inertia(p->chain, p->m);
+    p->nsamples = (int)lround(p->duration / p->interval) + 1;
+    double *ref = xcalloc((size_t)p->nsamples * p->n, sizeof(double));
+    p->ref = NULL;
+    run_out r =
+        ctc_run(p,
+                (ctc_integ_spec){
+                    .method = CTC_INTEG_DOPRI5, .rtol = p->ref_rtol, .atol = p->ref_rtol * 1e-2},
+                ref);
+    if (!r.done) {
+        fprintf(stderr, "bench_mujoco: %s: the reference run did not finish\n", p->name);
+        exit(1);
+    }
+    p->ref = ref;
+    p->ref_steps = r.steps;
+}
+
+static void problem_free(sim_problem *p)
+{
+    mj_deleteData(p->d);
+    mj_deleteModel(p->m);
+    free(p->ref);
+}
+
+/* one configuration of a work-precision comparison */
+enum { CFG_DOPRI5, CFG_RK4, CFG_MJ_STAGEWISE, CFG_MJ_HOLD };
+
+typedef struct sim_config {
+    int kind;   /* CFG_*: ctcsim DOPRI5 at rtol, ctcsim RK4 at dt, MuJoCo RK4 at dt */
+    double par; /* rtol or dt */
+    double cpu[8];
+    run_out last;
+} sim_config;
+
+/* time of MuJoCo stagewise at the given error, interpolated on its work-precision curve
+ * (log time linear in log error between neighbouring dt); NaN outside the measured range.
+ * *dt_at receives the interpolated dt. */
+static double mj_cpu_at(const sim_config *c, int nc, int rounds, double err, double *dt_at)
+{
+    for (int i = 0; i < nc; i++)
+        for (int j = 0; j < nc; j++) {
+            const sim_config *a = &c[i], *b = &c[j];
+            if (a->kind != CFG_MJ_STAGEWISE || b->kind != CFG_MJ_STAGEWISE || a->par <= b->par)
+                continue;
+            /* a is the next larger dt above b */
+            int between = 1;
+            for (int k = 0; k < nc; k++)
+                if (c[k].kind == CFG_MJ_STAGEWISE && c[k].par < a->par && c[k].par > b->par)
+                    between = 0;
+            double ea = a->last.error, eb = b->last.error;
+            if (!between || !(ea >= err && err >= eb) || !(eb > 0)) continue;
+            double wa[8], wb[8];
+            memcpy(wa, a->cpu, sizeof wa);
+            memcpy(wb, b->cpu, sizeof wb);
+            double la = log(median_sort(wa, rounds)), lb = log(median_sort(wb, rounds));
+            double s = ea == eb ? 0 : (log(err) - log(ea)) / (log(eb) - log(ea));
+            *dt_at = exp(log(a->par) + s * (log(b->par) - log(a->par)));
+            return exp(la + s * (lb - la));
+        }
+    return NAN;
+}
+
+static void sim_compare(sim_problem *p, const double *rtols, int nrtol, const double *dts, int ndt,
+                        int rounds)
+{
+    sim_config c[MAX_CONFIGS];
+    int nc = 0;
+    for (int i = 0; i < nrtol && nc < MAX_CONFIGS; i++)
+        c[nc++] = (sim_config){.kind = CFG_DOPRI5, .par = rtols[i]};
+    for (int k = CFG_RK4; k <= CFG_MJ_HOLD; k++)
+        for (int i = 0; i < ndt && nc < MAX_CONFIGS; i++)
+            c[nc++] = (sim_config){.kind = k, .par = dts[i]};
+    double *qs = xcalloc((size_t)p->nsamples * p->n, sizeof(double));
+
+    /* the reference against MuJoCo stagewise at a small step */
+    run_out chk = mj_run(p, REF_DT, 0, qs);
+    printf("Reference: ctcsim DOPRI5 rtol %g, atol %g (%ld steps). Against MuJoCo RK4 "
+           "stagewise at dt = %g s: max |q - q_ref| = %.2e rad%s.\n\n",
+           p->ref_rtol, p->ref_rtol * 1e-2, p->ref_steps, REF_DT, chk.error,
+           chk.error <= 1e-8 ? "" : " (ABOVE 1e-8: see the README)");
+
+    for (int round = 0; round < rounds; round++)
+        for (int i = 0; i < nc; i++) {
+            ctc_integ_spec integ = {
+                .method = CTC_INTEG_DOPRI5, .rtol = c[i].par, .atol = c[i].par * 1e-2};
+            if (c[i].kind == CFG_RK4)
+                integ = (ctc_integ_spec){.method = CTC_INTEG_RK4, .step = c[i].par};
+            run_out r = c[i].kind >= CFG_MJ_STAGEWISE
+                            ? mj_run(p, c[i].par, c[i].kind == CFG_MJ_HOLD, qs)
+                            : ctc_run(p, integ, qs);
+            c[i].cpu[round] = r.cpu;
+            c[i].last = r;
+        }
+
+    printf("| run | time (ms) | steps | evals | us / eval | max error (rad) |\n"
+           "| --- | ---: | ---: | ---: | ---: | ---: |\n");
+    for (int i = 0; i < nc; i++) {
+        double w[8];
+        memcpy(w, c[i].cpu, sizeof w);
+        double cpu = median_sort(w, rounds);
+        const run_out *r = &c[i].last;
+        char label[64];
+        if (c[i].kind >= CFG_MJ_STAGEWISE)
+            snprintf(label, sizeof label, "MuJoCo rk4 %s dt = %g",
+                     c[i].kind == CFG_MJ_HOLD ? "hold" : "stagewise", c[i].par);
+        else if (c[i].kind == CFG_RK4)
+            snprintf(label, sizeof label, "ctcsim rk4 dt = %g", c[i].par);
+        else
+            snprintf(label, sizeof label, "ctcsim dopri5 rtol = %g", c[i].par);
+        if (r->done)
+            printf("| %s | %.2f | %ld | %ld | %.2f | %.2e |\n", label, 1e3 * cpu, r->steps,
+                   r->evals, 1e6 * cpu / (double)r->evals, r->error);
+        else
+            printf("| %s | %.2f | %ld | %ld | - | diverged at t = %.3f s |\n", label, 1e3 * cpu,
+                   r->steps, r->evals, r->t_fail);
+    }
+
+    printf("\nAt equal error (MuJoCo stagewise's time interpolated at ctcsim's error):\n\n"
+           "| ctcsim rtol | error (rad) | ctcsim time (ms) | MuJoCo dt for it (s) | MuJoCo time "
+           "(ms) | ratio ctcsim / MuJoCo |\n| ---: | ---: | ---: | ---: | ---: | ---: |\n");
+    for (int i = 0; i < nc; i++) {
+        if (c[i].kind != CFG_DOPRI5) continue;
+        double w[8];
+        memcpy(w, c[i].cpu, sizeof w);
+        double cpu = median_sort(w, rounds), dt_at = NAN;
+        double mw = mj_cpu_at(c, nc, rounds, c[i].last.error, &dt_at);
+        if (isnan(mw))
+            printf("| %g | %.2e | %.2f | outside MuJoCo's range | - | - |\n", c[i].par,
+                   c[i].last.error, 1e3 * cpu);
+        else
+            printf("| %g | %.2e | %.2f | %.2e | %.2f | %.2f |\n", c[i].par, c[i].last.error,
+                   1e3 * cpu, dt_at, 1e3 * mw, cpu / mw);
+    }
+    printf("\n");
+    fflush(stdout);
+    free(qs);
+}
+
+/* the paper's triple pendulum PID run (bench_sim's paper_spec) */
+static void sim_triple(void)
+{
+    static const double q0[3] = {5 * PI / 6, 3 * PI / 4, 2 * PI / 3};
+    ctc_gains gains[3];
+    ctc_traj traj[3];
+    ctc_disturb dist[3];
+    for (int i = 0; i < 3; i++) {
+        gains[i] = (ctc_gains){.ki = 250, .kp = 100, .kv = 20};
+        traj[i] = (ctc_traj){
+            .type = i == 1 ? CTC_TRAJ_COSINE : CTC_TRAJ_SINE, .amplitude = 0.6, .period = 1.5};
+        dist[i] = (ctc_disturb){.type = CTC_DISTURB_CONSTANT, .value = 0.2};
+    }
+    sim_problem p = {.name = "triple pendulum",
+                     .chain = test_chain_rod_pendulum(3, 1, 1),
+                     .n = 3,
+                     .q0 = q0,
+                     .gains = gains,
+                     .traj = traj,
+                     .dist = dist,
+                     .duration = 5,
+                     .interval = 0.01};
+    problem_setup(&p, 1e-12);
+    printf("## 2a. Triple pendulum, PID, 5 s (paper section 7.1), 0.2 N m disturbance\n\n"
+           "Times are thread CPU time, medians of 5 interleaved rounds.\n\n");
+    static const double rtols[] = {1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10};
+    static const double dts[] = {0.01, 0.005, 0.0025, 0.002, 0.001, 0.0005};
+    sim_compare(&p, rtols, 6, dts, 6, 5);
+    problem_free(&p);
+    test_chain_free(p.chain);
+}
+
+/* the 64-link problem: 1 m, 1 kg rods hanging along -y, joint i tracking
+ * q_d = 0.05 sin(pi t + pi i / 32) from rest at q = 0 (a travelling wave: the links' absolute
+ * angles stay within about 1 rad), PD kp = w^2, kv = 2 w */
+#define CHAIN_N 64
+static void chain64_problem(sim_problem *p, double w, double *q0, ctc_gains *gains, ctc_traj *traj)
+{
+    for (int i = 0; i < CHAIN_N; i++) {
+        q0[i] = 0;
+        gains[i] = (ctc_gains){.kp = w * w, .kv = 2 * w};
+        traj[i] =
+            (ctc_traj){.type = CTC_TRAJ_SINE, .amplitude = 0.05, .period = 2, .phase = PI * i / 32};
+    }
+    *p = (sim_problem){.name = "64-link chain",
+                       .chain = test_chain_rod_pendulum(CHAIN_N, 1, 1),
+                       .n = CHAIN_N,
+                       .q0 = q0,
+                       .gains = gains,
+                       .traj = traj,
+                       .duration = 5,
+                       .interval = 0.01};
+}
+
+static void sim_chain64(void)
+{
+    double q0[CHAIN_N];
+    ctc_gains gains[CHAIN_N];
+    ctc_traj traj[CHAIN_N];
+    sim_problem p;
+    chain64_problem(&p, 10, q0, gains, traj);
+    problem_setup(&p, 1e-12);
+    printf("## 2b. 64-link planar rod chain, PD kp = 100, kv = 20, 5 s\n\n"
+           "Rods 1 m, 1 kg, hanging along -y; joint i tracks 0.05 sin(pi t + pi i / 32) rad from "
+           "rest at q = 0; no disturbance. Times are thread CPU time, medians of 3 interleaved "
+           "rounds.\n\n");
+    static const double rtols[] = {1e-5, 1e-6, 1e-7, 1e-8, 1e-9};
+    static const double dts[] = {0.01, 0.005, 0.0025, 0.001, 0.0005};
+    sim_compare(&p, rtols, 5, dts, 5, 3);
+    problem_free(&p);
+    test_chain_free(p.chain);
+}
+
+/* max |q_d - q| over the samples from time t0 on: how well a run tracks after its transient */
+static double tracking_error(const sim_problem *p, const double *qs, double t0)
+{
+    double e = 0;
+    for (int k = (int)lround(t0 / p->interval); k < p->nsamples; k++)
+        for (int i = 0; i < p->n; i++) {
+            double des[3];
+            ctc_traj_eval(&p->traj[i], k * p->interval, des);
+            e = fmax(e, fabs(des[0] - qs[(size_t)k * p->n + i]));
+        }
+    return e;
+}
+
+static void print_stiff_row(const char *label, const run_out *r, int rejected)
+{
+    char rej[24] = "-";
+    if (rejected) snprintf(rej, sizeof rej, "%ld", r->rejected);
+    if (r->done)
+        printf("| %s | %.2f | %ld | %s | %ld | %.2e |\n", label, 1e3 * r->cpu, r->steps, rej,
+               r->evals, r->error);
+    else
+        printf("| %s | %.2f | %ld | %s | %ld | diverged at t = %.4f s |\n", label, 1e3 * r->cpu,
+               r->steps, rej, r->evals, r->t_fail);
+}
+
+/* 3: where MuJoCo's RK4 at 1 ms diverges, and ctcsim on that problem */
+static void sim_stiff(void)
+{
+    double q0[CHAIN_N];
+    ctc_gains gains[CHAIN_N];
+    ctc_traj traj[CHAIN_N];
+    static const double ws[] = {10, 100, 1000, 2000, 2500, 2750, 3000};
+    enum { NW = sizeof ws / sizeof ws[0] };
+    printf("## 3. 64-link chain, stiff PD: kp = w^2, kv = 2 w (double pole at -w)\n\n"
+           "MuJoCo RK4 at dt = 1 ms, same chain and trajectories as 2b. Tracking error = max "
+           "|q_d - q| over the samples of the last second (after the transient).\n\n"
+           "| w (1/s) | kp | kv | w dt | MuJoCo stagewise | MuJoCo hold |\n"
+           "| ---: | ---: | ---: | ---: | --- | --- |\n");
+    double w_div = 0;
+    double *qs = xcalloc((size_t)501 * CHAIN_N, sizeof(double));
+    for (int i = 0; i < NW; i++) {
+        sim_problem p;
+        chain64_problem(&p, ws[i], q0, gains, traj);
+        p.m = mj_load_chain(&p.chain->spec, 0, 1e-3);
+        p.d = mj_makeData(p.m);
+        adopt_mj_inertia(p.chain, p.m);
+        p.nsamples = 501;
+        run_out r[2];
+        char s[2][64];
+        for (int h = 0; h < 2; h++) {
+            r[h] = mj_run(&p, 1e-3, h, qs);
+            if (r[h].done)
+                snprintf(s[h], sizeof s[h], "tracks: error %.1e rad", tracking_error(&p, qs, 4));
+            else
+                snprintf(s[h], sizeof s[h], "diverged at t = %.3f s", r[h].t_fail);
+        }
+        printf("| %g | %g | %g | %g | %s | %s |\n", ws[i], gains[0].kp, gains[0].kv, ws[i] * 1e-3,
+               s[0], s[1]);
+        if (!r[0].done && w_div == 0) w_div = ws[i];
+        problem_free(&p);
+        test_chain_free(p.chain);
+    }
+    free(qs);
+    if (w_div == 0) {
+        printf("\nMuJoCo stagewise did not diverge at any w tried.\n\n");
+        return;
+    }
+
+    /* rtol 1e-10: at 1e-12 the reference takes about three times as many steps (see the top) */
+    sim_problem p;
+    chain64_problem(&p, w_div, q0, gains, traj);
+    problem_setup(&p, 1e-10);
+    printf("\nOn w = %g (kp = %g, kv = %g); reference ctcsim DOPRI5 rtol 1e-10, atol 1e-12 (%ld "
+           "steps). Single runs.\n\n",
+           w_div, gains[0].kp, gains[0].kv, p.ref_steps);
+    printf("| run | time (ms) | steps | rejected | evals | max error (rad) |\n"
+           "| --- | ---: | ---: | ---: | ---: | ---: |\n");
+    qs = xcalloc((size_t)p.nsamples * p.n, sizeof(double));
+    char label[64];
+    static const double rtols[] = {1e-4, 1e-6};
+    for (int i = 0; i < 2; i++) {
+        run_out r = ctc_run(
+            &p,
+            (ctc_integ_spec){.method = CTC_INTEG_DOPRI5, .rtol = rtols[i], .atol = rtols[i] * 1e-2},
+            qs);
+        snprintf(label, sizeof label, "ctcsim dopri5 rtol = %g", rtols[i]);
+        print_stiff_row(label, &r, 1);
+    }
+    run_out rb =
+        ctc_run(&p, (ctc_integ_spec){.method = CTC_INTEG_BDF, .rtol = 1e-6, .atol = 1e-8}, qs);
+    print_stiff_row("ctcsim bdf rtol = 1e-06", &rb, 1);
+    static const double dts[] = {1e-3, 5e-4, 2.5e-4};
+    for (int h = 0; h < 2; h++)
+        for (int i = 0; i < 3; i++) {
+            run_out r = mj_run(&p, dts[i], h, qs);
+            snprintf(label, sizeof label, "MuJoCo rk4 %s dt = %g", h ? "hold" : "stagewise",
+                     dts[i]);
+            print_stiff_row(label, &r, 0);
+        }
+    printf("\n");
+    free(qs);
+    problem_free(&p);
+    test_chain_free(p.chain);
+}
+
+int main(int argc, char **argv)
+{
+    int max_n = argc > 1 ? atoi(argv[1]) : 4096;
+    int batches = argc > 2 ? atoi(argv[2]) : 15;
+    const char *parts = argc > 3 ? argv[3] : "rsd";
+    if (max_n < 2 || batches < 1) {
+        fprintf(stderr, "usage: bench_mujoco [max_n >= 2 [batches >= 1 [parts: r s d]]]\n");
+        return 2;
+    }
+    mju_user_warning = mj_quiet;
+    int failed = 0;
+    double t0 = clock_s(CLOCK_MONOTONIC);
+    if (strchr(parts, 'r')) failed |= bench_rhs(max_n, batches);
+    if (strchr(parts, 's')) {
+        sim_triple();
+        sim_chain64();
+    }
+    if (strchr(parts, 'd')) sim_stiff();
+    printf("(bench_mujoco took %.0f s)\n", clock_s(CLOCK_MONOTONIC) - t0);
+    return failed || sink == 12345.678 ? 1 : 0;
+}
