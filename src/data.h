@@ -81,8 +81,8 @@ typedef struct ctc_data {
     /* threads of the GDCA passes (gdca_par.h); set with ctc_data_set_threads */
     int threads;                 /* the passes may use this many threads, the caller's included:
                                     1 (default) = serial */
-    int par_grain;               /* items per thread below which a stage of a pass (one tree
-                                    height, or the bodies) runs serially; 0 (default) = the
+    int par_grain;               /* the least items per chunk of a stage of a pass (one tree
+                                    height, or the bodies; gdca_par.h); 0 (default) = the
                                     pass's measured grain. For tests and benchmarks */
     struct ctc_pool *pool;       /* the workers: started by the first pass that splits a stage,
                                     stopped by ctc_data_free or a new thread count; else NULL */

@@ -9,12 +9,12 @@
  * higher ones in the disassembly (model.h: m->tree is ordered by height, height_start gives each
  * height's contiguous range), so the stages run in the order
  *     bodies, assembly heights 1 .. H, root, disassembly heights H .. 1
- * and within one stage each thread takes one contiguous chunk of its range. A stage of c items
- * uses min(threads, c / grain) threads; with fewer than two it runs on the caller's thread
- * alone, as does the root always (a loop model's root solve is special and small). Threads meet
- * at a barrier between two stages when either of them is split; consecutive serial stages need
- * none. A pass none of whose stages is split, or a data with threads = 1, runs without the pool
- * on the caller's thread.
+ * and the items of one stage are cut into contiguous chunks that the threads of the data's pool
+ * take as they come (pool.h): a stage of c items gets min(c / grain, threads x GDCA_PAR_CHUNKS)
+ * chunks, and one with fewer than two runs whole on one thread, as does the root always (a loop
+ * model's root solve is special and small); consecutive stages that do not split run as one
+ * piece. A chunk starts once every chunk of the earlier stages is done. A pass none of whose
+ * stages splits, or a data with threads = 1, runs without the pool on the caller's thread.
  *
  * The pass's callbacks must write only what belongs to the items they are given (a node's own
  * record, its joint's solution, the loads of its two children; a body's record), so that the
@@ -42,8 +42,8 @@ typedef struct gdca_par_pass {
     void (*root)(void *ctx);
     /* tree nodes hi-1 down to lo */
     void (*disassemble)(void *ctx, int lo, int hi);
-    int grain; /* items per thread below which a stage runs serially; d->par_grain > 0
-                  overrides it */
+    int grain; /* the least items per chunk: a stage of fewer than 2 grain items runs whole;
+                  d->par_grain > 0 overrides it */
 } gdca_par_pass;
 
 /* Runs the pass on the threads d allows (data.h: ctc_data_set_threads), starting d's pool at the

@@ -27,51 +27,78 @@
 
 /* ---- the pool ---- */
 
-#define ROUNDS 2000
+#define MAX_CHUNKS 4096
 
-typedef struct barrier_check {
-    ctc_pool *pool;
-    int nthreads;
-    int slot[CTC_MAX_THREADS]; /* slot[t]: the round thread t last finished */
-    atomic_int errors;         /* a thread saw another's slot not at its round */
-    atomic_int calls;
-} barrier_check;
+/* a job of stages of given sizes: each chunk checks that every chunk of the earlier stages is
+ * done and that it runs once */
+typedef struct staged_job {
+    int nstages, first[65]; /* first[s]: stage s's first chunk; first[nstages] = nchunks */
+    atomic_int runs[MAX_CHUNKS];
+    atomic_int done[MAX_CHUNKS];
+    atomic_int early; /* chunks that started before their dependencies were done */
+} staged_job;
 
-/* each round: write my slot, meet, check every slot, meet again */
-static void barrier_rounds(void *arg, int tid)
+static int stage_of(const staged_job *j, int c)
 {
-    barrier_check *b = arg;
-    atomic_fetch_add(&b->calls, 1);
-    for (int r = 1; r <= ROUNDS; r++) {
-        b->slot[tid] = r;
-        ctc_pool_barrier(b->pool);
-        for (int t = 0; t < b->nthreads; t++) {
-            if (b->slot[t] != r) atomic_fetch_add(&b->errors, 1);
-        }
-        ctc_pool_barrier(b->pool);
+    int s = 0;
+    while (j->first[s + 1] <= c) s++;
+    return s;
+}
+
+static int staged_need(void *arg, int c)
+{
+    staged_job *j = arg;
+    return j->first[stage_of(j, c)];
+}
+
+static void staged_work(void *arg, int c)
+{
+    staged_job *j = arg;
+    for (int i = 0; i < j->first[stage_of(j, c)]; i++) {
+        if (!atomic_load(&j->done[i])) atomic_fetch_add(&j->early, 1);
     }
+    atomic_fetch_add(&j->runs[c], 1);
+    atomic_store(&j->done[c], 1);
 }
 
-static void check_barrier(int nthreads, long spin_ns, long block_ns)
+/* runs a job of nstages stages of 1 + (s * 7) % width chunks, reps times */
+static void check_staged(int nthreads, long spin_ns, long block_ns, int nstages, int width)
 {
-    barrier_check b = {.nthreads = nthreads};
-    b.pool = ctc_pool_new(nthreads);
-    cr_assert_not_null(b.pool);
-    cr_assert_eq(ctc_pool_threads(b.pool), nthreads);
-    ctc_pool_set_wait(b.pool, spin_ns, block_ns);
-    for (int run = 0; run < 3; run++) ctc_pool_run(b.pool, barrier_rounds, &b);
-    cr_expect_eq(atomic_load(&b.errors), 0, "%d threads, wait (%ld, %ld) ns: %d stale slots",
-                 nthreads, spin_ns, block_ns, atomic_load(&b.errors));
-    cr_expect_eq(atomic_load(&b.calls), 3 * nthreads, "every thread runs every job once");
-    ctc_pool_free(b.pool);
+    staged_job *j = calloc(1, sizeof *j);
+    cr_assert_not_null(j);
+    j->nstages = nstages;
+    for (int s = 0; s < nstages; s++) j->first[s + 1] = j->first[s] + 1 + (s * 7) % width;
+    int n = j->first[nstages];
+    cr_assert(n <= MAX_CHUNKS);
+    ctc_pool *p = ctc_pool_new(nthreads);
+    cr_assert_not_null(p);
+    cr_assert_eq(ctc_pool_threads(p), nthreads);
+    ctc_pool_set_wait(p, spin_ns, block_ns);
+    ctc_pool_job job = {n, staged_need, staged_work, j};
+    for (int rep = 0; rep < 20; rep++) {
+        for (int c = 0; c < n; c++) atomic_store(&j->done[c], 0);
+        ctc_pool_run(p, &job);
+        for (int c = 0; c < n; c++) {
+            cr_assert_eq(atomic_load(&j->done[c]), 1, "%d threads: chunk %d not done", nthreads, c);
+        }
+    }
+    for (int c = 0; c < n; c++) {
+        cr_expect_eq(atomic_load(&j->runs[c]), 20, "%d threads: chunk %d ran %d times in 20 runs",
+                     nthreads, c, atomic_load(&j->runs[c]));
+    }
+    cr_expect_eq(atomic_load(&j->early), 0, "%d threads, wait (%ld, %ld) ns: %d early starts",
+                 nthreads, spin_ns, block_ns, atomic_load(&j->early));
+    ctc_pool_free(p);
+    free(j);
 }
 
-Test(gdca_parallel, pool_barrier_orders_every_round_in_every_waiting_mode)
+Test(gdca_parallel, pool_runs_every_chunk_once_after_its_stage_dependencies)
 {
-    check_barrier(2, CTC_POOL_SPIN_NS, CTC_POOL_BLOCK_NS); /* the defaults */
-    check_barrier(3, 0, 0);                                /* block at once */
-    check_barrier(2, 1000000, -1);                         /* spin, never block */
-    check_barrier(8, 0, 50000);                            /* yield, then block */
+    check_staged(2, -1, 0, 40, 5);               /* the defaults */
+    check_staged(3, 0, 0, 40, 9);                /* block at once */
+    check_staged(2, 1000000, -1, 40, 3);         /* spin, never block */
+    check_staged(8, 0, 50000, 30, 17);           /* yield, then block */
+    check_staged(CTC_MAX_THREADS, -1, 0, 8, 64); /* more threads than cores */
 }
 
 Test(gdca_parallel, pool_sizes_out_of_range_are_refused)
@@ -82,21 +109,28 @@ Test(gdca_parallel, pool_sizes_out_of_range_are_refused)
     ctc_pool_free(NULL);
 }
 
-/* idle workers block between runs and wake for the next one */
+/* idle workers block between runs and wake for the next one; an empty job returns at once */
 Test(gdca_parallel, pool_runs_again_after_its_workers_have_blocked)
 {
-    barrier_check b = {.nthreads = 4};
-    b.pool = ctc_pool_new(4);
-    cr_assert_not_null(b.pool);
-    ctc_pool_set_wait(b.pool, 1000, 2000);
+    staged_job *j = calloc(1, sizeof *j);
+    cr_assert_not_null(j);
+    j->nstages = 3;
+    j->first[1] = 4, j->first[2] = 5, j->first[3] = 9;
+    ctc_pool *p = ctc_pool_new(4);
+    cr_assert_not_null(p);
+    ctc_pool_set_wait(p, 1000, 2000);
+    ctc_pool_job job = {9, staged_need, staged_work, j}, empty = {0, staged_need, staged_work, j};
     for (int run = 0; run < 3; run++) {
-        ctc_pool_run(b.pool, barrier_rounds, &b);
+        for (int c = 0; c < 9; c++) atomic_store(&j->done[c], 0);
+        ctc_pool_run(p, &job);
+        ctc_pool_run(p, &empty);
         struct timespec nap = {0, 5000000}; /* 5 ms: every worker is blocked by now */
         nanosleep(&nap, NULL);
     }
-    cr_expect_eq(atomic_load(&b.errors), 0);
-    cr_expect_eq(atomic_load(&b.calls), 12);
-    ctc_pool_free(b.pool);
+    for (int c = 0; c < 9; c++) cr_expect_eq(atomic_load(&j->runs[c]), 3);
+    cr_expect_eq(atomic_load(&j->early), 0);
+    ctc_pool_free(p);
+    free(j);
 }
 
 /* ---- the passes ---- */
