@@ -20,7 +20,7 @@ WARN := -Wall -Wextra -Wshadow -Wstrict-prototypes -Werror
 CFLAGS := -std=c11 $(WARN) $(OPT) -g -D_POSIX_C_SOURCE=200809L -Isrc $(EXTRA_CFLAGS)
 LDFLAGS := $(EXTRA_LDFLAGS)
 LDLIBS := -lcjson -lsundials_cvode -lsundials_nvecserial -lsundials_sunmatrixdense \
-	-lsundials_sunlinsoldense -llapacke -llapack -lblas -lm
+	-lsundials_sunlinsoldense -llapacke -llapack -lblas -lm -pthread
 ifeq ($(SANITIZE),1)
 CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 LDFLAGS += -fsanitize=address,undefined

@@ -3,8 +3,8 @@
  * job's normalised document.
  *
  * One pass walks the document in the format's order: name, scene, controller, trajectory,
- * disturbance, integrator, duration, output, limits. Each object's keys are checked before any of
- * its values is read, so a misspelt key is reported as unknown (with the nearest valid key)
+ * disturbance, integrator, duration, output, limits, threads. Each object's keys are checked before
+ * any of its values is read, so a misspelt key is reported as unknown (with the nearest valid key)
  * rather than as the required key it was meant to be; a typed object ({"type": ...}) is checked
  * twice, against every key of its kind and then against the keys of its type. Types, finiteness
  * and the ranges the format owns (positive masses, non-zero axes, array lengths, the limits) are
@@ -44,6 +44,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "data.h"
 #include "presets.h"
 #include "shapes.h"
 
@@ -1937,11 +1938,25 @@ static int parse_limits(parser *p, const cJSON *doc)
     return 0;
 }
 
+/* "threads": a whole number 1..CTC_MAX_THREADS, default 1 (serial) */
+static int parse_threads(parser *p, const cJSON *doc)
+{
+    double threads;
+    if (member_number(p, doc, "", "threads", OPTIONAL, 1, &threads) != 0) return -1;
+    if (!(threads >= 1 && threads <= CTC_MAX_THREADS && threads == floor(threads))) {
+        return error_at(p->err, JOB_INVALID_FIELD, "threads",
+                        "must be a whole number from 1 to %d (got %g)", CTC_MAX_THREADS, threads);
+    }
+    p->j->spec.threads = (int)threads;
+    put_number(p, p->norm, "threads", threads);
+    return 0;
+}
+
 /* ---- the document ---- */
 
 static const char *const job_keys[] = {"name",        "scene",      "controller", "trajectory",
                                        "disturbance", "integrator", "duration",   "output",
-                                       "limits",      NULL};
+                                       "limits",      "threads",    NULL};
 
 /* the whole check of the spec by the library, after the format's own; what it finds wrong with
  * a loop (the mobility, the configuration at q0) is reported at the loop or at q0 */
@@ -1973,7 +1988,7 @@ static int parse_job(const cJSON *doc, const char *default_name, job **out, job_
         parse_controller(&p, doc) != 0 || parse_trajectory(&p, doc) != 0 ||
         parse_disturbance(&p, doc) != 0 || parse_integrator(&p, doc) != 0 ||
         parse_duration(&p, doc) != 0 || parse_output(&p, doc) != 0 || parse_limits(&p, doc) != 0 ||
-        check_spec(&p) != 0) {
+        parse_threads(&p, doc) != 0 || check_spec(&p) != 0) {
         if (p.norm == NULL) out_of_memory(err);
         job_free(j);
         return -1;

@@ -96,6 +96,10 @@
  *                 controller, loop a loop, tau at least one controlled coordinate)}
  *   "limits"      optional: {"max_speed": rad/s or m/s, > 0 (default 1e6), "wall_time": s >= 0
  *                 (0 = none)}
+ *   "threads"     optional whole number 1..CTC_MAX_THREADS (64), default 1: the threads the run's
+ *                 GDCA passes may use, its own thread included (sim.h); heights of the assembly
+ *                 tree too small to pay for the split still run serially, and the samples are
+ *                 bitwise the same for every count. Each run has its own workers.
  *
  * Or a preset with overrides: {"preset": NAME, PARAMS..., OVERRIDES...}. The preset's own
  * parameters (presets.h, e.g. "n" of n_link_pendulum) are taken out, the preset's job document

@@ -1,5 +1,6 @@
 /*
- * data.c - allocation of the per-simulation state (data.h): every array sized once from the model.
+ * data.c - allocation of the per-simulation state (data.h): every array sized once from the model,
+ * and the thread setting of its GDCA passes.
  */
 #include "data.h"
 
@@ -14,6 +15,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->dim = m->dim;
     d->hsize = (int)(3 * dim * dim + 2 * dim);
     d->singular_joint = -1;
+    d->threads = 1;
 
     d->xpos = calloc(n * 3, sizeof(double));
     d->xrot = calloc(n * 9, sizeof(double));
@@ -56,6 +58,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
 void ctc_data_free(ctc_data *d)
 {
     if (d == NULL) return;
+    ctc_pool_free(d->pool);
     free(d->xpos);
     free(d->xrot);
     free(d->xcom);
@@ -80,4 +83,24 @@ void ctc_data_free(ctc_data *d)
     free(d->jnt_load_inv);
     free(d->xbuf);
     free(d);
+}
+
+ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t errlen)
+{
+    if (nthreads < 1 || nthreads > CTC_MAX_THREADS) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "threads must be 1 to %d (got %d)",
+                        CTC_MAX_THREADS, nthreads);
+    }
+    if (nthreads != d->threads) {
+        ctc_pool_free(d->pool);
+        d->pool = NULL;
+        d->pool_failed = 0;
+        d->threads = nthreads;
+    }
+    return CTC_OK;
+}
+
+void ctc_data_share_pool(ctc_data *d, ctc_data *owner)
+{
+    d->pool_owner = owner == d ? NULL : owner;
 }

@@ -19,6 +19,7 @@
 #define CTC_DATA_H
 
 #include "model.h"
+#include "pool.h"
 
 typedef struct ctc_data {
     int dim;   /* 3 or 6, as the model's */
@@ -81,13 +82,39 @@ typedef struct ctc_data {
     double *jnt_load_inv; /* (njoints x dim) the same from the inverse pass (loop models: only
                              the joints the pruned disassembly reaches, model.h inv_need) */
     int singular_joint;   /* -1, or a joint whose matrix K was not positive definite */
+
+    /* threads of the GDCA passes (gdca_par.h); set with ctc_data_set_threads */
+    int threads;                 /* the passes may use this many threads, the caller's included:
+                                    1 (default) = serial */
+    int par_grain;               /* the least items per chunk of a stage of a pass (one tree
+                                    height, or the bodies; gdca_par.h); 0 (default) = the
+                                    pass's measured grain. For tests and benchmarks */
+    struct ctc_pool *pool;       /* the workers: started by the first pass that splits a stage,
+                                    stopped by ctc_data_free or a new thread count; else NULL */
+    int pool_failed;             /* 1: the pool could not start; serial until threads change */
+    struct ctc_data *pool_owner; /* NULL, or the data whose threads and pool d uses
+                                    (ctc_data_share_pool) */
 } ctc_data;
 
 /* Allocates a data block sized for m; NULL when out of memory. Free with ctc_data_free. */
 ctc_data *ctc_data_new(const ctc_model *m);
 
-/* Frees d; NULL is allowed. */
+/* Frees d and stops its worker threads, if any; NULL is allowed. */
 void ctc_data_free(ctc_data *d);
+
+/* Lets the GDCA passes on d (gdca.h) split the nodes of each large tree height over nthreads
+ * threads, the calling thread included: 1 (the default) is serial, at most CTC_MAX_THREADS
+ * (pool.h). Heights too small to pay for the split still run on the calling thread (gdca_par.h).
+ * The nthreads - 1 workers start at the first pass that uses them and belong to d: they stop when
+ * d is freed or its count changes, so no two data share them unless ctc_data_share_pool says so.
+ * The results are bitwise the same for every count. Returns CTC_OK, or CTC_EINVAL with a message
+ * in err (errlen bytes; may be NULL) when nthreads is out of range. */
+ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t errlen);
+
+/* Makes d's passes use owner's thread count and workers instead of its own, for two data used in
+ * turn by one thread (a simulation's plant and its controller's model): one set of workers then
+ * serves both. owner must stay alive while d uses it; NULL returns d to its own setting. */
+void ctc_data_share_pool(ctc_data *d, ctc_data *owner);
 
 /* The record of assembly index a: a body's (a < n), or internal node a - n's of the forward
  * (inverse = 0) or the mobility-form inverse (inverse = 1) pass. */

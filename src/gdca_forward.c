@@ -14,6 +14,11 @@
  * A loop model's root has both handles jointed to the ground (gdca_loop.h): joint 0 and the
  * closing joint, each with its constraint load unknown and its driving force known; dependent
  * joints' driving forces are taken as zero.
+ *
+ * The nodes of one tree height are independent: each node's assembly writes only its own record
+ * and its joint's E and z, its disassembly only its joint's load and acceleration and its two
+ * children's terminal loads, so gdca_par.c may split a height over threads (ctc_data_set_threads)
+ * with bitwise the serial results; the root stays on the caller's thread.
  */
 #include "gdca.h"
 
@@ -21,12 +26,14 @@
 #include <string.h>
 
 #include "gdca_loop.h"
+#include "gdca_par.h"
 #include "gdca_refine.h"
 #include "gdca_tree.h"
 
-/* the factor E of W = E E^T and z = W Y + P f of joint j between left (NULL: ground) and right */
-static inline void forward_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
-                                 const double *right, const double *f, const int dim)
+/* the factor E of W = E E^T and z = W Y + P f of joint j between left (NULL: ground) and right;
+ * returns 0, or -1 when D^T K D is not positive definite (the results are then NaN) */
+static inline int forward_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
+                                const double *right, const double *f, const int dim)
 {
     const int nv = m->jnt_nv[j];
     double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
@@ -34,16 +41,14 @@ static inline void forward_joint(const ctc_model *m, ctc_data *d, int j, const d
     double kpf[CTC_DENSE_MAX];
 
     gdca_joint_K(dim, left, right, k);
-    if (gdca_joint_factor(dim, k, d->jnt_D + dim * dim * j, dim - nv, e) != 0 &&
-        d->singular_joint < 0) {
-        d->singular_joint = j;
-    }
+    int st = gdca_joint_factor(dim, k, d->jnt_D + dim * dim * j, dim - nv, e);
     gdca_joint_map(dim, nv, d->jnt_P + 3 * dim * j, f + m->jnt_vadr[j], pf);
     ctc_dense_mulv(dim, dim, k, pf, kpf);
     gdca_joint_Y0(dim, left, right, d->jnt_beta + dim * j, y);
     for (int i = 0; i < dim; i++) y[i] -= kpf[i];
     gdca_factor_apply(dim, dim - nv, e, y, z);
     for (int i = 0; i < dim; i++) z[i] += pf[i];
+    return st;
 }
 
 /* qdd_j = P^T (A1^R - A2^L - beta) written into qacc */
@@ -89,42 +94,72 @@ static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const doub
     forward_qacc(m, d, n, rest, a2, qacc, dim); /* A(ground) = 0 = A2 + P qdd + beta */
 }
 
-static inline void forward_pass(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
-                                const int dim)
-{
-    const int n = m->nbodies, hs = d->hsize;
-    d->singular_joint = -1;
+/* Items per thread below which a stage of the forward pass runs serially (gdca_par.h), from
+ * bench_parallel's grain sweep (bench/README.md, "Parallel assembly"). */
+#define FORWARD_GRAIN_PLANAR 16
+#define FORWARD_GRAIN_SPATIAL 4
 
-    /* assembly, children before parents */
-    for (int i = 0; i < m->ntree; i++) {
+/* what the stages of one forward pass share (gdca_par.h) */
+typedef struct forward_args {
+    const ctc_model *m;
+    ctc_data *d;
+    const double *f;
+    double *qacc;
+} forward_args;
+
+/* assembly of tree nodes lo..hi-1, children before parents; returns the first node whose joint
+   is singular, or -1 */
+static inline int forward_assemble(const forward_args *a, int lo, int hi, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const int hs = d->hsize;
+    int first = -1;
+    for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 0);
         const double *right = ctc_data_handles(m, d, node->right, 0);
         int j = node->joint;
-        forward_joint(m, d, j, left, right, f, dim);
+        if (forward_joint(m, d, j, left, right, a->f, dim) != 0 && first < 0) first = i;
         gdca_assemble(dim, dim - m->jnt_nv[j], left, right, d->fwd_E + dim * dim * j,
                       d->fwd_z + dim * j, d->hfwd + (size_t)i * hs);
     }
+    return first;
+}
 
+/* the root: a loop model's, or the ground joint 0 with the free end's load F2 = 0 */
+static inline void forward_root(const forward_args *a, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
     if (m->has_loop) {
-        forward_loop_root(m, d, f, qacc, dim);
-    } else { /* root: the ground joint 0 with the free end's load F2 = 0 */
-        const double *root = ctc_data_handles(m, d, m->root, 0);
-        double *tl = d->tload + (size_t)m->root * 2 * dim, a1[CTC_DENSE_MAX];
-        static const double rest[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
-        forward_joint(m, d, 0, NULL, root, f, dim);
-        for (int i = 0; i < dim; i++) {
-            tl[i] = d->fwd_z[i];
-            tl[dim + i] = 0;
-            d->jnt_load[i] = tl[i];
-        }
-        ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
-        for (int i = 0; i < dim; i++) a1[i] += root[H13(dim) + i];
-        forward_qacc(m, d, 0, a1, rest, qacc, dim);
+        forward_loop_root(m, d, a->f, a->qacc, dim);
+        return;
     }
+    const double *root = ctc_data_handles(m, d, m->root, 0);
+    double *tl = d->tload + (size_t)m->root * 2 * dim, a1[CTC_DENSE_MAX];
+    static const double rest[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+    if (forward_joint(m, d, 0, NULL, root, a->f, dim) != 0 && d->singular_joint < 0) {
+        d->singular_joint = 0;
+    }
+    for (int i = 0; i < dim; i++) {
+        tl[i] = d->fwd_z[i];
+        tl[dim + i] = 0;
+        d->jnt_load[i] = tl[i];
+    }
+    ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
+    for (int i = 0; i < dim; i++) a1[i] += root[H13(dim) + i];
+    forward_qacc(m, d, 0, a1, rest, a->qacc, dim);
+}
 
-    /* disassembly, parents before children */
-    for (int i = m->ntree - 1; i >= 0; i--) {
+/* disassembly of tree nodes hi-1 down to lo, parents before children: each writes its joint's
+   load and acceleration and its children's terminal loads */
+static inline void forward_disassemble(const forward_args *a, int lo, int hi, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const int n = m->nbodies;
+    for (int i = hi - 1; i >= lo; i--) {
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 0);
         const double *right = ctc_data_handles(m, d, node->right, 0);
@@ -142,22 +177,64 @@ static inline void forward_pass(const ctc_model *m, ctc_data *d, const double *f
         ctc_dense_tmulv(dim, dim, left + H12(dim), f1, a2l);
         ctc_dense_mulv(dim, dim, left + H22(dim), fj, t);
         for (int r = 0; r < dim; r++) a2l[r] += left[H23(dim) + r] - t[r];
-        forward_qacc(m, d, j, a1r, a2l, qacc, dim);
+        forward_qacc(m, d, j, a1r, a2l, a->qacc, dim);
 
         gdca_pass_loads(dim, d->tload, node, f1, f2, fj);
     }
 }
 
-static CTC_SPECIALISE void forward_planar(const ctc_model *m, ctc_data *d, const double *f,
-                                          double *qacc)
+/* the stages specialised to the planar and the spatial form */
+static CTC_SPECIALISE int assemble_planar(void *a, int lo, int hi)
 {
-    forward_pass(m, d, f, qacc, 3);
+    return forward_assemble(a, lo, hi, 3);
 }
 
-static CTC_SPECIALISE void forward_spatial(const ctc_model *m, ctc_data *d, const double *f,
-                                           double *qacc)
+static CTC_SPECIALISE int assemble_spatial(void *a, int lo, int hi)
 {
-    forward_pass(m, d, f, qacc, 6);
+    return forward_assemble(a, lo, hi, 6);
+}
+
+static CTC_SPECIALISE void root_planar(void *a)
+{
+    forward_root(a, 3);
+}
+
+static CTC_SPECIALISE void root_spatial(void *a)
+{
+    forward_root(a, 6);
+}
+
+static CTC_SPECIALISE void disassemble_planar(void *a, int lo, int hi)
+{
+    forward_disassemble(a, lo, hi, 3);
+}
+
+static CTC_SPECIALISE void disassemble_spatial(void *a, int lo, int hi)
+{
+    forward_disassemble(a, lo, hi, 6);
+}
+
+/* assembly and disassembly over the tree, serial or a tree height at a time (gdca_par.h) */
+static void forward_planar(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
+{
+    forward_args a = {m, d, f, qacc};
+    gdca_par_pass pass = {.ctx = &a,
+                          .assemble = assemble_planar,
+                          .root = root_planar,
+                          .disassemble = disassemble_planar,
+                          .grain = FORWARD_GRAIN_PLANAR};
+    gdca_par_run(m, d, &pass);
+}
+
+static void forward_spatial(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
+{
+    forward_args a = {m, d, f, qacc};
+    gdca_par_pass pass = {.ctx = &a,
+                          .assemble = assemble_spatial,
+                          .root = root_spatial,
+                          .disassemble = disassemble_spatial,
+                          .grain = FORWARD_GRAIN_SPATIAL};
+    gdca_par_run(m, d, &pass);
 }
 
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc)

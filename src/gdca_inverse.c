@@ -25,11 +25,18 @@
  *     F = I^R A1^R + w^R - T(r12^R)^T F2,     driving force f = P^T F   (Eq. 51-52).
  * A body's record: I = T(rho)^T M_c T(rho), w = T(rho)^T (M_c kappa - b), rho = c_m - handle 1,
  * kappa = (0; w x (w x rho)), b = (-w x I_c w; m g), c = (0; w x (w x r12)).
+ *
+ * The body records, and the nodes of one tree height, are independent: a body writes its own
+ * record; a node's assembly its own record and its joint's offset e; its disassembly its joint's
+ * load and driving force and its two children's (A1, F2). gdca_par.c may therefore split them
+ * over threads (ctc_data_set_threads) with bitwise the serial results; the root stays on the
+ * caller's thread. Nothing is inverted, so d->singular_joint stays -1.
  */
 #include "gdca.h"
 #include "gdca_inverse_loop.h"
 
 #include "dense.h"
+#include "gdca_par.h"
 #include "spatial.h"
 
 /* offsets in a composite record */
@@ -151,22 +158,50 @@ static inline double *record(const ctc_data *d, int a)
     return d->icomp + (size_t)a * d->csize;
 }
 
-static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u, double *f,
-                                const int dim)
+/* Items per thread below which a stage of the composite inverse pass runs serially
+ * (gdca_par.h), from bench_parallel's grain sweep (bench/README.md, "Parallel assembly"). */
+#define INVERSE_GRAIN_PLANAR 32
+#define INVERSE_GRAIN_SPATIAL 8
+
+/* what the stages of one inverse pass share (gdca_par.h) */
+typedef struct inverse_args {
+    const ctc_model *m;
+    ctc_data *d;
+    const double *u;
+    double *f;
+} inverse_args;
+
+/* f_j = P^T F of joint j */
+static inline void inverse_drive(const ctc_model *m, const ctc_data *d, int j, double *f,
+                                 const int dim)
 {
+    const double *P = d->jnt_P + 3 * dim * j, *load = d->jnt_load_inv + dim * j;
+    for (int col = 0; col < m->jnt_nv[j]; col++) {
+        double x = 0;
+        for (int r = 0; r < dim; r++) x += P[col * dim + r] * load[r];
+        f[m->jnt_vadr[j] + col] = x;
+    }
+}
+
+/* the records of bodies lo..hi-1 */
+static inline void inverse_bodies(const inverse_args *a, int lo, int hi, const int dim)
+{
+    for (int k = lo; k < hi; k++) body_record(a->m, a->d, k, record(a->d, k), dim);
+}
+
+/* assembly of tree nodes lo..hi-1, children before parents; nothing is inverted, so no joint
+   is singular: returns -1 */
+static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
     const int n = m->nbodies;
-    d->singular_joint = -1; /* nothing is inverted in this form */
-
-    /* body records */
-    for (int k = 0; k < n; k++) body_record(m, d, k, record(d, k), dim);
-
-    /* assembly, children before parents */
-    for (int i = 0; i < m->ntree; i++) {
+    for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
         const double *L = record(d, node->left), *R = record(d, node->right);
         double *N = record(d, n + i), *e = d->inv_e + dim * node->joint;
         const double *P = d->jnt_P + 3 * dim * node->joint, *beta = d->jnt_beta + dim * node->joint;
-        const double *uj = u + m->jnt_vadr[node->joint];
+        const double *uj = a->u + m->jnt_vadr[node->joint];
         double t[CTC_DENSE_MAX * CTC_DENSE_MAX], s[CTC_DENSE_MAX * CTC_DENSE_MAX];
         double ie[CTC_DENSE_MAX], tf[CTC_DENSE_MAX];
 
@@ -190,9 +225,15 @@ static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u
         for (int r = 0; r < dim; r++) N[CC(dim) + r] = tf[r] + R[CC(dim) + r];
         ctc_v3_add(N + CR(dim), L + CR(dim), R + CR(dim));
     }
+    return -1;
+}
 
-    /* root: A1 = P u + beta of the ground joint, F1 = I A1 + w (free end: F2 = 0) */
-    const double *root = record(d, m->root);
+/* root: A1 = P u + beta of the ground joint, F1 = I A1 + w (free end: F2 = 0) */
+static inline void inverse_root(const inverse_args *a, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const double *root = record(d, m->root), *u = a->u;
     double *tl = d->tload + (size_t)m->root * 2 * dim, *load0 = d->jnt_load_inv;
     for (int r = 0; r < dim; r++) tl[r] = d->jnt_beta[r];
     for (int col = 0; col < m->jnt_nv[0]; col++) {
@@ -201,9 +242,17 @@ static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u
     for (int r = 0; r < dim; r++) tl[dim + r] = 0;
     ctc_dense_mulv(dim, dim, root + CI(dim), tl, load0);
     for (int r = 0; r < dim; r++) load0[r] += root[CW(dim) + r];
+    inverse_drive(m, d, 0, a->f, dim);
+}
 
-    /* disassembly, parents before children: F = I^R A1^R + w^R - T(r12^R)^T F2 */
-    for (int i = m->ntree - 1; i >= 0; i--) {
+/* disassembly of tree nodes hi-1 down to lo, parents before children:
+   F = I^R A1^R + w^R - T(r12^R)^T F2, and the joint's driving force f = P^T F */
+static inline void inverse_disassemble(const inverse_args *a, int lo, int hi, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const int n = m->nbodies;
+    for (int i = hi - 1; i >= lo; i--) {
         const ctc_tree_node *node = &m->tree[i];
         const double *L = record(d, node->left), *R = record(d, node->right);
         const double *a1 = d->tload + (size_t)(n + i) * 2 * dim, *f2 = a1 + dim;
@@ -222,29 +271,74 @@ static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u
             tlL[r] = a1[r];
             tlL[dim + r] = -load[r];
         }
-    }
-
-    /* driving forces f = P^T F of every joint */
-    for (int j = 0; j < n; j++) {
-        const double *P = d->jnt_P + 3 * dim * j, *load = d->jnt_load_inv + dim * j;
-        for (int col = 0; col < m->jnt_nv[j]; col++) {
-            double x = 0;
-            for (int r = 0; r < dim; r++) x += P[col * dim + r] * load[r];
-            f[m->jnt_vadr[j] + col] = x;
-        }
+        inverse_drive(m, d, node->joint, a->f, dim);
     }
 }
 
-static CTC_SPECIALISE void inverse_planar(const ctc_model *m, ctc_data *d, const double *u,
-                                          double *f)
+/* the stages specialised to the planar and the spatial form */
+static CTC_SPECIALISE void bodies_planar(void *a, int lo, int hi)
 {
-    inverse_pass(m, d, u, f, 3);
+    inverse_bodies(a, lo, hi, 3);
 }
 
-static CTC_SPECIALISE void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u,
-                                           double *f)
+static CTC_SPECIALISE void bodies_spatial(void *a, int lo, int hi)
 {
-    inverse_pass(m, d, u, f, 6);
+    inverse_bodies(a, lo, hi, 6);
+}
+
+static CTC_SPECIALISE int assemble_planar(void *a, int lo, int hi)
+{
+    return inverse_assemble(a, lo, hi, 3);
+}
+
+static CTC_SPECIALISE int assemble_spatial(void *a, int lo, int hi)
+{
+    return inverse_assemble(a, lo, hi, 6);
+}
+
+static CTC_SPECIALISE void root_planar(void *a)
+{
+    inverse_root(a, 3);
+}
+
+static CTC_SPECIALISE void root_spatial(void *a)
+{
+    inverse_root(a, 6);
+}
+
+static CTC_SPECIALISE void disassemble_planar(void *a, int lo, int hi)
+{
+    inverse_disassemble(a, lo, hi, 3);
+}
+
+static CTC_SPECIALISE void disassemble_spatial(void *a, int lo, int hi)
+{
+    inverse_disassemble(a, lo, hi, 6);
+}
+
+/* body records, assembly and disassembly, serial or a tree height at a time (gdca_par.h) */
+static void inverse_planar(const ctc_model *m, ctc_data *d, const double *u, double *f)
+{
+    inverse_args a = {m, d, u, f};
+    gdca_par_pass pass = {.ctx = &a,
+                          .bodies = bodies_planar,
+                          .assemble = assemble_planar,
+                          .root = root_planar,
+                          .disassemble = disassemble_planar,
+                          .grain = INVERSE_GRAIN_PLANAR};
+    gdca_par_run(m, d, &pass);
+}
+
+static void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u, double *f)
+{
+    inverse_args a = {m, d, u, f};
+    gdca_par_pass pass = {.ctx = &a,
+                          .bodies = bodies_spatial,
+                          .assemble = assemble_spatial,
+                          .root = root_spatial,
+                          .disassemble = disassemble_spatial,
+                          .grain = INVERSE_GRAIN_SPATIAL};
+    gdca_par_run(m, d, &pass);
 }
 
 void gdca_inverse_composite(const ctc_model *m, ctc_data *d, const double *u, double *f)

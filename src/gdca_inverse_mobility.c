@@ -23,6 +23,11 @@
  * are jointed to the ground (gdca_loop.h), each end's case (independent or dependent terminal
  * joint, Eq. 55-65) choosing its unknowns. The disassembly visits only the nodes on the way to
  * an independent joint (model.h inv_need, Fig. 4); the loads of the others are not needed.
+ *
+ * As in the forward pass, the nodes of one tree height write disjoint slots (their records,
+ * their joints' E, z, load and driving force, their children's terminal loads), so gdca_par.c
+ * may split a height over threads (ctc_data_set_threads) with bitwise the serial results; the
+ * root, a loop model's included, stays on the caller's thread.
  */
 #include "gdca.h"
 
@@ -30,6 +35,7 @@
 #include <string.h>
 
 #include "gdca_loop.h"
+#include "gdca_par.h"
 #include "gdca_tree.h"
 
 /* the factor's column count of joint j: dim across an independent joint, dim - nv otherwise */
@@ -38,25 +44,24 @@ static inline int inverse_nc(const ctc_model *m, int j, const int dim)
     return m->jnt_indep[j] ? dim : dim - m->jnt_nv[j];
 }
 
-/* the factor E of X = E E^T = K^-1 and z = X Y' of joint j between left (NULL: ground) and right */
-static inline void inverse_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
-                                 const double *right, const double *u, const int dim)
+/* the factor E of X = E E^T = K^-1 and z = X Y' of joint j between left (NULL: ground) and right;
+ * returns 0, or -1 when the matrix to factor is not positive definite (the results are NaN) */
+static inline int inverse_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
+                                const double *right, const double *u, const int dim)
 {
     double *e = d->inv_E + dim * dim * j, *z = d->inv_z + dim * j;
     double k[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX], pu[CTC_DENSE_MAX];
     const int indep = m->jnt_indep[j], nc = inverse_nc(m, j, dim);
 
     gdca_joint_K(dim, left, right, k);
-    if (gdca_joint_factor(dim, k, indep ? NULL : d->jnt_D + dim * dim * j, nc, e) != 0 &&
-        d->singular_joint < 0) {
-        d->singular_joint = j;
-    }
+    int st = gdca_joint_factor(dim, k, indep ? NULL : d->jnt_D + dim * dim * j, nc, e);
     gdca_joint_Y0(dim, left, right, d->jnt_beta + dim * j, y);
     if (indep) {
         gdca_joint_map(dim, m->jnt_nv[j], d->jnt_P + 3 * dim * j, u + m->jnt_vadr[j], pu);
         for (int i = 0; i < dim; i++) y[i] += pu[i];
     }
     gdca_factor_apply(dim, nc, e, y, z);
+    return st;
 }
 
 /* a loop model's root: both handles jointed to the ground, each end independent or dependent */
@@ -104,44 +109,75 @@ static inline void inverse_drive(const ctc_model *m, const ctc_data *d, int j, c
     }
 }
 
-static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u, double *f,
-                                const int dim)
-{
-    const int n = m->nbodies, hs = d->hsize;
-    d->singular_joint = -1;
+/* Items per thread below which a stage of the mobility-form inverse pass runs serially
+ * (gdca_par.h): its nodes cost about what the forward pass's do, so it takes the forward pass's
+ * grain (gdca_forward.c; bench/README.md, "Parallel assembly"). */
+#define MOBILITY_GRAIN_PLANAR 16
+#define MOBILITY_GRAIN_SPATIAL 4
 
-    /* assembly, children before parents */
-    for (int i = 0; i < m->ntree; i++) {
+/* what the stages of one inverse pass share (gdca_par.h) */
+typedef struct mobility_args {
+    const ctc_model *m;
+    ctc_data *d;
+    const double *u;
+    double *f;
+} mobility_args;
+
+/* assembly of tree nodes lo..hi-1, children before parents; returns the first node whose joint
+   is singular, or -1 */
+static inline int mobility_assemble(const mobility_args *a, int lo, int hi, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const int hs = d->hsize;
+    int first = -1;
+    for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 1);
         const double *right = ctc_data_handles(m, d, node->right, 1);
         int j = node->joint;
-        inverse_joint(m, d, j, left, right, u, dim);
+        if (inverse_joint(m, d, j, left, right, a->u, dim) != 0 && first < 0) first = i;
         gdca_assemble(dim, inverse_nc(m, j, dim), left, right, d->inv_E + dim * dim * j,
                       d->inv_z + dim * j, d->hinv + (size_t)i * hs);
     }
+    return first;
+}
 
-    double *tl = d->tload + (size_t)m->root * 2 * dim;
+/* the root: a loop model's, or the ground joint 0 with the free end's load F2 = 0 */
+static inline void mobility_root(const mobility_args *a, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const int n = m->nbodies;
+    double *tl = d->tload + (size_t)m->root * 2 * dim, *f = a->f;
     if (m->has_loop) {
-        inverse_loop_root(m, d, u, dim);
+        inverse_loop_root(m, d, a->u, dim);
         for (int j = 0; j < m->nvx; j++) f[j] = 0; /* dependent coordinates */
         if (m->jnt_indep[0]) inverse_drive(m, d, 0, tl, f, dim);
         if (m->jnt_indep[n]) inverse_drive(m, d, n, d->jnt_load_inv + dim * n, f, dim);
-    } else { /* root: ground joint 0, free end F2 = 0 */
-        const double *root = ctc_data_handles(m, d, m->root, 1);
-        inverse_joint(m, d, 0, NULL, root, u, dim);
-        for (int i = 0; i < dim; i++) {
-            tl[i] = d->inv_z[i];
-            tl[dim + i] = 0;
-            d->jnt_load_inv[i] = tl[i];
-        }
-        inverse_drive(m, d, 0, tl, f, dim);
+        return;
     }
+    const double *root = ctc_data_handles(m, d, m->root, 1);
+    if (inverse_joint(m, d, 0, NULL, root, a->u, dim) != 0 && d->singular_joint < 0) {
+        d->singular_joint = 0;
+    }
+    for (int i = 0; i < dim; i++) {
+        tl[i] = d->inv_z[i];
+        tl[dim + i] = 0;
+        d->jnt_load_inv[i] = tl[i];
+    }
+    inverse_drive(m, d, 0, tl, f, dim);
+}
 
-    /* disassembly, parents before children; a loop model's stops where no independent joint
-       is left below (Fig. 4) */
+/* disassembly of tree nodes hi-1 down to lo, parents before children; a loop model's stops
+   where no independent joint is left below (Fig. 4) */
+static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const int n = m->nbodies;
     const int prune = m->has_loop && !d->inv_full;
-    for (int i = m->ntree - 1; i >= 0; i--) {
+    for (int i = hi - 1; i >= lo; i--) {
         if (prune && !m->inv_need[i]) continue;
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 1);
@@ -151,31 +187,55 @@ static inline void inverse_pass(const ctc_model *m, ctc_data *d, const double *u
         double *fj = d->jnt_load_inv + dim * j;
         gdca_joint_load(dim, inverse_nc(m, j, dim), left, right, d->inv_E + dim * dim * j,
                         d->inv_z + dim * j, f1, f2, fj);
-        if (m->jnt_indep[j]) inverse_drive(m, d, j, fj, f, dim);
+        if (m->jnt_indep[j]) inverse_drive(m, d, j, fj, a->f, dim);
         gdca_pass_loads(dim, d->tload, node, f1, f2, fj);
     }
-    if (m->has_loop && d->singular_joint >= 0) {
-        for (int j = 0; j < m->nvx; j++) f[j] = NAN;
-    }
 }
 
-static CTC_SPECIALISE void inverse_planar(const ctc_model *m, ctc_data *d, const double *u,
-                                          double *f)
+/* the stages specialised to the planar and the spatial form */
+static CTC_SPECIALISE int assemble_planar(void *a, int lo, int hi)
 {
-    inverse_pass(m, d, u, f, 3);
+    return mobility_assemble(a, lo, hi, 3);
 }
 
-static CTC_SPECIALISE void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u,
-                                           double *f)
+static CTC_SPECIALISE int assemble_spatial(void *a, int lo, int hi)
 {
-    inverse_pass(m, d, u, f, 6);
+    return mobility_assemble(a, lo, hi, 6);
+}
+
+static CTC_SPECIALISE void root_planar(void *a)
+{
+    mobility_root(a, 3);
+}
+
+static CTC_SPECIALISE void root_spatial(void *a)
+{
+    mobility_root(a, 6);
+}
+
+static CTC_SPECIALISE void disassemble_planar(void *a, int lo, int hi)
+{
+    mobility_disassemble(a, lo, hi, 3);
+}
+
+static CTC_SPECIALISE void disassemble_spatial(void *a, int lo, int hi)
+{
+    mobility_disassemble(a, lo, hi, 6);
 }
 
 void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u, double *f)
 {
-    if (m->form == CTC_FORM_PLANAR) {
-        inverse_planar(m, d, u, f);
-    } else {
-        inverse_spatial(m, d, u, f);
+    mobility_args a = {m, d, u, f};
+    const int planar = m->form == CTC_FORM_PLANAR;
+    gdca_par_pass pass = {
+        .ctx = &a,
+        .assemble = planar ? assemble_planar : assemble_spatial,
+        .root = planar ? root_planar : root_spatial,
+        .disassemble = planar ? disassemble_planar : disassemble_spatial,
+        .grain = planar ? MOBILITY_GRAIN_PLANAR : MOBILITY_GRAIN_SPATIAL,
+    };
+    gdca_par_run(m, d, &pass);
+    if (m->has_loop && d->singular_joint >= 0) {
+        for (int j = 0; j < m->nvx; j++) f[j] = NAN;
     }
 }

@@ -162,6 +162,9 @@ static ctc_status check_run(const ctc_sim_spec *s, char *err, size_t errlen)
     if (!(s->wall_limit >= 0) || isinf(s->wall_limit))
         return ctc_fail(CTC_EINVAL, err, errlen, "wall_limit must be >= 0 and finite (got %g s)",
                         s->wall_limit);
+    if (s->threads < 0 || s->threads > CTC_MAX_THREADS)
+        return ctc_fail(CTC_EINVAL, err, errlen, "threads must be 0 to %d (got %d)",
+                        CTC_MAX_THREADS, s->threads);
     if ((unsigned)s->controller > CTC_CTRL_LQR)
         return ctc_fail(CTC_EINVAL, err, errlen, "unknown controller type %d", (int)s->controller);
     unsigned bad = s->channels & ~channels_applicable(s->controller) & ~CTC_CH_BIT(CTC_CH_LOOP);
@@ -770,6 +773,11 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     if (!c.dp || !c.dc || !c.qn || !c.u || !ybuf) {
         st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
         goto cleanup;
+    }
+    if (spec->threads > 1) { /* one set of workers for both models */
+        st = ctc_data_set_threads(c.dp, spec->threads, err, errlen);
+        if (st != CTC_OK) goto cleanup;
+        ctc_data_share_pool(c.dc, c.dp);
     }
     c.f = c.u + nvx, c.fz = c.f + nvx, c.acc = c.fz + nvx, c.w = c.acc + nvx;
     c.des = c.w + nv, c.qi = c.des + 3 * nv, c.vi = c.qi + nv;

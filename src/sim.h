@@ -27,8 +27,9 @@
  * stops as "singular" when the independent joints can no longer drive the loop (the boundary
  * solve's condition estimate beyond loop_cond_max).
  *
- * A run is single-threaded and allocates everything before its first step. Any number of runs
- * may go on at once in different threads.
+ * A run allocates everything before its first step. It runs on the calling thread, helped in the
+ * GDCA passes by spec.threads - 1 workers of its own when asked. Any number of runs may go on at
+ * once in different threads.
  */
 #ifndef CTC_SIM_H
 #define CTC_SIM_H
@@ -101,6 +102,12 @@ typedef struct ctc_sim_spec {
     double baumgarte[2];  /* a, b (1/s) for CTC_LOOP_BAUMGARTE; 0, 0 = 10, 10 */
     double loop_cond_max; /* stop as singular beyond this condition estimate; 0 =
                              CTC_SIM_DEFAULT_COND_MAX */
+    /* threads of the GDCA passes, the calling thread included (data.h ctc_data_set_threads):
+       0 or 1 = serial; up to CTC_MAX_THREADS. The run owns its workers (one set for the plant and
+       the controller's model, started at the first pass that splits a tree height), so runs in
+       different threads never share them; the results are bitwise the same for every count, and
+       metrics.cpu_s counts the calling thread only */
+    int threads;
 } ctc_sim_spec;
 
 /* The default limit on the condition estimates of a closed chain's solves: the inverse pass's

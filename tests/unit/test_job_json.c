@@ -442,6 +442,18 @@ static const bad_job bad_jobs[] = {
      "limits.max_speed", "must be positive (got 0)"},
     {"negative wall time", PASSIVE_JOB(",'limits':{'wall_time':-1}"), NULL, JOB_INVALID_FIELD,
      "limits.wall_time", "must not be negative (got -1 s)"},
+    {"no threads", PASSIVE_JOB(",'threads':0"), NULL, JOB_INVALID_FIELD, "threads",
+     "must be a whole number from 1 to 64 (got 0)"},
+    {"negative threads", PASSIVE_JOB(",'threads':-2"), NULL, JOB_INVALID_FIELD, "threads",
+     "must be a whole number from 1 to 64 (got -2)"},
+    {"too many threads", PASSIVE_JOB(",'threads':65"), NULL, JOB_INVALID_FIELD, "threads",
+     "must be a whole number from 1 to 64 (got 65)"},
+    {"fractional threads", PASSIVE_JOB(",'threads':1.5"), NULL, JOB_INVALID_FIELD, "threads",
+     "must be a whole number from 1 to 64 (got 1.5)"},
+    {"threads a string", PASSIVE_JOB(",'threads':'2'"), NULL, JOB_INVALID_FIELD, "threads",
+     "must be a number (got a string)"},
+    {"threads in the integrator", PASSIVE_JOB(",'integrator':{'threads':2}"), NULL,
+     JOB_UNKNOWN_FIELD, "integrator.threads", "unknown key \"threads\""},
 
     /* the loop */
     {"dependent joint of an open chain",
@@ -674,6 +686,7 @@ Test(job_json, fills_every_default_of_a_minimal_planar_job)
     cr_assert_eq(s->channels, passive);
     cr_assert_eq(s->max_speed, 1e6);
     cr_assert_eq(s->wall_limit, 0);
+    cr_assert_eq(s->threads, 1);
     job_free(j);
 
     /* rk4's step; an interval no longer than a short duration; every channel with a controller */
@@ -1126,7 +1139,7 @@ Test(job_json, normalised_documents_parse_back_to_the_same_job)
         "0.1,'period':0.5},{'type':'step','value':1,'time':0.5},{'type':'none'}],"
         "'integrator':{'method':'rk4','step':0.0005,'max_steps':100000},'duration':2,"
         "'output':{'interval':0.05,'channels':['e','q','w']},'limits':{'max_speed':1000,"
-        "'wall_time':10}}",
+        "'wall_time':10},'threads':4}",
         0);
 
     /* lqr with rows, complex poles with overrides, bdf */
@@ -1173,10 +1186,28 @@ Test(job_json, normalised_keys_come_in_canonical_order)
         "'q0':[0],'v0':[1]},'controller':{'type':'none'},'disturbance':{'type':'none'},"
         "'integrator':{'method':'dopri5','rtol':1e-08,'atol':1e-10,'initial_step':0,'max_step':0,"
         "'max_steps':10000000},'duration':1,'output':{'interval':0.01,'channels':['q','qdot']},"
-        "'limits':{'max_speed':1000000,'wall_time':0}}");
+        "'limits':{'max_speed':1000000,'wall_time':0},'threads':1}");
     cr_assert_str_eq(text, want);
     free(text);
     free(want);
+    job_free(j);
+}
+
+Test(job_json, threads_are_the_runs_thread_count_also_over_a_preset)
+{
+    job *j = parse_ok(PASSIVE_JOB(",'threads':8"));
+    cr_assert_eq(j->spec.threads, 8);
+    const cJSON *t = cJSON_GetObjectItemCaseSensitive(j->normalised, "threads");
+    cr_assert(cJSON_IsNumber(t) && t->valuedouble == 8);
+    job_free(j);
+
+    j = parse_ok("{'preset':'n_link_pendulum','n':64,'threads':2}");
+    cr_assert_eq(j->spec.threads, 2);
+    cr_assert_eq(j->spec.chain.nbodies, 64);
+    job_free(j);
+
+    j = parse_ok(PASSIVE_JOB(",'threads':64"));
+    cr_assert_eq(j->spec.threads, 64, "the largest count allowed");
     job_free(j);
 }
 

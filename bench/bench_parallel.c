@@ -1,0 +1,549 @@
+/*
+ * bench_parallel.c - the GDCA passes with each tree height split over threads (gdca_par.h,
+ * ctc_data_set_threads) against the same passes on one thread, and what the threads' meeting
+ * points cost.
+ *
+ * Three parts, each printed as a table:
+ *   barrier   the pool's level barrier (pool.h) with 2 threads and with each count of
+ *             CTC_BENCH_THREADS: a job of BARRIERS stages of one trivial chunk per thread, each
+ *             stage needing the one before, per stage, with the default waiting (pause-spin,
+ *             then block), sched_yield at once (then block), block at once; POSIX
+ *             pthread_barrier_wait on as many plain threads per crossing for comparison; and one
+ *             run of one stage on warm workers and on blocked ones (after 2 ms idle), the cost
+ *             of a pass's start.
+ *   grain     for each pass (GDCA forward, composite iGDCA), form and n = 256, 1024, 4096, on
+ *             2 threads: the time of one pass as the grain varies (d->par_grain: a stage of c items
+ * uses min(threads, c / grain) threads, serial below 2), and serially. The best grain is the
+ * threshold written into gdca_forward.c and gdca_inverse.c. speed-up  planar rod chains and spatial
+ * revolute chains (the chains of bench_dynamics) of n = 64, 128, ..., max_n bodies: one GDCA
+ * forward pass, one composite iGDCA pass and one CTC right-hand side (kinematics + handles + iGDCA
+ * + GDCA; kinematics and handles stay serial), on 1 thread and on each count of CTC_BENCH_THREADS
+ * (default 2), with the measured grains; speed-up = time on 1 thread / time on k threads, from the
+ * same run. Each thread count has its own ctc_data (and pool). Before timing, the results on k
+ * threads are checked bitwise against 1 thread; a mismatch ends the run with status 1. Batches of
+ * all timings of one chain are interleaved, each batch starting one timing further on; each timing
+ * runs untimed for SETTLE_S (at least once) before it is timed, so that the workers are warm and
+ * the caches hold the timing's own data; the figures are medians over the batches.
+ *
+ * Usage: bench_parallel [max_n] [batches]     (default 65536 and 11)
+ * Environment: CTC_BENCH_THREADS="2,4,8" thread counts beside 1 (default "2", each 2..64);
+ *              CTC_BENCH_QUICK=1: max_n 4096 and 5 batches unless given.
+ */
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "chains.h"
+#include "ctc.h"
+#include "pool.h"
+
+#define MAXK 8         /* thread counts beside 1 */
+#define SETTLE_S 5e-3  /* s, untimed runs before each timing in a batch */
+#define BATCH_S 2e-3   /* s, the least length of one timed batch of the slowest timing */
+#define BARRIERS 20000 /* crossings per barrier timing */
+
+#define IDLE_NS 2000000L /* ns between two runs of the blocked-start timing */
+
+enum { P_FWD, P_INV, P_CTC, NP }; /* the passes timed */
+static const char *const pass_names[NP] = {"GDCA fwd", "iGDCA", "ctc"};
+
+static int nk = 1;               /* thread counts beside 1 */
+static int kthreads[MAXK] = {2}; /* and the counts */
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static double loadavg(void)
+{
+    double l = -1;
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (f) {
+        if (fscanf(f, "%lf", &l) != 1) l = -1;
+        fclose(f);
+    }
+    return l;
+}
+
+static int cmp_double(const void *x, const void *y)
+{
+    double a = *(const double *)x, b = *(const double *)y;
+    return (a > b) - (a < b);
+}
+
+static volatile double sink;
+
+/* ---- medians over interleaved batches ---- */
+
+/* Medians (s per call) of ntim timings of run(ctx, w), w = 0..ntim-1: batches interleaved, each
+ * timing settled for SETTLE_S (at least one call), reps calls per batch so that a batch of the
+ * slowest timing lasts BATCH_S. */
+static void measure(void (*run)(void *ctx, int w), void *ctx, int ntim, int batches, double *med)
+{
+    int reps = 1;
+    for (int w = 0; w < ntim; w++) { /* the slowest timing's calls per BATCH_S */
+        double t0 = now();
+        int calls = 0;
+        while (now() - t0 < BATCH_S || calls < 1) {
+            run(ctx, w);
+            calls++;
+        }
+        if (w == 0 || calls < reps) reps = calls;
+    }
+    double *samples = malloc(sizeof(double) * (size_t)batches * (size_t)ntim);
+    if (!samples) abort();
+    for (int b = 0; b < batches; b++) {
+        for (int i = 0; i < ntim; i++) {
+            int w = (b + i) % ntim;
+            double s = now();
+            do {
+                run(ctx, w);
+            } while (now() - s < SETTLE_S);
+            s = now();
+            for (int r = 0; r < reps; r++) run(ctx, w);
+            samples[w * batches + b] = (now() - s) / reps;
+        }
+    }
+    for (int w = 0; w < ntim; w++) {
+        qsort(samples + w * batches, (size_t)batches, sizeof(double), cmp_double);
+        med[w] = samples[w * batches + batches / 2];
+    }
+    free(samples);
+}
+
+/* ---- the level barrier ---- */
+
+enum { B_DEFAULT, B_YIELD, B_BLOCK, B_POSIX, B_RUN_WARM, B_RUN_COLD, NB };
+
+typedef struct barrier_case {
+    ctc_pool *pool; /* its waiting phases set for each timing */
+    int nthreads;
+    volatile double slot[CTC_MAX_THREADS * 8]; /* a chunk's trivial work, a cache line apart */
+    pthread_barrier_t posix;
+    pthread_t *posix_threads;
+    /* POSIX: the helpers wait on go_gen, then cross BARRIERS barriers with the caller */
+    pthread_mutex_t lock;
+    pthread_cond_t go;
+    int go_gen, stop;
+} barrier_case;
+
+/* BARRIERS stages of nthreads chunks each: chunk c needs the stages before its own */
+static int stage_need(void *arg, int c)
+{
+    const barrier_case *b = arg;
+    return c / b->nthreads * b->nthreads;
+}
+
+static void stage_work(void *arg, int c)
+{
+    barrier_case *b = arg;
+    b->slot[(c % b->nthreads) * 8] += 1.0;
+}
+
+static void *posix_helper(void *arg)
+{
+    barrier_case *c = arg;
+    int seen = 0;
+    for (;;) {
+        pthread_mutex_lock(&c->lock);
+        while (c->go_gen == seen && !c->stop) pthread_cond_wait(&c->go, &c->lock);
+        seen = c->go_gen;
+        int stop = c->stop;
+        pthread_mutex_unlock(&c->lock);
+        if (stop) return NULL;
+        for (int i = 0; i < BARRIERS; i++) pthread_barrier_wait(&c->posix);
+    }
+}
+
+/* one timing of the barrier table: BARRIERS stages, or one run of one stage on warm workers */
+static void run_barrier(void *arg, int w)
+{
+    barrier_case *c = arg;
+    ctc_pool_job stages = {BARRIERS * c->nthreads, stage_need, stage_work, c};
+    ctc_pool_job one = {c->nthreads, stage_need, stage_work, c};
+    switch (w) {
+    case B_DEFAULT:
+    case B_YIELD:
+    case B_BLOCK:
+        if (w == B_YIELD) ctc_pool_set_wait(c->pool, 0, CTC_POOL_BLOCK_NS);
+        if (w == B_BLOCK) ctc_pool_set_wait(c->pool, 0, 0);
+        ctc_pool_run(c->pool, &stages);
+        ctc_pool_set_wait(c->pool, -1, 0); /* back to the defaults */
+        break;
+    case B_POSIX:
+        pthread_mutex_lock(&c->lock);
+        c->go_gen++;
+        pthread_cond_broadcast(&c->go);
+        pthread_mutex_unlock(&c->lock);
+        for (int i = 0; i < BARRIERS; i++) pthread_barrier_wait(&c->posix);
+        break;
+    default:
+        ctc_pool_run(c->pool, &one);
+        break;
+    }
+}
+
+static void bench_barrier(int nthreads, int batches)
+{
+    barrier_case c = {.nthreads = nthreads};
+    c.pool = ctc_pool_new(nthreads);
+    if (!c.pool) abort();
+    c.posix_threads = calloc((size_t)nthreads, sizeof *c.posix_threads);
+    if (!c.posix_threads || pthread_barrier_init(&c.posix, NULL, (unsigned)nthreads) != 0 ||
+        pthread_mutex_init(&c.lock, NULL) != 0 || pthread_cond_init(&c.go, NULL) != 0)
+        abort();
+    for (int t = 1; t < nthreads; t++) {
+        if (pthread_create(&c.posix_threads[t], NULL, posix_helper, &c) != 0) abort();
+    }
+
+    double med[NB];
+    measure(run_barrier, &c, B_RUN_COLD, batches, med); /* all but the cold start, below */
+
+    /* the cold start: median of single one-stage runs, each after IDLE_NS idle (every worker
+       has blocked by then) */
+    ctc_pool_job one = {nthreads, stage_need, stage_work, &c};
+    int runs = 2 * batches + 1;
+    double *cold = malloc(sizeof(double) * (size_t)runs);
+    if (!cold) abort();
+    for (int r = 0; r < runs; r++) {
+        struct timespec idle = {0, IDLE_NS};
+        nanosleep(&idle, NULL);
+        double t = now();
+        ctc_pool_run(c.pool, &one);
+        cold[r] = now() - t;
+    }
+    qsort(cold, (size_t)runs, sizeof(double), cmp_double);
+    med[B_RUN_COLD] = cold[runs / 2];
+    free(cold);
+
+    printf("| %7d | %9.0f | %9.0f | %9.0f | %9.0f | %9.0f | %9.0f |\n", nthreads,
+           1e9 * med[B_DEFAULT] / BARRIERS, 1e9 * med[B_YIELD] / BARRIERS,
+           1e9 * med[B_BLOCK] / BARRIERS, 1e9 * med[B_POSIX] / BARRIERS, 1e9 * med[B_RUN_WARM],
+           1e9 * med[B_RUN_COLD]);
+
+    pthread_mutex_lock(&c.lock);
+    c.stop = 1;
+    pthread_cond_broadcast(&c.go);
+    pthread_mutex_unlock(&c.lock);
+    for (int t = 1; t < nthreads; t++) pthread_join(c.posix_threads[t], NULL);
+    pthread_barrier_destroy(&c.posix);
+    pthread_cond_destroy(&c.go);
+    pthread_mutex_destroy(&c.lock);
+    free(c.posix_threads);
+    ctc_pool_free(c.pool);
+}
+
+/* ---- chains ---- */
+
+typedef struct chain_case {
+    const ctc_model *m;
+    ctc_data *d[MAXK + 1]; /* d[0] serial, d[i] on kthreads[i - 1] threads */
+    double *q, *v, *u;
+    double *f[MAXK + 1], *a[MAXK + 1];
+    int grains[16]; /* grain sweep: par_grain of each timing (0: serial) */
+} chain_case;
+
+static void run_pass(const ctc_model *m, ctc_data *d, int pass, const double *q, const double *v,
+                     const double *u, double *f, double *a)
+{
+    switch (pass) {
+    case P_FWD:
+        ctc_gdca_forward(m, d, f, a);
+        break;
+    case P_INV:
+        ctc_gdca_inverse(m, d, u, f);
+        break;
+    default:
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        ctc_gdca_inverse(m, d, u, f);
+        ctc_gdca_forward(m, d, f, a);
+        break;
+    }
+}
+
+/* timing w of the speed-up table: pass w % NP on data w / NP */
+static void run_speedup(void *arg, int w)
+{
+    chain_case *c = arg;
+    int k = w / NP;
+    run_pass(c->m, c->d[k], w % NP, c->q, c->v, c->u, c->f[k], c->a[k]);
+    sink += c->a[k][0];
+}
+
+static ctc_model *build(const test_chain *chain)
+{
+    char err[256];
+    ctc_model *m = NULL;
+    if (ctc_model_build(&chain->spec, &m, err, sizeof err) != CTC_OK) {
+        fprintf(stderr, "bench_parallel: n = %d: %s\n", chain->spec.nbodies, err);
+        exit(1);
+    }
+    return m;
+}
+
+/* a case with data on 1 thread (d[0]) and on threads[k - 1] threads (d[k], k = 1..nthreads),
+ * its state and results */
+static chain_case *case_new(const ctc_model *m, const int *threads, int nthreads)
+{
+    const int ndata = 1 + nthreads;
+    chain_case *c = calloc(1, sizeof *c);
+    if (!c) abort();
+    c->m = m;
+    size_t nq = (size_t)m->nq, nv = (size_t)m->nv;
+    c->q = calloc(nq, sizeof(double)), c->v = calloc(nv, sizeof(double));
+    c->u = calloc(nv, sizeof(double));
+    if (!c->q || !c->v || !c->u) abort();
+    uint64_t rng = 11;
+    test_random_state(m, &rng, 1.0, c->q, c->v);
+    for (size_t i = 0; i < nv; i++) c->u[i] = test_uniform(&rng, -1, 1);
+    for (int k = 0; k < ndata; k++) {
+        c->d[k] = ctc_data_new(m);
+        c->f[k] = calloc(nv, sizeof(double)), c->a[k] = calloc(nv, sizeof(double));
+        if (!c->d[k] || !c->f[k] || !c->a[k]) abort();
+        if (k > 0 && ctc_data_set_threads(c->d[k], threads[k - 1], NULL, 0) != CTC_OK) abort();
+    }
+    return c;
+}
+
+static void case_free(chain_case *c)
+{
+    for (int k = 0; k <= MAXK; k++) {
+        ctc_data_free(c->d[k]);
+        free(c->f[k]), free(c->a[k]);
+    }
+    free(c->q), free(c->v), free(c->u);
+    free(c);
+}
+
+/* the results of data k against data 0, bitwise, after a CTC evaluation; 0 when equal */
+static int check_bitwise(chain_case *c, int k)
+{
+    const ctc_model *m = c->m;
+    run_pass(m, c->d[0], P_CTC, c->q, c->v, c->u, c->f[0], c->a[0]);
+    run_pass(m, c->d[k], P_CTC, c->q, c->v, c->u, c->f[k], c->a[k]);
+    size_t nv = (size_t)m->nv * sizeof(double);
+    return memcmp(c->f[0], c->f[k], nv) != 0 || memcmp(c->a[0], c->a[k], nv) != 0;
+}
+
+/* ---- the grain sweep ---- */
+
+static const int sweep[] = {1, 2, 4, 8, 16, 32, 64, 128, 256, 0}; /* 0: serial */
+#define NSWEEP ((int)(sizeof sweep / sizeof *sweep))
+
+typedef struct sweep_case {
+    chain_case *c;
+    int pass;
+} sweep_case;
+
+static void run_sweep(void *arg, int w)
+{
+    sweep_case *s = arg;
+    chain_case *c = s->c;
+    ctc_data *d = c->d[1];
+    d->par_grain = sweep[w] ? sweep[w] : c->m->nbodies; /* a grain of n splits nothing */
+    run_pass(c->m, d, s->pass, c->q, c->v, c->u, c->f[1], c->a[1]);
+    sink += c->a[1][0] + c->f[1][0];
+}
+
+static void bench_sweep(const char *label, test_chain *chain, int batches)
+{
+    ctc_model *m = build(chain);
+    static const int two[1] = {2};
+    chain_case *c = case_new(m, two, 1);
+    run_pass(m, c->d[1], P_CTC, c->q, c->v, c->u, c->f[1], c->a[1]);
+    for (int pass = P_FWD; pass <= P_INV; pass++) {
+        sweep_case s = {c, pass};
+        double med[NSWEEP];
+        measure(run_sweep, &s, NSWEEP, batches, med);
+        int best = 0;
+        for (int g = 1; g < NSWEEP; g++)
+            if (med[g] < med[best]) best = g;
+        printf("| %-7s | %5d | %-8s |", label, m->nbodies, pass_names[pass]);
+        for (int g = 0; g < NSWEEP; g++) printf(" %8.1f |", 1e6 * med[g]);
+        if (sweep[best])
+            printf(" %4d |\n", sweep[best]);
+        else
+            printf(" serial |\n");
+    }
+    case_free(c);
+    ctc_model_free(m);
+}
+
+/* ---- the speed-up table ---- */
+
+#define MAXROWS 32
+
+typedef struct speed_row {
+    char label[8];
+    int n;
+    double t[MAXK + 1][NP]; /* s per call */
+} speed_row;
+
+static int bench_speedup(const char *label, test_chain *chain, int batches, speed_row *row)
+{
+    ctc_model *m = build(chain);
+    chain_case *c = case_new(m, kthreads, nk);
+    int failed = 0;
+    for (int k = 1; k <= nk; k++) {
+        if (check_bitwise(c, k)) {
+            fprintf(stderr, "bench_parallel: %s n = %d: %d threads change the results\n", label,
+                    m->nbodies, kthreads[k - 1]);
+            failed = 1;
+        }
+    }
+    double med[(MAXK + 1) * NP];
+    measure(run_speedup, c, (1 + nk) * NP, batches, med);
+    snprintf(row->label, sizeof row->label, "%s", label);
+    row->n = m->nbodies;
+    for (int k = 0; k <= nk; k++)
+        for (int p = 0; p < NP; p++) row->t[k][p] = med[k * NP + p];
+    case_free(c);
+    ctc_model_free(m);
+    return failed;
+}
+
+static void print_speedup(const speed_row *rows, int nrows)
+{
+    printf("| chain   |     n |");
+    for (int p = 0; p < NP; p++) {
+        printf(" %s 1T (us) |", pass_names[p]);
+        for (int k = 0; k < nk; k++) printf(" %dT (us) | speed-up |", kthreads[k]);
+    }
+    printf("\n| ------- | ----: |");
+    for (int p = 0; p < NP; p++) {
+        printf(" ---------: |");
+        for (int k = 0; k < nk; k++) printf(" --------: | ----: |");
+    }
+    printf("\n");
+    for (int i = 0; i < nrows; i++) {
+        const speed_row *r = &rows[i];
+        printf("| %-7s | %5d |", r->label, r->n);
+        for (int p = 0; p < NP; p++) {
+            printf(" %10.1f |", 1e6 * r->t[0][p]);
+            for (int k = 1; k <= nk; k++) {
+                printf(" %9.1f | %5.2f |", 1e6 * r->t[k][p], r->t[0][p] / r->t[k][p]);
+            }
+        }
+        printf("\n");
+    }
+
+    /* where k threads start to pay: the least n from which every larger n gains */
+    printf("\nThe least n from which every larger n of the table runs faster on k threads:\n\n");
+    for (int k = 1; k <= nk; k++) {
+        for (int p = 0; p < NP; p++) {
+            const char *labels[2] = {"planar", "spatial"};
+            for (int l = 0; l < 2; l++) {
+                int from = -1;
+                for (int i = nrows - 1; i >= 0; i--) {
+                    if (strcmp(rows[i].label, labels[l]) != 0) continue;
+                    if (rows[i].t[k][p] < rows[i].t[0][p])
+                        from = rows[i].n;
+                    else
+                        break;
+                }
+                printf("- %d threads, %s, %s: ", kthreads[k - 1], pass_names[p], labels[l]);
+                if (from > 0)
+                    printf("n >= %d\n", from);
+                else
+                    printf("none in the table\n");
+            }
+        }
+    }
+}
+
+/* ---- main ---- */
+
+/* CTC_BENCH_THREADS: a comma-separated list of thread counts 2..64 */
+static void parse_threads(const char *s)
+{
+    if (!s || !*s) return;
+    nk = 0;
+    while (*s && nk < MAXK) {
+        char *end;
+        long k = strtol(s, &end, 10);
+        if (end == s || k < 2 || k > CTC_MAX_THREADS) {
+            fprintf(stderr,
+                    "bench_parallel: CTC_BENCH_THREADS: thread counts 2..%d, e.g. "
+                    "\"2,4,8\"\n",
+                    CTC_MAX_THREADS);
+            exit(2);
+        }
+        kthreads[nk++] = (int)k;
+        s = *end == ',' ? end + 1 : end;
+        if (*end && *end != ',') break;
+    }
+    if (nk == 0) nk = 1, kthreads[0] = 2;
+}
+
+int main(int argc, char **argv)
+{
+    const char *quick = getenv("CTC_BENCH_QUICK");
+    int is_quick = quick && *quick && strcmp(quick, "0") != 0;
+    int max_n = argc > 1 ? atoi(argv[1]) : is_quick ? 4096 : 65536;
+    int batches = argc > 2 ? atoi(argv[2]) : is_quick ? 5 : 11;
+    if (max_n < 64 || batches < 1) {
+        fprintf(stderr, "usage: bench_parallel [max_n >= 64] [batches >= 1]\n");
+        return 2;
+    }
+    parse_threads(getenv("CTC_BENCH_THREADS"));
+    double load0 = loadavg(), t0 = now();
+    printf("GDCA passes split over threads. Medians of %d interleaved batches. Load average at the "
+           "start: %.2f.\n\n",
+           batches, load0);
+
+    printf(
+        "Level barrier: ns per stage of one trivial chunk per thread, each stage waiting for the "
+        "one before (pthread_barrier: ns per crossing), and one run of one stage (ns):\n\n");
+    printf("| threads | default | yield | block at once | pthread_barrier | run, warm | run, "
+           "after 2 ms idle |\n");
+    printf("| ------: | ------: | --------: | ------------: | --------------: | --------: | "
+           "--------------------: |\n");
+    bench_barrier(2, batches);
+    for (int k = 0; k < nk; k++)
+        if (kthreads[k] != 2) bench_barrier(kthreads[k], batches);
+
+    printf("\nGrain sweep, 2 threads: one pass (us) as the grain varies, and the best:\n\n");
+    printf("| chain   |     n | pass     |");
+    for (int g = 0; g < NSWEEP; g++) {
+        if (sweep[g])
+            printf(" %8d |", sweep[g]);
+        else
+            printf("   serial |");
+    }
+    printf(" best |\n| ------- | ----: | -------- |");
+    for (int g = 0; g < NSWEEP; g++) printf(" -------: |");
+    printf(" ---: |\n");
+    static const int sweep_n[] = {256, 1024, 4096};
+    for (int form = 0; form < 2; form++) {
+        for (int i = 0; i < 3 && sweep_n[i] <= max_n; i++) {
+            test_chain *c = form
+                                ? test_chain_random_spatial(sweep_n[i], 7, 1u << CTC_JOINT_REVOLUTE)
+                                : test_chain_random_planar(sweep_n[i], 7, 0, 1);
+            bench_sweep(form ? "spatial" : "planar", c, batches);
+            test_chain_free(c);
+        }
+    }
+
+    printf("\nOne pass and one CTC right-hand side on 1 thread and on k threads (us), speed-up = "
+           "1 thread / k threads:\n\n");
+    speed_row rows[MAXROWS];
+    int nrows = 0, failed = 0;
+    for (int form = 0; form < 2; form++) {
+        for (int n = 64; n <= max_n && nrows < MAXROWS; n *= 2) {
+            test_chain *c = form ? test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE)
+                                 : test_chain_random_planar(n, 7, 0, 1);
+            failed |= bench_speedup(form ? "spatial" : "planar", c, batches, &rows[nrows++]);
+            test_chain_free(c);
+        }
+    }
+    print_speedup(rows, nrows);
+    printf("\nLoad average at the end: %.2f; %.0f s in all.\n", loadavg(), now() - t0);
+    if (failed) return 1;
+    return sink == 12345.678 ? 1 : 0;
+}

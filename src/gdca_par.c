@@ -1,0 +1,196 @@
+/*
+ * gdca_par.c - the plan of a GDCA pass over the assembly tree, run serially or as chunks on the
+ * data's pool (gdca_par.h, pool.h).
+ *
+ * The stages (bodies, assembly heights 1..H, root, disassembly heights H..1) become a list of
+ * chunks for ctc_pool_run: a stage of c items that splits gets min(c / grain, threads x
+ * GDCA_PAR_CHUNKS) chunks, contiguous ranges [c j / m, c (j + 1) / m) of its items, so that a
+ * chunk at one height mostly reads what one chunk at the height below wrote (the nodes of one
+ * height are stored left to right along the chain); a run of consecutive stages that do not
+ * split becomes one chunk, done by one thread in stage order without waiting between them. Each
+ * chunk needs every chunk of the stages before it done, which is the level barrier; a thread
+ * that holds no chunk delays nobody (pool.h).
+ */
+#include "gdca_par.h"
+
+#include <limits.h>
+#include <stdatomic.h>
+
+#include "pool.h"
+
+/* Chunks per thread a split stage is cut into (at most): more than one, so that a thread that
+ * is descheduled or slow leaves work the others can take (bench_parallel built with 1, 2 and 4;
+ * bench/README.md). */
+#ifndef GDCA_PAR_CHUNKS
+#define GDCA_PAR_CHUNKS 2
+#endif
+
+#define MAX_STAGES 64 /* bodies, 2 x 20 heights (CTC_MAX_BODIES = 10^6 < 2^20), root */
+
+enum { STAGE_BODIES, STAGE_ASSEMBLE, STAGE_ROOT, STAGE_DISASSEMBLE };
+
+/* one stage of the pass, or a run of consecutive stages that do not split (a group) */
+typedef struct par_stage {
+    int kind;    /* STAGE_*; a group of several stages has nchunks = 1 and last > index */
+    int lo, hi;  /* the items [lo, hi) */
+    int nchunks; /* 1: not split */
+    int first;   /* its first chunk, or the group's */
+    int last;    /* the group's last stage (its own index when alone) */
+} par_stage;
+
+typedef struct par_plan {
+    const ctc_model *m;
+    ctc_data *d;
+    const gdca_par_pass *pass;
+    int nthreads, grain;
+    int nstages;
+    par_stage stage[MAX_STAGES];
+    int ngroups;
+    int group[MAX_STAGES];     /* the first stage of each group (a split stage is a group alone) */
+    atomic_int first_singular; /* the least tree index whose joint failed; INT_MAX: none */
+} par_plan;
+
+/* the chunks a stage of count items is cut into: 1 when it does not pay to split */
+static int stage_chunks(const par_plan *r, int count)
+{
+    int u = count / r->grain, most = r->nthreads * GDCA_PAR_CHUNKS;
+    if (u < 2 || r->nthreads < 2) return 1;
+    return u < most ? u : most;
+}
+
+static void add_stage(par_plan *r, int kind, int lo, int hi)
+{
+    par_stage *s = &r->stage[r->nstages++];
+    s->kind = kind;
+    s->lo = lo;
+    s->hi = hi;
+    s->nchunks = kind == STAGE_ROOT ? 1 : stage_chunks(r, hi - lo);
+}
+
+/* the stages of the pass, grouped and numbered; returns the number of chunks */
+static int plan_pass(par_plan *r)
+{
+    const ctc_model *m = r->m;
+    const int *hs = m->height_start;
+    r->nstages = 0;
+    if (r->pass->bodies) add_stage(r, STAGE_BODIES, 0, m->nbodies);
+    for (int h = 1; h <= m->height; h++) add_stage(r, STAGE_ASSEMBLE, hs[h - 1], hs[h]);
+    add_stage(r, STAGE_ROOT, 0, 1);
+    for (int h = m->height; h >= 1; h--) add_stage(r, STAGE_DISASSEMBLE, hs[h - 1], hs[h]);
+
+    int chunks = 0;
+    r->ngroups = 0;
+    for (int i = 0; i < r->nstages; i++) {
+        par_stage *s = &r->stage[i];
+        s->last = i;
+        if (s->nchunks == 1) { /* join the following stages that do not split either */
+            while (s->last + 1 < r->nstages && r->stage[s->last + 1].nchunks == 1) s->last++;
+        }
+        s->first = chunks;
+        chunks += s->nchunks;
+        r->group[r->ngroups++] = i;
+        i = s->last;
+    }
+    return chunks;
+}
+
+/* d->singular_joint from the assembly's first singular tree index */
+static void set_singular(const ctc_model *m, ctc_data *d, int first)
+{
+    d->singular_joint = first >= 0 && first < m->ntree ? m->tree[first].joint : -1;
+}
+
+static void run_range(par_plan *r, int kind, int lo, int hi)
+{
+    const gdca_par_pass *p = r->pass;
+    switch (kind) {
+    case STAGE_BODIES:
+        p->bodies(p->ctx, lo, hi);
+        break;
+    case STAGE_ASSEMBLE: {
+        int f = p->assemble(p->ctx, lo, hi), cur = atomic_load(&r->first_singular);
+        while (f >= 0 && f < cur && !atomic_compare_exchange_weak(&r->first_singular, &cur, f)) {
+        }
+        break;
+    }
+    case STAGE_ROOT:
+        set_singular(r->m, r->d, atomic_load(&r->first_singular));
+        p->root(p->ctx);
+        break;
+    default:
+        p->disassemble(p->ctx, lo, hi);
+        break;
+    }
+}
+
+/* the group that chunk c belongs to (its first stage) */
+static const par_stage *chunk_group(const par_plan *r, int c)
+{
+    int lo = 0, hi = r->ngroups - 1;
+    while (lo < hi) { /* the last group whose first chunk is <= c */
+        int mid = (lo + hi + 1) / 2;
+        if (r->stage[r->group[mid]].first <= c)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    return &r->stage[r->group[lo]];
+}
+
+/* pool callbacks: a chunk needs every chunk of the groups before its own */
+static int chunk_need(void *arg, int c)
+{
+    return chunk_group(arg, c)->first;
+}
+
+static void chunk_work(void *arg, int c)
+{
+    par_plan *r = arg;
+    const par_stage *s = chunk_group(r, c);
+    if (s->nchunks == 1) { /* a stage or a group of stages that do not split */
+        for (int i = (int)(s - r->stage); i <= s->last; i++) {
+            run_range(r, r->stage[i].kind, r->stage[i].lo, r->stage[i].hi);
+        }
+        return;
+    }
+    const long long count = s->hi - s->lo;
+    const int j = c - s->first;
+    run_range(r, s->kind, s->lo + (int)(count * j / s->nchunks),
+              s->lo + (int)(count * (j + 1) / s->nchunks));
+}
+
+/* d's pool (or its owner's), started on first use; NULL when d is serial or it cannot start */
+static ctc_pool *data_pool(ctc_data *d)
+{
+    ctc_data *o = d->pool_owner ? d->pool_owner : d;
+    if (o->threads < 2) return NULL;
+    if (o->pool == NULL && !o->pool_failed) {
+        o->pool = ctc_pool_new(o->threads);
+        o->pool_failed = o->pool == NULL;
+    }
+    return o->pool;
+}
+
+void gdca_par_run(const ctc_model *m, ctc_data *d, const gdca_par_pass *pass)
+{
+    const ctc_data *o = d->pool_owner ? d->pool_owner : d;
+    if (o->threads > 1) {
+        par_plan r = {.m = m, .d = d, .pass = pass, .nthreads = o->threads};
+        r.grain = d->par_grain > 0 ? d->par_grain : pass->grain;
+        if (r.grain < 1) r.grain = 1;
+        atomic_init(&r.first_singular, INT_MAX);
+        int chunks = plan_pass(&r);
+        ctc_pool *pool = chunks > 1 ? data_pool(d) : NULL;
+        if (pool != NULL) {
+            ctc_pool_job job = {chunks, chunk_need, chunk_work, &r};
+            ctc_pool_run(pool, &job);
+            return;
+        }
+    }
+
+    /* serial: the same callbacks over whole ranges, in the same order */
+    if (pass->bodies) pass->bodies(pass->ctx, 0, m->nbodies);
+    set_singular(m, d, pass->assemble(pass->ctx, 0, m->ntree));
+    pass->root(pass->ctx);
+    pass->disassemble(pass->ctx, 0, m->ntree);
+}

@@ -1,0 +1,54 @@
+/*
+ * gdca_par.h - one GDCA pass over the balanced assembly tree, one tree height at a time, with the
+ * nodes of a height split over the threads of the data's pool (internal to the library; used by
+ * gdca_forward.c, gdca_inverse.c and gdca_inverse_mobility.c).
+ *
+ * A pass is four kinds of work (DESIGN.md section 4): an optional per-body stage, the assembly
+ * from the leaves to the root, the root's boundary solve, and the disassembly from the root to
+ * the leaves. The nodes of one height depend only on lower heights in the assembly and only on
+ * higher ones in the disassembly (model.h: m->tree is ordered by height, height_start gives each
+ * height's contiguous range), so the stages run in the order
+ *     bodies, assembly heights 1 .. H, root, disassembly heights H .. 1
+ * and the items of one stage are cut into contiguous chunks that the threads of the data's pool
+ * take as they come (pool.h): a stage of c items gets min(c / grain, threads x GDCA_PAR_CHUNKS)
+ * chunks, and one with fewer than two runs whole on one thread, as does the root always (a loop
+ * model's root solve is special and small); consecutive stages that do not split run as one
+ * piece. A chunk starts once every chunk of the earlier stages is done. A pass none of whose
+ * stages splits, or a data with threads = 1, runs without the pool on the caller's thread.
+ *
+ * The pass's callbacks must write only what belongs to the items they are given (a node's own
+ * record, its joint's solution, the loads of its two children; a body's record), so that the
+ * result does not depend on the split: every item does the same arithmetic in the same order
+ * whatever the threads, and the results are bitwise those of the serial pass. The one quantity
+ * shared between nodes, the first joint whose matrix is singular, is reduced deterministically:
+ * the assembly callback returns the first tree index of its range whose joint failed, the
+ * smallest over all ranges is taken, and d->singular_joint is set to its joint (or -1) before
+ * the root callback runs - the joint the serial pass, which visits the nodes in index order,
+ * would have named first.
+ */
+#ifndef CTC_GDCA_PAR_H
+#define CTC_GDCA_PAR_H
+
+#include "data.h"
+
+typedef struct gdca_par_pass {
+    void *ctx; /* passed to every callback */
+    /* bodies lo..hi-1 (NULL: no per-body stage) */
+    void (*bodies)(void *ctx, int lo, int hi);
+    /* tree nodes lo..hi-1 in increasing order; returns the first of them whose joint's matrix
+       was singular, or -1 */
+    int (*assemble)(void *ctx, int lo, int hi);
+    /* the root's boundary solve, after d->singular_joint is set from the assembly */
+    void (*root)(void *ctx);
+    /* tree nodes hi-1 down to lo */
+    void (*disassemble)(void *ctx, int lo, int hi);
+    int grain; /* the least items per chunk: a stage of fewer than 2 grain items runs whole;
+                  d->par_grain > 0 overrides it */
+} gdca_par_pass;
+
+/* Runs the pass on the threads d allows (data.h: ctc_data_set_threads), starting d's pool at the
+ * first pass that splits a stage. Without a pool (threads = 1, or it could not be started) the
+ * pass runs serially, with the same results. */
+void gdca_par_run(const ctc_model *m, ctc_data *d, const gdca_par_pass *pass);
+
+#endif

@@ -1,0 +1,599 @@
+/*
+ * test_gdca_parallel.c - the GDCA passes split over threads (gdca_par.h, pool.h,
+ * ctc_data_set_threads) against the same passes on one thread.
+ *
+ * The oracle is the serial pass: splitting a tree height over threads must not change a single
+ * bit of any result - accelerations, driving forces, joint loads, the assembled records - nor
+ * which joint is reported singular. Each case runs a serial data and parallel data side by side
+ * on the same random state: planar and spatial open chains of 1 to 1000 bodies (odd sizes,
+ * powers of two and their neighbours), planar and spatial closed chains (loop models' roots stay
+ * serial), on 2, 3 and 8 threads with every height split (grain 1) and with the measured grains.
+ * The serial results themselves are checked against the oracles elsewhere (test_gdca_forward.c,
+ * test_gdca_inverse.c, test_loop.c). Also: the pool's barrier in each of its waiting modes, the
+ * first singular joint named as the serial pass names it, the thread setting's limits, and whole
+ * simulations on two threads recording the serial samples.
+ */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "chains.h"
+#include "ctc.h"
+#include "pool.h"
+#include "sim.h"
+
+/* ---- the pool ---- */
+
+#define MAX_CHUNKS 4096
+
+/* a job of stages of given sizes: each chunk checks that every chunk of the earlier stages is
+ * done and that it runs once */
+typedef struct staged_job {
+    int nstages, first[65]; /* first[s]: stage s's first chunk; first[nstages] = nchunks */
+    atomic_int runs[MAX_CHUNKS];
+    atomic_int done[MAX_CHUNKS];
+    atomic_int early; /* chunks that started before their dependencies were done */
+} staged_job;
+
+static int stage_of(const staged_job *j, int c)
+{
+    int s = 0;
+    while (j->first[s + 1] <= c) s++;
+    return s;
+}
+
+static int staged_need(void *arg, int c)
+{
+    staged_job *j = arg;
+    return j->first[stage_of(j, c)];
+}
+
+static void staged_work(void *arg, int c)
+{
+    staged_job *j = arg;
+    for (int i = 0; i < j->first[stage_of(j, c)]; i++) {
+        if (!atomic_load(&j->done[i])) atomic_fetch_add(&j->early, 1);
+    }
+    atomic_fetch_add(&j->runs[c], 1);
+    atomic_store(&j->done[c], 1);
+}
+
+/* runs a job of nstages stages of 1 + (s * 7) % width chunks, reps times */
+static void check_staged(int nthreads, long spin_ns, long block_ns, int nstages, int width)
+{
+    staged_job *j = calloc(1, sizeof *j);
+    cr_assert_not_null(j);
+    j->nstages = nstages;
+    for (int s = 0; s < nstages; s++) j->first[s + 1] = j->first[s] + 1 + (s * 7) % width;
+    int n = j->first[nstages];
+    cr_assert(n <= MAX_CHUNKS);
+    ctc_pool *p = ctc_pool_new(nthreads);
+    cr_assert_not_null(p);
+    cr_assert_eq(ctc_pool_threads(p), nthreads);
+    ctc_pool_set_wait(p, spin_ns, block_ns);
+    ctc_pool_job job = {n, staged_need, staged_work, j};
+    for (int rep = 0; rep < 20; rep++) {
+        for (int c = 0; c < n; c++) atomic_store(&j->done[c], 0);
+        ctc_pool_run(p, &job);
+        for (int c = 0; c < n; c++) {
+            cr_assert_eq(atomic_load(&j->done[c]), 1, "%d threads: chunk %d not done", nthreads, c);
+        }
+    }
+    for (int c = 0; c < n; c++) {
+        cr_expect_eq(atomic_load(&j->runs[c]), 20, "%d threads: chunk %d ran %d times in 20 runs",
+                     nthreads, c, atomic_load(&j->runs[c]));
+    }
+    cr_expect_eq(atomic_load(&j->early), 0, "%d threads, wait (%ld, %ld) ns: %d early starts",
+                 nthreads, spin_ns, block_ns, atomic_load(&j->early));
+    ctc_pool_free(p);
+    free(j);
+}
+
+Test(gdca_parallel, pool_runs_every_chunk_once_after_its_stage_dependencies)
+{
+    check_staged(2, -1, 0, 40, 5);               /* the defaults */
+    check_staged(3, 0, 0, 40, 9);                /* block at once */
+    check_staged(2, 1000000, -1, 40, 3);         /* spin, never block */
+    check_staged(8, 0, 50000, 30, 17);           /* yield, then block */
+    check_staged(CTC_MAX_THREADS, -1, 0, 8, 64); /* more threads than cores */
+}
+
+Test(gdca_parallel, pool_sizes_out_of_range_are_refused)
+{
+    cr_expect_null(ctc_pool_new(1));
+    cr_expect_null(ctc_pool_new(0));
+    cr_expect_null(ctc_pool_new(CTC_MAX_THREADS + 1));
+    ctc_pool_free(NULL);
+}
+
+/* idle workers block between runs and wake for the next one; an empty job returns at once */
+Test(gdca_parallel, pool_runs_again_after_its_workers_have_blocked)
+{
+    staged_job *j = calloc(1, sizeof *j);
+    cr_assert_not_null(j);
+    j->nstages = 3;
+    j->first[1] = 4, j->first[2] = 5, j->first[3] = 9;
+    ctc_pool *p = ctc_pool_new(4);
+    cr_assert_not_null(p);
+    ctc_pool_set_wait(p, 1000, 2000);
+    ctc_pool_job job = {9, staged_need, staged_work, j}, empty = {0, staged_need, staged_work, j};
+    for (int run = 0; run < 3; run++) {
+        for (int c = 0; c < 9; c++) atomic_store(&j->done[c], 0);
+        ctc_pool_run(p, &job);
+        ctc_pool_run(p, &empty);
+        struct timespec nap = {0, 5000000}; /* 5 ms: every worker is blocked by now */
+        nanosleep(&nap, NULL);
+    }
+    for (int c = 0; c < 9; c++) cr_expect_eq(atomic_load(&j->runs[c]), 3);
+    cr_expect_eq(atomic_load(&j->early), 0);
+    ctc_pool_free(p);
+    free(j);
+}
+
+/* ---- the passes ---- */
+
+static ctc_model *build(const ctc_chain_spec *spec)
+{
+    char err[256] = "";
+    ctc_model *m = NULL;
+    ctc_status st = ctc_model_build(spec, &m, err, sizeof err);
+    cr_assert_eq(st, CTC_OK, "build failed: %s", err);
+    return m;
+}
+
+/* everything one state's passes produce */
+typedef struct outputs {
+    double *qacc, *f, *fm;      /* (nvx) forward; composite (or loop) inverse; mobility inverse */
+    double *load, *load_inv;    /* (njoints x dim) after the forward, the composite inverse */
+    double *load_mob;           /* (njoints x dim) after the mobility inverse */
+    int sing_f, sing_i, sing_m; /* d->singular_joint after each */
+} outputs;
+
+static outputs *outputs_new(const ctc_model *m)
+{
+    outputs *o = calloc(1, sizeof *o);
+    size_t nvx = (size_t)m->nvx + 1, nl = (size_t)m->njoints * (size_t)m->dim;
+    cr_assert_not_null(o);
+    o->qacc = calloc(nvx, sizeof(double)), o->f = calloc(nvx, sizeof(double));
+    o->fm = calloc(nvx, sizeof(double));
+    o->load = calloc(nl, sizeof(double)), o->load_inv = calloc(nl, sizeof(double));
+    o->load_mob = calloc(nl, sizeof(double));
+    cr_assert(o->qacc && o->f && o->fm && o->load && o->load_inv && o->load_mob);
+    return o;
+}
+
+static void outputs_free(outputs *o)
+{
+    free(o->qacc), free(o->f), free(o->fm), free(o->load), free(o->load_inv), free(o->load_mob);
+    free(o);
+}
+
+/* the inverse passes on u, then the forward pass on tau, at (q, v) */
+static void run_passes(const ctc_model *m, ctc_data *d, const double *q, const double *v,
+                       const double *u, const double *tau, outputs *o)
+{
+    size_t nl = (size_t)m->njoints * (size_t)m->dim * sizeof(double);
+    ctc_kinematics(m, d, q, v);
+    ctc_handles(m, d);
+    ctc_gdca_inverse(m, d, u, o->f);
+    o->sing_i = d->singular_joint;
+    memcpy(o->load_inv, d->jnt_load_inv, nl);
+    ctc_gdca_inverse_mobility(m, d, u, o->fm);
+    o->sing_m = d->singular_joint;
+    memcpy(o->load_mob, d->jnt_load_inv, nl);
+    ctc_gdca_forward(m, d, tau, o->qacc);
+    o->sing_f = d->singular_joint;
+    memcpy(o->load, d->jnt_load, nl);
+}
+
+static int all_finite(const double *x, int n)
+{
+    for (int i = 0; i < n; i++)
+        if (!isfinite(x[i])) return 0;
+    return 1;
+}
+
+/* asserts bitwise equality of two arrays of count doubles */
+static void expect_same(const double *serial, const double *par, size_t count, const char *what,
+                        const char *label, int n, int threads, int grain)
+{
+    int same = memcmp(serial, par, count * sizeof(double)) == 0;
+    size_t i = 0;
+    while (!same && i < count && memcmp(&serial[i], &par[i], sizeof(double)) == 0) i++;
+    cr_expect(same, "%s n = %d, %d threads, grain %d: %s differs first at [%zu] (%.17g vs %.17g)",
+              label, n, threads, grain, what, i, i < count ? serial[i] : 0.0,
+              i < count ? par[i] : 0.0);
+}
+
+static const int thread_counts[] = {2, 3, 8};
+#define NTHREADS ((int)(sizeof thread_counts / sizeof thread_counts[0]))
+
+/* Runs the passes at one random state on a serial data and on parallel data with every thread
+ * count, every height split (grain 1) and with the measured grains, and compares every output
+ * and record bit for bit. finite: the serial results must be finite (a valid state). */
+static void compare_on(const ctc_model *m, const double *q, const double *v, uint64_t seed,
+                       const char *label)
+{
+    const int nvx = m->nvx, n = m->nbodies;
+    double *u = calloc((size_t)nvx + 1, sizeof(double)),
+           *tau = calloc((size_t)nvx + 1, sizeof(double));
+    cr_assert(u && tau);
+    uint64_t rng = seed;
+    for (int i = 0; i < nvx; i++) u[i] = test_uniform(&rng, -2, 2);
+    for (int i = 0; i < nvx; i++) tau[i] = test_uniform(&rng, -5, 5);
+
+    ctc_data *ds = ctc_data_new(m);
+    cr_assert_not_null(ds);
+    outputs *s = outputs_new(m), *p = outputs_new(m);
+    run_passes(m, ds, q, v, u, tau, s);
+    cr_assert(all_finite(s->qacc, nvx) && all_finite(s->f, nvx) && all_finite(s->fm, nvx),
+              "%s n = %d: the serial results are not finite", label, n);
+    cr_assert_eq(s->sing_f, -1);
+
+    size_t nl = (size_t)m->njoints * (size_t)m->dim, nt = (size_t)m->ntree * (size_t)ds->hsize;
+    size_t nc = (2 * (size_t)n - 1) * (size_t)ds->csize;
+    for (int t = 0; t < NTHREADS; t++) {
+        for (int g = 0; g < 2; g++) {
+            int threads = thread_counts[t], grain = g ? 0 : 1;
+            ctc_data *dp = ctc_data_new(m);
+            cr_assert_not_null(dp);
+            cr_assert_eq(ctc_data_set_threads(dp, threads, NULL, 0), CTC_OK);
+            dp->par_grain = grain;
+            for (int rep = 0; rep < 2; rep++) { /* the second time on warm workers */
+                run_passes(m, dp, q, v, u, tau, p);
+                expect_same(s->qacc, p->qacc, (size_t)nvx, "qacc", label, n, threads, grain);
+                expect_same(s->f, p->f, (size_t)nvx, "f", label, n, threads, grain);
+                expect_same(s->fm, p->fm, (size_t)nvx, "f (mobility)", label, n, threads, grain);
+                expect_same(s->load, p->load, nl, "jnt_load", label, n, threads, grain);
+                expect_same(s->load_inv, p->load_inv, nl, "jnt_load_inv", label, n, threads, grain);
+                expect_same(s->load_mob, p->load_mob, nl, "jnt_load_inv (mobility)", label, n,
+                            threads, grain);
+                expect_same(ds->hfwd, dp->hfwd, nt, "hfwd", label, n, threads, grain);
+                expect_same(ds->hinv, dp->hinv, nt, "hinv", label, n, threads, grain);
+                expect_same(ds->icomp, dp->icomp, nc, "icomp", label, n, threads, grain);
+                cr_expect_eq(p->sing_f, s->sing_f);
+                cr_expect_eq(p->sing_i, s->sing_i);
+                cr_expect_eq(p->sing_m, s->sing_m);
+            }
+            /* grain 1 splits every height of two nodes or more: the pool must have started */
+            if (grain == 1 && m->ntree >= 2) {
+                cr_expect_not_null(dp->pool, "%s n = %d: no pool", label, n);
+            }
+            ctc_data_free(dp);
+        }
+    }
+    outputs_free(s), outputs_free(p);
+    ctc_data_free(ds);
+    free(u), free(tau);
+}
+
+/* an open chain at a random state */
+static void compare_open(test_chain *c, uint64_t seed, const char *label)
+{
+    ctc_model *m = build(&c->spec);
+    double *q = calloc((size_t)m->nq, sizeof(double)), *v = calloc((size_t)m->nv, sizeof(double));
+    cr_assert(q && v);
+    uint64_t rng = seed;
+    test_random_state(m, &rng, 2.0, q, v);
+    compare_on(m, q, v, seed + 1, label);
+    free(q), free(v);
+    ctc_model_free(m);
+    test_chain_free(c);
+}
+
+static const int sizes[] = {1,   2,   3,   4,   5,   6,   7,   8,   9,   13,  16,
+                            17,  31,  32,  33,  63,  64,  65,  100, 127, 128, 129,
+                            255, 256, 257, 333, 511, 512, 513, 777, 999, 1000};
+#define NSIZES ((int)(sizeof sizes / sizeof sizes[0]))
+
+Test(gdca_parallel, planar_chains_give_bitwise_the_serial_results_on_any_threads, .timeout = 300)
+{
+    for (int i = 0; i < NSIZES; i++) {
+        compare_open(test_chain_random_planar(sizes[i], 300 + (uint64_t)i, i % 2, i % 3 == 0),
+                     40 + (uint64_t)i, "planar");
+    }
+}
+
+Test(gdca_parallel, spatial_chains_give_bitwise_the_serial_results_on_any_threads, .timeout = 300)
+{
+    for (int i = 0; i < NSIZES; i++) {
+        compare_open(test_chain_random_spatial(sizes[i], 500 + (uint64_t)i, TEST_ALL_JOINTS),
+                     60 + (uint64_t)i, "spatial");
+    }
+}
+
+/* ---- closed chains ---- */
+
+/* A loop on a random revolute chain of n bodies, closed at a random q0: planar rods closed by a
+ * revolute joint (joints n/2, n-1 and the closing one dependent, mobility n - 2) or spatial
+ * bodies closed by a spherical joint (joints n/4, n/2, 3n/4 and the closing one dependent,
+ * mobility n - 3). The anchor is where the tip's closing point is at q0. */
+typedef struct loop_chain {
+    test_chain *c;
+    ctc_loop_spec loop;
+    unsigned char *independent;
+    double *q0;
+} loop_chain;
+
+static loop_chain *loop_chain_new(int n, int spatial, uint64_t seed)
+{
+    loop_chain *l = calloc(1, sizeof *l);
+    cr_assert_not_null(l);
+    l->c = spatial ? test_chain_random_spatial(n, seed, 1u << CTC_JOINT_REVOLUTE)
+                   : test_chain_random_planar(n, seed, 0, 1);
+    l->independent = calloc((size_t)n + 1, 1);
+    l->q0 = calloc((size_t)n, sizeof(double));
+    cr_assert(l->independent && l->q0);
+    memset(l->independent, 1, (size_t)n);
+    if (spatial) {
+        l->loop.joint = (ctc_joint_spec){.type = CTC_JOINT_SPHERICAL, .location = {0.1, 0.2, 0.3}};
+        l->independent[n / 4] = l->independent[n / 2] = l->independent[3 * n / 4] = 0;
+    } else {
+        l->loop.joint = (ctc_joint_spec){
+            .type = CTC_JOINT_REVOLUTE, .axis = {0, 0, 1}, .location = {0.3, -0.4, 0}};
+        l->independent[n / 2] = l->independent[n - 1] = 0;
+    }
+    uint64_t rng = seed;
+    for (int k = 0; k < n; k++) l->q0[k] = test_uniform(&rng, -1, 1);
+
+    /* the anchor: where the loop's kinematics put the tip's closing point at q0 */
+    l->c->spec.loop = &l->loop;
+    l->c->spec.independent = l->independent;
+    ctc_model *m = build(&l->c->spec);
+    ctc_data *d = ctc_data_new(m);
+    double *zero = calloc((size_t)m->nv, sizeof(double));
+    cr_assert(d && zero);
+    ctc_kinematics(m, d, l->q0, zero);
+    memcpy(l->loop.anchor, d->loop_pt, sizeof l->loop.anchor);
+    free(zero);
+    ctc_data_free(d);
+    ctc_model_free(m);
+    return l;
+}
+
+static void loop_chain_free(loop_chain *l)
+{
+    test_chain_free(l->c);
+    free(l->independent), free(l->q0), free(l);
+}
+
+static void compare_loop(int n, int spatial, uint64_t seed)
+{
+    loop_chain *l = loop_chain_new(n, spatial, seed);
+    ctc_model *m = build(&l->c->spec);
+    cr_assert(m->has_loop);
+    cr_assert_eq(m->form, spatial ? CTC_FORM_SPATIAL : CTC_FORM_PLANAR);
+    double *v = calloc((size_t)m->nv, sizeof(double));
+    cr_assert_not_null(v);
+    uint64_t rng = seed + 7;
+    for (int i = 0; i < m->nv; i++) v[i] = test_uniform(&rng, -1, 1);
+    compare_on(m, l->q0, v, seed + 9, spatial ? "spatial loop" : "planar loop");
+    free(v);
+    ctc_model_free(m);
+    loop_chain_free(l);
+}
+
+Test(gdca_parallel, loops_give_bitwise_the_serial_results_on_any_threads, .timeout = 300)
+{
+    static const int planar[] = {5, 6, 17, 64, 257, 1000}, spatial[] = {5, 16, 129, 1000};
+    for (int i = 0; i < 6; i++) compare_loop(planar[i], 0, 700 + (uint64_t)i);
+    for (int i = 0; i < 4; i++) compare_loop(spatial[i], 1, 800 + (uint64_t)i);
+}
+
+Test(gdca_parallel, the_early_stop_of_a_loops_inverse_pass_is_kept_on_threads)
+{
+    loop_chain *l = loop_chain_new(200, 0, 901);
+    ctc_model *m = build(&l->c->spec);
+    ctc_data *ds = ctc_data_new(m), *dp = ctc_data_new(m);
+    double *v = calloc((size_t)m->nv, sizeof(double));
+    double *u = calloc((size_t)m->nvx, sizeof(double)),
+           *fs = calloc((size_t)m->nvx, sizeof(double));
+    double *fp = calloc((size_t)m->nvx, sizeof(double));
+    cr_assert(ds && dp && v && u && fs && fp);
+    uint64_t rng = 5;
+    for (int i = 0; i < m->nvx; i++) u[i] = test_uniform(&rng, -1, 1);
+    cr_assert_eq(ctc_data_set_threads(dp, 2, NULL, 0), CTC_OK);
+    dp->par_grain = 1;
+    for (int full = 0; full < 2; full++) {
+        ds->inv_full = dp->inv_full = full;
+        ctc_kinematics(m, ds, l->q0, v), ctc_handles(m, ds);
+        ctc_kinematics(m, dp, l->q0, v), ctc_handles(m, dp);
+        ctc_gdca_inverse(m, ds, u, fs);
+        ctc_gdca_inverse(m, dp, u, fp);
+        cr_expect_eq(memcmp(fs, fp, (size_t)m->nvx * sizeof(double)), 0, "inv_full = %d", full);
+        cr_expect_eq(memcmp(ds->jnt_load_inv, dp->jnt_load_inv,
+                            (size_t)m->njoints * (size_t)m->dim * sizeof(double)),
+                     0, "inv_full = %d", full);
+    }
+    free(v), free(u), free(fs), free(fp);
+    ctc_data_free(ds), ctc_data_free(dp);
+    ctc_model_free(m);
+    loop_chain_free(l);
+}
+
+/* ---- the first singular joint ---- */
+
+/* The joint the serial pass names when the records of the bodies in bad[] are NaN: the first
+ * node in tree order (children before parents) with one of them inside - every node above a NaN
+ * body fails too. From the tree alone. */
+static int expected_singular(const ctc_model *m, const int *bad, int nbad)
+{
+    for (int i = 0; i < m->ntree; i++) {
+        for (int b = 0; b < nbad; b++) {
+            if (bad[b] >= m->tree[i].first && bad[b] <= m->tree[i].last) return m->tree[i].joint;
+        }
+    }
+    return 0; /* a single body: the ground joint */
+}
+
+Test(gdca_parallel, the_first_singular_joint_is_the_serial_passes_whatever_the_threads)
+{
+    test_chain *c = test_chain_random_spatial(300, 17, TEST_ALL_JOINTS);
+    ctc_model *m = build(&c->spec);
+    double *q = calloc((size_t)m->nq, sizeof(double)), *v = calloc((size_t)m->nv, sizeof(double));
+    double *x = calloc((size_t)m->nv, sizeof(double)), *y = calloc((size_t)m->nv, sizeof(double));
+    cr_assert(q && v && x && y);
+    uint64_t rng = 3;
+    test_random_state(m, &rng, 1.0, q, v);
+    /* NaN bodies in different threads' chunks, the later one alone, at a leaf and deeper */
+    static const int cases[][2] = {{250, 20}, {299, 151}, {150, 149}, {7, 7}, {0, 298}};
+    for (int k = 0; k < 5; k++) {
+        int want = expected_singular(m, cases[k], 2);
+        for (int threads = 1; threads <= 8; threads++) {
+            ctc_data *d = ctc_data_new(m);
+            cr_assert_not_null(d);
+            cr_assert_eq(ctc_data_set_threads(d, threads, NULL, 0), CTC_OK);
+            d->par_grain = 1;
+            ctc_kinematics(m, d, q, v);
+            ctc_handles(m, d);
+            for (int b = 0; b < 2; b++) {
+                double *h = d->hbody + (size_t)cases[k][b] * d->hsize;
+                for (int i = 0; i < d->hsize; i++) h[i] = NAN;
+            }
+            ctc_gdca_forward(m, d, x, y);
+            cr_expect_eq(d->singular_joint, want, "forward, bodies %d and %d, %d threads: %d",
+                         cases[k][0], cases[k][1], threads, d->singular_joint);
+            ctc_gdca_inverse_mobility(m, d, x, y);
+            cr_expect_eq(d->singular_joint, want, "mobility, bodies %d and %d, %d threads: %d",
+                         cases[k][0], cases[k][1], threads, d->singular_joint);
+            ctc_data_free(d);
+        }
+    }
+    free(q), free(v), free(x), free(y);
+    ctc_model_free(m);
+    test_chain_free(c);
+}
+
+/* ---- the setting ---- */
+
+Test(gdca_parallel, thread_counts_out_of_range_are_refused_with_the_range)
+{
+    test_chain *c = test_chain_rod_pendulum(4, 1, 1);
+    ctc_model *m = build(&c->spec);
+    ctc_data *d = ctc_data_new(m);
+    char err[128] = "";
+    cr_assert_eq(ctc_data_set_threads(d, 0, err, sizeof err), CTC_EINVAL);
+    cr_expect_str_eq(err, "threads must be 1 to 64 (got 0)");
+    cr_assert_eq(ctc_data_set_threads(d, 65, err, sizeof err), CTC_EINVAL);
+    cr_expect_str_eq(err, "threads must be 1 to 64 (got 65)");
+    cr_expect_eq(d->threads, 1, "a refused count changes nothing");
+    cr_expect_eq(ctc_data_set_threads(d, 64, NULL, 0), CTC_OK);
+    ctc_data_free(d);
+    ctc_model_free(m);
+    test_chain_free(c);
+}
+
+/* a data that shares another's workers runs on them and gives the serial results */
+Test(gdca_parallel, a_shared_pool_serves_two_data_in_turn)
+{
+    test_chain *c = test_chain_random_planar(400, 77, 0, 0);
+    ctc_model *m = build(&c->spec);
+    ctc_data *owner = ctc_data_new(m), *user = ctc_data_new(m), *serial = ctc_data_new(m);
+    double *q = calloc((size_t)m->nq, sizeof(double)), *v = calloc((size_t)m->nv, sizeof(double));
+    double *f = calloc((size_t)m->nv, sizeof(double)), *a1 = calloc((size_t)m->nv, sizeof(double));
+    double *a2 = calloc((size_t)m->nv, sizeof(double));
+    cr_assert(owner && user && serial && q && v && f && a1 && a2);
+    uint64_t rng = 9;
+    test_random_state(m, &rng, 1.0, q, v);
+    for (int i = 0; i < m->nv; i++) f[i] = test_uniform(&rng, -1, 1);
+    cr_assert_eq(ctc_data_set_threads(owner, 2, NULL, 0), CTC_OK);
+    ctc_data_share_pool(user, owner);
+    user->par_grain = 1;
+    ctc_data *both[3] = {serial, user, owner};
+    for (int k = 0; k < 3; k++) {
+        ctc_kinematics(m, both[k], q, v);
+        ctc_handles(m, both[k]);
+    }
+    ctc_gdca_forward(m, serial, f, a1);
+    ctc_gdca_forward(m, user, f, a2);
+    cr_expect_eq(memcmp(a1, a2, (size_t)m->nv * sizeof(double)), 0);
+    cr_expect_null(user->pool, "the user starts no pool of its own");
+    cr_expect_not_null(owner->pool, "the owner's pool did the work");
+    ctc_data_free(user);
+    ctc_data_free(owner);
+    ctc_data_free(serial);
+    free(q), free(v), free(f), free(a1), free(a2);
+    ctc_model_free(m);
+    test_chain_free(c);
+}
+
+/* ---- whole simulations ---- */
+
+#define SIM_N 256
+
+/* a PD run of SIM_N-link rod pendulum from q0_k = +-pi/6 to rest, RK4, 50 steps */
+static ctc_sim_result *pendulum_run(int threads, double mass_scale)
+{
+    test_chain *c = test_chain_rod_pendulum(SIM_N, 0.1, 0.1);
+    static double q0[SIM_N];
+    static ctc_gains gains[SIM_N];
+    static ctc_traj traj[SIM_N];
+    for (int k = 0; k < SIM_N; k++) {
+        q0[k] = (k % 2 ? 1 : -1) * 0.5235987755982988;
+        gains[k] = (ctc_gains){.kp = 100, .kv = 20};
+        traj[k] = (ctc_traj){.type = CTC_TRAJ_CONSTANT, .value = 0};
+    }
+    ctc_sim_spec spec = {.chain = c->spec,
+                         .q0 = q0,
+                         .controller = CTC_CTRL_PD,
+                         .gains = gains,
+                         .model_mass_scale = mass_scale,
+                         .model_inertia_scale = 1,
+                         .traj = traj,
+                         .integrator = {.method = CTC_INTEG_RK4, .step = 1e-3},
+                         .duration = 0.05,
+                         .output_interval = 0.01,
+                         .threads = threads};
+    ctc_sim_result *r = NULL;
+    char err[256] = "";
+    cr_assert_eq(ctc_sim_run(&spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
+    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    test_chain_free(c);
+    return r;
+}
+
+static void expect_same_run(const ctc_sim_result *a, const ctc_sim_result *b, const char *what)
+{
+    cr_assert_eq(a->nsamples, b->nsamples);
+    cr_assert_eq(a->channels, b->channels);
+    cr_expect_eq(memcmp(a->t, b->t, (size_t)a->nsamples * sizeof(double)), 0);
+    for (int ch = 0; ch < CTC_NCHANNELS; ch++) {
+        if (!a->ch[ch]) continue;
+        size_t count = (size_t)a->nsamples * (size_t)a->width[ch];
+        cr_expect_eq(memcmp(a->ch[ch], b->ch[ch], count * sizeof(double)), 0, "%s: channel %s",
+                     what, ctc_channel_name((ctc_channel)ch));
+    }
+}
+
+Test(gdca_parallel, a_simulation_on_two_threads_records_the_serial_samples, .timeout = 120)
+{
+    for (int err = 0; err < 2; err++) { /* exact model, then a controller model of its own */
+        double scale = err ? 1.1 : 1.0;
+        ctc_sim_result *serial = pendulum_run(0, scale), *two = pendulum_run(2, scale);
+        expect_same_run(serial, two, err ? "model error" : "exact model");
+        ctc_sim_result_free(serial);
+        ctc_sim_result_free(two);
+    }
+}
+
+Test(gdca_parallel, a_simulation_refuses_thread_counts_out_of_range)
+{
+    test_chain *c = test_chain_rod_pendulum(2, 1, 1);
+    ctc_sim_spec spec = {.chain = c->spec,
+                         .integrator = {.method = CTC_INTEG_RK4, .step = 1e-3},
+                         .duration = 0.1,
+                         .output_interval = 0.01,
+                         .threads = 65};
+    char err[256] = "";
+    cr_expect_eq(ctc_sim_check(&spec, err, sizeof err), CTC_EINVAL);
+    cr_expect_str_eq(err, "threads must be 0 to 64 (got 65)");
+    spec.threads = -1;
+    cr_expect_eq(ctc_sim_check(&spec, err, sizeof err), CTC_EINVAL);
+    cr_expect_str_eq(err, "threads must be 0 to 64 (got -1)");
+    spec.threads = 64;
+    cr_expect_eq(ctc_sim_check(&spec, err, sizeof err), CTC_OK, "%s", err);
+    test_chain_free(c);
+}
