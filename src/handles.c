@@ -50,19 +50,19 @@ static void handles_planar(const ctc_model *m, ctc_data *d)
     }
 }
 
-/* h = [ iw  G_j^T ; G_i  G_i S_j^T + 1/m ] (6x6 row-major) */
-static void spatial_block(double *h, const double iw[9], const double gi[9], const double gj[9],
-                          const double rj[3], double im)
+/* h = [ iw  G_j^T ; G_i  G_i S_j^T + 1/m ] (6x6 row-major), row by row; row a of G_i S_j^T is
+ * (row a of G_i) x r_j, and 1/m goes on the diagonal only */
+static inline void spatial_block(double *h, const double iw[9], const double gi[9],
+                                 const double gj[9], const double rj[3], double im)
 {
     for (int a = 0; a < 3; a++) {
-        double row[3];
-        ctc_v3_cross(row, &gi[3 * a], rj);
-        for (int b = 0; b < 3; b++) {
-            h[6 * a + b] = iw[3 * a + b];
-            h[6 * a + 3 + b] = gj[3 * b + a];
-            h[6 * (a + 3) + b] = gi[3 * a + b];
-            h[6 * (a + 3) + 3 + b] = row[b] + (a == b ? im : 0.0);
-        }
+        double *top = h + 6 * a, *bottom = h + 6 * (a + 3);
+        const double *ga = gi + 3 * a;
+        ctc_v3_copy(top, iw + 3 * a);
+        ctc_v3_set(top + 3, gj[a], gj[3 + a], gj[6 + a]);
+        ctc_v3_copy(bottom, ga);
+        ctc_v3_cross(bottom + 3, ga, rj);
+        bottom[3 + a] += im;
     }
 }
 
