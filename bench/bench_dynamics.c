@@ -6,6 +6,10 @@
  *           right-hand side of a CTC simulation (f = iGDCA(q, v, u), qdd = GDCA(q, v, f));
  *   pair  = the oracle's RNEA + ABA on the same state (each does its own kinematics);
  * and, to show where the time goes, each stage of ctc alone and the paper's mobility-form iGDCA.
+ * A second table splits ctc per body for the hot-path figures of bench/README.md: kinematics,
+ * handles, the composite iGDCA, GDCA forward without refinement (d->fwd_refine = 0) and one
+ * refinement step (GDCA forward with d->fwd_refine = 1, less the unrefined pass), with the steps
+ * the default makes and ctc with and without refinement, at n = 16, 256 and 4096.
  * Batches of each are interleaved so that machine noise hits all of them alike; the figures are
  * medians over the batches, per evaluation, and the ratio is ctc / pair from the same run.
  * Usage: bench_dynamics [max_n] [batches]
@@ -19,7 +23,20 @@
 #include "ctc.h"
 #include "oracle.h"
 
-enum { T_CTC, T_PAIR, T_KIN, T_INV, T_FWD, T_MOB, NT };
+enum {
+    T_CTC,
+    T_PAIR,
+    T_KIN,
+    T_INV,
+    T_FWD,
+    T_MOB,
+    T_KIN_ONLY, /* the stage split: kinematics alone */
+    T_HANDLES,
+    T_FWD0, /* GDCA forward unrefined */
+    T_FWD1, /* GDCA forward with one refinement step */
+    T_CTC0, /* ctc unrefined */
+    NT
+};
 
 typedef struct bench_case {
     const ctc_model *m;
@@ -40,6 +57,7 @@ static volatile double sink;
 static void run_once(bench_case *c, int what)
 {
     const ctc_model *m = c->m;
+    const int refine = c->d->fwd_refine;
     switch (what) {
     case T_CTC:
         ctc_kinematics(m, c->d, c->q, c->v);
@@ -64,6 +82,23 @@ static void run_once(bench_case *c, int what)
     case T_MOB:
         ctc_gdca_inverse_mobility(m, c->d, c->u, c->f);
         break;
+    case T_KIN_ONLY:
+        ctc_kinematics(m, c->d, c->q, c->v);
+        break;
+    case T_HANDLES:
+        ctc_handles(m, c->d);
+        break;
+    case T_FWD0:
+    case T_FWD1:
+        c->d->fwd_refine = what == T_FWD0 ? 0 : 1;
+        ctc_gdca_forward(m, c->d, c->f, c->a);
+        c->d->fwd_refine = refine;
+        break;
+    case T_CTC0:
+        c->d->fwd_refine = 0;
+        run_once(c, T_CTC);
+        c->d->fwd_refine = refine;
+        break;
     }
     sink += c->a[0] + c->f[0];
 }
@@ -74,8 +109,9 @@ static int cmp_double(const void *x, const void *y)
     return (a > b) - (a < b);
 }
 
-/* median seconds per evaluation of each timing, from interleaved batches */
-static void measure(bench_case *c, int batches, double med[NT])
+/* median seconds per evaluation of the nw timings in which (med indexed by timing), from
+ * interleaved batches */
+static void measure(bench_case *c, int batches, const int *which, int nw, double med[NT])
 {
     /* a batch of reps evaluations lasts about 2 ms for the slowest timing */
     run_once(c, T_CTC);
@@ -88,24 +124,25 @@ static void measure(bench_case *c, int batches, double med[NT])
         probe++;
     }
     int reps = probe > 1 ? probe : 1;
-    double *samples = malloc(sizeof(double) * (size_t)batches * NT);
+    double *samples = malloc(sizeof(double) * (size_t)batches * nw);
     for (int b = 0; b < batches; b++) {
-        for (int w = 0; w < NT; w++) {
+        for (int i = 0; i < nw; i++) {
             double s = now();
-            for (int r = 0; r < reps; r++) run_once(c, w);
-            samples[w * batches + b] = (now() - s) / reps;
-            /* the stage timings assume the state's kinematics are in place */
-            if (w == T_PAIR) run_once(c, T_KIN);
+            for (int r = 0; r < reps; r++) run_once(c, which[i]);
+            samples[i * batches + b] = (now() - s) / reps;
+            /* the stage timings assume the state's kinematics and forces are in place */
+            if (which[i] == T_PAIR) run_once(c, T_CTC);
         }
     }
-    for (int w = 0; w < NT; w++) {
-        qsort(samples + w * batches, (size_t)batches, sizeof(double), cmp_double);
-        med[w] = samples[w * batches + batches / 2];
+    for (int i = 0; i < nw; i++) {
+        qsort(samples + i * batches, (size_t)batches, sizeof(double), cmp_double);
+        med[which[i]] = samples[i * batches + batches / 2];
     }
     free(samples);
 }
 
-static void bench_chain(const char *label, test_chain *chain, int batches)
+/* the main table's row (split = 0) or the stage split's (split = 1) */
+static void bench_chain(const char *label, test_chain *chain, int batches, int split)
 {
     char err[256];
     ctc_model *m = NULL;
@@ -125,13 +162,24 @@ static void bench_chain(const char *label, test_chain *chain, int batches)
     for (size_t i = 0; i < nv; i++) c.u[i] = test_uniform(&rng, -1, 1);
 
     double med[NT];
-    measure(&c, batches, med);
     int n = m->nbodies;
-    printf("| %-7s | %5d | %10.2f | %10.2f | %5.2f | %7.1f | %7.1f | %8.2f | %8.2f | %8.2f | %8.2f "
-           "|\n",
-           label, n, 1e6 * med[T_CTC], 1e6 * med[T_PAIR], med[T_CTC] / med[T_PAIR],
-           1e9 * med[T_CTC] / n, 1e9 * med[T_PAIR] / n, 1e6 * med[T_KIN], 1e6 * med[T_INV],
-           1e6 * med[T_FWD], 1e6 * med[T_MOB]);
+    if (split) {
+        static const int which[] = {T_KIN_ONLY, T_HANDLES, T_INV, T_FWD0, T_FWD1, T_CTC, T_CTC0};
+        measure(&c, batches, which, (int)(sizeof which / sizeof *which), med);
+        run_once(&c, T_CTC); /* the default's refinement steps */
+        printf("| %-7s | %5d | %7.1f | %7.1f | %7.1f | %7.1f | %7.1f | %5d | %7.1f | %7.1f |\n",
+               label, n, 1e9 * med[T_KIN_ONLY] / n, 1e9 * med[T_HANDLES] / n, 1e9 * med[T_INV] / n,
+               1e9 * med[T_FWD0] / n, 1e9 * (med[T_FWD1] - med[T_FWD0]) / n, c.d->fwd_refine_done,
+               1e9 * med[T_CTC0] / n, 1e9 * med[T_CTC] / n);
+    } else {
+        static const int which[] = {T_CTC, T_PAIR, T_KIN, T_INV, T_FWD, T_MOB};
+        measure(&c, batches, which, (int)(sizeof which / sizeof *which), med);
+        printf("| %-7s | %5d | %10.2f | %10.2f | %5.2f | %7.1f | %7.1f | %8.2f | %8.2f | %8.2f | "
+               "%8.2f |\n",
+               label, n, 1e6 * med[T_CTC], 1e6 * med[T_PAIR], med[T_CTC] / med[T_PAIR],
+               1e9 * med[T_CTC] / n, 1e9 * med[T_PAIR] / n, 1e6 * med[T_KIN], 1e6 * med[T_INV],
+               1e6 * med[T_FWD], 1e6 * med[T_MOB]);
+    }
     fflush(stdout);
     free(c.q), free(c.v), free(c.u), free(c.f), free(c.a);
     ctc_oracle_free(c.o);
@@ -157,13 +205,29 @@ int main(int argc, char **argv)
            "-------: | -------: | -------: |\n");
     for (int n = 2; n <= max_n; n *= 2) {
         test_chain *c = test_chain_random_planar(n, 7, 0, 1);
-        bench_chain("planar", c, batches);
+        bench_chain("planar", c, batches, 0);
         test_chain_free(c);
     }
     for (int n = 2; n <= max_n; n *= 2) {
         test_chain *c = test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE);
-        bench_chain("spatial", c, batches);
+        bench_chain("spatial", c, batches, 0);
         test_chain_free(c);
+    }
+
+    printf("\nHot path: ns per body of each stage of ctc; refine step = GDCA forward with one "
+           "refinement step less the unrefined pass; steps = those the default makes.\n\n");
+    printf("| chain   |     n | kinematics | handles | iGDCA | GDCA fwd unrefined | refine step | "
+           "steps | ctc unrefined | ctc |\n");
+    printf(
+        "| ------- | ----: | ------: | ------: | ------: | ------: | ------: | ----: | ------: | "
+        "------: |\n");
+    for (int form = 0; form < 2; form++) {
+        for (int n = 16; n <= max_n; n *= 16) {
+            test_chain *c = form ? test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE)
+                                 : test_chain_random_planar(n, 7, 0, 1);
+            bench_chain(form ? "spatial" : "planar", c, batches, 1);
+            test_chain_free(c);
+        }
     }
     return sink == 12345.678 ? 1 : 0;
 }
