@@ -92,10 +92,13 @@ static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const doub
     forward_qacc(m, d, n, rest, a2, qacc, dim); /* A(ground) = 0 = A2 + P qdd + beta */
 }
 
-/* Items per thread below which a stage of the forward pass runs serially (gdca_par.h), from
- * bench_parallel's grain sweep (bench/README.md, "Parallel assembly"). */
-#define FORWARD_GRAIN_PLANAR 16
-#define FORWARD_GRAIN_SPATIAL 4
+/* When the forward pass splits over threads (gdca_par.h): the least nodes per chunk of one tree
+ * height, and the least chain length, from bench_parallel's grain sweep and speed-up table
+ * (bench/README.md, "Parallel assembly"). */
+#define FORWARD_GRAIN_PLANAR 4
+#define FORWARD_GRAIN_SPATIAL 2
+#define FORWARD_MIN_BODIES_PLANAR 512
+#define FORWARD_MIN_BODIES_SPATIAL 128
 
 /* what the stages of one forward pass share (gdca_par.h) */
 typedef struct forward_args {
@@ -220,7 +223,8 @@ static void forward_planar(const ctc_model *m, ctc_data *d, const double *f, dou
                           .assemble = assemble_planar,
                           .root = root_planar,
                           .disassemble = disassemble_planar,
-                          .grain = FORWARD_GRAIN_PLANAR};
+                          .grain = FORWARD_GRAIN_PLANAR,
+                          .min_bodies = FORWARD_MIN_BODIES_PLANAR};
     gdca_par_run(m, d, &pass);
 }
 
@@ -231,7 +235,8 @@ static void forward_spatial(const ctc_model *m, ctc_data *d, const double *f, do
                           .assemble = assemble_spatial,
                           .root = root_spatial,
                           .disassemble = disassemble_spatial,
-                          .grain = FORWARD_GRAIN_SPATIAL};
+                          .grain = FORWARD_GRAIN_SPATIAL,
+                          .min_bodies = FORWARD_MIN_BODIES_SPATIAL};
     gdca_par_run(m, d, &pass);
 }
 

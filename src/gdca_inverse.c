@@ -157,10 +157,13 @@ static inline double *record(const ctc_data *d, int a)
     return d->icomp + (size_t)a * d->csize;
 }
 
-/* Items per thread below which a stage of the composite inverse pass runs serially
- * (gdca_par.h), from bench_parallel's grain sweep (bench/README.md, "Parallel assembly"). */
-#define INVERSE_GRAIN_PLANAR 32
-#define INVERSE_GRAIN_SPATIAL 8
+/* When the composite inverse pass splits over threads (gdca_par.h): the least items (bodies,
+ * nodes of one tree height) per chunk, and the least chain length, from bench_parallel's grain
+ * sweep and speed-up table (bench/README.md, "Parallel assembly"). */
+#define INVERSE_GRAIN_PLANAR 16
+#define INVERSE_GRAIN_SPATIAL 4
+#define INVERSE_MIN_BODIES_PLANAR 2048
+#define INVERSE_MIN_BODIES_SPATIAL 256
 
 /* what the stages of one inverse pass share (gdca_par.h) */
 typedef struct inverse_args {
@@ -324,7 +327,8 @@ static void inverse_planar(const ctc_model *m, ctc_data *d, const double *u, dou
                           .assemble = assemble_planar,
                           .root = root_planar,
                           .disassemble = disassemble_planar,
-                          .grain = INVERSE_GRAIN_PLANAR};
+                          .grain = INVERSE_GRAIN_PLANAR,
+                          .min_bodies = INVERSE_MIN_BODIES_PLANAR};
     gdca_par_run(m, d, &pass);
 }
 
@@ -336,7 +340,8 @@ static void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u, do
                           .assemble = assemble_spatial,
                           .root = root_spatial,
                           .disassemble = disassemble_spatial,
-                          .grain = INVERSE_GRAIN_SPATIAL};
+                          .grain = INVERSE_GRAIN_SPATIAL,
+                          .min_bodies = INVERSE_MIN_BODIES_SPATIAL};
     gdca_par_run(m, d, &pass);
 }
 
