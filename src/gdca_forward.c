@@ -95,7 +95,7 @@ static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const doub
 /* When the forward pass splits over threads (gdca_par.h): the least nodes per chunk of one tree
  * height, and the least chain length, from bench_parallel's grain sweep and speed-up table
  * (bench/README.md, "Parallel assembly"). */
-#define FORWARD_GRAIN_PLANAR 4
+#define FORWARD_GRAIN_PLANAR 2
 #define FORWARD_GRAIN_SPATIAL 2
 #define FORWARD_MIN_BODIES_PLANAR 512
 #define FORWARD_MIN_BODIES_SPATIAL 128

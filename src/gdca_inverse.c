@@ -162,7 +162,7 @@ static inline double *record(const ctc_data *d, int a)
  * sweep and speed-up table (bench/README.md, "Parallel assembly"). */
 #define INVERSE_GRAIN_PLANAR 16
 #define INVERSE_GRAIN_SPATIAL 4
-#define INVERSE_MIN_BODIES_PLANAR 2048
+#define INVERSE_MIN_BODIES_PLANAR 1024
 #define INVERSE_MIN_BODIES_SPATIAL 256
 
 /* what the stages of one inverse pass share (gdca_par.h) */

@@ -41,6 +41,7 @@
 
 #define CACHE_LINE 64
 #define GRACE_NS 2000 /* ns a thread leaves an unclaimed chunk to its owner once it could start */
+#define OVERSUBSCRIBED_YIELD_NS 100000 /* ns an oversubscribed pool yields before it blocks */
 
 struct ctc_pool {
     alignas(CACHE_LINE) atomic_ulong done;    /* chunks done in the current run */
@@ -213,7 +214,7 @@ ctc_pool *ctc_pool_new(int nthreads)
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
     int oversubscribed = ncpu > 0 && nthreads > ncpu;
     p->spin_default = oversubscribed ? 0 : CTC_POOL_SPIN_NS;
-    p->block_default = oversubscribed ? 0 : CTC_POOL_BLOCK_NS;
+    p->block_default = oversubscribed ? OVERSUBSCRIBED_YIELD_NS : CTC_POOL_BLOCK_NS;
     atomic_init(&p->spin_ns, p->spin_default);
     atomic_init(&p->block_ns, p->block_default);
     p->nthreads = nthreads;
