@@ -93,8 +93,13 @@ static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const doub
 }
 
 /* When the forward pass splits over threads (gdca_par.h): the least nodes per chunk of one tree
- * height, and the least chain length, from bench_parallel's grain sweep and speed-up table
- * (bench/README.md, "Parallel assembly"). */
+ * height, and the least chain length. From bench_parallel on 2 threads, idle machine
+ * (bench/README.md, "Parallel assembly"): grain 1 did best at every n and 2 within 3% (2 keeps
+ * chunks of two nodes for larger thread counts); the split pass alone beat the serial one from
+ * n = 256 planar (1.15x) and n = 64 spatial (1.39x), but a CTC evaluation, whose serial
+ * kinematics and handles leave the records in the caller's cache, gained only from 512 planar
+ * (0.80x at 256, 0.98-1.0x at 512, 1.32x at 1024 with the inverse split too) and 128 spatial
+ * (1.10x). */
 #define FORWARD_GRAIN_PLANAR 2
 #define FORWARD_GRAIN_SPATIAL 2
 #define FORWARD_MIN_BODIES_PLANAR 512

@@ -28,12 +28,13 @@
  * blocked, so warm threads pay none. The defaults spin for 5 us, about what the chunks of one
  * stage take to finish one after another, and then block without yielding. bench_parallel
  * measured, per stage of two 1 us chunks on 2 threads: 1.12 us for every spinning policy and
- * 1.40 us blocking at once on an idle machine (pthread_barrier_wait: 5.2 us); with other
- * programs on both cores, 2.2 us spinning 5 us then blocking, 1.9 us blocking at once, 4.4 us
- * spinning only and 5.9 us spinning then yielding (a yield hands the core to the other program,
- * a spin keeps it from the thread being waited for). A pool with more threads than the machine
- * has online CPUs is different: its own threads compete for the cores, so it yields at once and
- * blocks after 100 us (4 threads on 2 cores: 2.8 us per stage yielding, 15.6 us blocking at once).
+ * 1.40 us blocking at once on an idle machine (pthread_barrier_wait: 5.2 us); beside two
+ * busy-loop processes, 3.2 us spinning 5 us then blocking, 6.2 us spinning only, 7.7 us blocking
+ * at once and 9.8 us yielding at once (a yield or an early block hands the core to the other
+ * program, a spin keeps it from the thread being waited for). A pool with more threads than the
+ * machine has online CPUs is different: its own threads compete for the cores, so it yields at
+ * once and blocks after 100 us (4 threads on 2 cores: 2.7 us per stage, 11.5 us blocking at
+ * once, 208 us spinning).
  *
  * A pool belongs to one thread at a time (the one calling ctc_pool_run); it is not reentrant.
  */
