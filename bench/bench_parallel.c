@@ -4,30 +4,35 @@
  * points cost.
  *
  * Three parts, each printed as a table:
- *   barrier   the pool's level barrier (pool.h) with 2 threads and with each count of
- *             CTC_BENCH_THREADS: a job of BARRIERS stages of one trivial chunk per thread, each
- *             stage needing the one before, per stage, with the default waiting (pause-spin,
- *             then block), sched_yield at once (then block), block at once; POSIX
- *             pthread_barrier_wait on as many plain threads per crossing for comparison; and one
- *             run of one stage on warm workers and on blocked ones (after 2 ms idle), the cost
- *             of a pass's start.
- *   grain     for each pass (GDCA forward, composite iGDCA), form and n = 256, 1024, 4096, on
- *             2 threads: the time of one pass as the grain varies (d->par_grain: a stage of c items
- * uses min(threads, c / grain) threads, serial below 2), and serially. The best grain is the
- * threshold written into gdca_forward.c and gdca_inverse.c. speed-up  planar rod chains and spatial
- * revolute chains (the chains of bench_dynamics) of n = 64, 128, ..., max_n bodies: one GDCA
- * forward pass, one composite iGDCA pass and one CTC right-hand side (kinematics + handles + iGDCA
- * + GDCA; kinematics and handles stay serial), on 1 thread and on each count of CTC_BENCH_THREADS
- * (default 2), with the measured grains; speed-up = time on 1 thread / time on k threads, from the
- * same run. Each thread count has its own ctc_data (and pool). Before timing, the results on k
- * threads are checked bitwise against 1 thread; a mismatch ends the run with status 1. Batches of
- * all timings of one chain are interleaved, each batch starting one timing further on; each timing
- * runs untimed for SETTLE_S (at least once) before it is timed, so that the workers are warm and
- * the caches hold the timing's own data; the figures are medians over the batches.
+ *   barrier   the pool's level barrier (pool.h), with 2 threads and with each count of
+ *             CTC_BENCH_THREADS: a job of BARRIERS stages of one chunk of CHUNK_NS busy work
+ *             per thread, each stage needing the one before, per stage, for several waiting
+ *             policies (ctc_pool_set_wait), the default first; POSIX pthread_barrier_wait on as
+ *             many plain threads (CHUNK_NS of work, then a crossing) for comparison; and one run
+ *             of one stage on warm workers and on blocked ones (after 2 ms idle).
+ *   grain     for each pass (GDCA forward, composite iGDCA), form and n = 64, 128, ..., 4096,
+ *             on 2 threads: the time of one pass as the grain varies (d->par_grain: a stage of c
+ *             items is cut into at most c / grain chunks, and runs whole below 2; no least chain
+ *             length), and serially. The grains that do best at the larger n, and the least n
+ *             where a split beats the serial pass, are the thresholds written into
+ *             gdca_forward.c and gdca_inverse.c.
+ *   speed-up  planar rod chains and spatial revolute chains (the chains of bench_dynamics) of
+ *             n = 64, 128, ..., max_n bodies: one GDCA forward pass, one composite iGDCA pass
+ *             and one CTC right-hand side (kinematics + handles + iGDCA + GDCA; kinematics and
+ *             handles stay serial), on 1 thread and on each count of CTC_BENCH_THREADS (default
+ *             2), with the measured grains; speed-up = time on 1 thread / time on k threads,
+ *             from the same run. Each thread count has its own ctc_data (and pool).
+ * Before timing, the results on k threads are checked bitwise against 1 thread; a mismatch ends
+ * the run with status 1. Every timing of a case first runs round-robin for WARM_S. Batches of
+ * all timings of one chain are interleaved, each batch starting one timing further on; each
+ * timing runs untimed for SETTLE_S (at least once) before it is timed, so that the workers are
+ * warm and the caches hold the timing's own data; the figures are medians over the batches.
  *
  * Usage: bench_parallel [max_n] [batches]     (default 65536 and 11)
  * Environment: CTC_BENCH_THREADS="2,4,8" thread counts beside 1 (default "2", each 2..64);
- *              CTC_BENCH_QUICK=1: max_n 4096 and 5 batches unless given.
+ *              CTC_BENCH_QUICK=1: max_n 4096 and 5 batches unless given;
+ *              CTC_BENCH_WAIT="spin_ns,block_ns": the waiting phases of the passes' pools
+ *              (ctc_pool_set_wait; default: the pool's own).
  */
 #include <pthread.h>
 #include <stdio.h>
@@ -39,18 +44,24 @@
 #include "ctc.h"
 #include "pool.h"
 
-#define MAXK 8         /* thread counts beside 1 */
-#define SETTLE_S 5e-3  /* s, untimed runs before each timing in a batch */
-#define BATCH_S 2e-3   /* s, the least length of one timed batch of the slowest timing */
-#define BARRIERS 20000 /* crossings per barrier timing */
+#define MAXK 8        /* thread counts beside 1 */
+#define SETTLE_S 5e-3 /* s, untimed runs before each timing in a batch */
+#define BATCH_S 2e-3  /* s, the least length of one timed batch of the slowest timing */
+#define BARRIERS 4000 /* stages (or crossings) per barrier timing, in runs of up to 200 */
+#define CHUNK_NS 1000 /* ns, the busy work of one chunk in the barrier timings */
 
 #define IDLE_NS 2000000L /* ns between two runs of the blocked-start timing */
+#define WARM_S                                                                                     \
+    0.1 /* s, every timing of a new case round-robin before the batches: new                       \
+           worker threads start on the caller's core and the scheduler takes                       \
+           tens of milliseconds to spread them (seen on the 2-core machine) */
 
 enum { P_FWD, P_INV, P_CTC, NP }; /* the passes timed */
 static const char *const pass_names[NP] = {"GDCA fwd", "iGDCA", "ctc"};
 
-static int nk = 1;               /* thread counts beside 1 */
-static int kthreads[MAXK] = {2}; /* and the counts */
+static int nk = 1;                          /* thread counts beside 1 */
+static long wait_spin = -1, wait_block = 0; /* CTC_BENCH_WAIT for the passes' pools */
+static int kthreads[MAXK] = {2};            /* and the counts */
 
 static double now(void)
 {
@@ -85,6 +96,9 @@ static volatile double sink;
  * slowest timing lasts BATCH_S. */
 static void measure(void (*run)(void *ctx, int w), void *ctx, int ntim, int batches, double *med)
 {
+    for (double t0 = now(); now() - t0 < WARM_S;) {
+        for (int w = 0; w < ntim; w++) run(ctx, w);
+    }
     int reps = 1;
     for (int w = 0; w < ntim; w++) { /* the slowest timing's calls per BATCH_S */
         double t0 = now();
@@ -118,12 +132,27 @@ static void measure(void (*run)(void *ctx, int w), void *ctx, int ntim, int batc
 
 /* ---- the level barrier ---- */
 
-enum { B_DEFAULT, B_YIELD, B_BLOCK, B_POSIX, B_RUN_WARM, B_RUN_COLD, NB };
+/* waiting policies of the barrier table (ctc_pool_set_wait; spin -1: the pool's default) */
+static const struct {
+    const char *name;
+    long spin_ns, block_ns;
+} policies[] = {
+    {"default (spin 5 us, block)", -1, 0},
+    {"spin 5 us, yield to 100 us, block", 5000, 100000},
+    {"spin 50 us, block", 50000, 50000},
+    {"spin, never block", 1000000000L, -1},
+    {"yield at once, block at 100 us", 0, 100000},
+    {"block at once", 0, 0},
+};
+#define NPOL ((int)(sizeof policies / sizeof *policies))
+enum { B_POSIX = NPOL, B_RUN_WARM, B_RUN_COLD, NB };
 
 typedef struct barrier_case {
     ctc_pool *pool; /* its waiting phases set for each timing */
     int nthreads;
-    volatile double slot[CTC_MAX_THREADS * 8]; /* a chunk's trivial work, a cache line apart */
+    int nstages;                        /* stages per run: BARRIERS / runs */
+    int first[CTC_POOL_MAX_STAGES + 1]; /* stage s: chunks s nthreads .. (s + 1) nthreads - 1 */
+    volatile double slot[CTC_MAX_THREADS * 8]; /* a chunk's result, a cache line apart */
     pthread_barrier_t posix;
     pthread_t *posix_threads;
     /* POSIX: the helpers wait on go_gen, then cross BARRIERS barriers with the caller */
@@ -132,17 +161,32 @@ typedef struct barrier_case {
     int go_gen, stop;
 } barrier_case;
 
-/* BARRIERS stages of nthreads chunks each: chunk c needs the stages before its own */
-static int stage_need(void *arg, int c)
+static long chunk_iters = 1000; /* busy-loop rounds of CHUNK_NS, calibrated in main */
+
+static double busy(long iters)
 {
-    const barrier_case *b = arg;
-    return c / b->nthreads * b->nthreads;
+    double x = 0;
+    for (long i = 0; i < iters; i++) x = x * 0.999999 + 1e-9 * (double)i;
+    return x;
+}
+
+static void calibrate_chunk(void)
+{
+    double best = 1e9;
+    for (int r = 0; r < 5; r++) {
+        double t = now();
+        sink += busy(1000000);
+        t = now() - t;
+        if (t < best) best = t;
+    }
+    chunk_iters = (long)(1000000 * CHUNK_NS * 1e-9 / best);
+    if (chunk_iters < 1) chunk_iters = 1;
 }
 
 static void stage_work(void *arg, int c)
 {
     barrier_case *b = arg;
-    b->slot[(c % b->nthreads) * 8] += 1.0;
+    b->slot[(c % b->nthreads) * 8] += busy(chunk_iters);
 }
 
 static void *posix_helper(void *arg)
@@ -156,7 +200,10 @@ static void *posix_helper(void *arg)
         int stop = c->stop;
         pthread_mutex_unlock(&c->lock);
         if (stop) return NULL;
-        for (int i = 0; i < BARRIERS; i++) pthread_barrier_wait(&c->posix);
+        for (int i = 0; i < BARRIERS; i++) {
+            c->slot[8] += busy(chunk_iters);
+            pthread_barrier_wait(&c->posix);
+        }
     }
 }
 
@@ -164,23 +211,24 @@ static void *posix_helper(void *arg)
 static void run_barrier(void *arg, int w)
 {
     barrier_case *c = arg;
-    ctc_pool_job stages = {BARRIERS * c->nthreads, stage_need, stage_work, c};
-    ctc_pool_job one = {c->nthreads, stage_need, stage_work, c};
+    ctc_pool_job stages = {c->nstages, c->first, stage_work, c};
+    ctc_pool_job one = {1, c->first, stage_work, c};
+    if (w < NPOL) { /* a policy, then back to the pool's default */
+        ctc_pool_set_wait(c->pool, policies[w].spin_ns, policies[w].block_ns);
+        for (int r = 0; r < BARRIERS / c->nstages; r++) ctc_pool_run(c->pool, &stages);
+        ctc_pool_set_wait(c->pool, -1, 0);
+        return;
+    }
     switch (w) {
-    case B_DEFAULT:
-    case B_YIELD:
-    case B_BLOCK:
-        if (w == B_YIELD) ctc_pool_set_wait(c->pool, 0, CTC_POOL_BLOCK_NS);
-        if (w == B_BLOCK) ctc_pool_set_wait(c->pool, 0, 0);
-        ctc_pool_run(c->pool, &stages);
-        ctc_pool_set_wait(c->pool, -1, 0); /* back to the defaults */
-        break;
     case B_POSIX:
         pthread_mutex_lock(&c->lock);
         c->go_gen++;
         pthread_cond_broadcast(&c->go);
         pthread_mutex_unlock(&c->lock);
-        for (int i = 0; i < BARRIERS; i++) pthread_barrier_wait(&c->posix);
+        for (int i = 0; i < BARRIERS; i++) {
+            c->slot[0] += busy(chunk_iters);
+            pthread_barrier_wait(&c->posix);
+        }
         break;
     default:
         ctc_pool_run(c->pool, &one);
@@ -191,6 +239,10 @@ static void run_barrier(void *arg, int w)
 static void bench_barrier(int nthreads, int batches)
 {
     barrier_case c = {.nthreads = nthreads};
+    c.nstages = CTC_POOL_MAX_CHUNKS / nthreads;
+    if (c.nstages > 200) c.nstages = 200; /* a divisor of BARRIERS */
+    while (BARRIERS % c.nstages) c.nstages--;
+    for (int st = 0; st <= c.nstages; st++) c.first[st] = st * nthreads;
     c.pool = ctc_pool_new(nthreads);
     if (!c.pool) abort();
     c.posix_threads = calloc((size_t)nthreads, sizeof *c.posix_threads);
@@ -206,7 +258,7 @@ static void bench_barrier(int nthreads, int batches)
 
     /* the cold start: median of single one-stage runs, each after IDLE_NS idle (every worker
        has blocked by then) */
-    ctc_pool_job one = {nthreads, stage_need, stage_work, &c};
+    ctc_pool_job one = {1, c.first, stage_work, &c};
     int runs = 2 * batches + 1;
     double *cold = malloc(sizeof(double) * (size_t)runs);
     if (!cold) abort();
@@ -221,9 +273,14 @@ static void bench_barrier(int nthreads, int batches)
     med[B_RUN_COLD] = cold[runs / 2];
     free(cold);
 
-    printf("| %7d | %9.0f | %9.0f | %9.0f | %9.0f | %9.0f | %9.0f |\n", nthreads,
-           1e9 * med[B_DEFAULT] / BARRIERS, 1e9 * med[B_YIELD] / BARRIERS,
-           1e9 * med[B_BLOCK] / BARRIERS, 1e9 * med[B_POSIX] / BARRIERS, 1e9 * med[B_RUN_WARM],
+    for (int w = 0; w < NPOL; w++) {
+        printf("| %7d | %-42s | %7.0f |\n", nthreads, policies[w].name, 1e9 * med[w] / BARRIERS);
+    }
+    printf("| %7d | %-42s | %7.0f |\n", nthreads, "pthread_barrier_wait (plain threads)",
+           1e9 * med[B_POSIX] / BARRIERS);
+    printf("| %7d | %-42s | %7.0f |\n", nthreads, "one run of one stage, warm",
+           1e9 * med[B_RUN_WARM]);
+    printf("| %7d | %-42s | %7.0f |\n", nthreads, "one run of one stage, after 2 ms idle",
            1e9 * med[B_RUN_COLD]);
 
     pthread_mutex_lock(&c.lock);
@@ -333,7 +390,7 @@ static int check_bitwise(chain_case *c, int k)
 
 /* ---- the grain sweep ---- */
 
-static const int sweep[] = {1, 2, 4, 8, 16, 32, 64, 128, 256, 0}; /* 0: serial */
+static const int sweep[] = {1, 2, 4, 8, 16, 32, 64, 128, 0}; /* 0: serial */
 #define NSWEEP ((int)(sizeof sweep / sizeof *sweep))
 
 typedef struct sweep_case {
@@ -356,7 +413,9 @@ static void bench_sweep(const char *label, test_chain *chain, int batches)
     ctc_model *m = build(chain);
     static const int two[1] = {2};
     chain_case *c = case_new(m, two, 1);
+    c->d[1]->par_grain = 1; /* so that the pool starts */
     run_pass(m, c->d[1], P_CTC, c->q, c->v, c->u, c->f[1], c->a[1]);
+    if (c->d[1]->pool) ctc_pool_set_wait(c->d[1]->pool, wait_spin, wait_block);
     for (int pass = P_FWD; pass <= P_INV; pass++) {
         sweep_case s = {c, pass};
         double med[NSWEEP];
@@ -397,6 +456,8 @@ static int bench_speedup(const char *label, test_chain *chain, int batches, spee
             failed = 1;
         }
     }
+    for (int k = 1; k <= nk; k++)
+        if (c->d[k]->pool) ctc_pool_set_wait(c->d[k]->pool, wait_spin, wait_block);
     double med[(MAXK + 1) * NP];
     measure(run_speedup, c, (1 + nk) * NP, batches, med);
     snprintf(row->label, sizeof row->label, "%s", label);
@@ -434,7 +495,8 @@ static void print_speedup(const speed_row *rows, int nrows)
     }
 
     /* where k threads start to pay: the least n from which every larger n gains */
-    printf("\nThe least n from which every larger n of the table runs faster on k threads:\n\n");
+    printf("\nThe least n from which every larger n of the table runs at least 5%% faster on k "
+           "threads:\n\n");
     for (int k = 1; k <= nk; k++) {
         for (int p = 0; p < NP; p++) {
             const char *labels[2] = {"planar", "spatial"};
@@ -442,7 +504,7 @@ static void print_speedup(const speed_row *rows, int nrows)
                 int from = -1;
                 for (int i = nrows - 1; i >= 0; i--) {
                     if (strcmp(rows[i].label, labels[l]) != 0) continue;
-                    if (rows[i].t[k][p] < rows[i].t[0][p])
+                    if (rows[i].t[0][p] >= 1.05 * rows[i].t[k][p])
                         from = rows[i].n;
                     else
                         break;
@@ -492,18 +554,23 @@ int main(int argc, char **argv)
         return 2;
     }
     parse_threads(getenv("CTC_BENCH_THREADS"));
+    const char *wait = getenv("CTC_BENCH_WAIT");
+    if (wait && sscanf(wait, "%ld,%ld", &wait_spin, &wait_block) != 2) {
+        fprintf(stderr,
+                "bench_parallel: CTC_BENCH_WAIT: \"spin_ns,block_ns\", e.g. \"5000,5000\"\n");
+        return 2;
+    }
     double load0 = loadavg(), t0 = now();
     printf("GDCA passes split over threads. Medians of %d interleaved batches. Load average at the "
-           "start: %.2f.\n\n",
-           batches, load0);
+           "start: %.2f. Waiting of the passes' pools: %s.\n\n",
+           batches, load0, wait ? wait : "default");
 
-    printf(
-        "Level barrier: ns per stage of one trivial chunk per thread, each stage waiting for the "
-        "one before (pthread_barrier: ns per crossing), and one run of one stage (ns):\n\n");
-    printf("| threads | default | yield | block at once | pthread_barrier | run, warm | run, "
-           "after 2 ms idle |\n");
-    printf("| ------: | ------: | --------: | ------------: | --------------: | --------: | "
-           "--------------------: |\n");
+    calibrate_chunk();
+    printf("Level barrier: ns per stage of one %d ns chunk per thread, each stage waiting for the "
+           "one before (pthread_barrier: %d ns of work, then a crossing), and one run of one "
+           "stage (ns); %d ns is the ideal:\n\n",
+           CHUNK_NS, CHUNK_NS, CHUNK_NS);
+    printf("| threads | waiting | ns per stage |\n| ------: | ------- | -----------: |\n");
     bench_barrier(2, batches);
     for (int k = 0; k < nk; k++)
         if (kthreads[k] != 2) bench_barrier(kthreads[k], batches);
@@ -519,9 +586,9 @@ int main(int argc, char **argv)
     printf(" best |\n| ------- | ----: | -------- |");
     for (int g = 0; g < NSWEEP; g++) printf(" -------: |");
     printf(" ---: |\n");
-    static const int sweep_n[] = {256, 1024, 4096};
+    static const int sweep_n[] = {64, 128, 256, 512, 1024, 2048, 4096};
     for (int form = 0; form < 2; form++) {
-        for (int i = 0; i < 3 && sweep_n[i] <= max_n; i++) {
+        for (int i = 0; i < 7 && sweep_n[i] <= max_n; i++) {
             test_chain *c = form
                                 ? test_chain_random_spatial(sweep_n[i], 7, 1u << CTC_JOINT_REVOLUTE)
                                 : test_chain_random_planar(sweep_n[i], 7, 0, 1);

@@ -87,8 +87,9 @@ typedef struct ctc_data {
     int threads;                 /* the passes may use this many threads, the caller's included:
                                     1 (default) = serial */
     int par_grain;               /* the least items per chunk of a stage of a pass (one tree
-                                    height, or the bodies; gdca_par.h); 0 (default) = the
-                                    pass's measured grain. For tests and benchmarks */
+                                    height, or the bodies; gdca_par.h), and no least chain
+                                    length; 0 (default) = the pass's measured values. For tests
+                                    and benchmarks */
     struct ctc_pool *pool;       /* the workers: started by the first pass that splits a stage,
                                     stopped by ctc_data_free or a new thread count; else NULL */
     int pool_failed;             /* 1: the pool could not start; serial until threads change */

@@ -94,10 +94,18 @@ static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const doub
     forward_qacc(m, d, n, rest, a2, qacc, dim); /* A(ground) = 0 = A2 + P qdd + beta */
 }
 
-/* Items per thread below which a stage of the forward pass runs serially (gdca_par.h), from
- * bench_parallel's grain sweep (bench/README.md, "Parallel assembly"). */
-#define FORWARD_GRAIN_PLANAR 16
-#define FORWARD_GRAIN_SPATIAL 4
+/* When the forward pass splits over threads (gdca_par.h): the least nodes per chunk of one tree
+ * height, and the least chain length. From bench_parallel on 2 threads, idle machine
+ * (bench/README.md, "Parallel assembly"): grain 1 did best at every n and 2 within 3% (2 keeps
+ * chunks of two nodes for larger thread counts); the split pass alone beat the serial one from
+ * n = 256 planar (1.15x) and n = 64 spatial (1.39x), but a CTC evaluation, whose serial
+ * kinematics and handles leave the records in the caller's cache, gained only from 512 planar
+ * (0.80x at 256, 0.98-1.0x at 512, 1.32x at 1024 with the inverse split too) and 128 spatial
+ * (1.10x). */
+#define FORWARD_GRAIN_PLANAR 2
+#define FORWARD_GRAIN_SPATIAL 2
+#define FORWARD_MIN_BODIES_PLANAR 512
+#define FORWARD_MIN_BODIES_SPATIAL 128
 
 /* what the stages of one forward pass share (gdca_par.h) */
 typedef struct forward_args {
@@ -222,7 +230,8 @@ static void forward_planar(const ctc_model *m, ctc_data *d, const double *f, dou
                           .assemble = assemble_planar,
                           .root = root_planar,
                           .disassemble = disassemble_planar,
-                          .grain = FORWARD_GRAIN_PLANAR};
+                          .grain = FORWARD_GRAIN_PLANAR,
+                          .min_bodies = FORWARD_MIN_BODIES_PLANAR};
     gdca_par_run(m, d, &pass);
 }
 
@@ -233,7 +242,8 @@ static void forward_spatial(const ctc_model *m, ctc_data *d, const double *f, do
                           .assemble = assemble_spatial,
                           .root = root_spatial,
                           .disassemble = disassemble_spatial,
-                          .grain = FORWARD_GRAIN_SPATIAL};
+                          .grain = FORWARD_GRAIN_SPATIAL,
+                          .min_bodies = FORWARD_MIN_BODIES_SPATIAL};
     gdca_par_run(m, d, &pass);
 }
 

@@ -158,10 +158,16 @@ static inline double *record(const ctc_data *d, int a)
     return d->icomp + (size_t)a * d->csize;
 }
 
-/* Items per thread below which a stage of the composite inverse pass runs serially
- * (gdca_par.h), from bench_parallel's grain sweep (bench/README.md, "Parallel assembly"). */
-#define INVERSE_GRAIN_PLANAR 32
-#define INVERSE_GRAIN_SPATIAL 8
+/* When the composite inverse pass splits over threads (gdca_par.h): the least items (bodies,
+ * nodes of one tree height) per chunk, and the least chain length. From bench_parallel on 2
+ * threads, idle machine (bench/README.md, "Parallel assembly"): planar, grain 16 did best from
+ * n = 1024, where the split pass beat the serial one (1.22x; none at 512); spatial, grains 1 to 8
+ * were within 3% of each other and the split pass beat the serial one from n = 256 (1.29x; a loss
+ * at 128). */
+#define INVERSE_GRAIN_PLANAR 16
+#define INVERSE_GRAIN_SPATIAL 4
+#define INVERSE_MIN_BODIES_PLANAR 1024
+#define INVERSE_MIN_BODIES_SPATIAL 256
 
 /* what the stages of one inverse pass share (gdca_par.h) */
 typedef struct inverse_args {
@@ -325,7 +331,8 @@ static void inverse_planar(const ctc_model *m, ctc_data *d, const double *u, dou
                           .assemble = assemble_planar,
                           .root = root_planar,
                           .disassemble = disassemble_planar,
-                          .grain = INVERSE_GRAIN_PLANAR};
+                          .grain = INVERSE_GRAIN_PLANAR,
+                          .min_bodies = INVERSE_MIN_BODIES_PLANAR};
     gdca_par_run(m, d, &pass);
 }
 
@@ -337,7 +344,8 @@ static void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u, do
                           .assemble = assemble_spatial,
                           .root = root_spatial,
                           .disassemble = disassemble_spatial,
-                          .grain = INVERSE_GRAIN_SPATIAL};
+                          .grain = INVERSE_GRAIN_SPATIAL,
+                          .min_bodies = INVERSE_MIN_BODIES_SPATIAL};
     gdca_par_run(m, d, &pass);
 }
 

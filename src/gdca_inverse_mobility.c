@@ -109,11 +109,13 @@ static inline void inverse_drive(const ctc_model *m, const ctc_data *d, int j, c
     }
 }
 
-/* Items per thread below which a stage of the mobility-form inverse pass runs serially
- * (gdca_par.h): its nodes cost about what the forward pass's do, so it takes the forward pass's
- * grain (gdca_forward.c; bench/README.md, "Parallel assembly"). */
-#define MOBILITY_GRAIN_PLANAR 16
-#define MOBILITY_GRAIN_SPATIAL 4
+/* When the mobility-form inverse pass splits over threads (gdca_par.h): its nodes cost about
+ * what the forward pass's do, so it takes the forward pass's measured values (gdca_forward.c;
+ * bench/README.md, "Parallel assembly"). */
+#define MOBILITY_GRAIN_PLANAR 2
+#define MOBILITY_GRAIN_SPATIAL 2
+#define MOBILITY_MIN_BODIES_PLANAR 512
+#define MOBILITY_MIN_BODIES_SPATIAL 128
 
 /* what the stages of one inverse pass share (gdca_par.h) */
 typedef struct mobility_args {
@@ -233,6 +235,7 @@ void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u,
         .root = planar ? root_planar : root_spatial,
         .disassemble = planar ? disassemble_planar : disassemble_spatial,
         .grain = planar ? MOBILITY_GRAIN_PLANAR : MOBILITY_GRAIN_SPATIAL,
+        .min_bodies = planar ? MOBILITY_MIN_BODIES_PLANAR : MOBILITY_MIN_BODIES_SPATIAL,
     };
     gdca_par_run(m, d, &pass);
     if (m->has_loop && d->singular_joint >= 0) {

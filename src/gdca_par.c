@@ -1,15 +1,15 @@
 /*
- * gdca_par.c - the plan of a GDCA pass over the assembly tree, run serially or as chunks on the
- * data's pool (gdca_par.h, pool.h).
+ * gdca_par.c - the plan of a GDCA pass over the assembly tree, run serially or as the stages of
+ * a job on the data's pool (gdca_par.h, pool.h).
  *
- * The stages (bodies, assembly heights 1..H, root, disassembly heights H..1) become a list of
- * chunks for ctc_pool_run: a stage of c items that splits gets min(c / grain, threads x
- * GDCA_PAR_CHUNKS) chunks, contiguous ranges [c j / m, c (j + 1) / m) of its items, so that a
- * chunk at one height mostly reads what one chunk at the height below wrote (the nodes of one
- * height are stored left to right along the chain); a run of consecutive stages that do not
- * split becomes one chunk, done by one thread in stage order without waiting between them. Each
- * chunk needs every chunk of the stages before it done, which is the level barrier; a thread
- * that holds no chunk delays nobody (pool.h).
+ * The stages (bodies, assembly heights 1..H, root, disassembly heights H..1) become the pool's
+ * stages: a stage of c items that splits is cut into min(c / grain, threads) chunks, contiguous
+ * ranges [c j / m, c (j + 1) / m) of its items. The pool gives chunk j of every stage to the
+ * same thread, so a thread's chunk at one height mostly reads what its own chunk at the height
+ * below wrote (the nodes of one height are stored left to right along the chain, and the left
+ * half of one height has its children in the left half of the heights below). A run of
+ * consecutive stages that do not split becomes one stage of one chunk, done by one thread in
+ * stage order without waiting between them.
  */
 #include "gdca_par.h"
 
@@ -17,13 +17,6 @@
 #include <stdatomic.h>
 
 #include "pool.h"
-
-/* Chunks per thread a split stage is cut into (at most): more than one, so that a thread that
- * is descheduled or slow leaves work the others can take (bench_parallel built with 1, 2 and 4;
- * bench/README.md). */
-#ifndef GDCA_PAR_CHUNKS
-#define GDCA_PAR_CHUNKS 2
-#endif
 
 #define MAX_STAGES 64 /* bodies, 2 x 20 heights (CTC_MAX_BODIES = 10^6 < 2^20), root */
 
@@ -46,16 +39,17 @@ typedef struct par_plan {
     int nstages;
     par_stage stage[MAX_STAGES];
     int ngroups;
-    int group[MAX_STAGES];     /* the first stage of each group (a split stage is a group alone) */
-    atomic_int first_singular; /* the least tree index whose joint failed; INT_MAX: none */
+    int group[MAX_STAGES];           /* the first stage of each group (a split stage is alone) */
+    int group_first[MAX_STAGES + 1]; /* the first chunk of each group, then the chunk count */
+    atomic_int first_singular;       /* the least tree index whose joint failed; INT_MAX: none */
 } par_plan;
 
 /* the chunks a stage of count items is cut into: 1 when it does not pay to split */
 static int stage_chunks(const par_plan *r, int count)
 {
-    int u = count / r->grain, most = r->nthreads * GDCA_PAR_CHUNKS;
+    int u = count / r->grain;
     if (u < 2 || r->nthreads < 2) return 1;
-    return u < most ? u : most;
+    return u < r->nthreads ? u : r->nthreads;
 }
 
 static void add_stage(par_plan *r, int kind, int lo, int hi)
@@ -87,10 +81,12 @@ static int plan_pass(par_plan *r)
             while (s->last + 1 < r->nstages && r->stage[s->last + 1].nchunks == 1) s->last++;
         }
         s->first = chunks;
+        r->group_first[r->ngroups] = chunks;
         chunks += s->nchunks;
         r->group[r->ngroups++] = i;
         i = s->last;
     }
+    r->group_first[r->ngroups] = chunks;
     return chunks;
 }
 
@@ -137,12 +133,7 @@ static const par_stage *chunk_group(const par_plan *r, int c)
     return &r->stage[r->group[lo]];
 }
 
-/* pool callbacks: a chunk needs every chunk of the groups before its own */
-static int chunk_need(void *arg, int c)
-{
-    return chunk_group(arg, c)->first;
-}
-
+/* the pool's callback: chunk c of the plan */
 static void chunk_work(void *arg, int c)
 {
     par_plan *r = arg;
@@ -174,7 +165,7 @@ static ctc_pool *data_pool(ctc_data *d)
 void gdca_par_run(const ctc_model *m, ctc_data *d, const gdca_par_pass *pass)
 {
     const ctc_data *o = d->pool_owner ? d->pool_owner : d;
-    if (o->threads > 1) {
+    if (o->threads > 1 && (d->par_grain > 0 || m->nbodies >= pass->min_bodies)) {
         par_plan r = {.m = m, .d = d, .pass = pass, .nthreads = o->threads};
         r.grain = d->par_grain > 0 ? d->par_grain : pass->grain;
         if (r.grain < 1) r.grain = 1;
@@ -182,7 +173,7 @@ void gdca_par_run(const ctc_model *m, ctc_data *d, const gdca_par_pass *pass)
         int chunks = plan_pass(&r);
         ctc_pool *pool = chunks > 1 ? data_pool(d) : NULL;
         if (pool != NULL) {
-            ctc_pool_job job = {chunks, chunk_need, chunk_work, &r};
+            ctc_pool_job job = {r.ngroups, r.group_first, chunk_work, &r};
             ctc_pool_run(pool, &job);
             return;
         }

@@ -10,11 +10,12 @@
  * height's contiguous range), so the stages run in the order
  *     bodies, assembly heights 1 .. H, root, disassembly heights H .. 1
  * and the items of one stage are cut into contiguous chunks that the threads of the data's pool
- * take as they come (pool.h): a stage of c items gets min(c / grain, threads x GDCA_PAR_CHUNKS)
- * chunks, and one with fewer than two runs whole on one thread, as does the root always (a loop
- * model's root solve is special and small); consecutive stages that do not split run as one
- * piece. A chunk starts once every chunk of the earlier stages is done. A pass none of whose
- * stages splits, or a data with threads = 1, runs without the pool on the caller's thread.
+ * run, each thread the same part of every stage unless it is late (pool.h): a stage of c items
+ * gets min(c / grain, threads) chunks, and one with fewer than two runs whole on one thread, as
+ * does the root always (a loop model's root solve is special and small); consecutive stages
+ * that do not split run as one piece. A chunk starts once every chunk of the earlier stages is
+ * done. A pass none of whose stages splits, a chain of fewer than min_bodies bodies, or a data
+ * with threads = 1 runs without the pool on the caller's thread.
  *
  * The pass's callbacks must write only what belongs to the items they are given (a node's own
  * record, its joint's solution, the loads of its two children; a body's record), so that the
@@ -42,8 +43,9 @@ typedef struct gdca_par_pass {
     void (*root)(void *ctx);
     /* tree nodes hi-1 down to lo */
     void (*disassemble)(void *ctx, int lo, int hi);
-    int grain; /* the least items per chunk: a stage of fewer than 2 grain items runs whole;
-                  d->par_grain > 0 overrides it */
+    int grain;      /* the least items per chunk: a stage of fewer than 2 grain items runs whole */
+    int min_bodies; /* chains of fewer bodies run the whole pass serially: below it the pass is
+                       too short for a second thread to pay (d->par_grain > 0 overrides both) */
 } gdca_par_pass;
 
 /* Runs the pass on the threads d allows (data.h: ctc_data_set_threads), starting d's pool at the

@@ -27,41 +27,30 @@
 
 /* ---- the pool ---- */
 
-#define MAX_CHUNKS 4096
+#define MAX_CHUNKS CTC_POOL_MAX_CHUNKS
 
 /* a job of stages of given sizes: each chunk checks that every chunk of the earlier stages is
  * done and that it runs once */
 typedef struct staged_job {
-    int nstages, first[65]; /* first[s]: stage s's first chunk; first[nstages] = nchunks */
+    int nstages, first[CTC_POOL_MAX_STAGES + 2]; /* first[nstages] = the number of chunks */
     atomic_int runs[MAX_CHUNKS];
     atomic_int done[MAX_CHUNKS];
     atomic_int early; /* chunks that started before their dependencies were done */
 } staged_job;
 
-static int stage_of(const staged_job *j, int c)
-{
-    int s = 0;
-    while (j->first[s + 1] <= c) s++;
-    return s;
-}
-
-static int staged_need(void *arg, int c)
-{
-    staged_job *j = arg;
-    return j->first[stage_of(j, c)];
-}
-
 static void staged_work(void *arg, int c)
 {
     staged_job *j = arg;
-    for (int i = 0; i < j->first[stage_of(j, c)]; i++) {
+    int s = 0;
+    while (j->first[s + 1] <= c) s++;
+    for (int i = 0; i < j->first[s]; i++) {
         if (!atomic_load(&j->done[i])) atomic_fetch_add(&j->early, 1);
     }
     atomic_fetch_add(&j->runs[c], 1);
     atomic_store(&j->done[c], 1);
 }
 
-/* runs a job of nstages stages of 1 + (s * 7) % width chunks, reps times */
+/* runs a job of nstages stages of 1 + (s * 7) % width chunks 20 times */
 static void check_staged(int nthreads, long spin_ns, long block_ns, int nstages, int width)
 {
     staged_job *j = calloc(1, sizeof *j);
@@ -74,7 +63,7 @@ static void check_staged(int nthreads, long spin_ns, long block_ns, int nstages,
     cr_assert_not_null(p);
     cr_assert_eq(ctc_pool_threads(p), nthreads);
     ctc_pool_set_wait(p, spin_ns, block_ns);
-    ctc_pool_job job = {n, staged_need, staged_work, j};
+    ctc_pool_job job = {nstages, j->first, staged_work, j};
     for (int rep = 0; rep < 20; rep++) {
         for (int c = 0; c < n; c++) atomic_store(&j->done[c], 0);
         ctc_pool_run(p, &job);
@@ -99,6 +88,7 @@ Test(gdca_parallel, pool_runs_every_chunk_once_after_its_stage_dependencies)
     check_staged(2, 1000000, -1, 40, 3);         /* spin, never block */
     check_staged(8, 0, 50000, 30, 17);           /* yield, then block */
     check_staged(CTC_MAX_THREADS, -1, 0, 8, 64); /* more threads than cores */
+    check_staged(4, -1, 0, CTC_POOL_MAX_STAGES, 2);
 }
 
 Test(gdca_parallel, pool_sizes_out_of_range_are_refused)
@@ -109,7 +99,8 @@ Test(gdca_parallel, pool_sizes_out_of_range_are_refused)
     ctc_pool_free(NULL);
 }
 
-/* idle workers block between runs and wake for the next one; an empty job returns at once */
+/* idle workers block between runs and wake for the next one; an empty job returns at once; a
+ * job beyond the pool's capacity runs on the caller's thread */
 Test(gdca_parallel, pool_runs_again_after_its_workers_have_blocked)
 {
     staged_job *j = calloc(1, sizeof *j);
@@ -119,7 +110,7 @@ Test(gdca_parallel, pool_runs_again_after_its_workers_have_blocked)
     ctc_pool *p = ctc_pool_new(4);
     cr_assert_not_null(p);
     ctc_pool_set_wait(p, 1000, 2000);
-    ctc_pool_job job = {9, staged_need, staged_work, j}, empty = {0, staged_need, staged_work, j};
+    ctc_pool_job job = {3, j->first, staged_work, j}, empty = {0, j->first, staged_work, j};
     for (int run = 0; run < 3; run++) {
         for (int c = 0; c < 9; c++) atomic_store(&j->done[c], 0);
         ctc_pool_run(p, &job);
@@ -128,6 +119,16 @@ Test(gdca_parallel, pool_runs_again_after_its_workers_have_blocked)
         nanosleep(&nap, NULL);
     }
     for (int c = 0; c < 9; c++) cr_expect_eq(atomic_load(&j->runs[c]), 3);
+    cr_expect_eq(atomic_load(&j->early), 0);
+
+    /* CTC_POOL_MAX_STAGES + 1 stages: too large for the pool */
+    j->nstages = CTC_POOL_MAX_STAGES + 1;
+    for (int s = 0; s < j->nstages; s++) j->first[s + 1] = j->first[s] + 1;
+    cr_assert(j->first[j->nstages] <= MAX_CHUNKS);
+    ctc_pool_job big = {j->nstages, j->first, staged_work, j};
+    for (int c = 0; c < MAX_CHUNKS; c++) atomic_store(&j->runs[c], 0), atomic_store(&j->done[c], 0);
+    ctc_pool_run(p, &big);
+    for (int c = 0; c < j->nstages; c++) cr_expect_eq(atomic_load(&j->runs[c]), 1);
     cr_expect_eq(atomic_load(&j->early), 0);
     ctc_pool_free(p);
     free(j);
@@ -522,7 +523,8 @@ Test(gdca_parallel, a_shared_pool_serves_two_data_in_turn)
 
 /* ---- whole simulations ---- */
 
-#define SIM_N 256
+#define SIM_N                                                                                      \
+    2048 /* long enough for both passes to split by default (gdca_forward.c, gdca_inverse.c) */
 
 /* a PD run of SIM_N-link rod pendulum from q0_k = +-pi/6 to rest, RK4, 50 steps */
 static ctc_sim_result *pendulum_run(int threads, double mass_scale)
