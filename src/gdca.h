@@ -10,9 +10,10 @@
  *
  * Call order for one state: ctc_kinematics(m, d, q, v), ctc_handles(m, d), then any number of
  * ctc_gdca_inverse and ctc_gdca_forward calls, which share the body-level records (Eq. 42-43).
- * Neither allocates; both assume a validated model. If a joint's matrix K = h11(right) +
- * h22(left) is not numerically positive definite (it always is for a valid model unless the
- * numbers overflow), d->singular_joint names the joint and the results are NaN.
+ * Neither allocates (except that the first pass that splits over threads starts the data's workers,
+ * data.h); both assume a validated model. If a joint's matrix K = h11(right) + h22(left) is not
+ * numerically positive definite (it always is for a valid model unless the numbers overflow),
+ * d->singular_joint names the joint and the results are NaN.
  *
  * Loop models (model.h, paper section 5): forces and accelerations are extended vectors (nvx:
  * the chain's coordinates, then the closing joint's). The forward pass constrains both terminal
