@@ -77,7 +77,12 @@ function fieldErrors(page) {
 
 /* Picks a preset in select#preset and waits for the form to take it (controller.type filled). */
 async function pickPreset(page, name, controllerType) {
+    /* the form fills itself from GET /api/presets/NAME: wait for that answer, so that fields set
+       afterwards are not overwritten by it (controller.type alone may match before it lands) */
+    const loaded = page.waitForResponse((r) => new URL(r.url()).pathname === `/api/presets/${name}`);
     await page.selectOption('select#preset', name);
+    await loaded;
+    await page.evaluate(() => new Promise((done) => requestAnimationFrame(() => setTimeout(done, 0))));
     await pollValue(() => field(page, 'controller.type'), (v) => v === controllerType, `controller.type after picking ${name}`);
 }
 
