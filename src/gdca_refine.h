@@ -39,8 +39,9 @@
 #define CTC_REFINE_STALL 10.0
 
 /* The most refinement steps ctc_gdca_forward makes on model m with settings d: d->fwd_refine
- * when >= 0, else CTC_REFINE_MAX_STEPS or 0 by the rule above; always 0 for loop models (their
- * accurate residual would need the closure's multipliers; not implemented). */
+ * when >= 0, else CTC_REFINE_MAX_STEPS or 0 by the rule above. Loop models get 0: their
+ * residual would have to include the closing joint's load and the closure, which this pass does
+ * not compute (their forward pass is the unrefined one). */
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d);
 
 /* The correction dq (nv; rad/s^2, m/s^2) = M^-1 r for joint forces r (nv; N m, N), by the

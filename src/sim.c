@@ -693,6 +693,25 @@ static void ctx_free(sim_ctx *c)
     free(c->u);
 }
 
+/* The message of a run stopped as singular at time t, why saying what stopped it; the estimate
+ * that stopped it belongs in the metrics too, not only the samples' */
+static void singular_message(ctc_sim_result *r, double t, const sim_ctx *c, const char *why)
+{
+    r->metrics.loop_cond_max = fmax(r->metrics.loop_cond_max, c->cond);
+    snprintf(r->message, sizeof r->message,
+             "t = %.6g s: the independent joints cannot drive the loop here (condition estimate "
+             "%.3g%s)",
+             t, c->cond, why);
+}
+
+/* stopped because the condition estimate passed the limit */
+static void singular_limit(ctc_sim_result *r, double t, const sim_ctx *c)
+{
+    char why[64];
+    snprintf(why, sizeof why, " > %g", c->cond_max);
+    singular_message(r, t, c, why);
+}
+
 /* A dependent joint's speed passing the bound while the condition estimate has grown by
  * SIM_SINGULAR_GROWTH since t = 0 is the loop running into a singular configuration: near it the
  * dependent joints' speeds grow like 1 / distance, faster than the estimate reaches cond_max
@@ -704,23 +723,12 @@ static int singular_divergence(const sim_ctx *c, double t, double bound, ctc_sim
     const int k = r->metrics.diverged_joint;
     if (!c->plant->has_loop || k < 0 || c->plant->jnt_indep[k]) return 0;
     if (!(c->cond > SIM_SINGULAR_GROWTH * c->cond0)) return 0;
-    r->metrics.loop_cond_max = fmax(r->metrics.loop_cond_max, c->cond);
-    snprintf(r->message, sizeof r->message,
-             "t = %.6g s: the independent joints cannot drive the loop here (condition estimate "
-             "%.3g, from %.3g at the start; dependent joint %d passed the speed bound %g)",
-             t, c->cond, c->cond0, k, bound);
+    char why[128];
+    snprintf(why, sizeof why,
+             ", from %.3g at the start; dependent joint %d passed the speed bound %g", c->cond0, k,
+             bound);
+    singular_message(r, t, c, why);
     return 1;
-}
-
-/* the message of a run stopped as singular at time t */
-static void singular_message(ctc_sim_result *r, double t, const sim_ctx *c)
-{
-    /* the estimate that stopped the run belongs in the metrics, not only the samples' */
-    r->metrics.loop_cond_max = fmax(r->metrics.loop_cond_max, c->cond);
-    snprintf(r->message, sizeof r->message,
-             "t = %.6g s: the independent joints cannot drive the loop here (condition estimate "
-             "%.3g > %g)",
-             t, c->cond, c->cond_max);
 }
 
 static int cmp_double(const void *a, const void *b)
@@ -862,7 +870,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     int rc0 = sim_rhs(0, y0, rec.ysample, &c);
     if (rc0 == SIM_RHS_SINGULAR) {
         status = CTC_RUN_SINGULAR;
-        singular_message(r, 0, &c);
+        singular_limit(r, 0, &c);
     } else if (rc0 != 0 || diverged(&c, 0, y0, bound, r)) {
         status = CTC_RUN_DIVERGED;
     } else {
@@ -881,7 +889,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
         const double *y = ctc_integrator_state(integ);
         if (rc == SIM_RHS_SINGULAR) {
             status = CTC_RUN_SINGULAR;
-            singular_message(r, t, &c);
+            singular_limit(r, t, &c);
             break;
         }
         if (rc != 0) {
@@ -930,7 +938,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
             int rcr = ctc_integrator_reset(integ, t, y);
             if (rcr == SIM_RHS_SINGULAR) {
                 status = CTC_RUN_SINGULAR;
-                singular_message(r, t, &c);
+                singular_limit(r, t, &c);
                 break;
             }
             if (rcr != 0) {
