@@ -33,8 +33,8 @@ typedef struct ctc_data {
     double *xvel;  /* (n x 3) velocity of the frame origin, m/s */
 
     /* joint k's maps, world (plane) coordinates: A1(body k) = A2(body k-1) + P qdd + beta; the
-       closing joint of a loop model is k = n (loop.h), with the tip as parent and the ground as
-       child. Sized for njoints. */
+       closing joint of a loop model is k = n (loop.h), with the tip as parent and the ground or
+       body b as child. Sized for njoints. */
     double *jnt_P;    /* (njoints x 3 x dim) column c at [(3k + c) dim]; nv columns, orthonormal */
     double *jnt_D;    /* (njoints x dim x dim) column c at [(dim k + c) dim]; dim - nv columns */
     double *jnt_beta; /* (njoints x dim) velocity-product term */
@@ -45,6 +45,10 @@ typedef struct ctc_data {
     double loop_v[3];    /* its velocity coordinates (nv of its type) */
     double loop_phi[6];  /* position residual D^T delta (dim - nv entries), m / rad */
     double loop_dphi[6]; /* velocity residual, m/s / rad/s */
+    double loop_r[3];    /* a loop on body b: loop_pt minus b's handle 2 (joint b+1's centre), m */
+    double loop_gam[6];  /* a loop on body b: (0; w_b x (w_b x loop_r)), what b's classical
+                            acceleration at loop_pt adds to the rigid shift of its acceleration at
+                            its handle 2 (gdca_loop_shift_accel), m/s^2 */
     double baumgarte[2]; /* forward pass: (a, b) adds D^T(A_t + beta) = 2 a dphi + b^2 phi to the
                             closure, i.e. phi'' + 2 a phi' + b^2 phi = 0 (1/s, 1/s); 0 = none */
     double *xbuf;        /* (2 nvx + nq) loop models: scratch of the passes and loop.c */

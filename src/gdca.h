@@ -19,7 +19,10 @@
  * the chain's coordinates, then the closing joint's). The forward pass constrains both terminal
  * handles - joint 0 to the ground and the closing joint n from the tip to the ground - and
  * solves the two sets of boundary equations together (the paper's reference [48]); dependent
- * joints carry no driving force (f of their coordinates is ignored). The paper's inverse pass
+ * joints carry no driving force (f of their coordinates is ignored). A loop closed on body b
+ * instead of the ground is solved the same way one level down the tree: the root splits at
+ * joint b + 1, and the root solve couples the parts' records through joints 0, b + 1 and the
+ * closing joint (gdca_loop.h). The paper's inverse pass
  * (ctc_gdca_inverse_mobility) assembles across a dependent joint with the forward, projected rule
  * (its acceleration is unknown) and across an independent joint with the commanded acceleration
  * (Eq. 19), solves the boundary case of the terminal joints (Eq. 55-65: both independent, one of

@@ -13,7 +13,9 @@
  *     A1^R = h11^R F + h12^R F2 + h13^R,   A2^L = h21^L F1 - h22^L F + h23^L.
  * A loop model's root has both handles jointed to the ground (gdca_loop.h): joint 0 and the
  * closing joint, each with its constraint load unknown and its driving force known; dependent
- * joints' driving forces are taken as zero.
+ * joints' driving forces are taken as zero. A loop closed on body b splits the tree's root at
+ * joint b + 1, and the root solve takes that node's two parts with joints 0, b + 1 and the
+ * closing joint together.
  *
  * The nodes of one tree height are independent: each node's assembly writes only its own record
  * and its joint's E and z, its disassembly only its joint's load and acceleration and its two
@@ -51,6 +53,9 @@ static inline int forward_joint(const ctc_model *m, ctc_data *d, int j, const do
     return st;
 }
 
+/* the acceleration of the ground */
+static const double rest_accel[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+
 /* qdd_j = P^T (A1^R - A2^L - beta) written into qacc */
 static inline void forward_qacc(const ctc_model *m, const ctc_data *d, int j, const double *a1r,
                                 const double *a2l, double *qacc, const int dim)
@@ -63,35 +68,46 @@ static inline void forward_qacc(const ctc_model *m, const ctc_data *d, int j, co
     }
 }
 
-/* a loop model's root: joint 0 and the closing joint n both join the ground (gdca_loop.h) */
+/* the boundary joint k's end of a loop model's root problem (gdca_loop.h): its load is unknown
+ * along D, its driving force known */
+static inline gdca_end forward_end(const ctc_model *m, const ctc_data *d, int k, const double *f,
+                                   double *pf, const double *off, const int dim)
+{
+    gdca_joint_map(dim, m->jnt_nv[k], d->jnt_P + 3 * dim * k, f + m->jnt_vadr[k], pf);
+    return (gdca_end){d->jnt_D + dim * dim * k, dim - m->jnt_nv[k], pf, d->jnt_beta + dim * k, off};
+}
+
+/* a loop model's root (gdca_loop.h): the loop's record R, joint 0 and the closing joint n on the
+ * ground; or, for a loop on body b, the root's two parts L (bodies 0..b) and R with joints 0,
+ * b + 1 and n, whose loads it hands to the parts' disassembly (the root node itself is not
+ * assembled or disassembled) */
 static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
                                      const int dim)
 {
-    const int n = m->nbodies;
-    const double *root = ctc_data_handles(m, d, m->root, 0);
-    double *tl = d->tload + (size_t)m->root * 2 * dim;
-    double pf1[CTC_DENSE_MAX], pf2[CTC_DENSE_MAX], a1[CTC_DENSE_MAX], a2[CTC_DENSE_MAX];
-    double off[CTC_DENSE_MAX];
-    static const double rest[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+    const int n = m->nbodies, j = m->loop_first;
+    const ctc_tree_node *top = &m->tree[m->ntree - 1];
+    double pf0[CTC_DENSE_MAX], pfj[CTC_DENSE_MAX], pfn[CTC_DENSE_MAX], off[CTC_DENSE_MAX];
     const int nc2 = dim - m->jnt_nv[n];
+    gdca_loop_sol s;
 
-    gdca_joint_map(dim, m->jnt_nv[0], d->jnt_P, f, pf1);
-    gdca_joint_map(dim, m->jnt_nv[n], d->jnt_P + 3 * dim * n, f + m->jnt_vadr[n], pf2);
     for (int c = 0; c < nc2; c++) {
         off[c] = 2 * d->baumgarte[0] * d->loop_dphi[c] +
                  d->baumgarte[1] * d->baumgarte[1] * d->loop_phi[c];
     }
-    gdca_end e1 = {d->jnt_D, dim - m->jnt_nv[0], pf1, d->jnt_beta, NULL};
-    gdca_end e2 = {d->jnt_D + dim * dim * n, nc2, pf2, d->jnt_beta + dim * n, off};
-    if (gdca_loop_boundary(dim, root, &e1, &e2, tl, tl + dim, a1, a2, &d->loop_cond) != 0) {
-        if (d->singular_joint < 0) d->singular_joint = n;
-    }
-    for (int i = 0; i < dim; i++) {
-        d->jnt_load[i] = tl[i];
-        d->jnt_load[dim * n + i] = -tl[dim + i];
-    }
-    forward_qacc(m, d, 0, a1, rest, qacc, dim);
-    forward_qacc(m, d, n, rest, a2, qacc, dim); /* A(ground) = 0 = A2 + P qdd + beta */
+    gdca_loop_root p = {.dim = dim,
+                        .l = j > 0 ? ctc_data_handles(m, d, top->left, 0) : NULL,
+                        .r = ctc_data_handles(m, d, j > 0 ? top->right : m->root, 0),
+                        .shift = d->loop_r,
+                        .gam = d->loop_gam,
+                        .e0 = forward_end(m, d, 0, f, pf0, NULL, dim),
+                        .ej = forward_end(m, d, j, f, pfj, NULL, dim),
+                        .en = forward_end(m, d, n, f, pfn, off, dim)};
+    if (gdca_loop_solve(&p, &s) != 0 && d->singular_joint < 0) d->singular_joint = n;
+    d->loop_cond = s.cond;
+    gdca_loop_hand_down(m, &s, d->loop_r, d->tload, d->jnt_load);
+    if (j > 0) forward_qacc(m, d, 0, s.al1, rest_accel, qacc, dim);
+    forward_qacc(m, d, j, s.ar1, j > 0 ? s.al2 : rest_accel, qacc, dim);
+    forward_qacc(m, d, n, s.ab, s.ar2, qacc, dim); /* A(child) = A2 + P qdd + beta */
 }
 
 /* When the forward pass splits over threads (gdca_par.h): the least nodes per chunk of one tree
@@ -123,6 +139,7 @@ static inline int forward_assemble(const forward_args *a, int lo, int hi, const 
     ctc_data *d = a->d;
     const int hs = d->hsize;
     int first = -1;
+    if (hi == m->ntree && m->loop_first > 0) hi--; /* a loop on a body: the root solves that node */
     for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 0);
@@ -146,7 +163,6 @@ static inline void forward_root(const forward_args *a, const int dim)
     }
     const double *root = ctc_data_handles(m, d, m->root, 0);
     double *tl = d->tload + (size_t)m->root * 2 * dim, a1[CTC_DENSE_MAX];
-    static const double rest[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
     if (forward_joint(m, d, 0, NULL, root, a->f, dim) != 0 && d->singular_joint < 0) {
         d->singular_joint = 0;
     }
@@ -157,7 +173,7 @@ static inline void forward_root(const forward_args *a, const int dim)
     }
     ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
     for (int i = 0; i < dim; i++) a1[i] += root[H13(dim) + i];
-    forward_qacc(m, d, 0, a1, rest, a->qacc, dim);
+    forward_qacc(m, d, 0, a1, rest_accel, a->qacc, dim);
 }
 
 /* disassembly of tree nodes hi-1 down to lo, parents before children: each writes its joint's
@@ -167,6 +183,7 @@ static inline void forward_disassemble(const forward_args *a, int lo, int hi, co
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
     const int n = m->nbodies;
+    if (hi == m->ntree && m->loop_first > 0) hi--; /* a loop on a body: the root solved that node */
     for (int i = hi - 1; i >= lo; i--) {
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 0);

@@ -358,10 +358,10 @@ void gdca_inverse_composite(const ctc_model *m, ctc_data *d, const double *u, do
     }
 }
 
-void gdca_inverse_tip_accel(const ctc_model *m, const ctc_data *d, double *a)
+void gdca_inverse_handle2_accel(const ctc_model *m, const ctc_data *d, int k, double *a)
 {
-    const int dim = m->dim, tip = m->nbodies - 1;
-    const double *rec = record(d, tip), *a1 = d->tload + (size_t)tip * 2 * dim;
+    const int dim = m->dim;
+    const double *rec = record(d, k), *a1 = d->tload + (size_t)k * 2 * dim;
     transfer_motion(dim, rec + CR(dim), a1, a);
     for (int r = 0; r < dim; r++) a[r] += rec[CC(dim) + r];
 }

@@ -9,6 +9,7 @@
 
 #include "dense.h"
 #include "gdca.h"
+#include "gdca_loop.h"
 #include "gdca_tree.h"
 #include "loop.h"
 
@@ -148,11 +149,18 @@ void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double 
 
     /* 1. the closure: B x = -(A_t(u0) + P_n qdd_n + beta_n); with B = R^-1 Bs C^-1, x = C y and
        Bs y = R rhs */
-    double at[CTC_DENSE_MAX], pu[CTC_DENSE_MAX], y[CTC_DENSE_MAX];
+    double at[CTC_DENSE_MAX], ab[CTC_DENSE_MAX] = {0}, pu[CTC_DENSE_MAX], y[CTC_DENSE_MAX];
     gdca_inverse_composite(m, d, qdd, tau);
-    gdca_inverse_tip_accel(m, d, at);
+    gdca_inverse_handle2_accel(m, d, n - 1, at);
+    if (m->loop_body >= 0) { /* the child's acceleration at p_t */
+        double a1[CTC_DENSE_MAX];
+        gdca_inverse_handle2_accel(m, d, m->loop_body, a1);
+        gdca_loop_shift_accel(dim, d->loop_r, d->loop_gam, a1, ab);
+    }
     gdca_joint_map(dim, m->jnt_nv[n], d->jnt_P + 3 * dim * n, qdd + nv, pu);
-    for (int r = 0; r < dim; r++) y[r] = -rs[r] * (at[r] + pu[r] + d->jnt_beta[dim * n + r]);
+    for (int r = 0; r < dim; r++) {
+        y[r] = -rs[r] * (at[r] - ab[r] + pu[r] + d->jnt_beta[dim * n + r]);
+    }
     lu_solve(dim, b, piv, 0, y);
     for (int j = 0; j < dim; j++) qdd[m->jnt_vadr[dep_k[j]] + dep_c[j]] = cs[j] * y[j];
 
@@ -167,7 +175,7 @@ void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double 
     lu_solve(dim, b, piv, 1, z);
     for (int r = 0; r < dim; r++) load[r] = rs[r] * z[r];
 
-    /* the balance: f_k = tau_k + J_k^T F, f_n = P_n^T F; the joint loads carry F too */
+    /* the balance: f_k = tau_k + J_k^T F in the loop, f_n = P_n^T F; the joint loads carry F too */
     for (int k = 0; k <= n; k++) {
         for (int c = 0; c < m->jnt_nv[k]; c++) {
             const int i = m->jnt_vadr[k] + c;
@@ -176,13 +184,15 @@ void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double 
                 continue;
             }
             double col[CTC_DENSE_MAX], s = k < n ? tau[i] : 0.0;
-            dependent_column(m, d, k, c, col);
-            for (int r = 0; r < dim; r++) s += col[r] * load[r];
+            if (k >= m->loop_first) {
+                dependent_column(m, d, k, c, col);
+                for (int r = 0; r < dim; r++) s += col[r] * load[r];
+            }
             f[i] = s;
         }
     }
     memcpy(d->jnt_load_inv + dim * n, load, (size_t)dim * sizeof *load);
-    for (int k = 0; k < n; k++) { /* L_k += F moved from p_t to joint k's centre */
+    for (int k = m->loop_first; k < n; k++) { /* L_k += F moved from p_t to joint k's centre */
         double *lk = d->jnt_load_inv + dim * k, r[3];
         const double *x = d->xpos + 3 * k;
         for (int a = 0; a < 3; a++) r[a] = d->loop_pt[a] - x[a];

@@ -6,16 +6,21 @@
  * projected rule, whose mobilities are differences of large numbers: on loops of hundreds of
  * bodies its forces lose up to 8 digits (bench_loop). This pass gets the same forces from the
  * open chain's composite pass, which is accurate to rounding, plus one small solve at the
- * closing joint. With the closing joint's load F (on the ground, at the tip's point p_t),
- * J_k the unit twist of chain coordinate k at p_t and tau = M(q) qdd + N(q, v) of the open chain:
+ * closing joint. With the closing joint's load F (on its child, the ground or body b, at the
+ * tip's point p_t; the tip bears -F), J_k the unit twist of chain coordinate k at p_t and
+ * tau = M(q) qdd + N(q, v) of the open chain:
  *
- *   closure     A_t(qdd) + P_n qdd_n + beta_n = 0      (the ground does not move; dim equations)
- *   balance     f_k = tau_k + J_k^T F (chain),  f_n = P_n^T F (closing joint)
+ *   closure     A_t(qdd) + P_n qdd_n + beta_n = A_b(qdd)    (A_b: the child's acceleration at
+ *                                                              p_t, zero on the ground; dim
+ *                                                              equations)
+ *   balance     f_k = tau_k + J_k^T F (the loop's joints k >= b + 1),  f_n = P_n^T F,
+ *               f_k = tau_k (joints 0..b, which F and -F load alike)
  *
  * With every independent coordinate commanded (qdd = u there) and every dependent one unforced
  * (f = 0 there), and exactly dim dependent coordinates (a valid single loop), both are square:
- *   1. the composite pass with the dependent accelerations 0 gives A_t(u0); the closure, linear in
- *      the dependent accelerations x, gives B x = -(A_t(u0) + P_n u_n + beta_n), the columns of B
+ *   1. the composite pass with the dependent accelerations 0 gives A_t(u0) and A_b(u0); the
+ *      closure, linear in the dependent accelerations x (all in the loop, which J_k moves relative
+ *      to the child), gives B x = -(A_t(u0) - A_b(u0) + P_n u_n + beta_n), the columns of B
  *      being J_k (dependent chain coordinates) and P_n's (dependent closing coordinates);
  *   2. the composite pass with those accelerations gives tau;
  *   3. B^T F = (-tau_k; 0) over the dependent coordinates gives F, and the balance f.
@@ -38,7 +43,7 @@ void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double 
  * M(q) u + N(q, v) for u (nv), free tip; for a loop model the closing joint is ignored. */
 void gdca_inverse_composite(const ctc_model *m, ctc_data *d, const double *u, double *f);
 
-/* The tip body's acceleration at its handle 2 (dim) after the last gdca_inverse_composite. */
-void gdca_inverse_tip_accel(const ctc_model *m, const ctc_data *d, double *a);
+/* Body k's classical acceleration at its handle 2 (dim) after the last gdca_inverse_composite. */
+void gdca_inverse_handle2_accel(const ctc_model *m, const ctc_data *d, int k, double *a);
 
 #endif

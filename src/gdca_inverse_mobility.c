@@ -64,37 +64,42 @@ static inline int inverse_joint(const ctc_model *m, ctc_data *d, int j, const do
     return st;
 }
 
-/* a loop model's root: both handles jointed to the ground, each end independent or dependent */
+/* joint k's end of a loop model's root problem (gdca_loop.h): an independent joint's whole load
+ * is unknown and its acceleration commanded (Eq. 55-65); a dependent one's load is unknown along D
+ * and it has no driving force. a (dim) is filled. */
+static inline gdca_end mobility_end(const ctc_model *m, const ctc_data *d, int k, const double *u,
+                                    double *a, const int dim)
+{
+    static const double zero[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+    memcpy(a, d->jnt_beta + dim * k, (size_t)dim * sizeof *a);
+    if (!m->jnt_indep[k])
+        return (gdca_end){d->jnt_D + dim * dim * k, dim - m->jnt_nv[k], zero, a, NULL};
+    double pu[CTC_DENSE_MAX];
+    gdca_joint_map(dim, m->jnt_nv[k], d->jnt_P + 3 * dim * k, u + m->jnt_vadr[k], pu);
+    for (int i = 0; i < dim; i++) a[i] += pu[i];
+    return (gdca_end){NULL, dim, zero, a, NULL};
+}
+
+/* a loop model's root: the loop's record with joint 0 and the closing joint on the ground, or,
+ * for a loop on body b, the root's two parts with joints 0, b + 1 and n (gdca_forward.c) */
 static inline void inverse_loop_root(const ctc_model *m, ctc_data *d, const double *u,
                                      const int dim)
 {
-    const int n = m->nbodies;
-    const double *root = ctc_data_handles(m, d, m->root, 1);
-    double *tl = d->tload + (size_t)m->root * 2 * dim;
-    double a1[CTC_DENSE_MAX], a2[CTC_DENSE_MAX], acc1[CTC_DENSE_MAX], acc2[CTC_DENSE_MAX];
-    static const double zero[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
-    gdca_end ends[2];
-
-    for (int side = 0; side < 2; side++) {
-        int j = side ? n : 0;
-        double *a = side ? a2 : a1;
-        if (m->jnt_indep[j]) { /* commanded: the whole load is unknown (Eq. 55-65) */
-            gdca_joint_map(dim, m->jnt_nv[j], d->jnt_P + 3 * dim * j, u + m->jnt_vadr[j], a);
-            for (int i = 0; i < dim; i++) a[i] += d->jnt_beta[dim * j + i];
-            ends[side] = (gdca_end){NULL, dim, zero, a, NULL};
-        } else {
-            memcpy(a, d->jnt_beta + dim * j, (size_t)dim * sizeof *a);
-            ends[side] = (gdca_end){d->jnt_D + dim * dim * j, dim - m->jnt_nv[j], zero, a, NULL};
-        }
-    }
-    if (gdca_loop_boundary(dim, root, &ends[0], &ends[1], tl, tl + dim, acc1, acc2,
-                           &d->loop_cond) != 0) {
-        if (d->singular_joint < 0) d->singular_joint = n;
-    }
-    for (int i = 0; i < dim; i++) {
-        d->jnt_load_inv[i] = tl[i];
-        d->jnt_load_inv[dim * n + i] = -tl[dim + i];
-    }
+    const int n = m->nbodies, j = m->loop_first;
+    const ctc_tree_node *top = &m->tree[m->ntree - 1];
+    double a0[CTC_DENSE_MAX], aj[CTC_DENSE_MAX], an[CTC_DENSE_MAX];
+    gdca_loop_sol s;
+    gdca_loop_root p = {.dim = dim,
+                        .l = j > 0 ? ctc_data_handles(m, d, top->left, 1) : NULL,
+                        .r = ctc_data_handles(m, d, j > 0 ? top->right : m->root, 1),
+                        .shift = d->loop_r,
+                        .gam = d->loop_gam,
+                        .e0 = mobility_end(m, d, 0, u, a0, dim),
+                        .ej = mobility_end(m, d, j, u, aj, dim),
+                        .en = mobility_end(m, d, n, u, an, dim)};
+    if (gdca_loop_solve(&p, &s) != 0 && d->singular_joint < 0) d->singular_joint = n;
+    d->loop_cond = s.cond;
+    gdca_loop_hand_down(m, &s, d->loop_r, d->tload, d->jnt_load_inv);
 }
 
 /* f_j = P^T F */
@@ -133,6 +138,7 @@ static inline int mobility_assemble(const mobility_args *a, int lo, int hi, cons
     ctc_data *d = a->d;
     const int hs = d->hsize;
     int first = -1;
+    if (hi == m->ntree && m->loop_first > 0) hi--; /* a loop on a body: the root solves that node */
     for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 1);
@@ -155,8 +161,11 @@ static inline void mobility_root(const mobility_args *a, const int dim)
     if (m->has_loop) {
         inverse_loop_root(m, d, a->u, dim);
         for (int j = 0; j < m->nvx; j++) f[j] = 0; /* dependent coordinates */
-        if (m->jnt_indep[0]) inverse_drive(m, d, 0, tl, f, dim);
-        if (m->jnt_indep[n]) inverse_drive(m, d, n, d->jnt_load_inv + dim * n, f, dim);
+        int bound[3] = {0, m->loop_first, n};
+        for (int b = 0; b < 3; b++) {
+            int k = bound[b];
+            if (m->jnt_indep[k]) inverse_drive(m, d, k, d->jnt_load_inv + dim * k, f, dim);
+        }
         return;
     }
     const double *root = ctc_data_handles(m, d, m->root, 1);
@@ -179,6 +188,7 @@ static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, 
     ctc_data *d = a->d;
     const int n = m->nbodies;
     const int prune = m->has_loop && !d->inv_full;
+    if (hi == m->ntree && m->loop_first > 0) hi--; /* a loop on a body: the root solved that node */
     for (int i = hi - 1; i >= lo; i--) {
         if (prune && !m->inv_need[i]) continue;
         const ctc_tree_node *node = &m->tree[i];

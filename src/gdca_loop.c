@@ -1,14 +1,19 @@
 /*
  * gdca_loop.c - the closed chain's boundary equations (gdca_loop.h).
+ *
+ * The matrix is built column by column: each unknown's unit load, applied to the records, gives
+ * the relative accelerations of every bounding joint, and the rows take them along each joint's
+ * S. The same function with the known loads and the records' bias terms gives the right-hand
+ * side, and once more with the solution the loads' accelerations.
  */
 #include "gdca_loop.h"
 
 #include <math.h>
+#include <string.h>
 
-#include "dense.h"
 #include "gdca_tree.h"
 
-#define NB (2 * CTC_DENSE_MAX)
+#define NB (3 * CTC_DENSE_MAX)
 
 /* relative pivot below which the scaled system counts as singular */
 #define BOUNDARY_PIVOT_MIN 1e-13
@@ -19,60 +24,127 @@ static inline double s_at(const gdca_end *e, int dim, int row, int c)
     return e->s ? e->s[c * dim + row] : (double)(row == c);
 }
 
-int gdca_loop_boundary(int dim, const double *h, const gdca_end *e1, const gdca_end *e2, double *f1,
-                       double *f2, double *a1, double *a2, double *cond)
+void gdca_loop_shift_accel(int dim, const double *r, const double *gam, const double *in,
+                           double *out)
 {
-    const double *h11 = h + H11(dim), *h12 = h + H12(dim), *h22 = h + H22(dim);
-    const double *h13 = h + H13(dim), *h23 = h + H23(dim);
-    const int n1 = e1->ns, n2 = e2->ns, nb = n1 + n2;
-    double hs[NB * 2 * CTC_DENSE_MAX]; /* per unknown: the accelerations (A1; A2) it causes */
-    double b[NB * NB], r[NB], x[NB], scale[NB], t[CTC_DENSE_MAX];
+    if (dim == 3) {
+        out[0] = in[0] + gam[0];
+        out[1] = in[1] - in[0] * r[1] + gam[1];
+        out[2] = in[2] + in[0] * r[0] + gam[2];
+        return;
+    }
+    out[0] = in[0] + gam[0];
+    out[1] = in[1] + gam[1];
+    out[2] = in[2] + gam[2];
+    out[3] = in[3] + in[1] * r[2] - in[2] * r[1] + gam[3];
+    out[4] = in[4] + in[2] * r[0] - in[0] * r[2] + gam[4];
+    out[5] = in[5] + in[0] * r[1] - in[1] * r[0] + gam[5];
+}
 
-    /* residual accelerations with x = 0: r1 = a1 - A1(Fo), r2 = a2 + A2(Fo) */
-    double g1[CTC_DENSE_MAX], g2[CTC_DENSE_MAX], m2[CTC_DENSE_MAX];
-    for (int i = 0; i < dim; i++) m2[i] = -e2->fo[i];
-    ctc_dense_mulv(dim, dim, h11, e1->fo, g1);
-    ctc_dense_mulv(dim, dim, h12, m2, t);
-    for (int i = 0; i < dim; i++) g1[i] = e1->a[i] - (g1[i] + t[i] + h13[i]);
-    ctc_dense_tmulv(dim, dim, h12, e1->fo, g2);
-    ctc_dense_mulv(dim, dim, h22, m2, t);
-    for (int i = 0; i < dim; i++) g2[i] = e2->a[i] + (g2[i] + t[i] + h23[i]);
+void gdca_loop_shift_load(int dim, const double *r, const double *in, double *out)
+{
+    if (dim == 3) {
+        out[0] = in[0] + r[0] * in[2] - r[1] * in[1];
+        out[1] = in[1];
+        out[2] = in[2];
+        return;
+    }
+    out[0] = in[0] + r[1] * in[5] - r[2] * in[4];
+    out[1] = in[1] + r[2] * in[3] - r[0] * in[5];
+    out[2] = in[2] + r[0] * in[4] - r[1] * in[3];
+    out[3] = in[3];
+    out[4] = in[4];
+    out[5] = in[5];
+}
 
-    /* B = [S1^T h11 S1, -S1^T h12 S2; -S2^T h21 S1, S2^T h22 S2]: the accelerations of unit
-       loads in the unknown directions, taken with the signs of F1 = S1 x1, F2 = -S2 x2 */
-    for (int c = 0; c < nb; c++) {
-        double col[CTC_DENSE_MAX], up[CTC_DENSE_MAX], lo[CTC_DENSE_MAX];
-        const gdca_end *e = c < n1 ? e1 : e2;
-        int cc = c < n1 ? c : c - n1;
-        for (int i = 0; i < dim; i++) col[i] = s_at(e, dim, i, cc);
-        if (c < n1) { /* F1 = col: A1 = h11 col, A2 = h21 col */
-            ctc_dense_mulv(dim, dim, h11, col, up);
-            ctc_dense_tmulv(dim, dim, h12, col, lo);
-        } else { /* F2 = -col: A1 = -h12 col, A2 = -h22 col */
-            ctc_dense_mulv(dim, dim, h12, col, up);
-            ctc_dense_mulv(dim, dim, h22, col, lo);
-            for (int i = 0; i < dim; i++) up[i] = -up[i], lo[i] = -lo[i];
-        }
+/* a1 = h11 f1 + h12 f2 (+ h13), a2 = h21 f1 + h22 f2 (+ h23) */
+static void record_accel(int dim, const double *h, const double *f1, const double *f2, int bias,
+                         double *a1, double *a2)
+{
+    double t[CTC_DENSE_MAX];
+    ctc_dense_mulv(dim, dim, h + H11(dim), f1, a1);
+    ctc_dense_mulv(dim, dim, h + H12(dim), f2, t);
+    for (int i = 0; i < dim; i++) a1[i] += t[i] + (bias ? h[H13(dim) + i] : 0.0);
+    ctc_dense_tmulv(dim, dim, h + H12(dim), f1, a2);
+    ctc_dense_mulv(dim, dim, h + H22(dim), f2, t);
+    for (int i = 0; i < dim; i++) a2[i] += t[i] + (bias ? h[H23(dim) + i] : 0.0);
+}
+
+/* The accelerations that the loads f[0], f[1], f[2] on the children of joints 0, j and n cause
+ * (with the records' bias terms, and gam, when bias), into s; w[J] gets joint J's relative
+ * acceleration A_child - A_parent. */
+static void root_accel(const gdca_loop_root *p, const double f[3][CTC_DENSE_MAX], int bias,
+                       gdca_loop_sol *s, double w[3][CTC_DENSE_MAX])
+{
+    static const double zero[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+    const int dim = p->dim;
+    double neg[CTC_DENSE_MAX] = {0};
+    for (int i = 0; i < dim; i++) neg[i] = -f[2][i];
+    record_accel(dim, p->r, f[1], neg, bias, s->ar1, s->ar2);
+    if (p->l == NULL) {
         for (int i = 0; i < dim; i++) {
-            hs[c * 2 * dim + i] = up[i];
-            hs[c * 2 * dim + dim + i] = lo[i];
+            s->al1[i] = s->al2[i] = s->ab[i] = w[0][i] = 0;
+            w[1][i] = s->ar1[i];
+            w[2][i] = -s->ar2[i];
         }
+        return;
+    }
+    double fl2[CTC_DENSE_MAX] = {0};
+    gdca_loop_shift_load(dim, p->shift, f[2], fl2);
+    for (int i = 0; i < dim; i++) fl2[i] -= f[1][i];
+    record_accel(dim, p->l, f[0], fl2, bias, s->al1, s->al2);
+    gdca_loop_shift_accel(dim, p->shift, bias ? p->gam : zero, s->al2, s->ab);
+    for (int i = 0; i < dim; i++) {
+        w[0][i] = s->al1[i];
+        w[1][i] = s->ar1[i] - s->al2[i];
+        w[2][i] = s->ab[i] - s->ar2[i];
+    }
+}
+
+static void fail(int dim, gdca_loop_sol *s)
+{
+    s->cond = INFINITY;
+    for (int i = 0; i < dim; i++) {
+        s->f0[i] = s->fj[i] = s->fn[i] = NAN;
+        s->al1[i] = s->al2[i] = s->ar1[i] = s->ar2[i] = s->ab[i] = NAN;
+    }
+}
+
+int gdca_loop_solve(const gdca_loop_root *p, gdca_loop_sol *s)
+{
+    const int dim = p->dim;
+    const gdca_end *ends[3] = {p->l ? &p->e0 : NULL, &p->ej, &p->en};
+    int owner[NB], col[NB], nb = 0; /* each unknown's joint and its column there */
+    for (int e = 0; e < 3; e++) {
+        for (int c = 0; ends[e] && c < ends[e]->ns; c++, nb++) owner[nb] = e, col[nb] = c;
+    }
+    double f[3][CTC_DENSE_MAX] = {{0}}, w[3][CTC_DENSE_MAX], wc[NB][3][CTC_DENSE_MAX];
+    double b[NB * NB], r[NB], x[NB], scale[NB];
+
+    /* the right-hand side S^T (a - w(fo)) - off, with the known loads and the bias terms */
+    for (int e = 0; e < 3; e++)
+        for (int i = 0; ends[e] && i < dim; i++) f[e][i] = ends[e]->fo[i];
+    root_accel(p, (const double(*)[CTC_DENSE_MAX])f, 1, s, w);
+    for (int a = 0; a < nb; a++) {
+        const gdca_end *e = ends[owner[a]];
+        double t = e->off ? -e->off[col[a]] : 0.0;
+        for (int i = 0; i < dim; i++) t += s_at(e, dim, i, col[a]) * (e->a[i] - w[owner[a]][i]);
+        r[a] = t;
+    }
+
+    /* B: column c holds what unknown c's unit load does to every row */
+    for (int c = 0; c < nb; c++) {
+        double fc[3][CTC_DENSE_MAX] = {{0}};
+        for (int i = 0; i < dim; i++) fc[owner[c]][i] = s_at(ends[owner[c]], dim, i, col[c]);
+        root_accel(p, (const double(*)[CTC_DENSE_MAX])fc, 0, s, wc[c]);
     }
     for (int a = 0; a < nb; a++) {
-        /* row a: end 1 rows are S1^T A1, end 2 rows are -S2^T A2 (so that B is symmetric) */
-        const gdca_end *e = a < n1 ? e1 : e2;
-        int ca = a < n1 ? a : a - n1, off = a < n1 ? 0 : dim;
-        double sg = a < n1 ? 1.0 : -1.0;
+        const gdca_end *e = ends[owner[a]];
         for (int c = 0; c < nb; c++) {
-            double s = 0;
-            for (int i = 0; i < dim; i++) s += s_at(e, dim, i, ca) * hs[c * 2 * dim + off + i];
-            b[a * nb + c] = sg * s;
+            double t = 0;
+            for (int i = 0; i < dim; i++) t += s_at(e, dim, i, col[a]) * wc[c][owner[a]][i];
+            b[a * nb + c] = t;
         }
-        double s = 0;
-        const double *g = a < n1 ? g1 : g2;
-        for (int i = 0; i < dim; i++) s += s_at(e, dim, i, ca) * g[i];
-        if (a >= n1 && e2->off) s -= e2->off[ca];
-        r[a] = s;
     }
 
     /* symmetric scaling, Cholesky, condition estimate from the pivots */
@@ -89,35 +161,53 @@ int gdca_loop_boundary(int dim, const double *h, const gdca_end *e1, const gdca_
     if (ok && ctc_dense_cholesky(nb, b) != 0) ok = 0;
     double pmin = INFINITY, pmax = 0;
     for (int a = 0; ok && a < nb; a++) {
-        double p = b[a * nb + a];
-        pmin = fmin(pmin, p);
-        pmax = fmax(pmax, p);
+        double piv = b[a * nb + a];
+        pmin = fmin(pmin, piv);
+        pmax = fmax(pmax, piv);
     }
     if (ok && !(pmin > BOUNDARY_PIVOT_MIN * pmax)) ok = 0;
     if (!ok) {
-        *cond = INFINITY;
-        for (int i = 0; i < dim; i++) f1[i] = f2[i] = a1[i] = a2[i] = NAN;
+        fail(dim, s);
         return -1;
     }
-    *cond = nb ? (pmax / pmin) * (pmax / pmin) : 1.0;
+    s->cond = nb ? (pmax / pmin) * (pmax / pmin) : 1.0;
     for (int a = 0; a < nb; a++) x[a] = r[a];
     ctc_dense_lsolve(nb, b, x);
     ctc_dense_ltsolve(nb, b, x);
-    for (int a = 0; a < nb; a++) x[a] *= scale[a];
-
-    /* the loads and the handles' accelerations */
-    for (int i = 0; i < dim; i++) {
-        double s1 = e1->fo[i], s2 = e2->fo[i];
-        for (int c = 0; c < n1; c++) s1 += s_at(e1, dim, i, c) * x[c];
-        for (int c = 0; c < n2; c++) s2 += s_at(e2, dim, i, c) * x[n1 + c];
-        f1[i] = s1;
-        f2[i] = -s2;
+    for (int a = 0; a < nb; a++) {
+        x[a] *= scale[a];
+        for (int i = 0; i < dim; i++) f[owner[a]][i] += s_at(ends[owner[a]], dim, i, col[a]) * x[a];
     }
-    ctc_dense_mulv(dim, dim, h11, f1, a1);
-    ctc_dense_mulv(dim, dim, h12, f2, t);
-    for (int i = 0; i < dim; i++) a1[i] += t[i] + h13[i];
-    ctc_dense_tmulv(dim, dim, h12, f1, a2);
-    ctc_dense_mulv(dim, dim, h22, f2, t);
-    for (int i = 0; i < dim; i++) a2[i] += t[i] + h23[i];
+
+    /* the loads and what they do */
+    root_accel(p, (const double(*)[CTC_DENSE_MAX])f, 1, s, w);
+    for (int i = 0; i < dim; i++) {
+        s->f0[i] = p->l ? f[0][i] : f[1][i];
+        s->fj[i] = f[1][i];
+        s->fn[i] = f[2][i];
+    }
     return 0;
+}
+
+void gdca_loop_hand_down(const ctc_model *m, const gdca_loop_sol *s, const double *shift,
+                         double *tload, double *jnt_load)
+{
+    const int dim = m->dim, n = m->nbodies, j = m->loop_first;
+    const ctc_tree_node *top = &m->tree[m->ntree - 1];
+    memcpy(jnt_load, s->f0, (size_t)dim * sizeof *s->f0);
+    memcpy(jnt_load + dim * j, s->fj, (size_t)dim * sizeof *s->fj);
+    memcpy(jnt_load + dim * n, s->fn, (size_t)dim * sizeof *s->fn);
+    if (j == 0) {
+        double *t = tload + (size_t)m->root * 2 * dim;
+        for (int i = 0; i < dim; i++) t[i] = s->fj[i], t[dim + i] = -s->fn[i];
+        return;
+    }
+    double *tl = tload + (size_t)top->left * 2 * dim, *tr = tload + (size_t)top->right * 2 * dim;
+    gdca_loop_shift_load(dim, shift, s->fn, tl + dim);
+    for (int i = 0; i < dim; i++) {
+        tl[i] = s->f0[i];
+        tl[dim + i] -= s->fj[i];
+        tr[i] = s->fj[i];
+        tr[dim + i] = -s->fn[i];
+    }
 }

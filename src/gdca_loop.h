@@ -3,40 +3,84 @@
  * passes of loop models (internal to the library; paper section 5, Eq. 55-65, and its
  * reference [48]).
  *
- * After the assembly the whole chain is one record h (data.h) with handle 1 at joint 0 and
- * handle 2 at the closing joint's point on the tip. Both handles are jointed to the ground:
- *     F1 = S1 x1 + F1o,      S1^T (A1 - a1) = 0                 (joint 0: ground -> body 0)
- *     F2 = -(S2 x2 + F2o),   S2^T (A2 + a2) = s2                (closing joint: tip -> ground)
- * where F1 is the load on the chain at handle 1, F2 at handle 2 (the closing joint's load on the
- * ground is -F2), and for each end either
- *     the joint's acceleration is unknown (a dependent joint, or any joint in the forward pass):
- *         S = D (its constraint directions), Fo = P f (its driving force), a = beta;
+ * After the assembly the loop's bodies are one record R: handle 1 at its first joint j (joint 0
+ * of a loop on the ground, joint b+1 of a loop on body b), handle 2 at the closing joint's point
+ * p2 = d->loop_pt on the tip. A loop on body b has a second record L, bodies 0..b: handle 1 at
+ * joint 0, handle 2 at joint j's centre p1 on body b (model.h: the tree's root splits at j). The
+ * joints that bound them, each written as "parent -> child" with F the load on the child at the
+ * joint (the parent bears -F) and A the classical accelerations of the two sides there:
+ *     joint 0   ground -> L, handle 1          (a loop on body b only)
+ *     joint j   L, handle 2 (or the ground) -> R, handle 1
+ *     joint n   R, handle 2 -> body b at p2 (or the ground)
+ * Body b's acceleration at p2 is its acceleration at p1 shifted rigidly (gdca_loop_shift_accel)
+ * plus d->loop_gam; a load at p2 on it is the load shifted to p1 (gdca_loop_shift_load). With
+ * A1 = h11 F1 + h12 F2 + h13, A2 = h21 F1 + h22 F2 + h23 for each record, each joint asks
+ *     F = S x + fo,     S^T (A_child - A_parent - a) = -off
+ * where for each joint either
+ *     its acceleration is unknown (a dependent joint, or any joint in the forward pass):
+ *         S = D (its constraint directions), fo = P f (its driving force), a = beta;
  *     or it is commanded (an independent joint in the inverse pass, Eq. 19):
- *         S = 1 (the whole load is unknown), Fo = 0, a = P u + beta.
- * s2 is the Baumgarte term of the forward pass (zero otherwise). With A1 = h11 F1 + h12 F2 + h13
- * and A2 = h21 F1 + h22 F2 + h23 this is the symmetric system
- *     [ S1^T h11 S1   -S1^T h12 S2 ] [x1]   [ S1^T (a1 - h13 - h11 F1o + h12 F2o)      ]
- *     [-S2^T h21 S1    S2^T h22 S2 ] [x2] = [ S2^T (a2 + h23 + h21 F1o - h22 F2o) - s2 ]
- * whose matrix is a congruence of the chain's mobility, positive definite when the unknown
- * accelerations determine the loop and singular when they do not (a singular configuration, or
- * redundant constraints). It is solved by Cholesky after symmetric diagonal scaling.
+ *         S = 1 (the whole load is unknown), fo = 0, a = P u + beta,
+ * and off (the closing joint's only, else zero) is the forward pass's Baumgarte term
+ * D_n^T (A_t + beta_n - A_child) = 2 a dphi + b^2 phi (data.h). Each unknown x is conjugate to
+ * the relative acceleration its rows measure, so the system in all the unknowns is symmetric: a
+ * congruence of the loop's mobility, positive definite when the unknown accelerations determine
+ * the loop and singular when they do not (a singular configuration, or redundant constraints).
+ * It is solved by Cholesky after symmetric diagonal scaling (at most 18 unknowns).
  */
 #ifndef CTC_GDCA_LOOP_H
 #define CTC_GDCA_LOOP_H
 
-/* One end of the boundary problem: s has ns columns of length dim at s[c dim]; s == NULL means
- * the identity (ns = dim). fo and a have dim entries; s2 (end 2 only) ns entries or NULL. */
+#include "dense.h"
+#include "model.h"
+
+/* One joint of the boundary problem: s has ns columns of length dim at s[c dim]; s == NULL means
+ * the identity (ns = dim). fo and a have dim entries; off ns entries or NULL. */
 typedef struct gdca_end {
     const double *s;
     int ns;
     const double *fo, *a, *off;
 } gdca_end;
 
-/* Solves the boundary equations for the root record h (dim 3 or 6) into f1 and f2 (dim each)
- * and the accelerations a1 = A1, a2 = A2 of the handles (dim each). *cond receives the
- * condition estimate (max/min squared Cholesky pivot of the scaled matrix; inf when singular).
- * Returns 0, or -1 when the matrix is not numerically positive definite (outputs NaN). */
-int gdca_loop_boundary(int dim, const double *h, const gdca_end *e1, const gdca_end *e2, double *f1,
-                       double *f2, double *a1, double *a2, double *cond);
+/* The problem at the root of a loop model's tree (see above). */
+typedef struct gdca_loop_root {
+    int dim;             /* 3 or 6 */
+    const double *l;     /* L's record, or NULL: the loop closes on the ground */
+    const double *r;     /* R's record */
+    const double *shift; /* (3) p2 - p1 (d->loop_r); L only */
+    const double *gam;   /* (dim) d->loop_gam; L only */
+    gdca_end e0, ej, en; /* joints 0 (L only), j and n */
+} gdca_loop_root;
+
+/* What the solve gives: the loads on the children of joints 0, j and n, and the classical
+ * accelerations of L's handles, R's handles and body b at p2. On the ground (no L) joint j is
+ * joint 0: f0 = fj, and al1, al2 and ab are zero. */
+typedef struct gdca_loop_sol {
+    double f0[CTC_DENSE_MAX], fj[CTC_DENSE_MAX], fn[CTC_DENSE_MAX];
+    double al1[CTC_DENSE_MAX], al2[CTC_DENSE_MAX];
+    double ar1[CTC_DENSE_MAX], ar2[CTC_DENSE_MAX];
+    double ab[CTC_DENSE_MAX];
+    double cond; /* max/min squared Cholesky pivot of the scaled matrix; inf when singular */
+} gdca_loop_sol;
+
+/* Solves the root problem p into s. Returns 0, or -1 when the matrix is not numerically positive
+ * definite (the loads and accelerations are then NaN). */
+int gdca_loop_solve(const gdca_loop_root *p, gdca_loop_sol *s);
+
+/* Writes the solution's joint loads into jnt_load (njoints x dim: joints 0, j and n) and hands
+ * the root's loads down to the disassembly in tload ((2n - 1) x 2 dim, by assembly index): the
+ * loop's record on the ground carries (F0, -Fn); on a body, L carries (F0, -Fj + Fn moved to p1)
+ * and R (Fj, -Fn). shift is d->loop_r. */
+void gdca_loop_hand_down(const ctc_model *m, const gdca_loop_sol *s, const double *shift,
+                         double *tload, double *jnt_load);
+
+/* out = body b's classical acceleration at p2 from the one at p1 (dim): (alpha; a + alpha x r)
+ * + gam, r = p2 - p1 (3). out may not alias in. */
+void gdca_loop_shift_accel(int dim, const double *r, const double *gam, const double *in,
+                           double *out);
+
+/* out = the load at p1 equal to the load in at p2 on the same body: (m + r x f; f), r = p2 - p1.
+ * out may not alias in. */
+void gdca_loop_shift_load(int dim, const double *r, const double *in, double *out);
 
 #endif

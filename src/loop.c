@@ -2,16 +2,17 @@
  * loop.c - the closing joint's kinematics, the closure residuals, Newton's method onto the
  * closure and the mobility checks (loop.h).
  *
- * The ground is the closing joint's child and is at rest, so its relative motion is minus the
- * tip's: the relative angular velocity is -w_t and beta = w_t x (-w_t) = 0 for the rotation; a
+ * The closing joint's child is the ground (at rest: the relative angular velocity is -w_t and
+ * beta = w_t x (-w_t) = 0 for the rotation) or body b, whose motion the kinematics pass has just
+ * computed; either way the joint is written as a chain joint from the tip to the child. A
  * prismatic closing joint keeps the Coriolis term 2 w_t x u qd. For a prismatic joint the tip's
- * handle is its material point at the anchor (the point coincident with the ground's side, as
+ * handle is its material point at the anchor (the point coincident with the child's side, as
  * for a chain's prismatic joint); for revolute and spherical ones the joint's centre on the tip.
  *
- * The loop Jacobian's column of a chain coordinate is its unit twist (P column at its joint's
- * centre) moved to the tip's handle, times -D^T. Newton and the velocity projection use only the
- * dependent coordinates' columns and never store the Jacobian: G G^T (at most 6 x 6) is summed
- * column by column, and the step G^T y is a second sweep.
+ * The loop Jacobian's column of a chain coordinate of the loop is its unit twist (P column at its
+ * joint's centre) moved to the tip's handle, times -D^T. Newton and the velocity projection use
+ * only the dependent coordinates' columns (all in the loop) and never store the Jacobian: G G^T
+ * (at most 6 x 6) is summed column by column, and the step G^T y is a second sweep.
  */
 #include "loop.h"
 
@@ -74,15 +75,55 @@ static void quat_from_matrix(const double r[9], double q[4])
         for (int i = 0; i < 4; i++) q[i] = -q[i];
 }
 
+/* The closing joint's child (model.h): the ground, or body b, as a pose and a motion (world or
+ * plane coordinates; planar: angle theta, rot unused) */
+typedef struct loop_child {
+    double x[3], rot[9], w[3], v[3]; /* origin, orientation, angular velocity, origin velocity */
+    double theta;                    /* planar: the angle */
+} loop_child;
+
+static void loop_child_of(const ctc_model *m, const ctc_data *d, loop_child *c)
+{
+    static const loop_child ground = {.rot = {1, 0, 0, 0, 1, 0, 0, 0, 1}};
+    const int b = m->loop_body;
+    *c = ground;
+    if (b < 0) return;
+    memcpy(c->x, d->xpos + 3 * b, sizeof c->x);
+    memcpy(c->rot, d->xrot + 9 * b, sizeof c->rot);
+    memcpy(c->w, d->omega + 3 * b, sizeof c->w);
+    memcpy(c->v, d->xvel + 3 * b, sizeof c->v);
+    c->theta = atan2(c->rot[3], c->rot[0]);
+}
+
+/* a loop on a body: r = p2 - p1 from the body's handle 2 (joint b+1's centre) to the closing
+ * point, and gam = (0; w x (w x r)), the centripetal part of the body's acceleration moved there */
+static void loop_shift(const ctc_model *m, ctc_data *d, const loop_child *c)
+{
+    memset(d->loop_r, 0, sizeof d->loop_r);
+    memset(d->loop_gam, 0, sizeof d->loop_gam);
+    if (m->loop_body < 0) return;
+    double t[3], g[3];
+    ctc_v3_sub(d->loop_r, d->loop_pt, d->xpos + 3 * m->loop_first);
+    ctc_v3_cross(t, c->w, d->loop_r);
+    ctc_v3_cross(g, c->w, t);
+    memcpy(d->loop_gam + (m->dim == 3 ? 1 : 3), g, (size_t)(m->dim == 3 ? 2 : 3) * sizeof *g);
+}
+
 static void loop_planar(const ctc_model *m, ctc_data *d)
 {
     const int n = m->nbodies, k = n - 1;
     const ctc_planar_body *lp = &m->loop_planar;
     const double *p = d->xpos + 3 * k, *xr = d->xrot + 9 * k, *v = d->xvel + 3 * k;
-    const double c = xr[0], s = xr[3], w = d->omega[3 * k + 2], *ag = m->loop_anchor2;
+    const double c = xr[0], s = xr[3], w = d->omega[3 * k + 2], *an = m->loop_anchor2;
     double *P = d->jnt_P + 9 * n, *D = d->jnt_D + 9 * n, *beta = d->jnt_beta + 3 * n;
     double pt[2] = {p[0] + c * lp->loc[0] - s * lp->loc[1], p[1] + s * lp->loc[0] + c * lp->loc[1]};
-    double theta = atan2(s, c);
+    loop_child ch;
+    loop_child_of(m, d, &ch);
+    /* the anchor in the plane, and the child's velocity there */
+    const double cb = cos(ch.theta), sb = sin(ch.theta), wb = ch.w[2];
+    double ag[2] = {ch.x[0] + cb * an[0] - sb * an[1], ch.x[1] + sb * an[0] + cb * an[1]};
+    double va[2] = {ch.v[0] - wb * (ag[1] - ch.x[1]), ch.v[1] + wb * (ag[0] - ch.x[0])};
+    double theta = atan2(s, c) - ch.theta; /* the tip's angle relative to the child */
 
     memset(P, 0, 9 * sizeof *P);
     memset(D, 0, 9 * sizeof *D);
@@ -95,15 +136,16 @@ static void loop_planar(const ctc_model *m, ctc_data *d)
         D[3 + 2] = 1;
         ctc_v3_set(d->loop_pt, pt[0], pt[1], 0);
         d->loop_q[0] = unwrap_near(-lp->sign * theta, d->loop_q[0]);
-        d->loop_v[0] = -lp->sign * w;
+        d->loop_v[0] = -lp->sign * (w - wb);
         d->loop_phi[0] = ag[0] - pt[0];
         d->loop_phi[1] = ag[1] - pt[1];
-        d->loop_dphi[0] = -vt[0];
-        d->loop_dphi[1] = -vt[1];
+        d->loop_dphi[0] = va[0] - vt[0];
+        d->loop_dphi[1] = va[1] - vt[1];
     } else { /* prismatic: the tip's point at the anchor */
         double u[2] = {c * lp->axis[0] - s * lp->axis[1], s * lp->axis[0] + c * lp->axis[1]};
         double nr[2] = {-u[1], u[0]}, gap[2] = {ag[0] - pt[0], ag[1] - pt[1]};
         double vc[2] = {v[0] - w * (ag[1] - p[1]), v[1] + w * (ag[0] - p[0])};
+        double dv[2] = {va[0] - vc[0], va[1] - vc[1]};
         P[1] = u[0];
         P[2] = u[1];
         D[0] = 1;
@@ -111,14 +153,15 @@ static void loop_planar(const ctc_model *m, ctc_data *d)
         D[3 + 2] = nr[1];
         ctc_v3_set(d->loop_pt, ag[0], ag[1], 0);
         d->loop_q[0] = gap[0] * u[0] + gap[1] * u[1];
-        d->loop_v[0] = -(vc[0] * u[0] + vc[1] * u[1]);
+        d->loop_v[0] = dv[0] * u[0] + dv[1] * u[1];
         beta[1] = -2 * w * u[1] * d->loop_v[0];
         beta[2] = 2 * w * u[0] * d->loop_v[0];
         d->loop_phi[0] = -wrap_angle(theta);
         d->loop_phi[1] = gap[0] * nr[0] + gap[1] * nr[1];
-        d->loop_dphi[0] = -w;
-        d->loop_dphi[1] = -(vc[0] * nr[0] + vc[1] * nr[1]);
+        d->loop_dphi[0] = wb - w;
+        d->loop_dphi[1] = dv[0] * nr[0] + dv[1] * nr[1];
     }
+    loop_shift(m, d, &ch);
 }
 
 static void loop_spatial(const ctc_model *m, ctc_data *d)
@@ -126,10 +169,17 @@ static void loop_spatial(const ctc_model *m, ctc_data *d)
     const int n = m->nbodies, k = n - 1;
     const ctc_joint_spec *j = &m->joints[n];
     const double *p = d->xpos + 3 * k, *r = d->xrot + 9 * k, *w = d->omega + 3 * k;
-    const double *v = d->xvel + 3 * k, *ag = m->loop_anchor;
+    const double *v = d->xvel + 3 * k;
     double *P = d->jnt_P + 18 * n, *D = d->jnt_D + 36 * n, *beta = d->jnt_beta + 6 * n;
-    double pt[3], t[3], vt[3], vc[3], gap[3];
+    double pt[3], t[3], vt[3], vc[3], gap[3], ag[3], va[3], wrel[3];
+    loop_child ch;
+    loop_child_of(m, d, &ch);
 
+    ctc_m3_mulv(t, ch.rot, m->loop_anchor); /* the anchor, and the child's velocity there */
+    ctc_v3_add(ag, ch.x, t);
+    ctc_v3_cross(va, ch.w, t);
+    ctc_v3_add(va, va, ch.v);
+    ctc_v3_sub(wrel, ch.w, w); /* the child's angular velocity relative to the tip */
     ctc_m3_mulv(t, r, j->location);
     ctc_v3_add(pt, p, t);
     ctc_v3_sub(gap, ag, pt);
@@ -146,15 +196,20 @@ static void loop_spatial(const ctc_model *m, ctc_data *d)
     if (j->type == CTC_JOINT_SPHERICAL) {
         double rt[9];
         for (int a = 0; a < 3; a++) {
-            P[6 * a + a] = 1;     /* the ground's axes */
+            for (int b = 0; b < 3; b++) P[6 * a + b] = ch.rot[3 * b + a]; /* the child's axes */
             D[6 * a + 3 + a] = 1; /* no relative translation */
-            d->loop_v[a] = -w[a]; /* relative angular velocity, ground (= world) frame */
             d->loop_phi[a] = gap[a];
-            d->loop_dphi[a] = -vt[a];
-            for (int b = 0; b < 3; b++) rt[3 * a + b] = r[3 * b + a];
+            d->loop_dphi[a] = va[a] - vt[a];
         }
+        ctc_m3_tmulv(d->loop_v, ch.rot, wrel); /* in the child's frame */
+        ctc_v3_cross(beta, w, wrel);
+        for (int a = 0; a < 3; a++) /* R_t^T R_child */
+            for (int b = 0; b < 3; b++)
+                rt[3 * a + b] =
+                    r[a] * ch.rot[b] + r[3 + a] * ch.rot[3 + b] + r[6 + a] * ch.rot[6 + b];
         quat_from_matrix(rt, d->loop_q);
         ctc_v3_copy(d->loop_pt, pt);
+        loop_shift(m, d, &ch);
         return;
     }
 
@@ -163,47 +218,59 @@ static void loop_spatial(const ctc_model *m, ctc_data *d)
     ctc_m3_mulv(n1, r, &m->jnt_perp[6 * n]);
     ctc_m3_mulv(n2, r, &m->jnt_perp[6 * n + 3]);
     if (j->type == CTC_JOINT_REVOLUTE) {
-        /* angle of R_t^T about the axis, from the tip-frame normals p1, p2 = a x p1 */
-        double rp[3], mis[3];
+        /* angle of R_t^T R_child about the axis, from the tip-frame normals p1, p2 = a x p1 */
+        double rp[3], mis[3], ub[3];
         const double *p1 = &m->jnt_perp[6 * n], *p2 = &m->jnt_perp[6 * n + 3];
-        ctc_m3_tmulv(rp, r, p1);
+        ctc_m3_mulv(t, ch.rot, p1);
+        ctc_m3_tmulv(rp, r, t);
         ctc_v3_copy(P, u);
         ctc_v3_copy(D, n1);
         ctc_v3_copy(D + 6, n2);
         D[12 + 3] = D[18 + 4] = D[24 + 5] = 1;
         ctc_v3_copy(d->loop_pt, pt);
         d->loop_q[0] = unwrap_near(atan2(ctc_v3_dot(p2, rp), ctc_v3_dot(p1, rp)), d->loop_q[0]);
-        d->loop_v[0] = -ctc_v3_dot(u, w);
-        ctc_v3_cross(mis, u, j->axis);
+        d->loop_v[0] = ctc_v3_dot(u, wrel);
+        ctc_v3_cross(beta, w, wrel);
+        ctc_m3_mulv(ub, ch.rot, j->axis); /* the axis carried by the child */
+        ctc_v3_cross(mis, u, ub);
         d->loop_phi[0] = ctc_v3_dot(n1, mis);
         d->loop_phi[1] = ctc_v3_dot(n2, mis);
-        d->loop_dphi[0] = -ctc_v3_dot(n1, w);
-        d->loop_dphi[1] = -ctc_v3_dot(n2, w);
+        d->loop_dphi[0] = ctc_v3_dot(n1, wrel);
+        d->loop_dphi[1] = ctc_v3_dot(n2, wrel);
         for (int a = 0; a < 3; a++) {
             d->loop_phi[2 + a] = gap[a];
-            d->loop_dphi[2 + a] = -vt[a];
+            d->loop_dphi[2 + a] = va[a] - vt[a];
         }
+        loop_shift(m, d, &ch);
         return;
     }
 
-    /* prismatic: rotation error = rotation vector of R_t^T, about vee(R_t^T - R_t) / 2 */
+    /* prismatic: rotation error = rotation vector of Q = R_child R_t^T, about vee(Q - Q^T) / 2 */
+    double q[9], dv[3];
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++)
+            q[3 * a + b] = ch.rot[3 * a] * r[3 * b] + ch.rot[3 * a + 1] * r[3 * b + 1] +
+                           ch.rot[3 * a + 2] * r[3 * b + 2];
+    ctc_v3_sub(dv, va, vc);
     ctc_v3_copy(P + 3, u);
     D[0] = D[6 + 1] = D[12 + 2] = 1;
     ctc_v3_copy(D + 18 + 3, n1);
     ctc_v3_copy(D + 24 + 3, n2);
     ctc_v3_copy(d->loop_pt, ag);
     d->loop_q[0] = ctc_v3_dot(gap, u);
-    d->loop_v[0] = -ctc_v3_dot(vc, u);
+    d->loop_v[0] = ctc_v3_dot(dv, u);
+    ctc_v3_cross(beta, w, wrel); /* zero on the closure, where the tip and the child turn alike */
     ctc_v3_cross(beta + 3, w, u);
     ctc_v3_scale(beta + 3, beta + 3, 2 * d->loop_v[0]);
-    d->loop_phi[0] = 0.5 * (r[5] - r[7]);
-    d->loop_phi[1] = 0.5 * (r[6] - r[2]);
-    d->loop_phi[2] = 0.5 * (r[1] - r[3]);
+    d->loop_phi[0] = 0.5 * (q[7] - q[5]);
+    d->loop_phi[1] = 0.5 * (q[2] - q[6]);
+    d->loop_phi[2] = 0.5 * (q[3] - q[1]);
     d->loop_phi[3] = ctc_v3_dot(gap, n1);
     d->loop_phi[4] = ctc_v3_dot(gap, n2);
-    for (int a = 0; a < 3; a++) d->loop_dphi[a] = -w[a];
-    d->loop_dphi[3] = -ctc_v3_dot(vc, n1);
-    d->loop_dphi[4] = -ctc_v3_dot(vc, n2);
+    for (int a = 0; a < 3; a++) d->loop_dphi[a] = wrel[a];
+    d->loop_dphi[3] = ctc_v3_dot(dv, n1);
+    d->loop_dphi[4] = ctc_v3_dot(dv, n2);
+    loop_shift(m, d, &ch);
 }
 
 void ctc_loop_kinematics(const ctc_model *m, ctc_data *d)
@@ -262,12 +329,13 @@ static void loop_column(const ctc_model *m, const ctc_data *d, int k, int c, dou
     }
 }
 
-/* L L^T = G_dep G_dep^T over the dependent chain coordinates (nc x nc); -1 if singular */
+/* L L^T = G_dep G_dep^T over the dependent chain coordinates of the loop (nc x nc); -1 if
+ * singular */
 static int dependent_gram(const ctc_model *m, const ctc_data *d, double *gram)
 {
     const int nc = loop_nc(m);
     memset(gram, 0, (size_t)nc * nc * sizeof *gram);
-    for (int k = 0; k < m->nbodies; k++) {
+    for (int k = m->loop_first; k < m->nbodies; k++) {
         if (m->jnt_indep[k]) continue;
         for (int c = 0; c < m->jnt_nv[k]; c++) {
             double g[CTC_DENSE_MAX];
@@ -295,7 +363,7 @@ static double dependent_step(const ctc_model *m, const ctc_data *d, const double
     ctc_dense_lsolve(nc, chol, y);
     ctc_dense_ltsolve(nc, chol, y);
     memset(dv, 0, (size_t)m->nv * sizeof *dv);
-    for (int k = 0; k < m->nbodies; k++) {
+    for (int k = m->loop_first; k < m->nbodies; k++) {
         if (m->jnt_indep[k]) continue;
         for (int c = 0; c < m->jnt_nv[k]; c++) {
             double g[CTC_DENSE_MAX], s = 0;
@@ -384,21 +452,21 @@ static ctc_status twist_svd(const ctc_model *m, const ctc_data *d, int dep_only,
 {
     const int dim = m->dim, n = m->nbodies;
     double len = 0;
-    for (int k = 0; k < n; k++) {
+    for (int k = m->loop_first; k < n; k++) {
         double r[3];
         ctc_v3_sub(r, d->xpos + 3 * k, d->loop_pt);
         len = fmax(len, ctc_v3_norm(r));
     }
     len = fmax(len, 1e-6);
     int cols = 0;
-    for (int k = 0; k <= n; k++)
+    for (int k = m->loop_first; k <= n; k++)
         if (!dep_only || !m->jnt_indep[k]) cols += m->jnt_nv[k];
     *ncols = cols;
     if (cols == 0) return CTC_OK;
     double *a = malloc((size_t)dim * cols * sizeof *a), superb[CTC_DENSE_MAX];
     if (!a) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     int col = 0;
-    for (int k = 0; k <= n; k++) {
+    for (int k = m->loop_first; k <= n; k++) {
         if (dep_only && m->jnt_indep[k]) continue;
         for (int c = 0; c < m->jnt_nv[k]; c++, col++) {
             double tw[CTC_DENSE_MAX];

@@ -3,30 +3,35 @@
  * closure residuals and their Jacobian, and putting a state back onto the closure (paper section
  * 5, DESIGN.md section 5).
  *
- * The closing joint n joins the tip body n-1 (parent) to the ground (child) (model.h). With the
- * tip's point p_t (the joint's centre on the tip) and the anchor p_g (on the ground), both in the
- * world, the closure asks that the ground's side moves relative to the tip's only along P_n:
+ * The closing joint n joins the tip body n-1 (parent) to its child, the ground or body b
+ * (model.h). With the tip's point p_t (the joint's centre on the tip) and the anchor p_a (on the
+ * child), both in the world, the closure asks that the child's side moves relative to the tip's
+ * only along P_n:
  *
- *     pose error   delta = (rotation error; p_g - p_t)
- *     residual     phi  = D_n^T delta                       (nc = dim - nv_n components; m, rad)
- *     rate         dphi = D_n^T (V_g - V_t) = -D_n^T V_t    (V_t: the tip's twist at p_t; m/s,
- * rad/s) acceleration D_n^T (A_t + beta_n) = 0                 (A_t: the tip's acceleration at p_t)
+ *     pose error   delta = (rotation error; p_a - p_t)
+ *     residual     phi  = D_n^T delta                        (nc = dim - nv_n components; m, rad)
+ *     rate         dphi = D_n^T (V_a - V_t)                  (V_t, V_a: the tip's and the child's
+ *                                                             twists at p_t; m/s, rad/s)
+ *     acceleration D_n^T (A_t + beta_n - A_a) = 0            (classical accelerations at p_t)
  *
- * The rotation error is, for a revolute closing joint, u_t x a, the misalignment of the axis
- * carried by the tip (u_t = R_t a) from the same axis fixed in the ground (a itself, because the
- * world frame is Rot(a, q_n) of the tip's frame); for a prismatic one the rotation vector of
- * R_t^T (the ground's orientation relative to the tip); a spherical one has none. Planar form:
- * revolute none, prismatic the tip's angle, wrapped to (-pi, pi], negated.
- * phi = 0 is the loop closed; its derivative along the motion is dphi to first order.
+ * The ground is at rest (V_a = A_a = 0). The rotation error is, for a revolute closing joint,
+ * u_t x u_a, the misalignment of the axis carried by the tip (u_t = R_t a) from the same axis
+ * carried by the child (u_a = R_a a, because the child's frame is Rot(a, q_n) of the tip's); for
+ * a prismatic one the rotation vector of R_a R_t^T (the child's orientation relative to the tip);
+ * a spherical one has none. Planar form: revolute none, prismatic the tip's angle relative to
+ * the child, wrapped to (-pi, pi], negated. phi = 0 is the loop closed; its derivative along the
+ * motion is dphi to first order. beta_n is a chain joint's (kinematics.h) with the tip as parent:
+ * (w_t x w_rel; 2 w_t x u qd_n), w_rel the child's angular velocity relative to the tip.
  *
  * The closing joint's coordinate and rate (revolute: angle and rate about the axis; prismatic:
- * displacement along it; spherical: the ground's orientation relative to the tip as a
- * quaternion, and the relative angular velocity in the ground's frame) are computed from the
+ * displacement along it; spherical: the child's orientation relative to the tip as a
+ * quaternion, and the relative angular velocity in the child's frame) are computed from the
  * chain's state, not integrated.
  *
- * Loop Jacobian: the twist of the tip at p_t is V_t = sum_k J_k v_k, J_k the unit twists of the
- * chain's coordinates moved to p_t; the closure's Jacobian is G = D_n^T J (nc x nv). Newton's
- * method on the dependent coordinates uses G restricted to them.
+ * Loop Jacobian: the relative twist at p_t is V_t - V_a = sum_k J_k v_k over the loop's chain
+ * coordinates (joints loop_first..n-1; the joints 0..b before a loop on body b move the tip and
+ * the child alike), J_k their unit twists moved to p_t; the closure's Jacobian is
+ * G = -D_n^T J (nc x nv). Newton's method on the dependent coordinates uses G restricted to them.
  */
 #ifndef CTC_LOOP_H
 #define CTC_LOOP_H
@@ -47,8 +52,9 @@ void ctc_loop_kinematics(const ctc_model *m, ctc_data *d);
 
 /* The unit twist tw (dim) of chain coordinate c of joint k (k < n) at the closing joint's point
  * on the tip, d->loop_pt: the tip's velocity there per unit rate of that coordinate, and (its
- * transpose) the coordinate's generalised force per unit load at that point. Needs the state's
- * ctc_kinematics. */
+ * transpose) the coordinate's generalised force per unit load at that point. For a joint of the
+ * loop (k >= m->loop_first) it is also the twist relative to the closing joint's child. Needs the
+ * state's ctc_kinematics. */
 void ctc_loop_coord_twist(const ctc_model *m, const ctc_data *d, int k, int c, double *tw);
 
 /* Max-norms of the position residual (m or rad) and the velocity residual (m/s or rad/s) of the

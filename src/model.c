@@ -309,12 +309,12 @@ static ctc_status setup_planar(ctc_model *m, const double n[3], char *err, size_
 
 /* Builds the subtree of bodies [first, last] into tmp (post-order); returns its assembly index
  * in tmp's numbering (n + position in tmp) or the body index for a leaf. */
-static int build_subtree(ctc_model *m, ctc_tree_node *tmp, int *count, int first, int last)
+static int build_subtree(ctc_model *m, ctc_tree_node *tmp, int *count, int first, int last, int mid)
 {
     if (first == last) return first;
-    int mid = first + (last - first + 1) / 2; /* right part starts here */
-    int left = build_subtree(m, tmp, count, first, mid - 1);
-    int right = build_subtree(m, tmp, count, mid, last);
+    if (mid <= first) mid = first + (last - first + 1) / 2; /* the right part starts at mid */
+    int left = build_subtree(m, tmp, count, first, mid - 1, 0);
+    int right = build_subtree(m, tmp, count, mid, last, 0);
     int hl = left < m->nbodies ? 0 : tmp[left - m->nbodies].height;
     int hr = right < m->nbodies ? 0 : tmp[right - m->nbodies].height;
     ctc_tree_node *node = &tmp[*count];
@@ -327,25 +327,31 @@ static int build_subtree(ctc_model *m, ctc_tree_node *tmp, int *count, int first
     return m->nbodies + (*count)++;
 }
 
-/* Lays out the tree with nodes sorted by height (stable), children before parents. */
+/* Lays out the tree with nodes sorted by height (stable), children before parents. A loop closed
+ * on a body b splits the root at joint b + 1 (model.h), so its two parts are whole subtrees. */
 static ctc_status build_tree(ctc_model *m, char *err, size_t errlen)
 {
     int n = m->nbodies;
     m->ntree = n - 1;
     m->height = 0;
     m->root = 0;
-    while ((1 << m->height) < n) m->height++;
-    m->height_start = calloc((size_t)m->height + 2, sizeof *m->height_start);
     m->tree = calloc((size_t)(n > 1 ? n - 1 : 1), sizeof *m->tree);
     ctc_tree_node *tmp = calloc((size_t)(n > 1 ? n - 1 : 1), sizeof *tmp);
     int *where = calloc((size_t)(n > 1 ? n - 1 : 1), sizeof *where);
-    if (m->height_start == NULL || m->tree == NULL || tmp == NULL || where == NULL) {
+    if (m->tree == NULL || tmp == NULL || where == NULL) {
         free(tmp);
         free(where);
         return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     }
     int count = 0;
-    int root = build_subtree(m, tmp, &count, 0, n - 1);
+    int root = build_subtree(m, tmp, &count, 0, n - 1, m->loop_first);
+    if (root >= n) m->height = tmp[root - n].height;
+    m->height_start = calloc((size_t)m->height + 2, sizeof *m->height_start);
+    if (m->height_start == NULL) {
+        free(tmp);
+        free(where);
+        return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    }
 
     /* counting sort by height; height_start[h] ends height h */
     for (int i = 0; i < count; i++) m->height_start[tmp[i].height]++;
@@ -436,6 +442,7 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
     ctc_model *m = calloc(1, sizeof *m);
     if (m == NULL) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     m->nbodies = n;
+    m->loop_body = -1;
     m->has_loop = spec->loop != NULL;
     int nj = m->njoints = n + m->has_loop;
     ctc_v3_copy(m->gravity, spec->gravity);
@@ -474,14 +481,37 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
             goto fail;
         }
         ctc_v3_copy(m->loop_anchor, lp->anchor);
+        if (lp->on_body) {
+            if (lp->body < 0 || lp->body > n - 2) {
+                st = ctc_fail(CTC_EINVAL, err, errlen,
+                              "loop: the body the loop closes on must be one of bodies 0..%d "
+                              "(before the tip, body %d) (got %d)",
+                              n - 2, n - 1, lp->body);
+                goto fail;
+            }
+            m->loop_body = lp->body;
+        }
+        m->loop_first = m->loop_body + 1;
     }
+    int any_indep = 0;
     for (int k = 0; k < nj; k++) {
         m->jnt_indep[k] = spec->independent ? spec->independent[k] != 0 : 1;
+        any_indep |= m->jnt_indep[k];
         if (!m->has_loop && !m->jnt_indep[k]) {
             st = ctc_fail(CTC_EINVAL, err, errlen,
                           "joint %d: an open chain is fully actuated: every joint is "
                           "independent",
                           k);
+            goto fail;
+        }
+    }
+    for (int k = 0; any_indep && m->has_loop && k < m->loop_first; k++) {
+        if (!m->jnt_indep[k]) {
+            st = ctc_fail(CTC_EINVAL, err, errlen,
+                          "loop: joint %d is outside the loop (which closes on body %d), so "
+                          "nothing determines its motion: mark it independent (or every joint "
+                          "dependent, for a passive run)",
+                          k, m->loop_body);
             goto fail;
         }
     }

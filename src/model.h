@@ -31,21 +31,25 @@
  *    prismatic axis and gravity, or any normal of a lone prismatic axis; its sign is chosen so its
  *    largest component is positive, so a chain with +z or -z axes moves in the x-y plane itself.
  *  - One kinematic loop (optional, ctc_loop_spec): a closing joint, numbered n, joins the tip body
- *    n-1 (its parent) to the ground (its child), so bodies 0..n-1 and the ground form a loop. It
+ *    n-1 (its parent) to the ground or to a body b <= n-2 of the chain (its child), so bodies
+ *    0..n-1 and the ground, or bodies b..n-1, form a loop. The loop's joints are b+1..n (0..n
+ *    on the ground, where b = -1); joints 0..b carry the loop as a whole. The closing joint
  *    follows the same conventions as a chain joint with the tip as the parent: its axis and
- *    centre are given in the tip's frame, its coordinate is the ground's motion relative to the
- *    tip (for a revolute closing joint the world frame is Rot(axis, q_n) of the tip's frame, so a
- *    planar loop of revolute joints has q_0 + ... + q_n = 0 mod 2 pi), and its generalised force
- *    is applied by the tip on the ground. The closing joint's coordinates are not part of the
- *    state q, v: they follow from the chain's (loop.h). The ground's side of the joint is the
- *    anchor, a fixed point in the world; when the loop is closed the anchor coincides with the
+ *    centre are given in the tip's frame, its coordinate is the child's motion relative to the
+ *    tip (for a revolute closing joint the child's frame is Rot(axis, q_n) of the tip's frame, so
+ *    a planar loop of revolute joints on the ground has q_0 + ... + q_n = 0 mod 2 pi, and one on
+ *    body b has q_(b+1) + ... + q_n = 0), and its generalised force is applied by the tip on the
+ *    child. The closing joint's coordinates are not part of the state q, v: they follow from the
+ *    chain's (loop.h). The child's side of the joint is the anchor, a point fixed in the world
+ *    (ground) or in body b's frame; when the loop is closed the anchor coincides with the
  *    closing joint's centre on the tip.
  *  - Independent and dependent joints: in a loop model each joint, the closing one included, is
  *    independent (actuated: a controller drives its coordinates along a trajectory) or dependent
  *    (passive: no driving force; its motion follows from the loop). An open chain's joints are
- *    all independent. "Extended" coordinate vectors list the chain's nv velocity coordinates and
- *    then the closing joint's (nvx = nv + loop_nv); forces and accelerations of loop models are
- *    extended vectors (gdca.h).
+ *    all independent, and so are the joints outside a loop closed on a body (0..b), unless every
+ *    joint is dependent (a passive run). "Extended" coordinate vectors list the chain's nv velocity
+ * coordinates and then the closing joint's (nvx = nv + loop_nv); forces and accelerations of loop
+ * models are extended vectors (gdca.h).
  */
 #ifndef CTC_MODEL_H
 #define CTC_MODEL_H
@@ -86,11 +90,15 @@ typedef struct ctc_joint_spec {
     double location[3]; /* m, the joint's centre in the parent frame (world for joint 0) */
 } ctc_joint_spec;
 
-/* The closing joint of a loop from the tip body n-1 to the ground. */
+/* The closing joint of a loop from the tip body n-1 to the ground or to body `body`. A zeroed
+ * spec closes on the ground. */
 typedef struct ctc_loop_spec {
     ctc_joint_spec joint; /* REVOLUTE, PRISMATIC or SPHERICAL; axis and location (the joint's
                              centre) in the tip body's frame */
-    double anchor[3];     /* m, the joint's centre on the ground, world frame */
+    double anchor[3];     /* m, the joint's centre on the child: world frame (ground), or body
+                             `body`'s frame */
+    int on_body;          /* 0: the loop closes on the ground; 1: on body `body` */
+    int body;             /* with on_body: 0 <= body <= n - 2 */
 } ctc_loop_spec;
 
 typedef struct ctc_chain_spec {
@@ -154,7 +162,8 @@ typedef struct ctc_model {
 
     int ntree;           /* n - 1 internal nodes */
     ctc_tree_node *tree; /* (ntree) ordered by height: children before parents, root last */
-    int height;          /* root height = ceil(log2 n) */
+    int height;          /* root height: ceil(log2 n), or one more when a loop closed on a body
+                            splits the root off the middle */
     int *height_start;   /* (height + 2) nodes of height h are tree[height_start[h-1] ..
                             height_start[h] - 1] for h >= 1; height_start[0] = 0 */
     int root;            /* assembly index of the whole chain */
@@ -166,9 +175,13 @@ typedef struct ctc_model {
                                     joint last (joints[n] has its type, unit axis and centre in the
                                     tip's frame; jnt_qadr[n] = nq, jnt_vadr[n] = nv, jnt_perp too) */
     int nvx;                     /* nv + the closing joint's nv: the length of extended vectors */
-    double loop_anchor[3];       /* m, world */
+    int loop_body;               /* the closing joint's child: -1 the ground (and open chains), else
+                                    a body 0..n-2 */
+    int loop_first;              /* loop_body + 1: the loop's first joint (its joints are
+                                    loop_first..n); the tree's root splits at it when > 0 */
+    double loop_anchor[3];       /* m, world (ground) or body loop_body's frame */
     ctc_planar_body loop_planar; /* form PLANAR: the closing joint's loc (on the tip), axis, sign */
-    double loop_anchor2[2];      /* form PLANAR: the anchor in plane coordinates */
+    double loop_anchor2[2];      /* form PLANAR: the anchor in plane coordinates (its frame's) */
     int mobility; /* Gruebler-Kutzbach: sum of joint freedoms - dim (loops), nv (open) */
     unsigned char *jnt_indep; /* (njoints) 1 = independent */
     int nind;                 /* number of independent coordinates */

@@ -21,18 +21,20 @@
 
 #define LO_MAX_ROWS 6
 
-/* one scalar constraint (loop_oracle.h): linear c . (p_t - anchor), or rotational c . (R_t b) */
+/* one scalar constraint (loop_oracle.h): linear c . (p_t - p_a), or rotational c . (R_t b), c
+ * fixed in the closing joint's child (c = R_a c_child) */
 typedef struct lo_row {
     int rotational;
     double b[3]; /* tip frame (rotational) */
-    double c[3]; /* world */
+    double c[3]; /* the child's frame (world for the ground) */
 } lo_row;
 
 struct loop_oracle {
     loop_oracle_dims dims;
     ctc_body_spec *bodies;  /* (n) */
     ctc_joint_spec *joints; /* (n + 1) axes normalised; the closing joint last */
-    double anchor[3];
+    double anchor[3];       /* the child's frame */
+    int body;               /* the closing joint's child: -1 the ground, else a body */
     double gravity[3];
     unsigned char *indep; /* (n + 1) */
     int *qadr, *vadr;     /* (n + 1) */
@@ -51,6 +53,10 @@ struct loop_oracle {
     double *acc0;   /* (n x 3) origin accelerations at v' = 0 */
     double pt[3], vt[3], at0[3];
     double *jac; /* (6 x nv) tip twist at p_t: rows 0-2 angular, 3-5 linear */
+    /* the child's (zero for the ground): its orientation and angular motion, the anchor p_a and
+       the child's point there (velocity, acceleration at v' = 0), its twist at p_a */
+    double ra[9], wa[3], alpha0a[3], pa[3], va[3], aa0[3];
+    double *jacb; /* (6 x nv) */
 
     /* scratch */
     double *mass, *h, *g, *gamma, *cmap, *big, *rhs;
@@ -289,6 +295,8 @@ loop_oracle *loop_oracle_new(const ctc_chain_spec *spec)
     memcpy(o->joints, spec->joints, (size_t)n * sizeof *o->joints);
     o->joints[n] = spec->loop->joint;
     memcpy(o->anchor, spec->loop->anchor, sizeof o->anchor);
+    o->body = spec->loop->on_body ? spec->loop->body : -1;
+    if (o->body < -1 || o->body > n - 2) goto fail;
     memcpy(o->gravity, spec->gravity, sizeof o->gravity);
     for (int k = 0; k <= n; k++) {
         ctc_joint_spec *j = &o->joints[k];
@@ -326,6 +334,7 @@ loop_oracle *loop_oracle_new(const ctc_chain_spec *spec)
     o->alpha0 = calloc((size_t)n * 3, sizeof(double));
     o->acc0 = calloc((size_t)n * 3, sizeof(double));
     o->jac = calloc((size_t)6 * nv + 1, sizeof(double));
+    o->jacb = calloc((size_t)6 * nv + 1, sizeof(double));
     o->mass = calloc((size_t)nv * nv + 1, sizeof(double));
     o->h = calloc((size_t)nv + 1, sizeof(double));
     o->g = calloc((size_t)LO_MAX_ROWS * nv + 1, sizeof(double));
@@ -334,7 +343,8 @@ loop_oracle *loop_oracle_new(const ctc_chain_spec *spec)
     o->big = calloc((size_t)big * big, sizeof(double));
     o->rhs = calloc((size_t)big, sizeof(double));
     if (!o->rot || !o->pos || !o->axis || !o->omega || !o->vel || !o->alpha0 || !o->acc0 ||
-        !o->jac || !o->mass || !o->h || !o->g || !o->gamma || !o->cmap || !o->big || !o->rhs)
+        !o->jac || !o->jacb || !o->mass || !o->h || !o->g || !o->gamma || !o->cmap || !o->big ||
+        !o->rhs)
         goto fail;
     return o;
 fail:
@@ -349,7 +359,8 @@ void loop_oracle_free(loop_oracle *o)
     ctc_model_free(o->open);
     free(o->bodies), free(o->joints), free(o->indep), free(o->qadr), free(o->vadr);
     free(o->rot), free(o->pos), free(o->axis), free(o->omega), free(o->vel);
-    free(o->alpha0), free(o->acc0), free(o->jac), free(o->mass), free(o->h), free(o->g);
+    free(o->alpha0), free(o->acc0), free(o->jac), free(o->jacb), free(o->mass), free(o->h),
+        free(o->g);
     free(o->gamma), free(o->cmap), free(o->big), free(o->rhs);
     free(o);
 }
@@ -361,7 +372,49 @@ const loop_oracle_dims *loop_oracle_get_dims(const loop_oracle *o)
 
 /* ---- kinematics ---- */
 
-/* poses, velocities, bias accelerations (v' = 0) of every body, the tip point's motion and J */
+/* jac (6 x nv): the unit twists at the point p of the coordinates of joints 0..last (zero
+ * columns for the others), from the kinematics in o */
+static void point_jacobian(const loop_oracle *o, int last, const double p[3], double *jac)
+{
+    int nv = o->dims.nv;
+    memset(jac, 0, (size_t)6 * nv * sizeof(double));
+    for (int k = 0; k <= last; k++) {
+        const ctc_joint_spec *j = &o->joints[k];
+        const double *uk = o->axis + 3 * k, *pk = o->pos + 3 * k, *rk = o->rot + 9 * k;
+        double d[3] = {p[0] - pk[0], p[1] - pk[1], p[2] - pk[2]}, lin[3];
+        int c0 = o->vadr[k];
+        switch (j->type) {
+        case CTC_JOINT_REVOLUTE:
+        case CTC_JOINT_CYLINDRICAL:
+            v3_cross(lin, uk, d);
+            for (int i = 0; i < 3; i++) {
+                jac[i * nv + c0] = uk[i];
+                jac[(3 + i) * nv + c0] = lin[i];
+            }
+            if (j->type == CTC_JOINT_CYLINDRICAL)
+                for (int i = 0; i < 3; i++) jac[(3 + i) * nv + c0 + 1] = uk[i];
+            break;
+        case CTC_JOINT_PRISMATIC:
+            for (int i = 0; i < 3; i++) jac[(3 + i) * nv + c0] = uk[i];
+            break;
+        case CTC_JOINT_SPHERICAL:
+            for (int c = 0; c < 3; c++) {
+                double e[3] = {rk[c], rk[3 + c], rk[6 + c]}; /* column c of R_k */
+                v3_cross(lin, e, d);
+                for (int i = 0; i < 3; i++) {
+                    jac[i * nv + c0 + c] = e[i];
+                    jac[(3 + i) * nv + c0 + c] = lin[i];
+                }
+            }
+            break;
+        case CTC_JOINT_FIXED:
+            break;
+        }
+    }
+}
+
+/* poses, velocities, bias accelerations (v' = 0) of every body, the tip point's motion, J
+ * and the same of the closing joint's child */
 static void kinematics(loop_oracle *o, const double *q, const double *v)
 {
     int n = o->dims.n, nv = o->dims.nv;
@@ -443,41 +496,28 @@ static void kinematics(loop_oracle *o, const double *q, const double *v)
     v3_cross(t3, wt, t2);
     for (int i = 0; i < 3; i++) o->at0[i] = o->acc0[3 * (n - 1) + i] + t[i] + t3[i];
 
-    /* J (6 x nv): unit twists of the chain's coordinates at p_t */
-    memset(o->jac, 0, (size_t)6 * nv * sizeof(double));
-    for (int k = 0; k < n; k++) {
-        const ctc_joint_spec *j = &o->joints[k];
-        const double *uk = o->axis + 3 * k, *pk = o->pos + 3 * k, *rk = o->rot + 9 * k;
-        double d[3] = {o->pt[0] - pk[0], o->pt[1] - pk[1], o->pt[2] - pk[2]}, lin[3];
-        int c0 = o->vadr[k];
-        switch (j->type) {
-        case CTC_JOINT_REVOLUTE:
-        case CTC_JOINT_CYLINDRICAL:
-            v3_cross(lin, uk, d);
-            for (int i = 0; i < 3; i++) {
-                o->jac[i * nv + c0] = uk[i];
-                o->jac[(3 + i) * nv + c0] = lin[i];
-            }
-            if (j->type == CTC_JOINT_CYLINDRICAL)
-                for (int i = 0; i < 3; i++) o->jac[(3 + i) * nv + c0 + 1] = uk[i];
-            break;
-        case CTC_JOINT_PRISMATIC:
-            for (int i = 0; i < 3; i++) o->jac[(3 + i) * nv + c0] = uk[i];
-            break;
-        case CTC_JOINT_SPHERICAL:
-            for (int c = 0; c < 3; c++) {
-                double e[3] = {rk[c], rk[3 + c], rk[6 + c]}; /* column c of R_k */
-                v3_cross(lin, e, d);
-                for (int i = 0; i < 3; i++) {
-                    o->jac[i * nv + c0 + c] = e[i];
-                    o->jac[(3 + i) * nv + c0 + c] = lin[i];
-                }
-            }
-            break;
-        case CTC_JOINT_FIXED:
-            break;
-        }
-    }
+    point_jacobian(o, n - 1, o->pt, o->jac);
+
+    /* the closing joint's child */
+    memset(o->wa, 0, sizeof o->wa), memset(o->alpha0a, 0, sizeof o->alpha0a);
+    memset(o->va, 0, sizeof o->va), memset(o->aa0, 0, sizeof o->aa0);
+    memcpy(o->ra, ident, sizeof o->ra);
+    memcpy(o->pa, o->anchor, sizeof o->pa);
+    memset(o->jacb, 0, (size_t)6 * nv * sizeof(double));
+    if (o->body < 0) return;
+    const int b = o->body;
+    memcpy(o->ra, o->rot + 9 * b, sizeof o->ra);
+    memcpy(o->wa, o->omega + 3 * b, sizeof o->wa);
+    memcpy(o->alpha0a, o->alpha0 + 3 * b, sizeof o->alpha0a);
+    m3_mulv(r, o->ra, o->anchor);
+    for (int i = 0; i < 3; i++) o->pa[i] = o->pos[3 * b + i] + r[i];
+    v3_cross(t, o->wa, r);
+    for (int i = 0; i < 3; i++) o->va[i] = o->vel[3 * b + i] + t[i];
+    v3_cross(t, o->alpha0a, r);
+    v3_cross(t2, o->wa, r);
+    v3_cross(t3, o->wa, t2);
+    for (int i = 0; i < 3; i++) o->aa0[i] = o->acc0[3 * b + i] + t[i] + t3[i];
+    point_jacobian(o, b, o->pa, o->jacb);
 }
 
 void loop_oracle_tip(loop_oracle *o, const double *q, const double *v, double pt[3], double rt[9],
@@ -497,44 +537,80 @@ void loop_oracle_residual(loop_oracle *o, const double *q, double *phi)
     const double *rt = o->rot + 9 * (o->dims.n - 1);
     for (int i = 0; i < o->dims.nc; i++) {
         const lo_row *r = &o->rows[i];
-        double w[3];
+        double w[3], c[3];
+        m3_mulv(c, o->ra, r->c);
         if (r->rotational) {
             m3_mulv(w, rt, r->b);
-            phi[i] = v3_dot(r->c, w);
+            phi[i] = v3_dot(c, w);
         } else {
-            double d[3] = {o->pt[0] - o->anchor[0], o->pt[1] - o->anchor[1],
-                           o->pt[2] - o->anchor[2]};
-            phi[i] = v3_dot(r->c, d);
+            double d[3] = {o->pt[0] - o->pa[0], o->pt[1] - o->pa[1], o->pt[2] - o->pa[2]};
+            phi[i] = v3_dot(c, d);
         }
     }
 }
 
-/* G and gamma from the kinematics already in o (v given to kinematics, or zero) */
+/* y (nv) = a^T jac's angular (row0 = 0) or linear (row0 = 3) rows, added with sign s */
+static void add_rows(const loop_oracle *o, const double *jac, int row0, const double a[3], double s,
+                     double *y)
+{
+    int nv = o->dims.nv;
+    for (int c = 0; c < nv; c++) {
+        y[c] += s * (a[0] * jac[row0 * nv + c] + a[1] * jac[(row0 + 1) * nv + c] +
+                     a[2] * jac[(row0 + 2) * nv + c]);
+    }
+}
+
+/* G and gamma from the kinematics already in o (v given to kinematics, or zero). With c = R_a c0
+ * turning with the child (w_a):
+ *   linear      phi = c . r, r = p_t - p_a:  d phi/dt = c . (v_t - v_a) + (c x r) . w_a,
+ *               gamma = c . (a0_t - a0_a) + (c x r) . alpha0_a + (w_a x c) . rd
+ *                       + w_a . ((w_a x c) x r + c x rd),  rd = v_t - v_a;
+ *   rotational  phi = c . w, w = R_t b:       d phi/dt = (w x c) . (w_t - w_a),
+ *               gamma = (w x c) . (alpha0_t - alpha0_a)
+ *                       + ((w_t x w) x c + w x (w_a x c)) . (w_t - w_a). */
 static void jacobian_from_kinematics(loop_oracle *o, double *g, double *gamma)
 {
     int n = o->dims.n, nv = o->dims.nv;
     const double *rt = o->rot + 9 * (n - 1), *wt = o->omega + 3 * (n - 1);
-    const double *at = o->alpha0 + 3 * (n - 1);
+    const double *at = o->alpha0 + 3 * (n - 1), *wa = o->wa;
+    double wrel[3] = {wt[0] - wa[0], wt[1] - wa[1], wt[2] - wa[2]};
     for (int i = 0; i < o->dims.nc; i++) {
         const lo_row *r = &o->rows[i];
-        double *gi = g + (size_t)i * nv;
+        double *gi = g + (size_t)i * nv, c[3], wc[3], t[3], t2[3];
+        memset(gi, 0, (size_t)nv * sizeof *gi);
+        m3_mulv(c, o->ra, r->c);
+        v3_cross(wc, wa, c); /* dc/dt */
         if (r->rotational) {
-            double w[3], a[3], t[3], t2[3];
+            double w[3], a[3];
             m3_mulv(w, rt, r->b);
-            v3_cross(a, w, r->c); /* d phi / dt = (w x c) . omega_t */
-            for (int c = 0; c < nv; c++)
-                gi[c] = a[0] * o->jac[c] + a[1] * o->jac[nv + c] + a[2] * o->jac[2 * nv + c];
+            v3_cross(a, w, c);
+            add_rows(o, o->jac, 0, a, 1, gi);
+            add_rows(o, o->jacb, 0, a, -1, gi);
             if (gamma) {
+                double arel[3] = {at[0] - o->alpha0a[0], at[1] - o->alpha0a[1],
+                                  at[2] - o->alpha0a[2]};
                 v3_cross(t, wt, w);
-                v3_cross(t2, wt, t);
-                gamma[i] = v3_dot(a, at) + v3_dot(r->c, t2);
+                v3_cross(t2, t, c);
+                v3_cross(t, w, wc);
+                for (int k = 0; k < 3; k++) t2[k] += t[k];
+                gamma[i] = v3_dot(a, arel) + v3_dot(t2, wrel);
             }
         } else {
-            const double *c3 = r->c;
-            for (int c = 0; c < nv; c++)
-                gi[c] = c3[0] * o->jac[3 * nv + c] + c3[1] * o->jac[4 * nv + c] +
-                        c3[2] * o->jac[5 * nv + c];
-            if (gamma) gamma[i] = v3_dot(c3, o->at0);
+            double rr[3] = {o->pt[0] - o->pa[0], o->pt[1] - o->pa[1], o->pt[2] - o->pa[2]};
+            double rd[3] = {o->vt[0] - o->va[0], o->vt[1] - o->va[1], o->vt[2] - o->va[2]};
+            double cr[3];
+            v3_cross(cr, c, rr);
+            add_rows(o, o->jac, 3, c, 1, gi);
+            add_rows(o, o->jacb, 3, c, -1, gi);
+            add_rows(o, o->jacb, 0, cr, 1, gi);
+            if (gamma) {
+                double da[3] = {o->at0[0] - o->aa0[0], o->at0[1] - o->aa0[1],
+                                o->at0[2] - o->aa0[2]};
+                v3_cross(t, wc, rr);
+                v3_cross(t2, c, rd);
+                for (int k = 0; k < 3; k++) t[k] += t2[k];
+                gamma[i] = v3_dot(c, da) + v3_dot(cr, o->alpha0a) + v3_dot(wc, rd) + v3_dot(wa, t);
+            }
         }
     }
 }
@@ -546,52 +622,80 @@ void loop_oracle_jacobian(loop_oracle *o, const double *q, const double *v, doub
     jacobian_from_kinematics(o, g, gamma);
 }
 
-/* C and c_b from the kinematics in o */
+/* C and c_b from the kinematics in o. With w = R_t a, the child's angular velocity w_a, its
+ * point velocity v_b(p_t) = v_a + w_a x (p_t - p_a) and a0_b(p_t) at v' = 0 likewise:
+ *   revolute    qd_n = w . (w_a - w_t),        c_b = w . (alpha0_a - alpha0_t) + (w_t x w) . (w_a -
+ * w_t) prismatic   qd_n = w . (v_b(p_t) - v_t),   c_b = (w_t x w) . (v_b(p_t) - v_t)
+ *               + w . (a0_a + alpha0_a x (p_t - p_a) + w_a x (v_t - v_a) - a0_t)
+ *   spherical   qd_n = R_a^T (w_a - w_t),      c_b = R_a^T (alpha0_a - alpha0_t - w_a x (w_a -
+ * w_t)) (on the ground w_a, v_a, alpha0_a and a0_a vanish and R_a = 1). */
 static void closing_from_kinematics(loop_oracle *o, double *cmap, double *cb, double *qn)
 {
     int n = o->dims.n, nv = o->dims.nv, nvn = o->dims.nvn;
     const ctc_joint_spec *jn = &o->joints[n];
     const double *rt = o->rot + 9 * (n - 1), *wt = o->omega + 3 * (n - 1);
-    const double *at = o->alpha0 + 3 * (n - 1);
-    double w[3];
+    const double *at = o->alpha0 + 3 * (n - 1), *wa = o->wa;
+    double w[3], wrel[3] = {wa[0] - wt[0], wa[1] - wt[1], wa[2] - wt[2]}, t[3];
+    double arel[3] = {o->alpha0a[0] - at[0], o->alpha0a[1] - at[1], o->alpha0a[2] - at[2]};
     m3_mulv(w, rt, jn->axis);
     if (qn) memset(qn, 0, (size_t)o->dims.nqn * sizeof(double));
+    memset(cmap, 0, (size_t)nv * nvn * sizeof(double));
     switch (jn->type) {
     case CTC_JOINT_REVOLUTE:
-        /* qd_n = -w . omega_t, qdd_n = -w . alpha_t */
-        for (int c = 0; c < nv; c++)
-            cmap[c] = -(w[0] * o->jac[c] + w[1] * o->jac[nv + c] + w[2] * o->jac[2 * nv + c]);
-        cb[0] = -v3_dot(w, at);
+        add_rows(o, o->jacb, 0, w, 1, cmap);
+        add_rows(o, o->jac, 0, w, -1, cmap);
+        v3_cross(t, wt, w);
+        cb[0] = v3_dot(w, arel) + v3_dot(t, wrel);
         if (qn) {
-            /* R_t = Rot(a, -q_n): the angle of R_t about a, from a unit normal p of a */
+            /* R_t^T R_a = Rot(a, q_n): minus the angle of R_a^T R_t about a, from a unit normal p
+             */
             double p1[3], p2[3], rp[3], x[3];
             v3_normals(jn->axis, p1, p2);
-            m3_mulv(rp, rt, p1);
+            m3_mulv(x, rt, p1);
+            for (int i = 0; i < 3; i++) /* R_a^T x */
+                rp[i] = o->ra[i] * x[0] + o->ra[3 + i] * x[1] + o->ra[6 + i] * x[2];
             v3_cross(x, p1, rp);
             qn[0] = -atan2(v3_dot(jn->axis, x), v3_dot(p1, rp));
         }
         break;
     case CTC_JOINT_PRISMATIC: {
-        /* qd_n = -w . v_t; its derivative -w . a_t - (omega_t x w) . v_t */
-        double t[3];
-        for (int c = 0; c < nv; c++)
-            cmap[c] = -(w[0] * o->jac[3 * nv + c] + w[1] * o->jac[4 * nv + c] +
-                        w[2] * o->jac[5 * nv + c]);
+        double r[3] = {o->pt[0] - o->pa[0], o->pt[1] - o->pa[1], o->pt[2] - o->pa[2]};
+        double vb[3], ab[3],
+            rd[3] = {o->vt[0] - o->va[0], o->vt[1] - o->va[1], o->vt[2] - o->va[2]};
+        double wr[3];
+        v3_cross(t, wa, r);
+        for (int i = 0; i < 3; i++) vb[i] = o->va[i] + t[i] - o->vt[i]; /* v_b(p_t) - v_t */
+        v3_cross(wr, r, w); /* w . (x x r) = (r x w) . x */
+        add_rows(o, o->jacb, 3, w, 1, cmap);
+        add_rows(o, o->jacb, 0, wr, 1, cmap);
+        add_rows(o, o->jac, 3, w, -1, cmap);
+        v3_cross(t, o->alpha0a, r);
+        for (int i = 0; i < 3; i++) ab[i] = o->aa0[i] + t[i] - o->at0[i];
+        v3_cross(t, wa, rd);
+        for (int i = 0; i < 3; i++) ab[i] += t[i];
         v3_cross(t, wt, w);
-        cb[0] = -v3_dot(w, o->at0) - v3_dot(t, o->vt);
+        cb[0] = v3_dot(t, vb) + v3_dot(w, ab);
         if (qn) {
-            double d[3] = {o->anchor[0] - o->pt[0], o->anchor[1] - o->pt[1],
-                           o->anchor[2] - o->pt[2]};
+            double d[3] = {o->pa[0] - o->pt[0], o->pa[1] - o->pt[1], o->pa[2] - o->pt[2]};
             qn[0] = v3_dot(d, w);
         }
         break;
     }
-    default: /* spherical: qd_n = -omega_t in the world (= ground) frame */
+    default: { /* spherical: qd_n = R_a^T (w_a - w_t), in the child's frame */
+        double x[3];
+        v3_cross(t, wa, wrel);
+        for (int i = 0; i < 3; i++) x[i] = arel[i] - t[i];
         for (int i = 0; i < 3; i++) {
-            for (int c = 0; c < nv; c++) cmap[c * nvn + i] = -o->jac[i * nv + c];
-            cb[i] = -at[i];
+            const double e[3] = {o->ra[i], o->ra[3 + i], o->ra[6 + i]}; /* column i of R_a */
+            for (int c = 0; c < nv; c++) {
+                double s = 0;
+                for (int k = 0; k < 3; k++) s += e[k] * (o->jacb[k * nv + c] - o->jac[k * nv + c]);
+                cmap[c * nvn + i] = s;
+            }
+            cb[i] = v3_dot(e, x);
         }
         break;
+    }
     }
 }
 
@@ -1062,4 +1166,18 @@ loop_scene *loop_scene_spatial(int n, ctc_joint_type closing, unsigned long long
     s->independent[0] = s->independent[n] = 1;
     scene_count(s);
     return s;
+}
+
+void loop_scene_close_on(loop_scene *s, int body)
+{
+    loop_oracle *o = loop_oracle_new(&s->spec);
+    if (o == NULL || body < 0 || body > s->spec.nbodies - 2) abort();
+    kinematics(o, s->q0, NULL);
+    const double *rb = o->rot + 9 * body, *xb = o->pos + 3 * body;
+    double d[3] = {o->pt[0] - xb[0], o->pt[1] - xb[1], o->pt[2] - xb[2]};
+    for (int i = 0; i < 3; i++) /* R_b^T (p_t - x_b) */
+        s->loop.anchor[i] = rb[i] * d[0] + rb[3 + i] * d[1] + rb[6 + i] * d[2];
+    s->loop.on_body = 1;
+    s->loop.body = body;
+    loop_oracle_free(o);
 }

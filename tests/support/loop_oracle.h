@@ -4,8 +4,9 @@
  * (tests only; nothing here shares code with src/loop.c or the GDCA passes).
  *
  * The chain is the spec's bodies 0..n-1 on joints 0..n-1 (model.h), closed by the joint n from
- * the tip body n-1 (its parent) to the ground (its child). Its dynamics are those of the open
- * chain plus the closure:
+ * the tip body n-1 (its parent) to its child, the ground or a body b <= n-2 of the chain (then
+ * "the child's frame" below is b's, and its motion enters every formula; on the ground it is the
+ * world at rest). Its dynamics are those of the open chain plus the closure:
  *
  *     M(q) qdd + h(q, v) = tau + G(q)^T lambda,        G(q) qdd + gamma(q, v) = 0,
  *
@@ -29,16 +30,22 @@
  * accelerations (omega_parent x relative rates, centripetal and Coriolis terms), so that
  * (alpha_t; a_t) = J qdd + (alpha0_t; a0_t).
  *
- * The closure. Two kinds of scalar constraints, each with a world unit vector c:
- *     linear      phi = c . (p_t - anchor)        G row = c^T J_lin        gamma = c . a0_t
- *     rotational  phi = c . w,  w = R_t b         G row = (w x c)^T J_ang
- *                 (b a unit vector fixed in the tip; d phi/dt = c . (omega_t x w))
- *                 gamma = (w x c) . alpha0_t + c . (omega_t x (omega_t x w)).
+ * The closure. Two kinds of scalar constraints, each with a unit vector c fixed in the child
+ * (c = R_a c0; on the ground R_a = 1, omega_a = 0, and every term in omega_a or alpha0_a
+ * vanishes), p_a the anchor, v_a and a0_a the child's point there:
+ *     linear      phi = c . (p_t - p_a)           G row = c^T (J_lin - J_a,lin) + (c x r)^T J_a,ang
+ *                 (r = p_t - p_a; J_a the child's unit twists at p_a)
+ *                 gamma = c . (a0_t - a0_a) + (c x r) . alpha0_a + (omega_a x c) . rd
+ *                         + omega_a . ((omega_a x c) x r + c x rd),   rd = v_t - v_a
+ *     rotational  phi = c . w,  w = R_t b         G row = (w x c)^T (J_ang - J_a,ang)
+ *                 (b a unit vector fixed in the tip)
+ *                 gamma = (w x c) . (alpha0_t - alpha0_a)
+ *                         + ((omega_t x w) x c + w x (omega_a x c)) . (omega_t - omega_a).
  * They are holonomic, so G is exactly d phi / dq and gamma exactly the second derivative of phi
  * at qdd = 0 (both checked against finite differences in test_loop.c). The closing joint's
- * axis a (unit, tip frame) and the convention that the ground's frame is the closing joint's
- * child frame (for a revolute joint the world frame is Rot(a, q_n) of the tip's, hence
- * R_t a = a when closed; for a prismatic one R_t = 1 when closed) give:
+ * axis a (unit, tip frame) and the convention that the child's frame is Rot(a, q_n) of the
+ * tip's for a revolute joint (hence R_t a = R_a a when closed) and equal to it for a prismatic
+ * one give (c0 in the child's frame):
  *     revolute    spatial: linear c = x, y, z; rotational b = a, c = two unit normals of a (5)
  *                 planar:  linear c = e1, e2 (2)
  *     prismatic   spatial: rotational (b, c) = (y, z), (z, x), (x, y); linear c = two unit
@@ -52,18 +59,19 @@
  * a full-rank Jacobian gives the same accelerations and driving forces on the closure; only the
  * multipliers depend on the choice.
  *
- * The closing joint's coordinates, as the library defines them (model.h: the ground's motion
+ * The closing joint's coordinates, as the library defines them (model.h: the child's motion
  * relative to the tip), follow from the chain's state: qd_n = C^T v, qdd_n = C^T qdd + c_b:
- *     revolute    qd_n = -w . omega_t,  w = R_t a      (qdd_n = -w . alpha_t exactly)
- *     prismatic   qd_n = -w . v_t                      (on the closure, where omega_t = 0)
- *     spherical   qd_n = -omega_t (the ground's frame is the world's)
- * and q_n (revolute) is minus the angle of R_t about a.
+ *     revolute    qd_n = w . (omega_a - omega_t),  w = R_t a
+ *     prismatic   qd_n = w . (v_a(p_t) - v_t)      (v_a(p_t): the child's point at p_t; its
+ *                                                    derivative is the library's on the closure)
+ *     spherical   qd_n = R_a^T (omega_a - omega_t) (in the child's frame)
+ * and q_n (revolute) is the angle of R_t^T R_a about a.
  *
  * Extended vectors (nvx = nv + nvn) list the chain's velocity coordinates, then the closing
  * joint's, as in gdca.h. Independent joints (spec->independent, n + 1 flags; NULL = all but
  * the closing joint) carry the driving forces:
  *     tau = sum over independent chain coordinates i of f_i e_i + C f_n (closing joint
- *           independent: its force, applied by the tip on the ground, does the power f_n qd_n).
+ *           independent: its force, applied by the tip on its child, does the power f_n qd_n).
  *
  * Forward dynamics: [M G^T; G 0] [qdd; -lambda] = [tau - h; -gamma] by LU with partial
  * pivoting (dependent entries of f are ignored).
@@ -223,5 +231,13 @@ loop_scene *loop_scene_rssp(void);
  * n + 1 - 6 (revolute closing joint) or n + 3 - 6 (spherical); joints 0 and n independent
  * (edit to match the mobility). */
 loop_scene *loop_scene_spatial(int n, ctc_joint_type closing, unsigned long long seed);
+
+/* Closes s's loop on body `body` (0 <= body <= n - 2) instead of the ground: the closing joint
+ * keeps its type, axis and centre on the tip, and its anchor becomes the tip's point at q0 in
+ * body's frame, so q0 stays closed. The joints 0..body then lie outside the loop (model.h); the
+ * caller sets the independent joints to match (the mobility does not change). The closure of
+ * orientation needs the tip's and the body's frames to differ by a rotation about the closing
+ * joint's axis at q0, as they do in every scene above (planar, or spatial ones at q0 = 0). */
+void loop_scene_close_on(loop_scene *s, int body);
 
 #endif

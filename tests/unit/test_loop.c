@@ -260,6 +260,24 @@ Test(loop_oracle, jacobian_and_velocity_product_terms_match_finite_differences)
     check_oracle_derivatives(loop_scene_spatial(7, CTC_JOINT_REVOLUTE, 7), 6);
 }
 
+/* s closed on body b instead of the ground */
+static loop_scene *on_body(loop_scene *s, int b)
+{
+    loop_scene_close_on(s, b);
+    return s;
+}
+
+Test(loop_oracle, derivatives_match_finite_differences_on_a_loop_closed_on_a_body)
+{
+    /* the child moves: its turning carries the constraint directions, and its motion enters G,
+       gamma and the closing joint's rate */
+    check_oracle_derivatives(on_body(loop_scene_five_bar(), 1), 11);
+    check_oracle_derivatives(on_body(loop_scene_slider_crank(0.0), 0), 12);
+    check_oracle_derivatives(on_body(loop_scene_spatial(7, CTC_JOINT_REVOLUTE, 7), 1), 13);
+    check_oracle_derivatives(on_body(loop_scene_spatial(6, CTC_JOINT_SPHERICAL, 13), 1), 14);
+    check_oracle_derivatives(on_body(loop_scene_spatial(7, CTC_JOINT_PRISMATIC, 5), 2), 15);
+}
+
 Test(loop_oracle, closing_joint_rate_is_the_derivative_of_its_angle_on_the_closure)
 {
     fixture f = fx_make(loop_scene_spatial(7, CTC_JOINT_REVOLUTE, 7));
@@ -586,6 +604,57 @@ Test(loop, gdca_forward_matches_the_kkt_oracle)
     }
 }
 
+/* A loop closed on body b of the chain (model.h): joints 0..b carry the loop, the root solve
+ * couples joints 0, b + 1 and the closing joint, and both inverse forms use the child's motion.
+ * Forward dynamics, both inverse forms and the round trip against the oracle. */
+Test(loop, a_loop_closed_on_a_body_matches_the_oracle)
+{
+    struct {
+        loop_scene *s;
+        const int *indep;
+        const char *what;
+    } cases[] = {
+        {on_body(loop_scene_five_bar(), 0), (const int[]){0, 1, 2, -1},
+         "five-bar on body 0, joints 1, 2 drive the loop"},
+        {on_body(loop_scene_five_bar(), 0), (const int[]){0, 2, 4, -1},
+         "five-bar on body 0, joints 2, 4 drive the loop"},
+        {on_body(loop_scene_five_bar(), 1), (const int[]){0, 1, 2, -1},
+         "five-bar on body 1, joint 2 drives the loop"},
+        {on_body(loop_scene_five_bar(), 1), (const int[]){0, 1, 5, -1},
+         "five-bar on body 1, the closing joint drives the loop"},
+        {on_body(loop_scene_slider_crank(0.0), 0), (const int[]){0, -1},
+         "slider-crank on its crank: a rigid loop with a prismatic closing joint"},
+        {on_body(loop_scene_spatial(7, CTC_JOINT_REVOLUTE, 7), 0), (const int[]){0, 7, -1},
+         "8R on body 0"},
+        {on_body(loop_scene_spatial(7, CTC_JOINT_REVOLUTE, 9), 1), (const int[]){0, 1, -1},
+         "8R on body 1: a rigid loop"},
+        {on_body(loop_scene_spatial(6, CTC_JOINT_SPHERICAL, 13), 1), (const int[]){0, 1, 3, -1},
+         "6R+S on body 1 (spherical closing joint)"},
+        {on_body(loop_scene_spatial(7, CTC_JOINT_SPHERICAL, 14), 0), (const int[]){0, 7, -1},
+         "7R+S on body 0, the spherical closing joint drives the loop"},
+        {on_body(loop_scene_spatial(7, CTC_JOINT_PRISMATIC, 5), 1), (const int[]){0, 1, -1},
+         "7R+P on body 1: a rigid loop with a spatial prismatic closing joint"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        set_independent(cases[i].s, cases[i].indep);
+        fixture f = fx_make(cases[i].s);
+        f.what = cases[i].what;
+        char err[512] = "";
+        cr_assert_eq(ctc_loop_check(f.m, f.d, f.s->q0, NULL, err, sizeof err), CTC_OK, "%s: %s",
+                     f.what, err);
+        double passive = check_forward(&f, 140 + i, 4, 0),
+               driven = check_forward(&f, 150 + i, 4, 1);
+        cr_expect_leq(passive, 1e-8, "%s, forward, passive: %g", f.what, passive);
+        cr_expect_leq(driven, 1e-8, "%s, forward, driven: %g", f.what, driven);
+        inverse_errors e = check_inverse(&f, 160 + i, 4, 0.2);
+        cr_expect_leq(e.torque, 1e-8, "%s: torques vs oracle %g", f.what, e.torque);
+        cr_expect_leq(e.full, 1e-12, "%s: early stop vs full %g", f.what, e.full);
+        cr_expect_leq(e.round, 1e-9, "%s: round trip %g", f.what, e.round);
+        cr_expect_leq(e.dependent, 1e-8, "%s: dependent accelerations %g", f.what, e.dependent);
+        fx_free(&f);
+    }
+}
+
 Test(loop, gdca_matches_the_parallelogram_closed_form)
 {
     for (int t = 0; t < 3; t++) {
@@ -751,6 +820,21 @@ Test(loop, bad_loops_are_rejected_with_clear_messages)
     s = loop_scene_five_bar();
     set_independent(s, (const int[]){1, 2, 3, -1});
     expect_loop_error(s, (const char *const[]){"singular", NULL});
+
+    /* closed on a body: the body must come before the tip */
+    s = on_body(loop_scene_five_bar(), 1);
+    s->loop.body = 4;
+    expect_loop_error(s, (const char *const[]){"loop", "bodies 0..3", "got 4", NULL});
+
+    /* a joint outside the loop cannot be dependent (unless every joint is) */
+    s = on_body(loop_scene_five_bar(), 1);
+    set_independent(s, (const int[]){0, 2, 3, -1});
+    expect_loop_error(s, (const char *const[]){"joint 1 is outside the loop", "body 1", NULL});
+
+    /* the tip pinned twice to body 3: its joint and the closing joint both revolute */
+    s = on_body(loop_scene_five_bar(), 3);
+    set_independent(s, (const int[]){0, 1, 2, 3, -1});
+    expect_loop_error(s, (const char *const[]){"mobility", NULL});
 }
 
 /* ---- simulation ---- */
@@ -901,6 +985,49 @@ Test(loop, exact_pd_error_of_the_five_bar_follows_the_closed_form)
     /* it arrives: the final independent coordinates are the set point */
     const double *qf = res->ch[CTC_CH_Q] + (size_t)(res->nsamples - 1) * res->nq;
     for (int i = 0; i < 3; i++) cr_expect_leq(fabs(qf[i] - target[i]), 1e-6, "joint %d", i);
+    ctc_sim_result_free(res);
+    run_free(r);
+}
+
+Test(loop, a_loop_closed_on_a_body_in_simulation)
+{
+    /* passive: the five-bar closed on body 0, every joint dependent, swings from q0 */
+    loop_run *r = run_new(on_body(loop_scene_five_bar(), 0), 5);
+    set_independent(r->s, (const int[]){-1});
+    ctc_sim_result *res = run(r);
+    cr_assert_eq(res->status, CTC_RUN_DONE, "%s", res->message);
+    cr_expect_leq(res->metrics.energy_drift, 1e-8, "passive: energy drift %g",
+                  res->metrics.energy_drift);
+    cr_expect_leq(res->metrics.loop_res_max, 1e-10, "passive: loop residual %g",
+                  res->metrics.loop_res_max);
+    double ke = 0;
+    for (int j = 0; j < res->nsamples; j++) ke = fmax(ke, res->ch[CTC_CH_ENERGY][2 * j]);
+    cr_expect_gt(ke, 1, "passive: max kinetic energy %g J", ke);
+    ctc_sim_result_free(res);
+    run_free(r);
+
+    /* exact-model PD on the five-bar closed on body 1: joints 0 and 1 carry the loop, joint 2
+       drives it; each independent error follows e(t) = e0 (1 + wn t) exp(-wn t) */
+    r = run_new(on_body(loop_scene_five_bar(), 1), 5);
+    set_independent(r->s, (const int[]){0, 1, 2, -1});
+    const double move[3] = {0.4, -0.3, 0.25}, wn = 5;
+    r->spec.controller = CTC_CTRL_PD;
+    for (int i = 0; i < 3; i++) {
+        r->gains[i] = (ctc_gains){.kp = wn * wn, .kv = 2 * wn};
+        r->traj[i] = (ctc_traj){.type = CTC_TRAJ_CONSTANT, .value = r->s->q0[i] + move[i]};
+    }
+    res = run(r);
+    cr_assert_eq(res->status, CTC_RUN_DONE, "%s", res->message);
+    double dev = 0;
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < res->nsamples; j++) {
+            double t = res->t[j], ref = move[i] * (1 + wn * t) * exp(-wn * t);
+            dev = fmax(dev, fabs(res->ch[CTC_CH_E][3 * j + i] - ref));
+        }
+    }
+    cr_expect_leq(dev, 1e-6, "PD on a body's loop: |e - closed form| = %g", dev);
+    cr_expect_leq(res->metrics.loop_res_max, 1e-10, "PD: loop residual %g",
+                  res->metrics.loop_res_max);
     ctc_sim_result_free(res);
     run_free(r);
 }
