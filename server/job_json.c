@@ -843,7 +843,8 @@ static const char *const loop_joint_keys_spherical[] = {"type", "location", "ind
 static const char *const *const loop_joint_keys[] = {loop_joint_keys_all, loop_joint_keys_all,
                                                      loop_joint_keys_spherical};
 
-/* "scene.loop.joint": the closing joint, from the tip (body n - 1) to the ground */
+/* "scene.loop.joint": the closing joint, from the tip (body n - 1) to the ground or to body
+ * "scene.loop.body" */
 static int parse_loop_joint(parser *p, const cJSON *loop, cJSON *out_loop)
 {
     static const char *const path = "scene.loop.joint";
@@ -929,7 +930,31 @@ static int parse_stabilization(parser *p, const cJSON *loop, cJSON *out_loop)
     return 0;
 }
 
-static const char *const loop_keys[] = {"joint", "anchor", "stabilization", "cond_max", NULL};
+static const char *const loop_keys[] = {"joint",         "anchor",   "body",
+                                        "stabilization", "cond_max", NULL};
+
+/* "scene.loop.body" (optional): the body the loop closes on, a whole number 0..n-2; absent, the
+ * loop closes on the ground */
+static int parse_loop_body(parser *p, const cJSON *loop, cJSON *out_loop)
+{
+    job *j = p->j;
+    int n = j->spec.chain.nbodies;
+    double b;
+    j->loop.on_body = 0;
+    j->loop.body = 0;
+    if (member(loop, "body") == NULL) return 0;
+    if (member_number(p, loop, "scene.loop", "body", REQUIRED, 0, &b) != 0) return -1;
+    if (!(b >= 0 && b <= n - 2 && b == floor(b))) {
+        return error_at(p->err, JOB_INVALID_FIELD, "scene.loop.body",
+                        "must be the index of a body before the tip (body %d): a whole number "
+                        "from 0 to %d (got %g)",
+                        n - 1, n - 2, b);
+    }
+    j->loop.on_body = 1;
+    j->loop.body = (int)b;
+    put_number(p, out_loop, "body", b);
+    return 0;
+}
 
 /* "scene.loop" (optional): the closing joint, its anchor and the run's loop settings; then the
  * independent flags: with a loop they say which coordinates are controlled (nind), without one
@@ -965,7 +990,7 @@ static int parse_loop(parser *p, const cJSON *scene, cJSON *out_scene)
         return -1;
     }
     put_numbers(p, out, "anchor", j->loop.anchor, 3);
-    if (parse_stabilization(p, v, out) != 0 ||
+    if (parse_loop_body(p, v, out) != 0 || parse_stabilization(p, v, out) != 0 ||
         member_number(p, v, "scene.loop", "cond_max", OPTIONAL, CTC_SIM_DEFAULT_COND_MAX,
                       &s->loop_cond_max) != 0) {
         return -1;

@@ -31,17 +31,22 @@
  *                       follows from the loop); false only with a "loop" (an open chain is
  *                       fully actuated)}
  *       "loop"      optional: closes the chain into one kinematic loop (model.h): a closing
- *                   joint from the last body (the tip) to a point fixed in the world:
+ *                   joint from the last body (the tip) to a point fixed in the world, or in
+ *                   an earlier body:
  *           "joint"    {"type": "revolute"|"prismatic"|"spherical", "axis": [x,y,z] (required
  *                       for revolute and prismatic, not allowed for spherical; in the tip's
  *                       frame), "location": [x,y,z] m, the joint's centre in the tip's frame
  *                       (default [0,0,0]), "independent": false (default) | true}
  *           "anchor"   [x,y,z] m, required: the joint's centre on the ground, world frame
+ *                      (or on body "body", in its frame)
+ *           "body"     optional, a whole number 0..n-2: the loop closes on this body instead
+ *                      of the ground; the joints before it (0..body) carry the loop and must
+ *                      be independent (unless every joint is dependent)
  *           "stabilization"  how the state is kept on the closure (sim.h), default "project":
  *                      {"method": "project", "tol": 1e-12 (m or rad, > 0)}
  *                    | {"method": "baumgarte", "alpha": 10, "beta": 10 (1/s, >= 0, not both 0)}
  *                    | {"method": "none"}
- *           "cond_max" > 1, default 1e10: the run stops as "singular" when the condition
+ *           "cond_max" > 1, default 1e5: the run stops as "singular" when the condition
  *                      estimate of the closed chain's boundary solve passes it
  *                   A loop needs at least 2 bodies. Its independent coordinates (nind: the
  *                   velocity coordinates of the independent joints, the closing joint's last; 1

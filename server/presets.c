@@ -41,6 +41,15 @@
  *    to the anchor: q0 = (2.0943951023931953, 0.10035043422724721, -2.3935368163015450) (the
  *    coupler-rocker joint at (1.158, 0.784) m). v0 = 0, no control, 10 s at rtol 1e-10, atol
  *    1e-12, so the energy drift shows the integration and the projection alone;
+ *  - planar four-bar on an arm (not in the paper; a loop closed on a body, model.h): the arm, a
+ *    1.5 m rod of 1.5 kg hanging along -y at q = 0 from a revolute joint about +z at the origin,
+ *    carries the crank-rocker above: the crank's pivot at the arm's end, the rocker's end pinned
+ *    to the arm 1 m further in (the anchor (0, -0.5, 0) in the arm's frame, "body": 0), so the
+ *    arm is the four-bar's ground link. q0: the arm along +x (pi/2) and the four-bar relative to
+ *    it as four_bar_passive's relative to the ground, turned a quarter turn (the crank's angle
+ *    plus pi/2). Joints 0 (arm) and 1 (crank) independent (mobility 2), PD (kp 100, kv 20): the
+ *    arm follows pi/2 + 0.3 sin(2 pi t / 4), the crank turns at pi rad/s from its q0 (a Grashof
+ *    crank turns fully); 10 s at rtol 1e-8, atol 1e-10;
  *  - spatial RSSR linkage (not in the paper): boxes of 1 kg/m with a 0.04 m square section,
  *    each along its body x axis from its inboard joint: crank 0.3 m, revolute about the world z
  *    axis at the origin; coupler 1 m, spherical at the crank's end; rocker 0.6 m, spherical at
@@ -577,6 +586,66 @@ static cJSON *four_bar_passive(const cJSON *request, job_error *err)
     return finish(&b, doc, "four_bar_passive", err);
 }
 
+/* the four-bar carried by an arm: the arm, then the four-bar's crank, coupler and rocker */
+#define ARM_FOUR_BAR_N 4
+#define ARM_LENGTH 1.5 /* m: the crank's pivot at its end, the rocker's 1 m further in */
+static const double arm_four_bar_length[ARM_FOUR_BAR_N] = {ARM_LENGTH, 0.4, 1, 0.8}; /* m */
+
+/* q0: the arm along +x (a quarter turn from hanging down); relative to it the four-bar stands
+ * as four_bar_passive's does relative to the ground, turned a quarter turn so that its ground
+ * link runs from the arm's end back along the arm */
+static void arm_four_bar_q0(double q0[ARM_FOUR_BAR_N])
+{
+    double fb[FOUR_BAR_N];
+    four_bar_q0(fb);
+    q0[0] = printable(PRESETS_PI / 2);
+    q0[1] = printable(fb[0] + PRESETS_PI / 2);
+    q0[2] = fb[1];
+    q0[3] = fb[2];
+}
+
+/* A planar four-bar crank-rocker whose ground link is an arm (a loop closed on body 0, not on the
+ * ground): PD drives the arm along a sine about +x and the crank round at 1 turn per 2 s; the
+ * coupler, the rocker and the closing joint follow. */
+static cJSON *arm_four_bar_pd(const cJSON *request, job_error *err)
+{
+    static const double z_axis[3] = {0, 0, 1};
+    static const unsigned char independent[ARM_FOUR_BAR_N] = {1, 1, 0, 0};
+    const double anchor[3] = {0, -(ARM_LENGTH - FOUR_BAR_GROUND), 0}; /* in the arm's frame */
+    const double rocker_end[3] = {0, -arm_four_bar_length[3], 0};
+    const double v0[ARM_FOUR_BAR_N] = {0, 0, 0, 0};
+    double q0[ARM_FOUR_BAR_N];
+    (void)request;
+    arm_four_bar_q0(q0);
+    doc_builder b = {0};
+    cJSON *doc = cJSON_CreateObject();
+    put_string(&b, doc, "name", "Four-bar linkage on a swinging arm, PD");
+
+    /* rods of 1 kg/m, gravity -y; the rocker's end pinned to the arm 1 m in from its end */
+    cJSON *scene = put_object(&b, doc, "scene");
+    put_vec3(&b, scene, "gravity", 0, -9.81, 0);
+    put_rods(&b, scene, ARM_FOUR_BAR_N, arm_four_bar_length, arm_four_bar_length, independent);
+    put_loop(&b, scene, "revolute", z_axis, rocker_end, anchor);
+    put_number(&b, cJSON_GetObjectItem(scene, "loop"), "body", 0);
+    put_vector(&b, scene, "q0", ARM_FOUR_BAR_N, q0);
+    put_vector(&b, scene, "v0", ARM_FOUR_BAR_N, v0);
+
+    /* the arm: q0 + 0.3 sin(2 pi t / 4); the crank: q0 + pi t */
+    put_controller(&b, doc, PRESET_PD);
+    cJSON *traj = put_array(&b, doc, "trajectory");
+    cJSON *arm = put_object(&b, traj, NULL);
+    put_string(&b, arm, "type", "sine");
+    put_number(&b, arm, "amplitude", 0.3);
+    put_number(&b, arm, "period", 4);
+    put_number(&b, arm, "offset", q0[0]);
+    cJSON *crank = put_object(&b, traj, NULL);
+    put_string(&b, crank, "type", "polynomial");
+    const double coef[2] = {q0[1], printable(PRESETS_PI)};
+    put_vector(&b, crank, "coefficients", 2, coef);
+    put_run_settings_of(&b, doc, 10, 1e-8, 1e-10);
+    return finish(&b, doc, "arm_four_bar_pd", err);
+}
+
 /* the spatial RSSR linkage: crank 0.3 m about the world z axis at the origin, coupler 1 m,
  * rocker 0.6 m turning about the world y axis at the anchor (0.9, 0.8, 0.6) */
 #define RSSR_CRANK 0.3
@@ -708,6 +777,10 @@ static const preset preset_table[] = {
      "Four-bar crank-rocker (ground 1, crank 0.4, coupler 1, rocker 0.8 m) falling from rest, "
      "all joints passive",
      no_params, four_bar_passive},
+    {"arm_four_bar_pd",
+     "Four-bar crank-rocker on an arm (a loop closed on a body): the arm swings, the crank "
+     "turns, " PD_GAINS,
+     no_params, arm_four_bar_pd},
     {"rssr_passive",
      "Spatial RSSR linkage (crank about z, rocker about y) falling from rest, gravity -z, all "
      "joints passive",

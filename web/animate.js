@@ -10,13 +10,14 @@
  * the base. The canvas carries data-mode ("planar" | "spatial") and data-time (the time drawn,
  * s, updated on every frame). The scale fits the largest reach over the whole run.
  *
- * A closed chain (scene.loop) has its second ground pivot, the anchor, drawn like the base, and
- * a thin line from the last body's closing point to it (a visible gap is the closure residual).
+ * A closed chain (scene.loop) has its second ground pivot, the anchor, drawn like the base (or,
+ * for a loop closed on a body, a dot on that body), and a thin line from the last body's closing
+ * point to it (a visible gap is the closure residual).
  * It has no ghost: q_des holds only the independent coordinates, and the desired pose of the
  * dependent joints is not recorded.
  */
 import {el} from "./dom.js";
-import {chainLayout, chainPose, planeBasis, worldBasis, dot, norm, add, scale, cross} from "./kinematics.js";
+import {chainLayout, chainPose, loopAnchor, planeBasis, worldBasis, dot, norm, add, scale, cross} from "./kinematics.js";
 
 const ACTUAL = "#0072B2";
 const GHOST = "#D55E00";
@@ -42,6 +43,7 @@ function sampler(ts, rows, t) {
 export function createAnimation(host, {spec, form, series, timeline}) {
   const bodies = spec.scene.bodies;
   const loop = spec.scene.loop || null;
+  const onBody = loop !== null && Number.isInteger(loop.body);
   const layout = chainLayout(bodies, loop);
   const ghost = loop ? null : series.q_des;
   const ts = series.t;
@@ -53,7 +55,7 @@ export function createAnimation(host, {spec, form, series, timeline}) {
   host.append(el("div", {class: "anim-wrap"}, canvas),
     el("p", {class: "muted small"}, el("span", {class: "key-actual", text: "━ actual"}), "  ",
       ghost ? el("span", {class: "key-ghost", text: "┅ desired"}) : null,
-      loop ? "■ ground pivots" : null, "  ·  ",
+      loop ? (onBody ? "■ ground pivot, ● the loop's pivot on a body" : "■ ground pivots") : null, "  ·  ",
       spatial ? "drag or use the arrow keys to rotate" : "x right, y up (against gravity)"));
 
   let yaw = -0.6, pitch = 0.35;
@@ -68,7 +70,7 @@ export function createAnimation(host, {spec, form, series, timeline}) {
   basis = spatial ? worldBasis(spec.scene.gravity) : planeBasis(bodies, spec.scene.gravity);
 
   /* the largest distance from the base over the run, actual and desired */
-  let reach = loop ? Math.max(1e-3, norm(loop.anchor || [0, 0, 0])) : 1e-3;
+  let reach = loop && !onBody ? Math.max(1e-3, norm(loop.anchor || [0, 0, 0])) : 1e-3;
   const stride = Math.max(1, Math.floor(ts.length / 400));
   for (const rows of [series.q, ghost]) {
     if (!rows) continue;
@@ -146,9 +148,11 @@ export function createAnimation(host, {spec, form, series, timeline}) {
     const pose = chainPose(layout, sampler(ts, series.q, t));
     if (loop) {
       /* the anchor, and the closing joint from the last body's closing point to it */
-      const [ax, ay] = toXY(loop.anchor || [0, 0, 0]);
+      const [ax, ay] = toXY(loopAnchor(loop, pose));
       const [ex, ey] = toXY(pose[pose.length - 1].end);
-      g.fillStyle = "#3d434a"; g.fillRect(ax - 7, ay - 7, 14, 14);
+      g.fillStyle = "#3d434a";
+      if (onBody) { g.beginPath(); g.arc(ax, ay, 6, 0, 2 * Math.PI); g.fill(); }
+      else g.fillRect(ax - 7, ay - 7, 14, 14);
       g.strokeStyle = "#3d434a"; g.lineWidth = 1.5;
       g.beginPath(); g.moveTo(ex, ey); g.lineTo(ax, ay); g.stroke();
     }

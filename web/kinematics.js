@@ -9,7 +9,8 @@
  * entries of q; fixed: nothing. So R_k = R_{k-1} Rot(axis, angle) and
  * p_k = p_{k-1} + R_{k-1} (location + axis d). Rotations are row-major 3x3 arrays. A closed
  * chain (scene.loop) ends its last body at the closing joint's centre (loop.joint.location, in
- * the last body's frame), which the loop keeps at loop.anchor in the world.
+ * the last body's frame), which the loop keeps at loop.anchor: in the world, or with loop.body
+ * in that body's frame (loopAnchor).
  */
 
 const NQ = {revolute: 1, prismatic: 1, cylindrical: 2, spherical: 4, fixed: 0};
@@ -102,8 +103,16 @@ export function chainPose(layout, q) {
     const origin = add(attach, scale(mulv(R, l.axis), slide));
     if (Rj) R = mul(R, Rj);
     p = origin;
-    return {attach, origin, end: add(origin, mulv(R, l.end))};
+    return {attach, origin, end: add(origin, mulv(R, l.end)), rot: R};
   });
+}
+
+/* The world position of a loop's anchor for a pose of chainPose: fixed in the world, or on the
+ * body loop.body (its frame) when the loop closes on a body. */
+export function loopAnchor(loop, pose) {
+  const a = loop.anchor || [0, 0, 0];
+  const b = Number.isInteger(loop.body) ? pose[loop.body] : null;
+  return b ? add(b.origin, mulv(b.rot, a)) : a;
 }
 
 /* The plane a planar chain moves in: normal = the first rotation axis (z if none), "up" =

@@ -53,6 +53,7 @@ static const char *const all_names[] = {
     "five_bar_poles",
     "five_bar_lqr",
     "four_bar_passive",
+    "arm_four_bar_pd",
     "rssr_passive",
 };
 #define NPRESETS ((int)(sizeof all_names / sizeof all_names[0]))
@@ -81,6 +82,7 @@ static const struct preset_want {
     {1, 5, 5, 5, 1, 3, CTC_CTRL_POLES, 0, 10, 1e-8, 1e-10},
     {1, 5, 5, 5, 1, 3, CTC_CTRL_LQR, 0, 10, 1e-8, 1e-10},
     {0, 3, 3, 3, 1, 0, CTC_CTRL_NONE, 0, 10, 1e-10, 1e-12},
+    {0, 4, 4, 4, 1, 2, CTC_CTRL_PD, 0, 10, 1e-8, 1e-10},
     {0, 3, 9, 7, 1, 0, CTC_CTRL_NONE, 0, 5, 1e-10, 1e-12},
 };
 _Static_assert(sizeof preset_want / sizeof preset_want[0] == NPRESETS, "one row per preset");
@@ -716,11 +718,13 @@ static const struct {
     ctc_form form;     /* the model's */
     int freedoms, dim; /* Gruebler-Kutzbach: sum of the joint freedoms, closing one included */
     int nind;          /* independent coordinates */
+    int body;          /* the body the loop closes on, -1: the ground */
 } loop_want[] = {
-    {"five_bar_pd", 4, CTC_FORM_PLANAR, 6, 3, 3},
-    {"five_bar_lqr", 4, CTC_FORM_PLANAR, 6, 3, 3},
-    {"four_bar_passive", 2, CTC_FORM_PLANAR, 4, 3, 0},
-    {"rssr_passive", 2, CTC_FORM_SPATIAL, 8, 6, 0},
+    {"five_bar_pd", 4, CTC_FORM_PLANAR, 6, 3, 3, -1},
+    {"five_bar_lqr", 4, CTC_FORM_PLANAR, 6, 3, 3, -1},
+    {"four_bar_passive", 2, CTC_FORM_PLANAR, 4, 3, 0, -1},
+    {"arm_four_bar_pd", 3, CTC_FORM_PLANAR, 5, 3, 2, 0},
+    {"rssr_passive", 2, CTC_FORM_SPATIAL, 8, 6, 0, -1},
 };
 
 /* element i of the array at path as a 3-vector */
@@ -843,9 +847,15 @@ Test(presets, every_loop_preset_closes_at_q0_and_builds_its_loop_model)
         cr_assert_eq(p.m->mobility, loop_want[i].freedoms - loop_want[i].dim, "%s: mobility", name);
         cr_assert_eq(p.m->nind, loop_want[i].nind, "%s: nind", name);
         cr_assert_eq(p.m->nind, j->nind, "%s: the format's count", name);
+        cr_assert_eq(p.m->loop_body, loop_want[i].body, "%s: the loop's body", name);
 
-        /* the tip's closing point at q0 is the anchor */
+        /* the tip's closing point at q0 is the anchor (on the ground, or on the loop's body) */
         body_point(p.m, p.d, loop_want[i].tip, loc, got);
+        if (loop_want[i].body >= 0) {
+            double a[3];
+            body_point(p.m, p.d, loop_want[i].body, anchor, a);
+            memcpy(anchor, a, sizeof a);
+        }
         expect_point(got, anchor[0], anchor[1], anchor[2], name);
         pose_free(&p);
         job_free(j);

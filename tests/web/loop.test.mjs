@@ -3,7 +3,8 @@
  * draws one e, tau and w line per independent coordinate labelled with its joint and q_d only
  * for the driven joints, animates the chain between its two ground pivots, lists the loop's
  * metrics; a run that stopped as singular says so in its status; a passive four-bar (every joint
- * dependent) has no torque plot.
+ * dependent) has no torque plot; a four-bar closed on an arm (a loop closed on a body) draws its
+ * pivot on the arm, where the tip's closing point is at every sample.
  */
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
@@ -15,6 +16,7 @@ let browser;
 let five; /* five-bar PD, 1 s */
 let singular; /* five-bar driven out of reach: stops as singular (job status failed) */
 let four; /* passive four-bar, 1 s */
+let arm; /* four-bar on an arm, PD, 2 s */
 
 before(async () => {
     srv = await startWebServer();
@@ -30,6 +32,7 @@ before(async () => {
         trajectory: [{ type: 'constant', value: 1.5 }, { type: 'constant', value: 0.785 }, { type: 'constant', value: -2.356 }],
     });
     four = await post({ preset: 'four_bar_passive', duration: 1 });
+    arm = await post({ preset: 'arm_four_bar_pd', duration: 2 });
 });
 
 after(async () => {
@@ -91,5 +94,39 @@ test('a passive loop of dependent joints has no torque plot, and its residuals a
         const channels = (await plots(page)).map((p) => p.channel);
         assert.deepEqual(channels, ['q', 'energy', 'loop']);
         assert.match(await text(page, 'dl#metrics'), /none \(every joint passive\)/);
+    });
+});
+
+test('a loop closed on a body: its pivot is drawn on the body, where the tip closes the loop', async () => {
+    assert.equal(arm.status, 'done', arm.message);
+    await withView(browser, srv, `#/jobs/${arm.id}`, 'loop-arm-four-bar', async (page) => {
+        const channels = (await plots(page)).map((p) => p.channel);
+        for (const ch of ['q', 'e', 'tau', 'loop']) assert.ok(channels.includes(ch), `no ${ch} plot: ${channels}`);
+        assert.match(await text(page, 'div.anim-wrap + p'), /pivot on a body/);
+        const img = await animImage(page);
+        assert.notEqual(img.image, img.blank, 'canvas#anim is blank');
+
+        /* the page's kinematics: the anchor on the arm meets the tip's closing point at every
+           sample; taken as a world point it would be metres away */
+        const gaps = await page.evaluate(async (id) => {
+            const kin = await import('/kinematics.js');
+            const job = await (await fetch(`/api/jobs/${id}`)).json();
+            const series = await (await fetch(`/api/jobs/${id}/series?format=json&channels=q`)).json();
+            const loop = job.spec.scene.loop;
+            const layout = kin.chainLayout(job.spec.scene.bodies, loop);
+            const q = series.q;
+            let onBody = 0, inWorld = 0;
+            for (let k = 0; k < series.t.length; k++) {
+                const pose = kin.chainPose(layout, (i) => q[i][k]);
+                const end = pose[pose.length - 1].end;
+                const a = kin.loopAnchor(loop, pose), w = loop.anchor;
+                onBody = Math.max(onBody, Math.hypot(end[0] - a[0], end[1] - a[1], end[2] - a[2]));
+                inWorld = Math.max(inWorld, Math.hypot(end[0] - w[0], end[1] - w[1], end[2] - w[2]));
+            }
+            return { onBody, inWorld };
+        }, arm.id);
+        assert.ok(gaps.onBody < 1e-6, `tip to the anchor on the arm: ${gaps.onBody} m`);
+        assert.ok(gaps.inWorld > 0.1, `the anchor read as a world point would close it: ${gaps.inWorld} m`);
+        await screenshot(page, 'loop-arm-four-bar.png');
     });
 });
