@@ -270,11 +270,14 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         ctc_gdca_inverse(m, d, qacc, r);
         for (int i = 0; i < m->nv; i++) r[i] = f[i] - r[i];
         gdca_forward_correct(m, d, r, dq);
+        /* the largest |qacc| and |dq|: plain comparisons, not libm's fmax (a call each); a NaN
+           is skipped either way */
         double amax = 0, dmax = 0;
         for (int i = 0; i < m->nv; i++) {
             qacc[i] += dq[i];
-            amax = fmax(amax, fabs(qacc[i]));
-            dmax = fmax(dmax, fabs(dq[i]));
+            double aa = fabs(qacc[i]), ad = fabs(dq[i]);
+            if (aa > amax) amax = aa;
+            if (ad > dmax) dmax = ad;
         }
         d->fwd_refine_done++;
         if (dmax <= CTC_REFINE_CONVERGED * amax || dmax * CTC_REFINE_STALL > last) break;
