@@ -99,6 +99,13 @@ typedef struct ctc_data {
     int pool_failed;             /* 1: the pool could not start; serial until threads change */
     struct ctc_data *pool_owner; /* NULL, or the data whose threads and pool d uses
                                     (ctc_data_share_pool) */
+
+    /* state stamps: ctc_handles increments handles_stamp (a new state); the composite inverse
+       sets icomp_stamp to it once icomp holds the parts of its records that depend on the
+       state only (the body records, the nodes' I and r12), and while the two match it
+       recomputes only w, c and inv_e (gdca_inverse.c) */
+    unsigned long long handles_stamp;
+    unsigned long long icomp_stamp;
 } ctc_data;
 
 /* Allocates a data block sized for m; NULL when out of memory. Free with ctc_data_free. */

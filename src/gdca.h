@@ -10,6 +10,9 @@
  *
  * Call order for one state: ctc_kinematics(m, d, q, v), ctc_handles(m, d), then any number of
  * ctc_gdca_inverse and ctc_gdca_forward calls, which share the body-level records (Eq. 42-43).
+ * The composite inverse keeps the parts of its records that depend on the state only (composite
+ * inertias) from its first call at a state to the next ctc_handles, so a new state needs both
+ * ctc_kinematics and ctc_handles before either pass.
  * Neither allocates (except that the first pass that splits over threads starts the data's workers,
  * data.h); both assume a validated model. If a joint's matrix K = h11(right) + h22(left) is not
  * numerically positive definite (it always is for a valid model unless the numbers overflow),

@@ -17,6 +17,11 @@
  * joint b + 1, and the root solve takes that node's two parts with joints 0, b + 1 and the
  * closing joint together.
  *
+ * The refinement's correction (gdca_refine.h) is this pass in a bias-free mode (correct = 1):
+ * every body's h13 = h23 = 0 and every beta = 0, the driving forces replaced by the force
+ * residual, the factors E and the assembled matrices reused, so that only the vectors are
+ * recomputed, by the same kernels and on the same threads.
+ *
  * The nodes of one tree height are independent: each node's assembly writes only its own record
  * and its joint's E and z, its disassembly only its joint's load and acceleration and its two
  * children's terminal loads, so gdca_par.c may split a height over threads (ctc_data_set_threads)
@@ -32,40 +37,62 @@
 #include "gdca_refine.h"
 #include "gdca_tree.h"
 
-/* the factor E of W = E E^T and z = W Y + P f of joint j between left (NULL: ground) and right;
- * returns 0, or -1 when D^T K D is not positive definite (the results are then NaN) */
+/* E and z of joint j between left (NULL: ground) and right: z = W Y + P f with
+ * Y = b23^L - b13^R + beta - K P f, W = E E^T. The full pass forms K and the factor E of W
+ * (factor = 1) from the records' h13, h23 (b23l, b13r) and the joint's beta; the correction
+ * reuses E, is given its own bias vectors and beta = 0, and does not form K. Returns 0, or -1
+ * when D^T K D is not positive definite (the results are then NaN). */
 static inline int forward_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
-                                const double *right, const double *f, const int dim)
+                                const double *right, const double *b23l, const double *b13r,
+                                const double *beta, const double *f, int factor, const int dim)
 {
     const int nv = m->jnt_nv[j];
     double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
     double k[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX], pf[CTC_DENSE_MAX];
     double kpf[CTC_DENSE_MAX];
+    int st = 0;
 
-    gdca_joint_K(dim, left, right, k);
-    int st = gdca_joint_factor(dim, k, d->jnt_D + dim * dim * j, dim - nv, e);
     gdca_joint_map(dim, nv, d->jnt_P + 3 * dim * j, f + m->jnt_vadr[j], pf);
-    ctc_dense_mulv(dim, dim, k, pf, kpf);
-    gdca_joint_Y0(dim, left, right, d->jnt_beta + dim * j, y);
-    for (int i = 0; i < dim; i++) y[i] -= kpf[i];
+    if (factor) {
+        gdca_joint_K(dim, left, right, k);
+        st = gdca_joint_factor(dim, k, d->jnt_D + dim * dim * j, dim - nv, e);
+        ctc_dense_mulv(dim, dim, k, pf, kpf);
+    } else { /* K P f = h11^R P f + h22^L P f, without forming K */
+        ctc_dense_mulv(dim, dim, right + H11(dim), pf, kpf);
+        if (left != NULL) {
+            ctc_dense_mulv(dim, dim, left + H22(dim), pf, y);
+            for (int i = 0; i < dim; i++) kpf[i] += y[i];
+        }
+    }
+    for (int i = 0; i < dim; i++) {
+        y[i] = b23l[i] - b13r[i] + beta[i];
+        y[i] -= kpf[i];
+    }
     gdca_factor_apply(dim, dim - nv, e, y, z);
     for (int i = 0; i < dim; i++) z[i] += pf[i];
     return st;
 }
 
-/* the acceleration of the ground */
-static const double rest_accel[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+/* a zero vector: the ground's acceleration, and the bias terms of the correction */
+static const double zero6[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
 
-/* qdd_j = P^T (A1^R - A2^L - beta) written into qacc */
-static inline void forward_qacc(const ctc_model *m, const ctc_data *d, int j, const double *a1r,
-                                const double *a2l, double *qacc, const int dim)
+/* qdd_j = P^T (A1^R - A2^L - beta) written into qacc, for the given beta */
+static inline void forward_accel(const ctc_model *m, const ctc_data *d, int j, const double *a1r,
+                                 const double *a2l, const double *beta, double *qacc, const int dim)
 {
-    const double *P = d->jnt_P + 3 * dim * j, *beta = d->jnt_beta + dim * j;
+    const double *P = d->jnt_P + 3 * dim * j;
     for (int c = 0; c < m->jnt_nv[j]; c++) {
         double s = 0;
         for (int i = 0; i < dim; i++) s += P[c * dim + i] * (a1r[i] - a2l[i] - beta[i]);
         qacc[m->jnt_vadr[j] + c] = s;
     }
+}
+
+/* qdd_j = P^T (A1^R - A2^L - beta) written into qacc */
+static inline void forward_qacc(const ctc_model *m, const ctc_data *d, int j, const double *a1r,
+                                const double *a2l, double *qacc, const int dim)
+{
+    forward_accel(m, d, j, a1r, a2l, d->jnt_beta + dim * j, qacc, dim);
 }
 
 /* the boundary joint k's end of a loop model's root problem (gdca_loop.h): its load is unknown
@@ -105,8 +132,8 @@ static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const doub
     if (gdca_loop_solve(&p, &s) != 0 && d->singular_joint < 0) d->singular_joint = n;
     d->loop_cond = s.cond;
     gdca_loop_hand_down(m, &s, d->loop_r, d->tload, d->jnt_load);
-    if (j > 0) forward_qacc(m, d, 0, s.al1, rest_accel, qacc, dim);
-    forward_qacc(m, d, j, s.ar1, j > 0 ? s.al2 : rest_accel, qacc, dim);
+    if (j > 0) forward_qacc(m, d, 0, s.al1, zero6, qacc, dim);
+    forward_qacc(m, d, j, s.ar1, j > 0 ? s.al2 : zero6, qacc, dim);
     forward_qacc(m, d, n, s.ab, s.ar2, qacc, dim); /* A(child) = A2 + P qdd + beta */
 }
 
@@ -123,17 +150,39 @@ static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const doub
 #define FORWARD_MIN_BODIES_PLANAR 512
 #define FORWARD_MIN_BODIES_SPATIAL 128
 
-/* what the stages of one forward pass share (gdca_par.h) */
+/* What the stages of one forward pass share (gdca_par.h). The same pass, with correct = 1 (a
+ * constant in each stage function, so each mode compiles without the other's branches), is
+ * the refinement's bias-free correction (gdca_refine.h): every body's h13 = h23 = 0 and every
+ * beta = 0, the factors E and the records' matrices h11, h12, h22 are those of the full pass just
+ * made, and only the vectors are recomputed: z, the nodes' biases (b13, b23, held in the node
+ * records' h13, h23), the joint loads (added to d->jnt_load) and the accelerations. */
 typedef struct forward_args {
     const ctc_model *m;
     ctc_data *d;
-    const double *f;
-    double *qacc;
+    const double *f; /* (nv) driving forces; correct: the force residual r */
+    double *qacc;    /* (nv) accelerations; correct: their correction dq = M^-1 r */
 } forward_args;
+
+/* the bias h13 (which = 0) or h23 (which = 1) of assembly index x: its record's, but zero for a
+   body in the correction */
+static inline const double *forward_bias(const forward_args *a, int x, int which, const int dim,
+                                         const int correct)
+{
+    if (correct && x < a->m->nbodies) return zero6;
+    return ctc_data_handles(a->m, a->d, x, 0) + (which ? H23(dim) : H13(dim));
+}
+
+/* joint j's beta: zero in the correction */
+static inline const double *forward_beta(const forward_args *a, int j, const int dim,
+                                         const int correct)
+{
+    return correct ? zero6 : a->d->jnt_beta + dim * j;
+}
 
 /* assembly of tree nodes lo..hi-1, children before parents; returns the first node whose joint
    is singular, or -1 */
-static inline int forward_assemble(const forward_args *a, int lo, int hi, const int dim)
+static inline int forward_assemble(const forward_args *a, int lo, int hi, const int dim,
+                                   const int correct)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
@@ -144,41 +193,56 @@ static inline int forward_assemble(const forward_args *a, int lo, int hi, const 
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 0);
         const double *right = ctc_data_handles(m, d, node->right, 0);
-        int j = node->joint;
-        if (forward_joint(m, d, j, left, right, a->f, dim) != 0 && first < 0) first = i;
-        gdca_assemble(dim, dim - m->jnt_nv[j], left, right, d->fwd_E + dim * dim * j,
-                      d->fwd_z + dim * j, d->hfwd + (size_t)i * hs);
+        const int j = node->joint, nc = dim - m->jnt_nv[j];
+        const double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
+        double *out = d->hfwd + (size_t)i * hs;
+        if (forward_joint(m, d, j, left, right, forward_bias(a, node->left, 1, dim, correct),
+                          forward_bias(a, node->right, 0, dim, correct),
+                          forward_beta(a, j, dim, correct), a->f, !correct, dim) != 0 &&
+            first < 0) {
+            first = i;
+        }
+        if (correct) {
+            gdca_assemble_bias(dim, left, right, forward_bias(a, node->left, 0, dim, correct),
+                               forward_bias(a, node->right, 1, dim, correct), z, out);
+        } else {
+            gdca_assemble(dim, nc, left, right, e, z, out);
+        }
     }
     return first;
 }
 
 /* the root: a loop model's, or the ground joint 0 with the free end's load F2 = 0 */
-static inline void forward_root(const forward_args *a, const int dim)
+static inline void forward_root(const forward_args *a, const int dim, const int correct)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
-    if (m->has_loop) {
+    if (m->has_loop) { /* never corrected (gdca_refine.h) */
         forward_loop_root(m, d, a->f, a->qacc, dim);
         return;
     }
     const double *root = ctc_data_handles(m, d, m->root, 0);
+    const double *b13 = forward_bias(a, m->root, 0, dim, correct),
+                 *beta = forward_beta(a, 0, dim, correct);
     double *tl = d->tload + (size_t)m->root * 2 * dim, a1[CTC_DENSE_MAX];
-    if (forward_joint(m, d, 0, NULL, root, a->f, dim) != 0 && d->singular_joint < 0) {
+    if (forward_joint(m, d, 0, NULL, root, zero6, b13, beta, a->f, !correct, dim) != 0 &&
+        d->singular_joint < 0) {
         d->singular_joint = 0;
     }
     for (int i = 0; i < dim; i++) {
         tl[i] = d->fwd_z[i];
         tl[dim + i] = 0;
-        d->jnt_load[i] = tl[i];
+        d->jnt_load[i] = correct ? d->jnt_load[i] + tl[i] : tl[i];
     }
     ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
-    for (int i = 0; i < dim; i++) a1[i] += root[H13(dim) + i];
-    forward_qacc(m, d, 0, a1, rest_accel, a->qacc, dim);
+    for (int i = 0; i < dim; i++) a1[i] += b13[i];
+    forward_accel(m, d, 0, a1, zero6, beta, a->qacc, dim);
 }
 
 /* disassembly of tree nodes hi-1 down to lo, parents before children: each writes its joint's
    load and acceleration and its children's terminal loads */
-static inline void forward_disassemble(const forward_args *a, int lo, int hi, const int dim)
+static inline void forward_disassemble(const forward_args *a, int lo, int hi, const int dim,
+                                       const int correct)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
@@ -189,79 +253,125 @@ static inline void forward_disassemble(const forward_args *a, int lo, int hi, co
         const double *left = ctc_data_handles(m, d, node->left, 0);
         const double *right = ctc_data_handles(m, d, node->right, 0);
         const double *f1 = d->tload + (size_t)(n + i) * 2 * dim, *f2 = f1 + dim;
-        int j = node->joint;
-        double *fj = d->jnt_load + dim * j, a1r[CTC_DENSE_MAX], a2l[CTC_DENSE_MAX];
-        double t[CTC_DENSE_MAX];
+        const double *b23l = forward_bias(a, node->left, 1, dim, correct);
+        const double *b13r = forward_bias(a, node->right, 0, dim, correct);
+        const int j = node->joint;
+        double *load = d->jnt_load + dim * j, fj[CTC_DENSE_MAX], a1r[CTC_DENSE_MAX];
+        double a2l[CTC_DENSE_MAX], t[CTC_DENSE_MAX];
         gdca_joint_load(dim, dim - m->jnt_nv[j], left, right, d->fwd_E + dim * dim * j,
                         d->fwd_z + dim * j, f1, f2, fj);
 
         /* A1^R = h11^R F + h12^R F2 + h13^R,  A2^L = h21^L F1 - h22^L F + h23^L */
         ctc_dense_mulv(dim, dim, right + H11(dim), fj, a1r);
         ctc_dense_mulv(dim, dim, right + H12(dim), f2, t);
-        for (int r = 0; r < dim; r++) a1r[r] += t[r] + right[H13(dim) + r];
+        for (int r = 0; r < dim; r++) a1r[r] += t[r] + b13r[r];
         ctc_dense_tmulv(dim, dim, left + H12(dim), f1, a2l);
         ctc_dense_mulv(dim, dim, left + H22(dim), fj, t);
-        for (int r = 0; r < dim; r++) a2l[r] += left[H23(dim) + r] - t[r];
-        forward_qacc(m, d, j, a1r, a2l, a->qacc, dim);
+        for (int r = 0; r < dim; r++) a2l[r] += b23l[r] - t[r];
+        forward_accel(m, d, j, a1r, a2l, forward_beta(a, j, dim, correct), a->qacc, dim);
 
+        for (int r = 0; r < dim; r++) load[r] = correct ? load[r] + fj[r] : fj[r];
         gdca_pass_loads(dim, d->tload, node, f1, f2, fj);
     }
 }
 
-/* the stages specialised to the planar and the spatial form */
+/* the stages specialised to the planar and the spatial form, full and correction */
 static CTC_SPECIALISE int assemble_planar(void *a, int lo, int hi)
 {
-    return forward_assemble(a, lo, hi, 3);
-}
-
-static CTC_SPECIALISE int assemble_spatial(void *a, int lo, int hi)
-{
-    return forward_assemble(a, lo, hi, 6);
+    return forward_assemble(a, lo, hi, 3, 0);
 }
 
 static CTC_SPECIALISE void root_planar(void *a)
 {
-    forward_root(a, 3);
-}
-
-static CTC_SPECIALISE void root_spatial(void *a)
-{
-    forward_root(a, 6);
+    forward_root(a, 3, 0);
 }
 
 static CTC_SPECIALISE void disassemble_planar(void *a, int lo, int hi)
 {
-    forward_disassemble(a, lo, hi, 3);
+    forward_disassemble(a, lo, hi, 3, 0);
+}
+
+static CTC_SPECIALISE int assemble_spatial(void *a, int lo, int hi)
+{
+    return forward_assemble(a, lo, hi, 6, 0);
+}
+
+static CTC_SPECIALISE void root_spatial(void *a)
+{
+    forward_root(a, 6, 0);
 }
 
 static CTC_SPECIALISE void disassemble_spatial(void *a, int lo, int hi)
 {
-    forward_disassemble(a, lo, hi, 6);
+    forward_disassemble(a, lo, hi, 6, 0);
 }
 
-/* assembly and disassembly over the tree, serial or a tree height at a time (gdca_par.h) */
-static void forward_planar(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
+static CTC_SPECIALISE int correct_assemble_planar(void *a, int lo, int hi)
+{
+    return forward_assemble(a, lo, hi, 3, 1);
+}
+
+static CTC_SPECIALISE void correct_root_planar(void *a)
+{
+    forward_root(a, 3, 1);
+}
+
+static CTC_SPECIALISE void correct_disassemble_planar(void *a, int lo, int hi)
+{
+    forward_disassemble(a, lo, hi, 3, 1);
+}
+
+static CTC_SPECIALISE int correct_assemble_spatial(void *a, int lo, int hi)
+{
+    return forward_assemble(a, lo, hi, 6, 1);
+}
+
+static CTC_SPECIALISE void correct_root_spatial(void *a)
+{
+    forward_root(a, 6, 1);
+}
+
+static CTC_SPECIALISE void correct_disassemble_spatial(void *a, int lo, int hi)
+{
+    forward_disassemble(a, lo, hi, 6, 1);
+}
+
+/* assembly and disassembly over the tree, serial or a tree height at a time (gdca_par.h); the
+   full pass (correct = 0) or the correction */
+static void forward_planar(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
+                           int correct)
 {
     forward_args a = {m, d, f, qacc};
     gdca_par_pass pass = {.ctx = &a,
-                          .assemble = assemble_planar,
-                          .root = root_planar,
-                          .disassemble = disassemble_planar,
+                          .assemble = correct ? correct_assemble_planar : assemble_planar,
+                          .root = correct ? correct_root_planar : root_planar,
+                          .disassemble = correct ? correct_disassemble_planar : disassemble_planar,
                           .grain = FORWARD_GRAIN_PLANAR,
                           .min_bodies = FORWARD_MIN_BODIES_PLANAR};
     gdca_par_run(m, d, &pass);
 }
 
-static void forward_spatial(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
+static void forward_spatial(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
+                            int correct)
 {
     forward_args a = {m, d, f, qacc};
     gdca_par_pass pass = {.ctx = &a,
-                          .assemble = assemble_spatial,
-                          .root = root_spatial,
-                          .disassemble = disassemble_spatial,
+                          .assemble = correct ? correct_assemble_spatial : assemble_spatial,
+                          .root = correct ? correct_root_spatial : root_spatial,
+                          .disassemble =
+                              correct ? correct_disassemble_spatial : disassemble_spatial,
                           .grain = FORWARD_GRAIN_SPATIAL,
                           .min_bodies = FORWARD_MIN_BODIES_SPATIAL};
     gdca_par_run(m, d, &pass);
+}
+
+void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, double *dq)
+{
+    if (m->form == CTC_FORM_PLANAR) {
+        forward_planar(m, d, r, dq, 1);
+    } else {
+        forward_spatial(m, d, r, dq, 1);
+    }
 }
 
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
@@ -273,9 +383,9 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         f = fm;
     }
     if (m->form == CTC_FORM_PLANAR) {
-        forward_planar(m, d, f, qacc);
+        forward_planar(m, d, f, qacc, 0);
     } else {
-        forward_spatial(m, d, f, qacc);
+        forward_spatial(m, d, f, qacc, 0);
     }
 
     /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r,
@@ -287,11 +397,14 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         ctc_gdca_inverse(m, d, qacc, r);
         for (int i = 0; i < m->nv; i++) r[i] = f[i] - r[i];
         gdca_forward_correct(m, d, r, dq);
+        /* the largest |qacc| and |dq|: plain comparisons, not libm's fmax (a call each); a NaN
+           is skipped either way */
         double amax = 0, dmax = 0;
         for (int i = 0; i < m->nv; i++) {
             qacc[i] += dq[i];
-            amax = fmax(amax, fabs(qacc[i]));
-            dmax = fmax(dmax, fabs(dq[i]));
+            double aa = fabs(qacc[i]), ad = fabs(dq[i]);
+            if (aa > amax) amax = aa;
+            if (ad > dmax) dmax = ad;
         }
         d->fwd_refine_done++;
         if (dmax <= CTC_REFINE_CONVERGED * amax || dmax * CTC_REFINE_STALL > last) break;

@@ -31,6 +31,11 @@
  * load and driving force and its two children's (A1, F2). gdca_par.c may therefore split them
  * over threads (ctc_data_set_threads) with bitwise the serial results; the root stays on the
  * caller's thread. Nothing is inverted, so d->singular_joint stays -1.
+ *
+ * The body records and each node's I and r12 depend on the state only; w, c and e also on u.
+ * The refinement of the forward pass (gdca_refine.h) calls this pass again at the same state,
+ * so the first pass after ctc_handles stamps the records (d->icomp_stamp = d->handles_stamp)
+ * and later ones recompute only w, c and e, with bitwise the same results.
  */
 #include "gdca.h"
 #include "gdca_inverse_loop.h"
@@ -175,6 +180,7 @@ typedef struct inverse_args {
     ctc_data *d;
     const double *u;
     double *f;
+    int keep; /* 1: the body records and the nodes' I and r12 are those of this state */
 } inverse_args;
 
 /* f_j = P^T F of joint j */
@@ -217,19 +223,21 @@ static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const 
             for (int r = 0; r < dim; r++) e[r] += P[col * dim + r] * uj[col];
         }
 
-        /* I = I^L + T^T I^R T,  w = w^L + T^T (I^R e + w^R) */
-        transfer_matrix(dim, L + CR(dim), t);
-        congruence(dim, t, R + CI(dim), s);
-        for (int r = 0; r < dim * dim; r++) N[CI(dim) + r] = L[CI(dim) + r] + s[r];
+        /* I = I^L + T^T I^R T (the state's: kept while a->keep),  w = w^L + T^T (I^R e + w^R) */
+        if (!a->keep) {
+            transfer_matrix(dim, L + CR(dim), t);
+            congruence(dim, t, R + CI(dim), s);
+            for (int r = 0; r < dim * dim; r++) N[CI(dim) + r] = L[CI(dim) + r] + s[r];
+            ctc_v3_add(N + CR(dim), L + CR(dim), R + CR(dim));
+        }
         ctc_dense_mulv(dim, dim, R + CI(dim), e, ie);
         for (int r = 0; r < dim; r++) ie[r] += R[CW(dim) + r];
         transfer_force(dim, L + CR(dim), ie, tf);
         for (int r = 0; r < dim; r++) N[CW(dim) + r] = L[CW(dim) + r] + tf[r];
 
-        /* c = T(r12^R) e + c^R,  r12 = r12^L + r12^R */
+        /* c = T(r12^R) e + c^R (r12 = r12^L + r12^R above) */
         transfer_motion(dim, R + CR(dim), e, tf);
         for (int r = 0; r < dim; r++) N[CC(dim) + r] = tf[r] + R[CC(dim) + r];
-        ctc_v3_add(N + CR(dim), L + CR(dim), R + CR(dim));
     }
     return -1;
 }
@@ -323,11 +331,11 @@ static CTC_SPECIALISE void disassemble_spatial(void *a, int lo, int hi)
 }
 
 /* body records, assembly and disassembly, serial or a tree height at a time (gdca_par.h) */
-static void inverse_planar(const ctc_model *m, ctc_data *d, const double *u, double *f)
+static void inverse_planar(const ctc_model *m, ctc_data *d, const double *u, double *f, int keep)
 {
-    inverse_args a = {m, d, u, f};
+    inverse_args a = {m, d, u, f, keep};
     gdca_par_pass pass = {.ctx = &a,
-                          .bodies = bodies_planar,
+                          .bodies = keep ? NULL : bodies_planar,
                           .assemble = assemble_planar,
                           .root = root_planar,
                           .disassemble = disassemble_planar,
@@ -336,11 +344,11 @@ static void inverse_planar(const ctc_model *m, ctc_data *d, const double *u, dou
     gdca_par_run(m, d, &pass);
 }
 
-static void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u, double *f)
+static void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u, double *f, int keep)
 {
-    inverse_args a = {m, d, u, f};
+    inverse_args a = {m, d, u, f, keep};
     gdca_par_pass pass = {.ctx = &a,
-                          .bodies = bodies_spatial,
+                          .bodies = keep ? NULL : bodies_spatial,
                           .assemble = assemble_spatial,
                           .root = root_spatial,
                           .disassemble = disassemble_spatial,
@@ -351,11 +359,13 @@ static void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u, do
 
 void gdca_inverse_composite(const ctc_model *m, ctc_data *d, const double *u, double *f)
 {
+    const int keep = d->icomp_stamp == d->handles_stamp;
     if (m->form == CTC_FORM_PLANAR) {
-        inverse_planar(m, d, u, f);
+        inverse_planar(m, d, u, f, keep);
     } else {
-        inverse_spatial(m, d, u, f);
+        inverse_spatial(m, d, u, f, keep);
     }
+    d->icomp_stamp = d->handles_stamp;
 }
 
 void gdca_inverse_handle2_accel(const ctc_model *m, const ctc_data *d, int k, double *a)

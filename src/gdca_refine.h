@@ -45,8 +45,9 @@
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d);
 
 /* The correction dq (nv; rad/s^2, m/s^2) = M^-1 r for joint forces r (nv; N m, N), by the
- * forward pass with all bias terms zero, reusing the factors and records of the last
- * ctc_gdca_forward at this state (open chains). Adds the correction's joint loads to
+ * forward pass with all bias terms zero (gdca_forward.c), reusing the factors and records of the
+ * last ctc_gdca_forward at this state (open chains). Splits over the data's threads as the
+ * forward pass does, with bitwise the serial results. Adds the correction's joint loads to
  * d->jnt_load, and overwrites the bias parts (h13, h23) of the forward node records, d->fwd_z
  * and d->tload. dq may not alias r. */
 void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, double *dq);

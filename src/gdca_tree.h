@@ -100,6 +100,20 @@ static inline void gdca_factor_apply(int dim, int nc, const double *e, const dou
     ctc_dense_mulv(dim, nc, e, t, out);
 }
 
+/* The bias vectors of the record of L:R (out) from the biases b13^L and b23^R (the records' own
+ * h13^L and h23^R, or other bias vectors through the same matrices: gdca_refine.h) and z:
+ *     h13 = b13^L - h12^L z,   h23 = b23^R + h21^R z.   out may not be left or right. */
+static inline void gdca_assemble_bias(int dim, const double *left, const double *right,
+                                      const double *b13l, const double *b23r, const double *z,
+                                      double *out)
+{
+    double t[CTC_DENSE_MAX];
+    ctc_dense_mulv(dim, dim, left + H12(dim), z, t);
+    for (int i = 0; i < dim; i++) out[H13(dim) + i] = b13l[i] - t[i];
+    ctc_dense_tmulv(dim, dim, right + H12(dim), z, t);
+    for (int i = 0; i < dim; i++) out[H23(dim) + i] = b23r[i] + t[i];
+}
+
 /* The record of L:R (out) from the records of L and R and the joint's factor E (G = E E^T) and
  * z (Eq. 34-39): with A = h12^L E and B = h21^R E,
  *     h11 = h11^L - A A^T,   h12 = A B^T,   h22 = h22^R - B B^T,
@@ -144,11 +158,7 @@ static inline void gdca_assemble_nc(int dim, int nc, const double *left, const d
         }
     }
 
-    double t[CTC_DENSE_MAX];
-    ctc_dense_mulv(dim, dim, l12, z, t); /* h13 = h13^L - h12^L z */
-    for (int i = 0; i < dim; i++) out[H13(dim) + i] = left[H13(dim) + i] - t[i];
-    ctc_dense_tmulv(dim, dim, r12, z, t); /* h23 = h23^R + h21^R z */
-    for (int i = 0; i < dim; i++) out[H23(dim) + i] = right[H23(dim) + i] + t[i];
+    gdca_assemble_bias(dim, left, right, left + H13(dim), right + H23(dim), z, out);
 }
 
 /* gdca_assemble_nc with nc made a constant in each branch, so that the loops unroll */

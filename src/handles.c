@@ -121,6 +121,7 @@ static void handles_spatial(const ctc_model *m, ctc_data *d)
 
 void ctc_handles(const ctc_model *m, ctc_data *d)
 {
+    d->handles_stamp++; /* a new state: the composite inverse recomputes its records */
     if (m->form == CTC_FORM_PLANAR) {
         handles_planar(m, d);
     } else {

@@ -12,6 +12,7 @@
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "chains.h"
 #include "ctc.h"
@@ -241,4 +242,53 @@ Test(gdca_inverse, leaves_the_shared_body_records_to_the_forward_pass)
     ctc_data_free(d);
     ctc_model_free(m);
     test_chain_free(c);
+}
+
+/* the composite inverse keeps the state-only parts of its records between calls at one state
+ * (data.h, handles_stamp): a second call with other accelerations must give bitwise what a fresh
+ * data gives, and a new state (ctc_kinematics, ctc_handles) must not see the old records */
+static void check_kept_records(const ctc_model *m, uint64_t seed)
+{
+    ctc_data *d = ctc_data_new(m), *fresh = ctc_data_new(m);
+    int nv = m->nv;
+    double *q = calloc((size_t)m->nq + 1, 8), *v = calloc((size_t)nv + 1, 8);
+    double *u = calloc((size_t)nv + 1, 8), *f = calloc((size_t)nv + 1, 8);
+    double *ref = calloc((size_t)nv + 1, 8);
+    cr_assert(d && fresh && q && v && u && f && ref);
+    uint64_t rng = seed;
+    for (int state = 0; state < 2; state++) {
+        test_random_state(m, &rng, 2.0, q, v);
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        for (int call = 0; call < 3; call++) {
+            for (int i = 0; i < nv; i++) u[i] = test_uniform(&rng, -5, 5);
+            ctc_gdca_inverse(m, d, u, f);
+            ctc_data_free(fresh);
+            fresh = ctc_data_new(m);
+            cr_assert_not_null(fresh);
+            ctc_kinematics(m, fresh, q, v);
+            ctc_handles(m, fresh);
+            ctc_gdca_inverse(m, fresh, u, ref);
+            for (int i = 0; i < nv; i++) {
+                cr_assert(memcmp(&f[i], &ref[i], sizeof f[i]) == 0,
+                          "n=%d state %d call %d: f[%d] = %.17g, fresh data %.17g", m->nbodies,
+                          state, call, i, f[i], ref[i]);
+            }
+        }
+    }
+    ctc_data_free(d), ctc_data_free(fresh);
+    free(q), free(v), free(u), free(f), free(ref);
+}
+
+Test(gdca_inverse, later_calls_at_one_state_keep_the_composite_inertias_bitwise)
+{
+    for (int n = 1; n <= 33; n += 8) {
+        test_chain *cp = test_chain_random_planar(n, 90 + (uint64_t)n, 1, 0);
+        test_chain *cs = test_chain_random_spatial(n, 91 + (uint64_t)n, TEST_ALL_JOINTS);
+        ctc_model *mp = build(&cp->spec), *ms = build(&cs->spec);
+        check_kept_records(mp, 5 + (uint64_t)n);
+        check_kept_records(ms, 6 + (uint64_t)n);
+        ctc_model_free(mp), ctc_model_free(ms);
+        test_chain_free(cp), test_chain_free(cs);
+    }
 }
