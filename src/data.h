@@ -54,6 +54,8 @@ typedef struct ctc_data {
     double *xbuf;        /* (2 nvx + nq) loop models: scratch of the passes and loop.c */
     int inv_full;        /* 1: the inverse pass of a loop model disassembles every node (no early
                             stop; for benchmarks and tests). Default 0 */
+    double loop_rho[6];  /* the refinement's closure residual D_n^T (A_t + beta_n - A_child) - off
+                            of the accelerations so far (gdca_refine.h), m/s^2 or rad/s^2 */
     double loop_cond;    /* condition estimate of the last closed-chain boundary solve (1 =
                             perfect; inf = singular), after diagonal scaling */
 

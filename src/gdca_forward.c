@@ -88,55 +88,6 @@ static inline void forward_accel(const ctc_model *m, const ctc_data *d, int j, c
     }
 }
 
-/* qdd_j = P^T (A1^R - A2^L - beta) written into qacc */
-static inline void forward_qacc(const ctc_model *m, const ctc_data *d, int j, const double *a1r,
-                                const double *a2l, double *qacc, const int dim)
-{
-    forward_accel(m, d, j, a1r, a2l, d->jnt_beta + dim * j, qacc, dim);
-}
-
-/* the boundary joint k's end of a loop model's root problem (gdca_loop.h): its load is unknown
- * along D, its driving force known */
-static inline gdca_end forward_end(const ctc_model *m, const ctc_data *d, int k, const double *f,
-                                   double *pf, const double *off, const int dim)
-{
-    gdca_joint_map(dim, m->jnt_nv[k], d->jnt_P + 3 * dim * k, f + m->jnt_vadr[k], pf);
-    return (gdca_end){d->jnt_D + dim * dim * k, dim - m->jnt_nv[k], pf, d->jnt_beta + dim * k, off};
-}
-
-/* a loop model's root (gdca_loop.h): the loop's record R, joint 0 and the closing joint n on the
- * ground; or, for a loop on body b, the root's two parts L (bodies 0..b) and R with joints 0,
- * b + 1 and n, whose loads it hands to the parts' disassembly (the root node itself is not
- * assembled or disassembled) */
-static inline void forward_loop_root(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
-                                     const int dim)
-{
-    const int n = m->nbodies, j = m->loop_first;
-    const ctc_tree_node *top = &m->tree[m->ntree - 1];
-    double pf0[CTC_DENSE_MAX], pfj[CTC_DENSE_MAX], pfn[CTC_DENSE_MAX], off[CTC_DENSE_MAX];
-    const int nc2 = dim - m->jnt_nv[n];
-    gdca_loop_sol s;
-
-    for (int c = 0; c < nc2; c++) {
-        off[c] = 2 * d->baumgarte[0] * d->loop_dphi[c] +
-                 d->baumgarte[1] * d->baumgarte[1] * d->loop_phi[c];
-    }
-    gdca_loop_root p = {.dim = dim,
-                        .l = j > 0 ? ctc_data_handles(m, d, top->left, 0) : NULL,
-                        .r = ctc_data_handles(m, d, j > 0 ? top->right : m->root, 0),
-                        .shift = d->loop_r,
-                        .gam = d->loop_gam,
-                        .e0 = forward_end(m, d, 0, f, pf0, NULL, dim),
-                        .ej = forward_end(m, d, j, f, pfj, NULL, dim),
-                        .en = forward_end(m, d, n, f, pfn, off, dim)};
-    if (gdca_loop_solve(&p, &s) != 0 && d->singular_joint < 0) d->singular_joint = n;
-    d->loop_cond = s.cond;
-    gdca_loop_hand_down(m, &s, d->loop_r, d->tload, d->jnt_load);
-    if (j > 0) forward_qacc(m, d, 0, s.al1, zero6, qacc, dim);
-    forward_qacc(m, d, j, s.ar1, j > 0 ? s.al2 : zero6, qacc, dim);
-    forward_qacc(m, d, n, s.ab, s.ar2, qacc, dim); /* A(child) = A2 + P qdd + beta */
-}
-
 /* When the forward pass splits over threads (gdca_par.h): the least nodes per chunk of one tree
  * height, and the least chain length. From bench_parallel on 2 threads, idle machine
  * (bench/README.md, "Parallel assembly"): grain 1 did best at every n and 2 within 3% (2 keeps
@@ -179,6 +130,62 @@ static inline const double *forward_beta(const forward_args *a, int j, const int
     return correct ? zero6 : a->d->jnt_beta + dim * j;
 }
 
+/* the boundary joint k's end of a loop model's root problem (gdca_loop.h): its load is unknown
+ * along D, its driving force (correct: its force residual) known */
+static inline gdca_end forward_end(const forward_args *a, int k, double *pf, const double *off,
+                                   const int dim, const int correct)
+{
+    const ctc_model *m = a->m;
+    const ctc_data *d = a->d;
+    gdca_joint_map(dim, m->jnt_nv[k], d->jnt_P + 3 * dim * k, a->f + m->jnt_vadr[k], pf);
+    return (gdca_end){d->jnt_D + dim * dim * k, dim - m->jnt_nv[k], pf,
+                      forward_beta(a, k, dim, correct), off};
+}
+
+/* a loop model's root (gdca_loop.h): the loop's record R, joint 0 and the closing joint n on the
+ * ground; or, for a loop on body b, the root's two parts L (bodies 0..b) and R with joints 0,
+ * b + 1 and n, whose loads it hands to the parts' disassembly (the root node itself is not
+ * assembled or disassembled). The closure's right-hand side is the Baumgarte term, or in the
+ * correction minus the closure residual d->loop_rho (gdca_refine.h). */
+static inline void forward_loop_root(const forward_args *a, const int dim, const int correct)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const int n = m->nbodies, j = m->loop_first;
+    const int left = j > 0 ? m->tree[m->ntree - 1].left : -1;
+    const int right = j > 0 ? m->tree[m->ntree - 1].right : m->root;
+    double pf0[CTC_DENSE_MAX], pfj[CTC_DENSE_MAX], pfn[CTC_DENSE_MAX], off[CTC_DENSE_MAX];
+    gdca_loop_sol s;
+
+    if (correct) {
+        for (int c = 0; c < dim - m->jnt_nv[n]; c++) off[c] = -d->loop_rho[c];
+    } else {
+        gdca_loop_offset(m, d, off);
+    }
+    gdca_loop_root p = {
+        .dim = dim,
+        .l = left >= 0 ? ctc_data_handles(m, d, left, 0) : NULL,
+        .r = ctc_data_handles(m, d, right, 0),
+        .shift = d->loop_r,
+        .gam = correct ? zero6 : d->loop_gam,
+        .e0 = forward_end(a, 0, pf0, NULL, dim, correct),
+        .ej = forward_end(a, j, pfj, NULL, dim, correct),
+        .en = forward_end(a, n, pfn, off, dim, correct),
+        .rb = {forward_bias(a, right, 0, dim, correct), forward_bias(a, right, 1, dim, correct)}};
+    if (left >= 0) {
+        p.lb[0] = forward_bias(a, left, 0, dim, correct);
+        p.lb[1] = forward_bias(a, left, 1, dim, correct);
+    }
+    if (gdca_loop_solve(&p, &s) != 0 && d->singular_joint < 0) d->singular_joint = n;
+    if (!correct) d->loop_cond = s.cond;
+    gdca_loop_hand_down(m, &s, d->loop_r, correct, d->tload, d->jnt_load);
+    if (j > 0) forward_accel(m, d, 0, s.al1, zero6, forward_beta(a, 0, dim, correct), a->qacc, dim);
+    forward_accel(m, d, j, s.ar1, j > 0 ? s.al2 : zero6, forward_beta(a, j, dim, correct), a->qacc,
+                  dim);
+    /* A(child) = A2 + P qdd + beta */
+    forward_accel(m, d, n, s.ab, s.ar2, forward_beta(a, n, dim, correct), a->qacc, dim);
+}
+
 /* assembly of tree nodes lo..hi-1, children before parents; returns the first node whose joint
    is singular, or -1 */
 static inline int forward_assemble(const forward_args *a, int lo, int hi, const int dim,
@@ -217,8 +224,8 @@ static inline void forward_root(const forward_args *a, const int dim, const int 
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
-    if (m->has_loop) { /* never corrected (gdca_refine.h) */
-        forward_loop_root(m, d, a->f, a->qacc, dim);
+    if (m->has_loop) {
+        forward_loop_root(a, dim, correct);
         return;
     }
     const double *root = ctc_data_handles(m, d, m->root, 0);
@@ -391,16 +398,15 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
     /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r,
        until the correction converges or stalls */
     const int steps = gdca_refine_steps(m, d);
-    double *r = d->fwd_res, *dq = d->fwd_res + m->nv, last = INFINITY;
+    double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, last = INFINITY;
     d->fwd_refine_done = 0;
     for (int s = 0; s < steps && d->singular_joint < 0; s++) {
-        ctc_gdca_inverse(m, d, qacc, r);
-        for (int i = 0; i < m->nv; i++) r[i] = f[i] - r[i];
+        gdca_refine_residual(m, d, f, qacc, r);
         gdca_forward_correct(m, d, r, dq);
         /* the largest |qacc| and |dq|: plain comparisons, not libm's fmax (a call each); a NaN
            is skipped either way */
         double amax = 0, dmax = 0;
-        for (int i = 0; i < m->nv; i++) {
+        for (int i = 0; i < m->nvx; i++) {
             qacc[i] += dq[i];
             double aa = fabs(qacc[i]), ad = fabs(dq[i]);
             if (aa > amax) amax = aa;

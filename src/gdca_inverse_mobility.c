@@ -99,7 +99,7 @@ static inline void inverse_loop_root(const ctc_model *m, ctc_data *d, const doub
                         .en = mobility_end(m, d, n, u, an, dim)};
     if (gdca_loop_solve(&p, &s) != 0 && d->singular_joint < 0) d->singular_joint = n;
     d->loop_cond = s.cond;
-    gdca_loop_hand_down(m, &s, d->loop_r, d->tload, d->jnt_load_inv);
+    gdca_loop_hand_down(m, &s, d->loop_r, 0, d->tload, d->jnt_load_inv);
 }
 
 /* f_j = P^T F */

@@ -9,7 +9,6 @@
 #include "gdca_loop.h"
 
 #include <math.h>
-#include <string.h>
 
 #include "gdca_tree.h"
 
@@ -57,17 +56,19 @@ void gdca_loop_shift_load(int dim, const double *r, const double *in, double *ou
     out[5] = in[5];
 }
 
-/* a1 = h11 f1 + h12 f2 (+ h13), a2 = h21 f1 + h22 f2 (+ h23) */
-static void record_accel(int dim, const double *h, const double *f1, const double *f2, int bias,
-                         double *a1, double *a2)
+/* a1 = h11 f1 + h12 f2 (+ b13), a2 = h21 f1 + h22 f2 (+ b23), the biases b the record's h13,
+   h23 or those of b (when not NULL) */
+static void record_accel(int dim, const double *h, const double *const b[2], const double *f1,
+                         const double *f2, int bias, double *a1, double *a2)
 {
     double t[CTC_DENSE_MAX];
+    const double *b13 = b[0] ? b[0] : h + H13(dim), *b23 = b[1] ? b[1] : h + H23(dim);
     ctc_dense_mulv(dim, dim, h + H11(dim), f1, a1);
     ctc_dense_mulv(dim, dim, h + H12(dim), f2, t);
-    for (int i = 0; i < dim; i++) a1[i] += t[i] + (bias ? h[H13(dim) + i] : 0.0);
+    for (int i = 0; i < dim; i++) a1[i] += t[i] + (bias ? b13[i] : 0.0);
     ctc_dense_tmulv(dim, dim, h + H12(dim), f1, a2);
     ctc_dense_mulv(dim, dim, h + H22(dim), f2, t);
-    for (int i = 0; i < dim; i++) a2[i] += t[i] + (bias ? h[H23(dim) + i] : 0.0);
+    for (int i = 0; i < dim; i++) a2[i] += t[i] + (bias ? b23[i] : 0.0);
 }
 
 /* The accelerations that the loads f[0], f[1], f[2] on the children of joints 0, j and n cause
@@ -80,7 +81,7 @@ static void root_accel(const gdca_loop_root *p, const double f[3][CTC_DENSE_MAX]
     const int dim = p->dim;
     double neg[CTC_DENSE_MAX] = {0};
     for (int i = 0; i < dim; i++) neg[i] = -f[2][i];
-    record_accel(dim, p->r, f[1], neg, bias, s->ar1, s->ar2);
+    record_accel(dim, p->r, p->rb, f[1], neg, bias, s->ar1, s->ar2);
     if (p->l == NULL) {
         for (int i = 0; i < dim; i++) {
             s->al1[i] = s->al2[i] = s->ab[i] = w[0][i] = 0;
@@ -92,7 +93,7 @@ static void root_accel(const gdca_loop_root *p, const double f[3][CTC_DENSE_MAX]
     double fl2[CTC_DENSE_MAX] = {0};
     gdca_loop_shift_load(dim, p->shift, f[2], fl2);
     for (int i = 0; i < dim; i++) fl2[i] -= f[1][i];
-    record_accel(dim, p->l, f[0], fl2, bias, s->al1, s->al2);
+    record_accel(dim, p->l, p->lb, f[0], fl2, bias, s->al1, s->al2);
     gdca_loop_shift_accel(dim, p->shift, bias ? p->gam : zero, s->al2, s->ab);
     for (int i = 0; i < dim; i++) {
         w[0][i] = s->al1[i];
@@ -189,14 +190,20 @@ int gdca_loop_solve(const gdca_loop_root *p, gdca_loop_sol *s)
     return 0;
 }
 
-void gdca_loop_hand_down(const ctc_model *m, const gdca_loop_sol *s, const double *shift,
+void gdca_loop_hand_down(const ctc_model *m, const gdca_loop_sol *s, const double *shift, int add,
                          double *tload, double *jnt_load)
 {
     const int dim = m->dim, n = m->nbodies, j = m->loop_first;
     const ctc_tree_node *top = &m->tree[m->ntree - 1];
-    memcpy(jnt_load, s->f0, (size_t)dim * sizeof *s->f0);
-    memcpy(jnt_load + dim * j, s->fj, (size_t)dim * sizeof *s->fj);
-    memcpy(jnt_load + dim * n, s->fn, (size_t)dim * sizeof *s->fn);
+    const int at[3] = {0, j, n};
+    const double *f[3] = {s->f0, s->fj, s->fn};
+    for (int e = 0; e < 3; e++) {
+        if (e == 1 && j == 0) continue; /* joint j is joint 0 */
+        for (int i = 0; i < dim; i++) {
+            double *x = jnt_load + dim * at[e] + i;
+            *x = add ? *x + f[e][i] : f[e][i];
+        }
+    }
     if (j == 0) {
         double *t = tload + (size_t)m->root * 2 * dim;
         for (int i = 0; i < dim; i++) t[i] = s->fj[i], t[dim + i] = -s->fn[i];
@@ -209,5 +216,13 @@ void gdca_loop_hand_down(const ctc_model *m, const gdca_loop_sol *s, const doubl
         tl[dim + i] -= s->fj[i];
         tr[i] = s->fj[i];
         tr[dim + i] = -s->fn[i];
+    }
+}
+
+void gdca_loop_offset(const ctc_model *m, const ctc_data *d, double *off)
+{
+    const double a = d->baumgarte[0], b = d->baumgarte[1];
+    for (int c = 0; c < m->dim - m->jnt_nv[m->nbodies]; c++) {
+        off[c] = 2 * a * d->loop_dphi[c] + b * b * d->loop_phi[c];
     }
 }

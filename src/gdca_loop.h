@@ -31,8 +31,8 @@
 #ifndef CTC_GDCA_LOOP_H
 #define CTC_GDCA_LOOP_H
 
+#include "data.h"
 #include "dense.h"
-#include "model.h"
 
 /* One joint of the boundary problem: s has ns columns of length dim at s[c dim]; s == NULL means
  * the identity (ns = dim). fo and a have dim entries; off ns entries or NULL. */
@@ -50,6 +50,9 @@ typedef struct gdca_loop_root {
     const double *shift; /* (3) p2 - p1 (d->loop_r); L only */
     const double *gam;   /* (dim) d->loop_gam; L only */
     gdca_end e0, ej, en; /* joints 0 (L only), j and n */
+    const double *lb[2]; /* L's bias terms h13, h23 in place of its record's; NULL: the record's
+                            own (the refinement's correction passes zero for a body) */
+    const double *rb[2]; /* R's, likewise */
 } gdca_loop_root;
 
 /* What the solve gives: the loads on the children of joints 0, j and n, and the classical
@@ -67,11 +70,15 @@ typedef struct gdca_loop_sol {
  * definite (the loads and accelerations are then NaN). */
 int gdca_loop_solve(const gdca_loop_root *p, gdca_loop_sol *s);
 
-/* Writes the solution's joint loads into jnt_load (njoints x dim: joints 0, j and n) and hands
- * the root's loads down to the disassembly in tload ((2n - 1) x 2 dim, by assembly index): the
- * loop's record on the ground carries (F0, -Fn); on a body, L carries (F0, -Fj + Fn moved to p1)
- * and R (Fj, -Fn). shift is d->loop_r. */
-void gdca_loop_hand_down(const ctc_model *m, const gdca_loop_sol *s, const double *shift,
+/* off (nc = dim - nv_n) = the Baumgarte term 2 a dphi + b^2 phi of d->baumgarte (data.h), the
+ * right-hand side of the forward pass's closure D_n^T (A_t + beta_n - A_child) = off. */
+void gdca_loop_offset(const ctc_model *m, const ctc_data *d, double *off);
+
+/* Writes the solution's joint loads into jnt_load (njoints x dim: joints 0, j and n; added to
+ * what is there when add) and hands the root's loads down to the disassembly in tload
+ * ((2n - 1) x 2 dim, by assembly index): the loop's record on the ground carries (F0, -Fn); on a
+ * body, L carries (F0, -Fj + Fn moved to p1) and R (Fj, -Fn). shift is d->loop_r. */
+void gdca_loop_hand_down(const ctc_model *m, const gdca_loop_sol *s, const double *shift, int add,
                          double *tload, double *jnt_load);
 
 /* out = body b's classical acceleration at p2 from the one at p1 (dim): (alpha; a + alpha x r)

@@ -1,6 +1,6 @@
 /*
- * gdca_refine.h - iterative refinement of forward GDCA on long open chains (internal to the
- * library; ctc_gdca_forward calls it).
+ * gdca_refine.h - iterative refinement of forward GDCA on long or stiffly proportioned chains,
+ * open or closed (internal to the library; ctc_gdca_forward calls it).
  *
  * The forward pass assembles each node's bias terms h13, h23 from the bodies' velocity and
  * gravity terms and the driving forces. In a CTC step the forces nearly balance those terms, so
@@ -15,7 +15,8 @@
  * the forward pass just made, so it costs vector work only (about a third of a forward pass
  * plus one composite inverse). The forward operator's relative error on a bias-free right-hand
  * side is many orders smaller than on the cancelling one, so one step brings the accelerations
- * to the accuracy of the forces' residual.
+ * to the accuracy of the forces' residual. A loop model's residual and correction include the
+ * closing joint's load and the closure (gdca_refine_residual).
  */
 #ifndef CTC_GDCA_REFINE_H
 #define CTC_GDCA_REFINE_H
@@ -39,10 +40,22 @@
 #define CTC_REFINE_STALL 10.0
 
 /* The most refinement steps ctc_gdca_forward makes on model m with settings d: d->fwd_refine
- * when >= 0, else CTC_REFINE_MAX_STEPS or 0 by the rule above. Loop models get 0: their
- * residual would have to include the closing joint's load and the closure, which this pass does
- * not compute (their forward pass is the unrefined one). */
+ * when >= 0, else CTC_REFINE_MAX_STEPS or 0 by the rule above. */
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d);
+
+/* The residual of the forward pass's accelerations qacc (nv; nvx for a loop model) under the
+ * driving forces f (the same length, a loop's dependent entries zero), from the composite inverse
+ * pass (gdca_inverse_loop.h): r (the same length; N m, N) = f - (M qacc + N) for an open chain.
+ * A loop model's equations also carry the closing joint's load F (d->jnt_load at joint n, on its
+ * child) and the closure, so the chain's r = f - (M qacc + N) - J^T F over the loop's
+ * coordinates (gdca_inverse_loop.h), the closing joint's r = 0 (its force P_n^T F = f_n holds by
+ * construction), and the closure's residual goes to d->loop_rho (data.h); the closing joint's
+ * accelerations in qacc are replaced by those of the accurate pass, P_n^T (A_child - A_t -
+ * beta_n). The correction then solves the bias-free loop problem with that closure residual as
+ * its right-hand side (gdca_forward.c), so (qacc, F) move together towards the solution of the
+ * constrained equations. Uses the composite records and d->tload. */
+void gdca_refine_residual(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
+                          double *r);
 
 /* The correction dq (nv; rad/s^2, m/s^2) = M^-1 r for joint forces r (nv; N m, N), by the
  * forward pass with all bias terms zero (gdca_forward.c), reusing the factors and records of the
