@@ -311,7 +311,8 @@ Test(gdca_parallel, spatial_chains_give_bitwise_the_serial_results_on_any_thread
 /* A loop on a random revolute chain of n bodies, closed at a random q0: planar rods closed by a
  * revolute joint (joints n/2, n-1 and the closing one dependent, mobility n - 2) or spatial
  * bodies closed by a spherical joint (joints n/4, n/2, 3n/4 and the closing one dependent,
- * mobility n - 3). The anchor is where the tip's closing point is at q0. */
+ * mobility n - 3). The anchor is where the tip's closing point is at q0: on the ground, or with
+ * on_body on body n/3 (planar) or n/8 (spatial), before the first dependent joint. */
 typedef struct loop_chain {
     test_chain *c;
     ctc_loop_spec loop;
@@ -319,7 +320,7 @@ typedef struct loop_chain {
     double *q0;
 } loop_chain;
 
-static loop_chain *loop_chain_new(int n, int spatial, uint64_t seed)
+static loop_chain *loop_chain_new(int n, int spatial, int on_body, uint64_t seed)
 {
     loop_chain *l = calloc(1, sizeof *l);
     cr_assert_not_null(l);
@@ -349,6 +350,16 @@ static loop_chain *loop_chain_new(int n, int spatial, uint64_t seed)
     cr_assert(d && zero);
     ctc_kinematics(m, d, l->q0, zero);
     memcpy(l->loop.anchor, d->loop_pt, sizeof l->loop.anchor);
+    if (on_body) { /* the same point in body b's frame: R_b^T (p - x_b) */
+        const int b = spatial ? n / 8 : n / 3;
+        const double *r = d->xrot + 9 * b, *x = d->xpos + 3 * b, *p = d->loop_pt;
+        for (int i = 0; i < 3; i++) {
+            l->loop.anchor[i] =
+                r[i] * (p[0] - x[0]) + r[3 + i] * (p[1] - x[1]) + r[6 + i] * (p[2] - x[2]);
+        }
+        l->loop.on_body = 1;
+        l->loop.body = b;
+    }
     free(zero);
     ctc_data_free(d);
     ctc_model_free(m);
@@ -361,11 +372,22 @@ static void loop_chain_free(loop_chain *l)
     free(l->independent), free(l->q0), free(l);
 }
 
-static void compare_loop(int n, int spatial, uint64_t seed)
+static void compare_loop(int n, int spatial, int on_body, uint64_t seed)
 {
-    loop_chain *l = loop_chain_new(n, spatial, seed);
+    loop_chain *l = loop_chain_new(n, spatial, on_body, seed);
     ctc_model *m = build(&l->c->spec);
     cr_assert(m->has_loop);
+    cr_assert_eq(m->loop_body, on_body ? (spatial ? n / 8 : n / 3) : -1);
+    {
+        ctc_data *d = ctc_data_new(m);
+        double *zero = calloc((size_t)m->nv, sizeof(double)), pos, vel;
+        cr_assert(d && zero);
+        ctc_kinematics(m, d, l->q0, zero);
+        ctc_loop_residual_norms(m, d, &pos, &vel);
+        cr_assert_leq(pos, 1e-12 * n, "n = %d: the loop is open at q0 by %g", n, pos);
+        free(zero);
+        ctc_data_free(d);
+    }
     cr_assert_eq(m->form, spatial ? CTC_FORM_SPATIAL : CTC_FORM_PLANAR);
     double *v = calloc((size_t)m->nv, sizeof(double));
     cr_assert_not_null(v);
@@ -380,13 +402,21 @@ static void compare_loop(int n, int spatial, uint64_t seed)
 Test(gdca_parallel, loops_give_bitwise_the_serial_results_on_any_threads, .timeout = 300)
 {
     static const int planar[] = {5, 6, 17, 64, 257, 1000}, spatial[] = {5, 16, 129, 1000};
-    for (int i = 0; i < 6; i++) compare_loop(planar[i], 0, 700 + (uint64_t)i);
-    for (int i = 0; i < 4; i++) compare_loop(spatial[i], 1, 800 + (uint64_t)i);
+    for (int i = 0; i < 6; i++) compare_loop(planar[i], 0, 0, 700 + (uint64_t)i);
+    for (int i = 0; i < 4; i++) compare_loop(spatial[i], 1, 0, 800 + (uint64_t)i);
+}
+
+Test(gdca_parallel, loops_closed_on_a_body_give_bitwise_the_serial_results_on_any_threads,
+     .timeout = 300)
+{
+    static const int planar[] = {5, 17, 257, 1000}, spatial[] = {5, 16, 129, 1000};
+    for (int i = 0; i < 4; i++) compare_loop(planar[i], 0, 1, 720 + (uint64_t)i);
+    for (int i = 0; i < 4; i++) compare_loop(spatial[i], 1, 1, 820 + (uint64_t)i);
 }
 
 Test(gdca_parallel, the_early_stop_of_a_loops_inverse_pass_is_kept_on_threads)
 {
-    loop_chain *l = loop_chain_new(200, 0, 901);
+    loop_chain *l = loop_chain_new(200, 0, 0, 901);
     ctc_model *m = build(&l->c->spec);
     ctc_data *ds = ctc_data_new(m), *dp = ctc_data_new(m);
     double *v = calloc((size_t)m->nv, sizeof(double));
