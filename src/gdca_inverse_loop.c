@@ -101,6 +101,19 @@ static void fail(const ctc_model *m, ctc_data *d, double *f)
     if (d->singular_joint < 0) d->singular_joint = m->nbodies;
 }
 
+void gdca_inverse_closing_accel(const ctc_model *m, const ctc_data *d, double *rel)
+{
+    const int dim = m->dim;
+    double at[CTC_DENSE_MAX], ab[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+    gdca_inverse_handle2_accel(m, d, m->nbodies - 1, at);
+    if (m->loop_body >= 0) { /* the child's acceleration at p_t, from its handle 2's */
+        double a1[CTC_DENSE_MAX];
+        gdca_inverse_handle2_accel(m, d, m->loop_body, a1);
+        gdca_loop_shift_accel(dim, d->loop_r, d->loop_gam, a1, ab);
+    }
+    for (int r = 0; r < dim; r++) rel[r] = ab[r] - at[r];
+}
+
 void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double *f)
 {
     const int n = m->nbodies, dim = m->dim, nv = m->nv;
@@ -149,18 +162,11 @@ void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double 
 
     /* 1. the closure: B x = -(A_t(u0) + P_n qdd_n + beta_n); with B = R^-1 Bs C^-1, x = C y and
        Bs y = R rhs */
-    double at[CTC_DENSE_MAX], ab[CTC_DENSE_MAX] = {0}, pu[CTC_DENSE_MAX], y[CTC_DENSE_MAX];
+    double rel[CTC_DENSE_MAX], pu[CTC_DENSE_MAX], y[CTC_DENSE_MAX];
     gdca_inverse_composite(m, d, qdd, tau);
-    gdca_inverse_handle2_accel(m, d, n - 1, at);
-    if (m->loop_body >= 0) { /* the child's acceleration at p_t */
-        double a1[CTC_DENSE_MAX];
-        gdca_inverse_handle2_accel(m, d, m->loop_body, a1);
-        gdca_loop_shift_accel(dim, d->loop_r, d->loop_gam, a1, ab);
-    }
+    gdca_inverse_closing_accel(m, d, rel);
     gdca_joint_map(dim, m->jnt_nv[n], d->jnt_P + 3 * dim * n, qdd + nv, pu);
-    for (int r = 0; r < dim; r++) {
-        y[r] = -rs[r] * (at[r] - ab[r] + pu[r] + d->jnt_beta[dim * n + r]);
-    }
+    for (int r = 0; r < dim; r++) y[r] = -rs[r] * (pu[r] + d->jnt_beta[dim * n + r] - rel[r]);
     lu_solve(dim, b, piv, 0, y);
     for (int j = 0; j < dim; j++) qdd[m->jnt_vadr[dep_k[j]] + dep_c[j]] = cs[j] * y[j];
 

@@ -46,4 +46,8 @@ void gdca_inverse_composite(const ctc_model *m, ctc_data *d, const double *u, do
 /* Body k's classical acceleration at its handle 2 (dim) after the last gdca_inverse_composite. */
 void gdca_inverse_handle2_accel(const ctc_model *m, const ctc_data *d, int k, double *a);
 
+/* rel (dim) = A_child - A_t after the last gdca_inverse_composite of a loop model: the closing
+ * joint's child's classical acceleration at p_t (zero on the ground) less the tip's there. */
+void gdca_inverse_closing_accel(const ctc_model *m, const ctc_data *d, double *rel);
+
 #endif

@@ -28,7 +28,7 @@ void gdca_refine_residual(const ctc_model *m, ctc_data *d, const double *f, doub
     }
     const int n = m->nbodies, dim = m->dim, nv = m->nv;
     const double *load = d->jnt_load + dim * n; /* the closing joint's, on its child */
-    double at[CTC_DENSE_MAX], ab[CTC_DENSE_MAX] = {0}, rel[CTC_DENSE_MAX], off[CTC_DENSE_MAX];
+    double rel[CTC_DENSE_MAX], off[CTC_DENSE_MAX];
 
     /* the chain: r = f - tau - J^T F over the loop's coordinates, tau = M qdd + N */
     gdca_inverse_composite(m, d, qacc, r);
@@ -48,13 +48,8 @@ void gdca_refine_residual(const ctc_model *m, ctc_data *d, const double *f, doub
 
     /* the closure, from the accelerations of the same pass: rel = A_child - A_t - beta_n gives
        the closing joint's accelerations P_n^T rel and the residual rho = -D_n^T rel - off */
-    gdca_inverse_handle2_accel(m, d, n - 1, at);
-    if (m->loop_body >= 0) {
-        double a1[CTC_DENSE_MAX];
-        gdca_inverse_handle2_accel(m, d, m->loop_body, a1);
-        gdca_loop_shift_accel(dim, d->loop_r, d->loop_gam, a1, ab);
-    }
-    for (int a = 0; a < dim; a++) rel[a] = ab[a] - at[a] - d->jnt_beta[dim * n + a];
+    gdca_inverse_closing_accel(m, d, rel);
+    for (int a = 0; a < dim; a++) rel[a] -= d->jnt_beta[dim * n + a];
     gdca_loop_offset(m, d, off);
     const double *P = d->jnt_P + 3 * dim * n, *D = d->jnt_D + dim * dim * n;
     for (int c = 0; c < m->jnt_nv[n]; c++) {
