@@ -138,7 +138,10 @@ typedef struct ctc_sim_metrics {
     double errdyn_dev;   /* exact model, no disturbance: max over samples and coordinates of
                             |E(t) - expm(Ac t) E(0)| for the error state (int e, e, de), the
                             deviation from the linear error dynamics; NaN otherwise */
-    long steps, rejected, rhs_evals;
+    long steps, rejected;
+    long rhs_evals;       /* evaluations of the dynamics with the forward pass: the integrator's
+                             right-hand sides and, for a loop model, one per sample not at a
+                             step's end (an open chain's samples need no forward pass) */
     double err_estimate;  /* the integrator's accumulated error estimate (integrator.h) */
     double wall_s, cpu_s; /* time spent in the run */
     double us_per_eval;   /* wall microseconds per right-hand-side evaluation */

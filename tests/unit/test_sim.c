@@ -410,6 +410,33 @@ Test(sim, applied_torque_is_inverse_dynamics_plus_disturbance)
     scene_free(s);
 }
 
+Test(sim, open_chain_samples_cost_no_evaluation_of_the_dynamics)
+{
+    /* every channel recorded, yet the right-hand sides are the integrator's alone: dopri5 makes
+       one at its start, one for its first step size and 6 per attempted step (FSAL); rk4 one at
+       its start and 4 per step. A sample's forces and energy take the inverse pass and the
+       kinematics only, or nothing at a step's end (the last evaluation is at that state) */
+    scene *s = triple_pendulum();
+    set_pd(s, 100, 20, 250);
+    set_disturbance(s, 0.2);
+    s->spec.duration = 2;
+    s->spec.output_interval = 0.01;
+    for (int method = 0; method < 2; method++) {
+        s->spec.integrator =
+            method ? (ctc_integ_spec){.method = CTC_INTEG_RK4, .step = 0.005}
+                   : (ctc_integ_spec){.method = CTC_INTEG_DOPRI5, .rtol = 1e-6, .atol = 1e-8};
+        ctc_sim_result *r = run(s);
+        cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+        cr_assert_eq(r->nsamples, 201);
+        const ctc_sim_metrics *mt = &r->metrics;
+        long expected = method ? 1 + 4 * mt->steps : 2 + 6 * (mt->steps + mt->rejected);
+        cr_expect_eq(mt->rhs_evals, expected, "%s: %ld evaluations for %ld steps (%ld rejected)",
+                     method ? "rk4" : "dopri5", mt->rhs_evals, mt->steps, mt->rejected);
+        ctc_sim_result_free(r);
+    }
+    scene_free(s);
+}
+
 Test(sim, step_disturbance_acts_from_its_time)
 {
     scene *s = triple_pendulum();
