@@ -31,8 +31,11 @@
  * Loop models: the controller's coordinates are the independent ones (c->nind; the closing
  * joint's position and rate come from the loop kinematics), the forces and accelerations of the
  * passes are extended vectors (nvx), and after each accepted step the state is checked against
- * the closure and, with projection, put back onto it (ctc_loop_assemble) and the integrator
- * restarted there. An evaluation whose boundary solve is
+ * the closure and, with projection, put back onto it (ctc_loop_assemble): for rk4 and dopri5
+ * after the step, restarting the integrator there; for bdf inside the step (sim_project, called
+ * by CVODE), because a restart sends CVODE back to order 1 and a short step, whose drift then
+ * asks for the next projection: on the five-bar preset that was a projection and a restart
+ * after nearly every one of 122,632 steps instead of 785. An evaluation whose boundary solve is
  * singular beyond loop_cond_max returns SIM_RHS_SINGULAR, which ends the run as "singular" with the
  * time.
  */
@@ -56,6 +59,7 @@
 #define SIM_DEFAULT_BAUMGARTE 10.0
 #define SIM_LOOP_MAX_ITER 50
 #define SIM_RHS_SINGULAR 2 /* the right-hand side's code for a singular loop */
+#define SIM_PROJ_FAILED 3  /* sim_project's code when the closure cannot be solved */
 
 typedef struct sim_ctx {
     const ctc_sim_spec *spec;
@@ -75,6 +79,12 @@ typedef struct sim_ctx {
     double cond;     /* loop models: the last evaluation's condition estimate (max of passes) */
     double cond0;    /* loop models: the condition estimate at t = 0 */
     long evals;      /* evaluations with the forward pass (the right-hand side's) */
+    /* bdf's in-step projection (sim_project): what its last call found and did */
+    double loop_tol;    /* its trigger and Newton tolerance */
+    long proj_calls;    /* calls so far */
+    double proj_res[2]; /* the residuals (position, velocity) before the last call projected */
+    int proj_moved;     /* the last call moved the state */
+    char proj_why[200]; /* why the last call failed */
     /* the arrays above (and dp's kinematics) hold a full evaluation at (t_eval, y_eval) */
     int eval_valid;
     double t_eval;
@@ -461,6 +471,27 @@ static int sim_rhs(double t, const double *y, double *ydot, void *ctx)
     if (c->active)
         for (int i = 0; i < c->nind; i++) ydot[c->nq + c->nv + i] = c->des[3 * i] - c->qi[i];
     return rc;
+}
+
+/* The projection CVODE calls inside each bdf step (integrator.h ctc_ode_project): the residuals
+ * at the step's end, and the state put back onto the closure when either exceeds loop_tol, as
+ * the explicit methods' projection between steps does. Returns 0, or SIM_PROJ_FAILED with the
+ * reason in c->proj_why. */
+static int sim_project(double t, double *y, void *ctx)
+{
+    sim_ctx *c = ctx;
+    (void)t;
+    c->eval_valid = 0; /* dp's kinematics are this state's now */
+    ctc_kinematics(c->plant, c->dp, y, y + c->nq);
+    ctc_loop_residual_norms(c->plant, c->dp, &c->proj_res[0], &c->proj_res[1]);
+    c->proj_calls++;
+    c->proj_moved = 0;
+    if (!(c->proj_res[0] > c->loop_tol || c->proj_res[1] > c->loop_tol)) return 0;
+    if (ctc_loop_assemble(c->plant, c->dp, y, y + c->nq, c->loop_tol, SIM_LOOP_MAX_ITER, NULL,
+                          c->proj_why, sizeof c->proj_why) != CTC_OK)
+        return SIM_PROJ_FAILED;
+    c->proj_moved = 1;
+    return 0;
 }
 
 /* the joint that owns velocity coordinate i */
@@ -913,6 +944,14 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     if (st != CTC_OK) goto cleanup;
     for (int i = c.nq + c.nv; i < c.ny; i++) y0[i] = 0;
     double loop_tol = loop_tol_of(spec);
+    c.loop_tol = loop_tol;
+    /* bdf projects inside its steps and keeps its history; rk4 and dopri5 between steps */
+    int in_step =
+        plant->has_loop && spec->loop_stab == CTC_LOOP_PROJECT && is.method == CTC_INTEG_BDF;
+    if (in_step) {
+        st = ctc_integrator_set_projection(integ, sim_project, err, errlen);
+        if (st != CTC_OK) goto cleanup;
+    }
 
     double bound = spec->max_speed > 0 ? spec->max_speed : SIM_DEFAULT_MAX_SPEED;
     ctc_run_status status = CTC_RUN_DONE;
@@ -942,9 +981,15 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
            rather than interpolate at a time a few ulps off the accumulated step ends */
         if (is.method == CTC_INTEG_RK4)
             tstop = fmin(tstop, sample_time(rec.next, rec.count, spec->duration, rec.dt));
+        long proj_calls = c.proj_calls;
         int rc = ctc_integrator_step(integ, tstop, why, sizeof why);
         t = ctc_integrator_time(integ);
         const double *y = ctc_integrator_state(integ);
+        if (rc == SIM_PROJ_FAILED) {
+            status = CTC_RUN_SINGULAR;
+            snprintf(r->message, sizeof r->message, "t = %.6g s: projection: %s", t, c.proj_why);
+            break;
+        }
         if (rc == SIM_RHS_SINGULAR) {
             status = CTC_RUN_SINGULAR;
             singular_limit(r, t, &c);
@@ -978,9 +1023,17 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
             c.eval_valid = 0; /* dp's kinematics are this state's now */
             ctc_kinematics(plant, c.dp, y, y + c.nq);
             ctc_loop_residual_norms(plant, c.dp, &pos, &vel);
+            if (in_step && c.proj_calls > proj_calls) {
+                /* CVODE projected inside the step: its last call was the accepted attempt's,
+                   and the drift is what that call found */
+                pos = fmax(pos, c.proj_res[0]);
+                vel = fmax(vel, c.proj_res[1]);
+                r->metrics.projections += c.proj_moved;
+            }
             rec.loop_max[0] = fmax(rec.loop_max[0], pos);
             rec.loop_max[1] = fmax(rec.loop_max[1], vel);
-            if (spec->loop_stab == CTC_LOOP_PROJECT && (pos > loop_tol || vel > loop_tol)) {
+            if (!in_step && spec->loop_stab == CTC_LOOP_PROJECT &&
+                (pos > loop_tol || vel > loop_tol)) {
                 memcpy(yproj, y, (size_t)c.ny * sizeof *y);
                 if (ctc_loop_assemble(plant, c.dp, yproj, yproj + c.nq, loop_tol, SIM_LOOP_MAX_ITER,
                                       NULL, why, sizeof why) != CTC_OK) {
