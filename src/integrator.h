@@ -15,7 +15,8 @@
  *           limit on 15 steps) when reaching tstop would take more than 1e5 further steps.
  *   bdf     SUNDIALS CVODE, variable-order variable-step BDF (orders 1-5) with Newton iteration
  *           and a dense direct linear solver on a difference-quotient Jacobian; for stiff
- *           systems (very high gains). Dense output by CVodeGetDky.
+ *           systems (very high gains). Dense output by CVodeGetDky. Optionally projects onto an
+ *           invariant inside its steps (ctc_integrator_set_projection).
  *
  * The in-house explicit steppers are used rather than SUNDIALS ARKODE's ERKStep because they
  * cost less per step on the small systems of a chain (bench/README.md has the figures).
@@ -23,7 +24,8 @@
  * The right-hand side returns 0 on success; any other value stops the step, is returned by
  * ctc_integrator_step and leaves the integrator's state at the last accepted step.
  * An integrator belongs to one thread. rk4 and dopri5 allocate only in ctc_integrator_new; bdf's
- * CVODE also allocates a little at each Jacobian evaluation (its difference-quotient Jacobian).
+ * CVODE also allocates its projection memory once in ctc_integrator_set_projection and a little
+ * at each Jacobian evaluation (its difference-quotient Jacobian).
  */
 #ifndef CTC_INTEGRATOR_H
 #define CTC_INTEGRATOR_H

@@ -389,7 +389,7 @@ static void controlled_coords(const sim_ctx *c, const double *q, const double *v
     }
 }
 
-/* What an evaluation computes, as bits (sim_evaluate): the right-hand side needs all; a sample
+/* What an evaluation computes, as bits (evaluate): the right-hand side needs all; a sample
  * only what its channels and metrics read (record_sample). The desired motion, the controller
  * output w and the applied forces' disturbance part are always computed (a few flops). */
 enum {
