@@ -44,6 +44,11 @@
  *      hold       the controller is evaluated once per step, at its start, and its torque and e
  *                 are held over the step (a zero-order hold, as a loop computing tau before each
  *                 mj_step would do, without evaluating the position stage twice).
+ *    Both sides record the same outputs at every sample - q, qdot, q_des, qdot_des, e, w, tau
+ *    and the energy, ctcsim's default channels: ctcsim as sim.c does (no forward pass for a
+ *    sample), MuJoCo in the first stage of the step that starts from the sample (its position
+ *    stage is there; the energy from mj_energyPos and mj_energyVel), the last sample by one more
+ *    mj_forward. The reference check compares the recorded tau and energy as well as q.
  *    Error = max over the samples and joints of |q - q_ref|, q_ref from ctcsim's DOPRI5 at
  *    rtol 1e-12, which is first compared with MuJoCo stagewise at dt = 1e-4. The hold runs
  *    converge to q_ref only as dt -> 0 (first order): their error is mostly the hold's. Times
@@ -601,39 +606,88 @@ typedef struct sim_problem {
     mjModel *m;        /* with integral actuators when any ki != 0 */
     mjData *d;
     double ref_rtol; /* the reference's rtol (atol = rtol / 100) */
-    double *ref;     /* (nsamples x n) ctcsim DOPRI5 at ref_rtol */
+    double *ref;     /* (nsamples x n) q of ctcsim DOPRI5 at ref_rtol (ref_samples' q) */
+    struct samples *ref_samples;
     long ref_steps;
 } sim_problem;
+
+/* What every run records at each sample, on both sides, so that both pay for the same outputs:
+ * ctcsim's default channels, indexed by ctc_channel - q, qdot, q_des, qdot_des, e, tau, w
+ * (nsamples x n each) and energy (nsamples x 2: kinetic, potential). */
+#define NOUT (CTC_CH_ENERGY + 1)
+typedef struct samples {
+    double *ch[NOUT];
+} samples;
+
+static samples *samples_new(int nsamples, int n)
+{
+    samples *s = xcalloc(1, sizeof *s);
+    for (int c = 0; c < NOUT; c++)
+        s->ch[c] = xcalloc((size_t)nsamples * (c == CTC_CH_ENERGY ? 2 : n), sizeof(double));
+    return s;
+}
+
+static void samples_free(samples *s)
+{
+    for (int c = 0; s && c < NOUT; c++) free(s->ch[c]);
+    free(s);
+}
 
 /* MuJoCo's controller: what mjcb_control runs, for the problem being simulated */
 typedef struct mj_ctrl {
     const sim_problem *p;
     int hold;  /* 1: evaluate at the first stage of each step and hold over the step */
     int stage; /* stages of the current step so far (the loop clears it before each mj_step) */
+    samples *out;
+    long row; /* the sample the next first stage records (its state is the sample's), or -1 */
 } mj_ctrl;
 
 static mj_ctrl *active;
 
 /* u = qdd_d + ki int e + kp e + kv de; qfrc_applied = MuJoCo's inverse dynamics of u + z(t);
- * ctrl = e, the rate of the integral state (act) when the model has integrator actuators */
+ * ctrl = e, the rate of the integral state (act) when the model has integrator actuators. The
+ * first stage of a step is at the step's start, a sample's state when c->row says so: it records
+ * the sample there (what ctcsim records), the energy from MuJoCo's own mj_energyPos and
+ * mj_energyVel on the position stage just computed. */
 static void mj_ctc_control(const mjModel *m, mjData *d)
 {
     mj_ctrl *c = active;
-    if (c->hold && c->stage++ > 0) return;
+    int first = c->stage++ == 0;
+    if (c->hold && !first) return;
     const sim_problem *p = c->p;
+    double **out = first && c->row >= 0 ? c->out->ch : NULL;
+    size_t o = out ? (size_t)c->row * (size_t)m->nv : 0;
     for (int i = 0; i < m->nv; i++) {
         double des[3];
         ctc_traj_eval(&p->traj[i], d->time, des);
         double e = des[0] - d->qpos[i], de = des[1] - d->qvel[i];
         double ie = m->na ? d->act[i] : 0;
         const ctc_gains *g = &p->gains[i];
-        d->qacc[i] = des[2] + g->ki * ie + g->kp * e + g->kv * de;
+        double w = g->ki * ie + g->kp * e + g->kv * de;
+        d->qacc[i] = des[2] + w;
         if (m->nu) d->ctrl[i] = e;
+        if (out) {
+            out[CTC_CH_Q][o + i] = d->qpos[i], out[CTC_CH_QD][o + i] = d->qvel[i];
+            out[CTC_CH_Q_DES][o + i] = des[0], out[CTC_CH_QD_DES][o + i] = des[1];
+            out[CTC_CH_E][o + i] = e, out[CTC_CH_W][o + i] = w;
+        }
     }
     mj_inverseSkip(m, d, mjSTAGE_VEL, 1);
     for (int i = 0; i < m->nv; i++)
         d->qfrc_applied[i] =
             d->qfrc_inverse[i] + (p->dist ? ctc_disturb_eval(&p->dist[i], d->time) : 0);
+    if (out) {
+        mju_copy(out[CTC_CH_TAU] + o, d->qfrc_applied, m->nv);
+        /* both return at once unless energy is enabled, which would compute it at every stage:
+           enabled for these two calls only */
+        p->m->opt.enableflags |= mjENBL_ENERGY;
+        mj_energyPos(m, d);
+        mj_energyVel(m, d);
+        p->m->opt.enableflags &= ~mjENBL_ENERGY;
+        out[CTC_CH_ENERGY][2 * c->row] = d->energy[1];
+        out[CTC_CH_ENERGY][2 * c->row + 1] = d->energy[0];
+        c->row = -1;
+    }
 }
 
 /* the outcome of one run */
@@ -654,8 +708,9 @@ static double max_error(const sim_problem *p, const double *q, int nsamples)
 }
 
 /* MuJoCo RK4 at step dt (dividing the sampling interval) with the stagewise or held controller;
- * samples q into qs (nsamples x n) */
-static run_out mj_run(sim_problem *p, double dt, int hold, double *qs)
+ * records the samples into out: each at the first stage of the step that starts from it, the last
+ * by one more mj_forward */
+static run_out mj_run(sim_problem *p, double dt, int hold, samples *out)
 {
     mjModel *m = p->m;
     mjData *d = p->d;
@@ -665,7 +720,7 @@ static run_out mj_run(sim_problem *p, double dt, int hold, double *qs)
         fprintf(stderr, "bench_mujoco: dt = %g does not divide %g\n", dt, p->interval);
         exit(1);
     }
-    mj_ctrl c = {.p = p, .hold = hold};
+    mj_ctrl c = {.p = p, .hold = hold, .out = out, .row = 0};
     active = &c;
     m->opt.timestep = dt;
     run_out r = {.done = 1, .error = NAN};
@@ -674,7 +729,6 @@ static run_out mj_run(sim_problem *p, double dt, int hold, double *qs)
     memset(d->warning, 0, sizeof d->warning);
     mju_copy(d->qpos, p->q0, n);
     mjcb_control = mj_ctc_control;
-    mju_copy(qs, d->qpos, n);
     int ns = 1;
     for (long k = 1; k <= nsteps; k++) {
         c.stage = 0;
@@ -686,13 +740,17 @@ static run_out mj_run(sim_problem *p, double dt, int hold, double *qs)
             r.done = 0, r.t_fail = (double)k * dt, r.steps = k;
             break;
         }
-        if (k % spp == 0) mju_copy(qs + (size_t)ns++ * n, d->qpos, n);
+        if (k % spp == 0) c.row = ns++;
+    }
+    if (r.done && c.row >= 0) { /* the last sample: no step starts from it */
+        c.stage = 0;
+        mj_forward(m, d);
     }
     r.cpu = now() - t0;
     mjcb_control = NULL;
     if (r.done) {
         r.steps = nsteps;
-        r.error = p->ref ? max_error(p, qs, ns) : NAN;
+        r.error = p->ref ? max_error(p, out->ch[CTC_CH_Q], ns) : NAN;
     }
     r.evals = 4 * r.steps;
     return r;
@@ -713,11 +771,11 @@ static ctc_sim_spec ctc_spec(const sim_problem *p, ctc_integ_spec integ)
                           .integrator = integ,
                           .duration = p->duration,
                           .output_interval = p->interval,
-                          .channels = CTC_CH_BIT(CTC_CH_Q)};
+                          .channels = 0}; /* every channel that applies: the samples' NOUT */
 }
 
-/* ctcsim's run; samples q into qs (nsamples x n) when it finishes */
-static run_out ctc_run(const sim_problem *p, ctc_integ_spec integ, double *qs)
+/* ctcsim's run; its samples into out when it finishes */
+static run_out ctc_run(const sim_problem *p, ctc_integ_spec integ, samples *out)
 {
     ctc_sim_spec spec = ctc_spec(p, integ);
     ctc_sim_result *res = NULL;
@@ -734,8 +792,10 @@ static run_out ctc_run(const sim_problem *p, ctc_integ_spec integ, double *qs)
                  .rejected = res->metrics.rejected,
                  .error = NAN};
     if (r.done) {
-        memcpy(qs, res->ch[CTC_CH_Q], (size_t)res->nsamples * p->n * sizeof *qs);
-        r.error = p->ref ? max_error(p, qs, res->nsamples) : NAN;
+        for (int c = 0; c < NOUT; c++)
+            memcpy(out->ch[c], res->ch[c],
+                   (size_t)res->nsamples * (size_t)res->width[c] * sizeof(double));
+        r.error = p->ref ? max_error(p, out->ch[CTC_CH_Q], res->nsamples) : NAN;
     }
     ctc_sim_result_free(res);
     return r;
@@ -751,7 +811,7 @@ static void problem_setup(sim_problem *p, double rtol)
     p->d = mj_makeData(p->m);
     adopt_mj_inertia(p->chain, p->m);
     p->nsamples = (int)lround(p->duration / p->interval) + 1;
-    double *ref = xcalloc((size_t)p->nsamples * p->n, sizeof(double));
+    samples *ref = samples_new(p->nsamples, p->n);
     p->ref = NULL;
     run_out r =
         ctc_run(p,
@@ -762,7 +822,8 @@ static void problem_setup(sim_problem *p, double rtol)
         fprintf(stderr, "bench_mujoco: %s: the reference run did not finish\n", p->name);
         exit(1);
     }
-    p->ref = ref;
+    p->ref_samples = ref;
+    p->ref = ref->ch[CTC_CH_Q];
     p->ref_steps = r.steps;
 }
 
@@ -770,7 +831,7 @@ static void problem_free(sim_problem *p)
 {
     mj_deleteData(p->d);
     mj_deleteModel(p->m);
-    free(p->ref);
+    samples_free(p->ref_samples);
 }
 
 /* one configuration of a work-precision comparison */
@@ -821,14 +882,25 @@ static void sim_compare(sim_problem *p, const double *rtols, int nrtol, const do
     for (int k = CFG_RK4; k <= CFG_MJ_HOLD; k++)
         for (int i = 0; i < ndt && nc < MAX_CONFIGS; i++)
             c[nc++] = (sim_config){.kind = k, .par = dts[i]};
-    double *qs = xcalloc((size_t)p->nsamples * p->n, sizeof(double));
+    samples *qs = samples_new(p->nsamples, p->n);
 
-    /* the reference against MuJoCo stagewise at a small step */
+    /* the reference against MuJoCo stagewise at a small step: q, and the recorded outputs that
+       come from each side's own dynamics, tau and energy */
     run_out chk = mj_run(p, REF_DT, 0, qs);
+    double dtau = 0, tau_max = 0, den = 0, e_max = 0;
+    for (size_t j = 0; j < (size_t)p->nsamples * (size_t)p->n; j++) {
+        dtau = fmax(dtau, fabs(qs->ch[CTC_CH_TAU][j] - p->ref_samples->ch[CTC_CH_TAU][j]));
+        tau_max = fmax(tau_max, fabs(p->ref_samples->ch[CTC_CH_TAU][j]));
+    }
+    for (size_t j = 0; j < (size_t)p->nsamples * 2; j++) {
+        den = fmax(den, fabs(qs->ch[CTC_CH_ENERGY][j] - p->ref_samples->ch[CTC_CH_ENERGY][j]));
+        e_max = fmax(e_max, fabs(p->ref_samples->ch[CTC_CH_ENERGY][j]));
+    }
     printf("Reference: ctcsim DOPRI5 rtol %g, atol %g (%ld steps). Against MuJoCo RK4 "
-           "stagewise at dt = %g s: max |q - q_ref| = %.2e rad%s.\n\n",
+           "stagewise at dt = %g s: max |q - q_ref| = %.2e rad%s; recorded tau within %.1e "
+           "(largest |tau| %.3g N m), energy within %.1e (largest |E| %.3g J).\n\n",
            p->ref_rtol, p->ref_rtol * 1e-2, p->ref_steps, REF_DT, chk.error,
-           chk.error <= 1e-8 ? "" : " (ABOVE 1e-8: see the README)");
+           chk.error <= 1e-8 ? "" : " (ABOVE 1e-8: see the README)", dtau, tau_max, den, e_max);
 
     for (int round = 0; round < rounds; round++)
         for (int i = 0; i < nc; i++) {
@@ -884,7 +956,7 @@ static void sim_compare(sim_problem *p, const double *rtols, int nrtol, const do
     }
     printf("\n");
     fflush(stdout);
-    free(qs);
+    samples_free(qs);
 }
 
 /* the paper's triple pendulum PID run (bench_sim's paper_spec) */
@@ -961,14 +1033,14 @@ static void sim_chain64(void)
 }
 
 /* max |q_d - q| over the samples from time t0 on: how well a run tracks after its transient */
-static double tracking_error(const sim_problem *p, const double *qs, double t0)
+static double tracking_error(const sim_problem *p, const samples *out, double t0)
 {
     double e = 0;
     for (int k = (int)lround(t0 / p->interval); k < p->nsamples; k++)
         for (int i = 0; i < p->n; i++) {
             double des[3];
             ctc_traj_eval(&p->traj[i], k * p->interval, des);
-            e = fmax(e, fabs(des[0] - qs[(size_t)k * p->n + i]));
+            e = fmax(e, fabs(des[0] - out->ch[CTC_CH_Q][(size_t)k * p->n + i]));
         }
     return e;
 }
@@ -999,7 +1071,7 @@ static void sim_stiff(void)
            "| w (1/s) | kp | kv | w dt | MuJoCo stagewise | MuJoCo hold |\n"
            "| ---: | ---: | ---: | ---: | --- | --- |\n");
     double w_div = 0;
-    double *qs = xcalloc((size_t)501 * CHAIN_N, sizeof(double));
+    samples *qs = samples_new(501, CHAIN_N);
     for (int i = 0; i < NW; i++) {
         sim_problem p;
         chain64_problem(&p, ws[i], q0, gains, traj);
@@ -1022,7 +1094,7 @@ static void sim_stiff(void)
         problem_free(&p);
         test_chain_free(p.chain);
     }
-    free(qs);
+    samples_free(qs);
     if (w_div == 0) {
         printf("\nMuJoCo stagewise did not diverge at any w tried.\n\n");
         return;
@@ -1037,7 +1109,7 @@ static void sim_stiff(void)
            w_div, gains[0].kp, gains[0].kv, p.ref_steps);
     printf("| run | time (ms) | steps | rejected | evals | max error (rad) |\n"
            "| --- | ---: | ---: | ---: | ---: | ---: |\n");
-    qs = xcalloc((size_t)p.nsamples * p.n, sizeof(double));
+    qs = samples_new(p.nsamples, p.n);
     char label[64];
     static const double rtols[] = {1e-4, 1e-6};
     for (int i = 0; i < 2; i++) {
@@ -1060,7 +1132,7 @@ static void sim_stiff(void)
             print_stiff_row(label, &r, 0);
         }
     printf("\n");
-    free(qs);
+    samples_free(qs);
     problem_free(&p);
     test_chain_free(p.chain);
 }

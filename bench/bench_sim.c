@@ -15,10 +15,11 @@
  *     (for the five-bar: the three independent joints and the two dependent ones), q_ref from
  *     dopri5 at rtol 1e-12, atol 1e-14; the reference's own error is gauged by a run at rtol
  *     1e-11 against it. The five-bar also runs bdf with Baumgarte stabilisation instead of the
- *     projection (which restarts the integrator after nearly every step). Each configuration
- *     runs once untimed (the warm-up, which also gives its error and metrics: the runs are
- *     deterministic), then in timed rounds that interleave every configuration of every scene,
- *     so machine noise falls on all alike; the wall time is the median over the rounds (ROUNDS,
+ *     projection (bdf projects inside CVODE's steps; before that, projecting
+ *     after nearly every step and restarting CVODE at order 1 cost it 1.5-7.7 s a run). Each
+ * configuration runs once untimed (the warm-up, which also gives its error and metrics: the runs
+ * are deterministic), then in timed rounds that interleave every configuration of every scene, so
+ * machine noise falls on all alike; the wall time is the median over the rounds (ROUNDS,
  *     SLOW_ROUNDS for the 64-link chain). A configuration whose warm-up took over SLOW_RUN_S is
  *     timed by that run alone, and one that needs more than WP_MAX_STEPS steps is stopped there
  *     (the five-bar's bdf at tight tolerances), to keep the whole bench within a few minutes.

@@ -18,6 +18,13 @@
  * solver setup failure). CVODE's error messages go to an error handler that keeps the last one
  * for err instead of printing it.
  *
+ * With a projection (ctc_integrator_set_projection), CVODE calls bdf_project after the Newton
+ * iteration of every step attempt: the caller's function works on a copy of CVODE's solution
+ * (it->y_new, which bdf does not otherwise use) and CVODE gets the difference as its correction,
+ * which it folds into the step's Nordsieck history. Error-estimate projection is off: the caller
+ * projects a nonlinear closure, not the linear map CVODE would apply to the estimate. A failed
+ * projection stops CVODE at once, as a failed rhs does, and its code is returned.
+ *
  * A reset restarts CVODE at order 1. Unlike the explicit methods it does not keep the step size:
  * the first reset starts from spec.initial_step, later ones from CVODE's own estimate (a few rhs
  * evaluations), because the step that suited the order-5 history is far too long for order 1.
@@ -26,10 +33,12 @@
  * `base` and the statistics are base + CVODE's current counters. CVODE's linear-solver counters
  * are zeroed only when it sets up its first step after a (re)initialisation, which is also where
  * it makes its first rhs evaluation, so they are read only once that evaluation has happened.
- * Allocation happens in ctc_bdf_new only (CVODE's difference-quotient Jacobian itself makes a
- * vector header per Jacobian evaluation).
+ * Allocation happens in ctc_bdf_new and in the first ctc_bdf_set_projection (CVODE's projection
+ * memory) only (CVODE's difference-quotient Jacobian itself makes a vector header per Jacobian
+ * evaluation).
  */
 #include <cvode/cvode.h>
+#include <cvode/cvode_proj.h>
 #include <nvector/nvector_serial.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -51,6 +60,8 @@ struct ctc_bdf {
     ctc_integrator *it; /* the owner, for the rhs wrapper */
     int rhs_rc;         /* the user's rhs's last non-zero return, 0 if none */
     double rhs_t;       /* and the time it was called at */
+    int proj_rc;        /* the projection's last non-zero return, 0 if none */
+    double proj_t;      /* and its time */
     double h_init;      /* the step CVODE starts from after a (re)initialisation, 0 = its choice */
     long reinits;       /* resets so far */
     ctc_integ_stats base; /* totals before the last CVodeReInit (and reset evaluations) */
@@ -66,6 +77,27 @@ static int bdf_rhs(sunrealtype t, N_Vector y, N_Vector ydot, void *user_data)
         b->rhs_t = t;
         return -1; /* unrecoverable: CVODE stops and returns */
     }
+    return 0;
+}
+
+/* CVProjFn: corr = P(ycur) - ycur, with P the caller's projection (integrator.h) */
+static int bdf_project(sunrealtype t, N_Vector ycur, N_Vector corr, sunrealtype eps_proj,
+                       N_Vector err, void *user_data)
+{
+    ctc_bdf *b = user_data;
+    ctc_integrator *it = b->it;
+    (void)eps_proj; /* the caller's own tolerance applies */
+    (void)err;      /* NULL: error projection is off */
+    const double *y = N_VGetArrayPointer(ycur);
+    double *c = N_VGetArrayPointer(corr), *yp = it->y_new;
+    memcpy(yp, y, (size_t)it->n * sizeof *yp);
+    int rc = it->proj(t, yp, it->ctx);
+    if (rc != 0) {
+        b->proj_rc = rc;
+        b->proj_t = t;
+        return -1; /* unrecoverable: CVODE stops and returns */
+    }
+    for (int i = 0; i < it->n; i++) c[i] = yp[i] - y[i];
     return 0;
 }
 
@@ -183,6 +215,16 @@ int ctc_bdf_reset(ctc_integrator *it)
     return 0;
 }
 
+int ctc_bdf_set_projection(ctc_integrator *it)
+{
+    ctc_bdf *b = it->bdf;
+    if (it->proj == NULL) return CVodeSetProjFrequency(b->cvode, 0) == CV_SUCCESS ? 0 : -1;
+    int flag = CVodeSetProjFn(b->cvode, bdf_project);
+    if (flag == CV_SUCCESS) flag = CVodeSetProjErrEst(b->cvode, SUNFALSE);
+    if (flag == CV_SUCCESS) flag = CVodeSetProjFrequency(b->cvode, 1);
+    return flag == CV_SUCCESS ? 0 : -1;
+}
+
 int ctc_bdf_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
 {
     ctc_bdf *b = it->bdf;
@@ -197,6 +239,7 @@ int ctc_bdf_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
 
     /* one internal step, stopping at tstop */
     b->rhs_rc = 0;
+    b->proj_rc = 0;
     b->msg[0] = '\0';
     const long steps_before = it->stats.steps;
     double t_ret = t;
@@ -204,6 +247,11 @@ int ctc_bdf_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
     if (flag == CV_SUCCESS) flag = CVode(b->cvode, tstop, b->y_out, &t_ret, CV_ONE_STEP);
     refresh_stats(it);
     if (b->rhs_rc != 0) return ctc_integ_fail_rhs(b->rhs_rc, b->rhs_t, err, errlen);
+    if (b->proj_rc != 0) {
+        ctc_fail(CTC_EINVAL, err, errlen, "projection failed (returned %d) at t = %.10g s",
+                 b->proj_rc, b->proj_t);
+        return b->proj_rc;
+    }
     if (flag < 0) {
         ctc_fail(CTC_EINVAL, err, errlen, "CVODE failed (flag %d) at t = %.10g s: %s", flag, t,
                  b->msg);

@@ -165,6 +165,19 @@ int ctc_integrator_reset(ctc_integrator *it, double t0, const double *y0)
     return 0;
 }
 
+ctc_status ctc_integrator_set_projection(ctc_integrator *it, ctc_ode_project proj, char *err,
+                                         size_t errlen)
+{
+    if (it->spec.method != CTC_INTEG_BDF)
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "in-step projection needs method bdf (this integrator is %s)",
+                        ctc_integ_method_name(it->spec.method));
+    it->proj = proj;
+    if (ctc_bdf_set_projection(it) != 0)
+        return ctc_fail(CTC_EINVAL, err, errlen, "bdf: CVODE refused the projection function");
+    return CTC_OK;
+}
+
 int ctc_integrator_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
 {
     if (!it->ready) {

@@ -15,7 +15,8 @@
  *           limit on 15 steps) when reaching tstop would take more than 1e5 further steps.
  *   bdf     SUNDIALS CVODE, variable-order variable-step BDF (orders 1-5) with Newton iteration
  *           and a dense direct linear solver on a difference-quotient Jacobian; for stiff
- *           systems (very high gains). Dense output by CVodeGetDky.
+ *           systems (very high gains). Dense output by CVodeGetDky. Optionally projects onto an
+ *           invariant inside its steps (ctc_integrator_set_projection).
  *
  * The in-house explicit steppers are used rather than SUNDIALS ARKODE's ERKStep because they
  * cost less per step on the small systems of a chain (bench/README.md has the figures).
@@ -23,7 +24,8 @@
  * The right-hand side returns 0 on success; any other value stops the step, is returned by
  * ctc_integrator_step and leaves the integrator's state at the last accepted step.
  * An integrator belongs to one thread. rk4 and dopri5 allocate only in ctc_integrator_new; bdf's
- * CVODE also allocates a little at each Jacobian evaluation (its difference-quotient Jacobian).
+ * CVODE also allocates its projection memory once in ctc_integrator_set_projection and a little
+ * at each Jacobian evaluation (its difference-quotient Jacobian).
  */
 #ifndef CTC_INTEGRATOR_H
 #define CTC_INTEGRATOR_H
@@ -34,6 +36,12 @@
 
 /* Right-hand side: ydot (n) = f(t, y (n)); ctx is the pointer given to ctc_integrator_new. */
 typedef int (*ctc_ode_rhs)(double t, const double *y, double *ydot, void *ctx);
+
+/* Projection onto an invariant of the ODE (a manifold its exact solution stays on, such as a
+ * kinematic loop's closure): moves y (n) at time t onto it in place, or leaves it where it is
+ * close enough; returns 0, or non-zero to stop the step (ctc_integrator_set_projection). ctx is
+ * the pointer given to ctc_integrator_new. */
+typedef int (*ctc_ode_project)(double t, double *y, void *ctx);
 
 typedef enum ctc_integ_method {
     CTC_INTEG_RK4,
@@ -83,6 +91,19 @@ void ctc_integrator_free(ctc_integrator *it);
  * returns what the rhs returned (0 = ok). */
 int ctc_integrator_reset(ctc_integrator *it, double t0, const double *y0);
 
+/* bdf only: has CVODE call proj inside every step, after its Newton iteration and before its
+ * error test (CVODE's projection, CVodeSetProjFn), and take the correction into the step. So a
+ * projection keeps CVODE's order and step-size history, which putting the state back with
+ * ctc_integrator_reset would throw away (order 1 and a fresh step size after every step). A
+ * call can belong to an attempt that the error test then rejects; the last call before
+ * ctc_integrator_step returns after an accepted step is that step's. The error estimate is not
+ * projected (the test sees the error before the projection: conservative). A non-zero return of
+ * proj fails the step: ctc_integrator_step returns it, as for the rhs, with "projection failed
+ * (returned 3) at t = ... s". NULL turns it off. Returns CTC_OK; CTC_EINVAL for rk4 and dopri5,
+ * whose callers project between steps and reset (their restart is one evaluation of f). */
+ctc_status ctc_integrator_set_projection(ctc_integrator *it, ctc_ode_project proj, char *err,
+                                         size_t errlen);
+
 /* Takes one step from the current time t towards tstop > t, never past it (a step that would
  * pass it is shortened to end exactly on it). Returns 0 after an accepted step; the rhs's
  * non-zero code if it failed; -1 with a message in err when the method fails (step size below
@@ -100,7 +121,7 @@ const double *ctc_integrator_state(const ctc_integrator *it);
  * output, into y (n). At t = t_now it is the state exactly. */
 void ctc_integrator_dense(const ctc_integrator *it, double t, double *y);
 
-/* Counters since ctc_integrator_new. */
+/* Counters since ctc_integrator_new (bdf: CVODE's own, summed over its restarts). */
 const ctc_integ_stats *ctc_integrator_stats(const ctc_integrator *it);
 
 /* Method name ("rk4", "dopri5", "bdf"). */

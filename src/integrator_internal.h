@@ -32,6 +32,7 @@ struct ctc_integrator {
     ctc_integ_spec spec;
     int n;
     ctc_ode_rhs rhs;
+    ctc_ode_project proj; /* bdf: CVODE's in-step projection; NULL = none */
     void *ctx;
 
     int ready;     /* a reset succeeded: t, y (and f) are valid */
@@ -117,6 +118,9 @@ void ctc_bdf_free(ctc_bdf *bdf);
  * from spec.initial_step, later ones let CVODE choose its starting step. Returns 0, or -1 if
  * CVODE refuses (which a valid spec never causes). */
 int ctc_bdf_reset(ctc_integrator *it);
+
+/* Turns CVODE's in-step projection on (it->proj set) or off (NULL): 0, or -1 if CVODE refuses. */
+int ctc_bdf_set_projection(ctc_integrator *it);
 
 /* One CVODE step (CV_ONE_STEP) with stop time tstop. */
 int ctc_bdf_step(ctc_integrator *it, double tstop, char *err, size_t errlen);

@@ -16,8 +16,11 @@
  *
  * Between steps the loop checks the state for divergence (non-finite values, speeds beyond the
  * bound), polls for cancellation and the wall-time limit, and records every output sample that
- * falls in the step from the integrator's dense output; a sample's forces and energy come from
- * one more evaluation at the sampled state. Discontinuities of the disturbance (step times) stop
+ * falls in the step from the integrator's dense output. A sample costs only what its channels
+ * and metrics read (sample_needs): on an open chain no forward pass, the inverse pass only for
+ * the "tau" channel, the kinematics only for energy; a sample at the state of the last
+ * right-hand side (the end of an rk4 or dopri5 step, t = 0) reuses that evaluation. The values
+ * are bitwise those of a full evaluation. Discontinuities of the disturbance (step times) stop
  * the integrator exactly there and restart it. Everything is allocated before the first step.
  *
  * Accuracy figures: the integrator's error estimate; for passive runs without disturbance, the
@@ -28,9 +31,13 @@
  * Loop models: the controller's coordinates are the independent ones (c->nind; the closing
  * joint's position and rate come from the loop kinematics), the forces and accelerations of the
  * passes are extended vectors (nvx), and after each accepted step the state is checked against
- * the closure and, with projection, put back onto it (ctc_loop_assemble) and the integrator
- * restarted there. An evaluation whose boundary solve is singular beyond loop_cond_max returns
- * SIM_RHS_SINGULAR, which ends the run as "singular" with the time.
+ * the closure and, with projection, put back onto it (ctc_loop_assemble): for rk4 and dopri5
+ * after the step, restarting the integrator there; for bdf inside the step (sim_project, called
+ * by CVODE), because a restart sends CVODE back to order 1 and a short step, whose drift then
+ * asks for the next projection: on the five-bar preset that was a projection and a restart
+ * after nearly every one of 122,632 steps instead of 785. An evaluation whose boundary solve is
+ * singular beyond loop_cond_max returns SIM_RHS_SINGULAR, which ends the run as "singular" with the
+ * time.
  */
 #include "sim.h"
 
@@ -52,6 +59,7 @@
 #define SIM_DEFAULT_BAUMGARTE 10.0
 #define SIM_LOOP_MAX_ITER 50
 #define SIM_RHS_SINGULAR 2 /* the right-hand side's code for a singular loop */
+#define SIM_PROJ_FAILED 3  /* sim_project's code when the closure cannot be solved */
 
 typedef struct sim_ctx {
     const ctc_sim_spec *spec;
@@ -70,7 +78,17 @@ typedef struct sim_ctx {
     double cond_max; /* loop models: singular beyond this condition estimate */
     double cond;     /* loop models: the last evaluation's condition estimate (max of passes) */
     double cond0;    /* loop models: the condition estimate at t = 0 */
-    long evals;
+    long evals;      /* evaluations with the forward pass (the right-hand side's) */
+    /* bdf's in-step projection (sim_project): what its last call found and did */
+    double loop_tol;    /* its trigger and Newton tolerance */
+    long proj_calls;    /* calls so far */
+    double proj_res[2]; /* the residuals (position, velocity) before the last call projected */
+    int proj_moved;     /* the last call moved the state */
+    char proj_why[200]; /* why the last call failed */
+    /* the arrays above (and dp's kinematics) hold a full evaluation at (t_eval, y_eval) */
+    int eval_valid;
+    double t_eval;
+    double *y_eval; /* (ny) */
 } sim_ctx;
 
 static const char *const ctrl_names[] = {"none", "pd", "pid", "poles", "lqr"};
@@ -371,28 +389,43 @@ static void controlled_coords(const sim_ctx *c, const double *q, const double *v
     }
 }
 
-/* driving forces and accelerations of state (q, v, ie) at time t; fills ctx's force arrays and
- * c->acc (nvx); returns 0, or SIM_RHS_SINGULAR when a loop's boundary solve is singular */
-static int evaluate(sim_ctx *c, double t, const double *y)
+/* What an evaluation computes, as bits (evaluate): the right-hand side needs all; a sample
+ * only what its channels and metrics read (record_sample). The desired motion, the controller
+ * output w and the applied forces' disturbance part are always computed (a few flops). */
+enum {
+    SIM_EVAL_KIN = 1,    /* the plant's kinematics (energy, loop residuals) */
+    SIM_EVAL_FORCES = 2, /* and the handles and the inverse pass: the driving forces f */
+    SIM_EVAL_ACC = 4,    /* and the forward pass: the accelerations */
+    SIM_EVAL_FULL = 7
+};
+
+/* Driving forces and accelerations of state (q, v, ie) at time t, as far as `what` asks: fills
+ * ctx's arrays (the force arrays and c->acc (nvx) when asked for) and dp's kinematics. A loop
+ * model always gets its kinematics (the closing joint's coordinates come from them). Returns 0,
+ * or SIM_RHS_SINGULAR when a loop's boundary solve is singular. A full evaluation is remembered
+ * (t_eval, y_eval), so a sample taken at exactly that state reuses it (record_sample). */
+static int evaluate(sim_ctx *c, double t, const double *y, unsigned what)
 {
     const ctc_sim_spec *s = c->spec;
     const ctc_model *m = c->plant;
     const double *q = y, *v = y + c->nq;
+    const int forces = (what & (SIM_EVAL_FORCES | SIM_EVAL_ACC)) != 0;
+    c->eval_valid = 0;
     if (c->has_quat) {
         memcpy(c->qn, q, (size_t)c->nq * sizeof *q);
         ctc_model_q_normalize(m, c->qn);
         q = c->qn;
     }
 
-    ctc_kinematics(m, c->dp, q, v);
-    ctc_handles(m, c->dp);
+    if (what || m->has_loop) ctc_kinematics(m, c->dp, q, v);
+    if (forces) ctc_handles(m, c->dp);
     controlled_coords(c, q, v);
     c->cond = 1;
 
     /* controller: u = qdd_d + K (int e, e, de), f = iGDCA(u) */
-    memset(c->u, 0, (size_t)c->nvx * sizeof *c->u);
     if (c->active) {
         const double *ie = y + c->nq + c->nv;
+        if (forces) memset(c->u, 0, (size_t)c->nvx * sizeof *c->u);
         for (int i = 0; i < c->nind; i++) {
             double *d = c->des + 3 * i;
             ctc_traj_eval(&s->traj[i], t, d);
@@ -400,14 +433,14 @@ static int evaluate(sim_ctx *c, double t, const double *y)
             c->w[i] = g->ki * ie[i] + g->kp * (d[0] - c->qi[i]) + g->kv * (d[1] - c->vi[i]);
             c->u[m->ind_coord[i]] = d[2] + c->w[i];
         }
-        if (c->ctrl_model) {
+        if (forces && c->ctrl_model) {
             ctc_kinematics(c->ctrl_model, c->dc, q, v);
             ctc_handles(c->ctrl_model, c->dc);
             ctc_gdca_inverse(c->ctrl_model, c->dc, c->u, c->f);
-        } else {
+        } else if (forces) {
             ctc_gdca_inverse(m, c->dp, c->u, c->f);
         }
-        if (m->has_loop) c->cond = c->dc->loop_cond;
+        if (forces && m->has_loop) c->cond = c->dc->loop_cond;
     } else {
         memset(c->f, 0, (size_t)c->nvx * sizeof *c->f);
     }
@@ -416,8 +449,12 @@ static int evaluate(sim_ctx *c, double t, const double *y)
     memcpy(c->fz, c->f, (size_t)c->nvx * sizeof *c->fz);
     for (int i = 0; s->disturb && i < c->nind; i++)
         c->fz[m->ind_coord[i]] += ctc_disturb_eval(&s->disturb[i], t);
+    if (!(what & SIM_EVAL_ACC)) return 0;
     ctc_gdca_forward(m, c->dp, c->fz, c->acc);
     c->evals++;
+    c->eval_valid = 1;
+    c->t_eval = t;
+    memcpy(c->y_eval, y, (size_t)c->ny * sizeof *y);
     if (m->has_loop) {
         c->cond = fmax(c->cond, c->dp->loop_cond);
         if (!(c->cond <= c->cond_max)) return SIM_RHS_SINGULAR;
@@ -428,12 +465,33 @@ static int evaluate(sim_ctx *c, double t, const double *y)
 static int sim_rhs(double t, const double *y, double *ydot, void *ctx)
 {
     sim_ctx *c = ctx;
-    int rc = evaluate(c, t, y);
+    int rc = evaluate(c, t, y, SIM_EVAL_FULL);
     memcpy(ydot + c->nq, c->acc, (size_t)c->nv * sizeof *ydot);
     ctc_model_q_rate(c->plant, c->has_quat ? c->qn : y, y + c->nq, ydot);
     if (c->active)
         for (int i = 0; i < c->nind; i++) ydot[c->nq + c->nv + i] = c->des[3 * i] - c->qi[i];
     return rc;
+}
+
+/* The projection CVODE calls inside each bdf step (integrator.h ctc_ode_project): the residuals
+ * at the step's end, and the state put back onto the closure when either exceeds loop_tol, as
+ * the explicit methods' projection between steps does. Returns 0, or SIM_PROJ_FAILED with the
+ * reason in c->proj_why. */
+static int sim_project(double t, double *y, void *ctx)
+{
+    sim_ctx *c = ctx;
+    (void)t;
+    c->eval_valid = 0; /* dp's kinematics are this state's now */
+    ctc_kinematics(c->plant, c->dp, y, y + c->nq);
+    ctc_loop_residual_norms(c->plant, c->dp, &c->proj_res[0], &c->proj_res[1]);
+    c->proj_calls++;
+    c->proj_moved = 0;
+    if (!(c->proj_res[0] > c->loop_tol || c->proj_res[1] > c->loop_tol)) return 0;
+    if (ctc_loop_assemble(c->plant, c->dp, y, y + c->nq, c->loop_tol, SIM_LOOP_MAX_ITER, NULL,
+                          c->proj_why, sizeof c->proj_why) != CTC_OK)
+        return SIM_PROJ_FAILED;
+    c->proj_moved = 1;
+    return 0;
 }
 
 /* the joint that owns velocity coordinate i */
@@ -524,6 +582,7 @@ typedef struct recorder {
     long count, next; /* samples in all, the next to take */
     double dt;
     double *ysample;  /* (ny) */
+    unsigned eval;    /* SIM_EVAL_* bits a sample needs (sample_needs) */
     double *loop_max; /* loop models: the max residuals (position, velocity) so far */
     /* error-dynamics reference (exact model, no disturbance) */
     int track_errdyn;
@@ -536,11 +595,31 @@ typedef struct recorder {
     double e0, ke_max, drift;
 } recorder;
 
+/* What a sample needs of an evaluation at its state. Its outputs are q, v, the desired motion,
+ * e and w (no pass needed); the driving forces (the inverse pass, with a controller); the energy
+ * (the kinematics). A loop model's sample takes a full evaluation: the forward pass's boundary
+ * solve has its own condition estimate, which metrics.loop_cond_max reports at the samples. No
+ * sample needs the forward pass's accelerations otherwise. */
+static unsigned sample_needs(const sim_ctx *c, const recorder *rec)
+{
+    const ctc_sim_result *r = rec->r;
+    if (c->plant->has_loop) return SIM_EVAL_FULL;
+    unsigned what = 0;
+    if (r->ch[CTC_CH_TAU] && c->active) what |= SIM_EVAL_FORCES;
+    if (r->ch[CTC_CH_ENERGY] || rec->track_energy) what |= SIM_EVAL_KIN;
+    return what;
+}
+
+/* Records sample j = r->nsamples at (t, y): its channels and its share of the metrics. A sample
+ * at the state of the last full evaluation (an explicit step's end, t = 0) reuses it; otherwise
+ * it evaluates what sample_needs says, with the very same calls as the right-hand side, so the
+ * values are bitwise those a full evaluation would give. */
 static void record_sample(sim_ctx *c, recorder *rec, double t, const double *y)
 {
     ctc_sim_result *r = rec->r;
     long j = r->nsamples;
-    evaluate(c, t, y);
+    if (!(c->eval_valid && t == c->t_eval && memcmp(y, c->y_eval, (size_t)c->ny * sizeof *y) == 0))
+        evaluate(c, t, y, rec->eval);
     r->t[j] = t;
     const double *q = c->has_quat ? c->qn : y, *v = y + c->nq;
     const int *ic = c->plant->ind_coord;
@@ -691,6 +770,7 @@ static void ctx_free(sim_ctx *c)
     ctc_model_free(c->ctrl_model);
     free(c->qn);
     free(c->u);
+    free(c->y_eval);
 }
 
 /* The message of a run stopped as singular at time t, why saying what stopped it; the estimate
@@ -778,7 +858,8 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     c.qn = malloc((nq + 1) * sizeof(double));
     c.u = malloc((nvx * 4 + nv * 6) * sizeof(double));
     ybuf = malloc((size_t)(c.ny + 1) * 3 * sizeof(double) + 2 * sizeof(double));
-    if (!c.dp || !c.dc || !c.qn || !c.u || !ybuf) {
+    c.y_eval = malloc((size_t)(c.ny + 1) * sizeof(double));
+    if (!c.dp || !c.dc || !c.qn || !c.u || !ybuf || !c.y_eval) {
         st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
         goto cleanup;
     }
@@ -815,6 +896,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     rec.loop_max[0] = rec.loop_max[1] = 0;
     rec.track_energy = !c.active && !has_disturbance(spec, c.nind);
     rec.track_errdyn = c.active && exact && !has_disturbance(spec, c.nind);
+    rec.eval = sample_needs(&c, &rec);
     rec.e_sq = calloc(nv, sizeof(double));
     rec.phi = calloc(nv * 12, sizeof(double));
     if (!rec.e_sq || !rec.phi) {
@@ -862,31 +944,52 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     if (st != CTC_OK) goto cleanup;
     for (int i = c.nq + c.nv; i < c.ny; i++) y0[i] = 0;
     double loop_tol = loop_tol_of(spec);
+    c.loop_tol = loop_tol;
+    /* bdf projects inside its steps and keeps its history; rk4 and dopri5 between steps */
+    int in_step =
+        plant->has_loop && spec->loop_stab == CTC_LOOP_PROJECT && is.method == CTC_INTEG_BDF;
+    if (in_step) {
+        st = ctc_integrator_set_projection(integ, sim_project, err, errlen);
+        if (st != CTC_OK) goto cleanup;
+    }
 
     double bound = spec->max_speed > 0 ? spec->max_speed : SIM_DEFAULT_MAX_SPEED;
     ctc_run_status status = CTC_RUN_DONE;
     char why[200] = "";
     double t = 0;
-    int rc0 = sim_rhs(0, y0, rec.ysample, &c);
+    /* the integrator's start evaluates f there, and the first sample reuses that evaluation */
+    int rc0 = ctc_integrator_reset(integ, 0, y0);
     if (rc0 == SIM_RHS_SINGULAR) {
         status = CTC_RUN_SINGULAR;
         singular_limit(r, 0, &c);
-    } else if (rc0 != 0 || diverged(&c, 0, y0, bound, r)) {
+    } else if (diverged(&c, 0, y0, bound, r)) {
         status = CTC_RUN_DIVERGED;
+    } else if (rc0 != 0) {
+        status = CTC_RUN_FAILED;
     } else {
         c.cond0 = c.cond;
         record_sample(&c, &rec, 0, y0);
         rec.next = 1;
-        if (ctc_integrator_reset(integ, 0, y0) != 0) status = CTC_RUN_FAILED;
     }
 
     /* the loop: one accepted step at a time */
     int ib = 0;
     while (status == CTC_RUN_DONE && rec.next < rec.count) {
         double tstop = ib < nbreaks ? breaks[ib] : spec->duration;
+        /* rk4's step divides the output interval: stopping at each sample time makes every
+           sample a step's end exactly, where it reuses the step's last evaluation (record_sample)
+           rather than interpolate at a time a few ulps off the accumulated step ends */
+        if (is.method == CTC_INTEG_RK4)
+            tstop = fmin(tstop, sample_time(rec.next, rec.count, spec->duration, rec.dt));
+        long proj_calls = c.proj_calls;
         int rc = ctc_integrator_step(integ, tstop, why, sizeof why);
         t = ctc_integrator_time(integ);
         const double *y = ctc_integrator_state(integ);
+        if (rc == SIM_PROJ_FAILED) {
+            status = CTC_RUN_SINGULAR;
+            snprintf(r->message, sizeof r->message, "t = %.6g s: projection: %s", t, c.proj_why);
+            break;
+        }
         if (rc == SIM_RHS_SINGULAR) {
             status = CTC_RUN_SINGULAR;
             singular_limit(r, t, &c);
@@ -917,11 +1020,20 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
         }
         if (plant->has_loop) { /* the drift at the step's end, and the projection */
             double pos, vel;
+            c.eval_valid = 0; /* dp's kinematics are this state's now */
             ctc_kinematics(plant, c.dp, y, y + c.nq);
             ctc_loop_residual_norms(plant, c.dp, &pos, &vel);
+            if (in_step && c.proj_calls > proj_calls) {
+                /* CVODE projected inside the step: its last call was the accepted attempt's,
+                   and the drift is what that call found */
+                pos = fmax(pos, c.proj_res[0]);
+                vel = fmax(vel, c.proj_res[1]);
+                r->metrics.projections += c.proj_moved;
+            }
             rec.loop_max[0] = fmax(rec.loop_max[0], pos);
             rec.loop_max[1] = fmax(rec.loop_max[1], vel);
-            if (spec->loop_stab == CTC_LOOP_PROJECT && (pos > loop_tol || vel > loop_tol)) {
+            if (!in_step && spec->loop_stab == CTC_LOOP_PROJECT &&
+                (pos > loop_tol || vel > loop_tol)) {
                 memcpy(yproj, y, (size_t)c.ny * sizeof *y);
                 if (ctc_loop_assemble(plant, c.dp, yproj, yproj + c.nq, loop_tol, SIM_LOOP_MAX_ITER,
                                       NULL, why, sizeof why) != CTC_OK) {

@@ -21,11 +21,12 @@
  * state is put onto the closure first (ctc_loop_assemble: q0 of the independent joints is
  * exact, of the dependent ones a guess; v0 of the dependent ones is replaced), and the
  * correction is reported. After every accepted step the stabilisation keeps the state on the
- * closure: "project" (default) moves (q, v) back when the position residual exceeds loop_tol
- * and restarts the integrator there; "baumgarte" adds phi'' + 2 a phi' + b^2 phi = 0 to the
- * forward dynamics; "none" integrates as it is and reports the residuals honestly. A run
- * stops as "singular" when the independent joints can no longer drive the loop (the boundary
- * solve's condition estimate beyond loop_cond_max).
+ * closure: "project" (default) moves (q, v) back when the position or velocity residual exceeds
+ * loop_tol - rk4 and dopri5 between steps, restarting there (one evaluation), bdf inside CVODE's
+ * steps, keeping its order and step-size history (integrator.h ctc_integrator_set_projection);
+ * "baumgarte" adds phi'' + 2 a phi' + b^2 phi = 0 to the forward dynamics; "none" integrates as it
+ * is and reports the residuals honestly. A run stops as "singular" when the independent joints can
+ * no longer drive the loop (the boundary solve's condition estimate beyond loop_cond_max).
  *
  * A run allocates everything before its first step. It runs on the calling thread, helped in the
  * GDCA passes by spec.threads - 1 workers of its own when asked. Any number of runs may go on at
@@ -74,7 +75,7 @@ typedef enum ctc_channel {
 
 /* How a loop model's state is kept on the closure. */
 typedef enum ctc_loop_stab {
-    CTC_LOOP_PROJECT = 0, /* project q and v after a step whose residual exceeds loop_tol */
+    CTC_LOOP_PROJECT = 0, /* project q and v at a step's end whose residual exceeds loop_tol */
     CTC_LOOP_BAUMGARTE,   /* Baumgarte terms in the forward dynamics */
     CTC_LOOP_NONE,        /* neither: the residuals show the drift */
 } ctc_loop_stab;
@@ -97,8 +98,8 @@ typedef struct ctc_sim_spec {
     double wall_limit;      /* s of wall time before the run stops as "timeout"; 0 = none */
     /* loop models only */
     ctc_loop_stab loop_stab;
-    double loop_tol;      /* projection: position residual (m, rad) that triggers it, and the
-                             Newton tolerance; 0 = 1e-12 */
+    double loop_tol;      /* projection: the position (m, rad) or velocity (m/s, rad/s)
+                             residual that triggers it, and the Newton tolerance; 0 = 1e-12 */
     double baumgarte[2];  /* a, b (1/s) for CTC_LOOP_BAUMGARTE; 0, 0 = 10, 10 */
     double loop_cond_max; /* stop as singular beyond this condition estimate; 0 =
                              CTC_SIM_DEFAULT_COND_MAX */
@@ -138,7 +139,10 @@ typedef struct ctc_sim_metrics {
     double errdyn_dev;   /* exact model, no disturbance: max over samples and coordinates of
                             |E(t) - expm(Ac t) E(0)| for the error state (int e, e, de), the
                             deviation from the linear error dynamics; NaN otherwise */
-    long steps, rejected, rhs_evals;
+    long steps, rejected;
+    long rhs_evals;       /* evaluations of the dynamics with the forward pass: the integrator's
+                             right-hand sides and, for a loop model, one per sample not at a
+                             step's end (an open chain's samples need no forward pass) */
     double err_estimate;  /* the integrator's accumulated error estimate (integrator.h) */
     double wall_s, cpu_s; /* time spent in the run */
     double us_per_eval;   /* wall microseconds per right-hand-side evaluation */
@@ -150,7 +154,7 @@ typedef struct ctc_sim_metrics {
                              (m, rad) */
     double loop_vres_max; /* max velocity residual (m/s, rad/s) */
     double loop_cond_max; /* max condition estimate of the boundary solves at the samples */
-    long projections;     /* steps after which the state was projected */
+    long projections;     /* steps at whose end the state was projected */
     ctc_loop_fix initial; /* what putting the initial state onto the closure did (loop.h) */
 } ctc_sim_metrics;
 
