@@ -56,10 +56,11 @@ static inline void gdca_joint_Y0(int dim, const double *left, const double *righ
 
 /* The factor E (dim x nc, row-major with row stride nc) of G = E E^T = D (D^T K D)^-1 D^T, for D
  * (dim x nc, column c at d[c dim]) with orthonormal columns, or D = identity when d is NULL (then
- * E E^T = K^-1). With D^T K D = L L^T (Cholesky), E = D L^-T: row r of E solves L e = (row r of
- * D)^T. K (dim x dim) symmetric positive definite. Returns 0, or -1 if D^T K D is not positive
- * definite (E is then NaN). G itself is never formed: every product with it goes through E. */
-static inline int gdca_joint_factor(int dim, const double *k, const double *d, int nc, double *e)
+ * E E^T = K^-1). With D^T K D = L L^T (Cholesky), E = D L^-T: row r of E solves L e = (row r
+ * of D)^T. K (dim x dim) symmetric positive definite. Returns 0, or -1 if D^T K D is not positive
+ * definite (E is then NaN). G itself is never formed: every product with it goes through E, and
+ * only E E^T matters, so the order of D's columns is free. */
+static inline int gdca_joint_factor_nc(int dim, const double *k, const double *d, int nc, double *e)
 {
     double c[CTC_DENSE_MAX * CTC_DENSE_MAX], kd[CTC_DENSE_MAX * CTC_DENSE_MAX];
 
@@ -92,12 +93,31 @@ static inline int gdca_joint_factor(int dim, const double *k, const double *d, i
     return 0;
 }
 
+/* gdca_joint_factor_nc with nc = dim - 1 (single-freedom joints) made a constant, so that its
+ * loops unroll */
+static inline int gdca_joint_factor(int dim, const double *k, const double *d, int nc, double *e)
+{
+    if (nc == dim - 1) return gdca_joint_factor_nc(dim, k, d, dim - 1, e);
+    return gdca_joint_factor_nc(dim, k, d, nc, e);
+}
+
 /* out = G x = E (E^T x), x and out (dim); out may not alias x */
-static inline void gdca_factor_apply(int dim, int nc, const double *e, const double *x, double *out)
+static inline void gdca_factor_apply_nc(int dim, int nc, const double *e, const double *x,
+                                        double *out)
 {
     double t[CTC_DENSE_MAX];
     ctc_dense_tmulv(dim, nc, e, x, t);
     ctc_dense_mulv(dim, nc, e, t, out);
+}
+
+/* gdca_factor_apply_nc with nc = dim - 1 made a constant */
+static inline void gdca_factor_apply(int dim, int nc, const double *e, const double *x, double *out)
+{
+    if (nc == dim - 1) {
+        gdca_factor_apply_nc(dim, dim - 1, e, x, out);
+    } else {
+        gdca_factor_apply_nc(dim, nc, e, x, out);
+    }
 }
 
 /* The bias vectors of the record of L:R (out) from the biases b13^L and b23^R (the records' own
