@@ -54,15 +54,47 @@ static inline void gdca_joint_Y0(int dim, const double *left, const double *righ
     }
 }
 
+/* The Cholesky factor C = L L^T of the symmetric positive definite C (nc x nc; its lower
+ * triangle receives L, the upper is left as it was) and L^-1 (li, nc x nc lower triangular,
+ * row-major; the upper triangle is not written). One division per pivot: L's columns are scaled
+ * by its reciprocal, which is L^-1's diagonal. Returns 0, or -1 if a pivot is not positive. */
+static inline int gdca_chol_inv(int nc, double *c, double *li)
+{
+    for (int j = 0; j < nc; j++) {
+        double p = c[j * nc + j];
+        for (int k = 0; k < j; k++) p -= c[j * nc + k] * c[j * nc + k];
+        if (!(p > 0)) return -1;
+        p = sqrt(p);
+        const double ip = 1.0 / p;
+        c[j * nc + j] = p;
+        li[j * nc + j] = ip;
+        for (int i = j + 1; i < nc; i++) {
+            double t = c[i * nc + j];
+            for (int k = 0; k < j; k++) t -= c[i * nc + k] * c[j * nc + k];
+            c[i * nc + j] = t * ip;
+        }
+    }
+    /* L^-1 by rows: (L^-1)_ij = -(L^-1)_ii sum_{k=j}^{i-1} L_ik (L^-1)_kj, j < i */
+    for (int i = 1; i < nc; i++) {
+        for (int j = 0; j < i; j++) {
+            double t = 0;
+            for (int k = j; k < i; k++) t += c[i * nc + k] * li[k * nc + j];
+            li[i * nc + j] = -li[i * nc + i] * t;
+        }
+    }
+    return 0;
+}
+
 /* The factor E (dim x nc, row-major with row stride nc) of G = E E^T = D (D^T K D)^-1 D^T, for D
  * (dim x nc, column c at d[c dim]) with orthonormal columns, or D = identity when d is NULL (then
- * E E^T = K^-1). With D^T K D = L L^T (Cholesky), E = D L^-T: row r of E solves L e = (row r
- * of D)^T. K (dim x dim) symmetric positive definite. Returns 0, or -1 if D^T K D is not positive
- * definite (E is then NaN). G itself is never formed: every product with it goes through E, and
- * only E E^T matters, so the order of D's columns is free. */
+ * E E^T = K^-1). With D^T K D = L L^T (Cholesky), E = D L^-T, from L^-1 formed once. K (dim x
+ * dim) symmetric positive definite. Returns 0, or -1 if D^T K D is not positive definite (E is
+ * then NaN). G itself is never formed: every product with it goes through E, and only E E^T
+ * matters, so the order of D's columns is free. */
 static inline int gdca_joint_factor_nc(int dim, const double *k, const double *d, int nc, double *e)
 {
     double c[CTC_DENSE_MAX * CTC_DENSE_MAX], kd[CTC_DENSE_MAX * CTC_DENSE_MAX];
+    double li[CTC_DENSE_MAX * CTC_DENSE_MAX];
 
     if (nc == 0) return 0; /* a joint that constrains nothing carries no constraint load */
     /* C = D^T K D; with D = I it is K */
@@ -81,14 +113,21 @@ static inline int gdca_joint_factor_nc(int dim, const double *k, const double *d
             }
         }
     }
-    if (ctc_dense_cholesky(nc, c) != 0) {
+    if (gdca_chol_inv(nc, c, li) != 0) {
         for (int i = 0; i < dim * nc; i++) e[i] = NAN;
         return -1;
     }
+    /* E_rc = sum_{k <= c} D_rk (L^-1)_ck */
     for (int r = 0; r < dim; r++) {
-        double *er = e + r * nc;
-        for (int c0 = 0; c0 < nc; c0++) er[c0] = d ? d[c0 * dim + r] : (double)(c0 == r);
-        ctc_dense_lsolve(nc, c, er);
+        for (int c0 = 0; c0 < nc; c0++) {
+            double s = 0;
+            if (d == NULL) {
+                s = r <= c0 ? li[c0 * nc + r] : 0.0;
+            } else {
+                for (int k0 = 0; k0 <= c0; k0++) s += d[k0 * dim + r] * li[c0 * nc + k0];
+            }
+            e[r * nc + c0] = s;
+        }
     }
     return 0;
 }
