@@ -140,6 +140,31 @@ static inline int gdca_joint_factor(int dim, const double *k, const double *d, i
     return gdca_joint_factor_nc(dim, k, d, nc, e);
 }
 
+/* E of a planar revolute joint, D = [(0, 1, 0), (0, 0, 1)]: D^T K D is K's lower right 2 x 2
+ * block, and E = D L^-T has a zero first row. Returns as gdca_joint_factor. */
+static inline int gdca_joint_factor_planar_revolute(const double *k, double *e)
+{
+    double c[4] = {k[4], k[5], k[7], k[8]}, li[4];
+    if (gdca_chol_inv(2, c, li) != 0) {
+        for (int i = 0; i < 6; i++) e[i] = NAN;
+        return -1;
+    }
+    e[0] = e[1] = 0;
+    e[2] = li[0], e[3] = li[2];
+    e[4] = 0, e[5] = li[3];
+    return 0;
+}
+
+/* E of joint j of type `type` with D from the kinematics (kinematics.c: a planar revolute
+ * joint's D columns are laid out as gdca_joint_factor_planar_revolute assumes), by the
+ * specialised form where it applies */
+static inline int gdca_joint_factor_typed(int dim, ctc_joint_type type, const double *k,
+                                          const double *d, int nc, double *e)
+{
+    if (dim == 3 && type == CTC_JOINT_REVOLUTE) return gdca_joint_factor_planar_revolute(k, e);
+    return gdca_joint_factor(dim, k, d, nc, e);
+}
+
 /* out = G x = E (E^T x), x and out (dim); out may not alias x */
 static inline void gdca_factor_apply_nc(int dim, int nc, const double *e, const double *x,
                                         double *out)
