@@ -140,6 +140,51 @@ static inline int gdca_joint_factor(int dim, const double *k, const double *d, i
     return gdca_joint_factor_nc(dim, k, d, nc, e);
 }
 
+/* E for D = [unit columns e_u, e_u+1, e_u+2; (n1 at rows g..g+2), (n2 at rows g..g+2)] (dim 6,
+ * nc 5; {u, g} = {3, 0} for a revolute joint, whose D's columns n1, n2 are angular, and {0, 3}
+ * for a prismatic one), the columns taken in that order: D^T K D picks K's block (u, u) and the
+ * products K (n_a at g), so that K D costs 2 products with 3 columns of K instead of 5 full
+ * ones, and E's rows u..u+2 are L^-T's. Returns as gdca_joint_factor. */
+static inline int gdca_joint_factor_hinge(const double *k, const double *n1, const double *n2,
+                                          int u, int g, double *e)
+{
+    double c[25], li[25], kn[2][6];
+    const double *n[2] = {n1, n2};
+
+    for (int a = 0; a < 2; a++) { /* kn_a = K (n_a at rows g) */
+        for (int i = 0; i < 6; i++) {
+            const double *ki = k + 6 * i + g;
+            kn[a][i] = ki[0] * n[a][0] + ki[1] * n[a][1] + ki[2] * n[a][2];
+        }
+    }
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) c[5 * i + j] = k[6 * (u + i) + u + j];
+        for (int a = 0; a < 2; a++) c[5 * i + 3 + a] = c[5 * (3 + a) + i] = kn[a][u + i];
+    }
+    for (int a = 0; a < 2; a++) {
+        for (int b = a; b < 2; b++) {
+            const double *kb = kn[b] + g;
+            c[5 * (3 + a) + 3 + b] = c[5 * (3 + b) + 3 + a] =
+                n[a][0] * kb[0] + n[a][1] * kb[1] + n[a][2] * kb[2];
+        }
+    }
+    if (gdca_chol_inv(5, c, li) != 0) {
+        for (int i = 0; i < 30; i++) e[i] = NAN;
+        return -1;
+    }
+    for (int i = 0; i < 3; i++) { /* rows u + i: D's row is e_i^T */
+        double *er = e + 5 * (u + i);
+        for (int c0 = 0; c0 < 5; c0++) er[c0] = c0 >= i ? li[5 * c0 + i] : 0.0;
+    }
+    for (int r = 0; r < 3; r++) { /* rows g + r: D's row is (0, 0, 0, n1_r, n2_r) */
+        double *er = e + 5 * (g + r);
+        er[0] = er[1] = er[2] = 0;
+        er[3] = n1[r] * li[5 * 3 + 3];
+        er[4] = n1[r] * li[5 * 4 + 3] + n2[r] * li[5 * 4 + 4];
+    }
+    return 0;
+}
+
 /* E of a planar revolute joint, D = [(0, 1, 0), (0, 0, 1)]: D^T K D is K's lower right 2 x 2
  * block, and E = D L^-T has a zero first row. Returns as gdca_joint_factor. */
 static inline int gdca_joint_factor_planar_revolute(const double *k, double *e)
@@ -155,13 +200,19 @@ static inline int gdca_joint_factor_planar_revolute(const double *k, double *e)
     return 0;
 }
 
-/* E of joint j of type `type` with D from the kinematics (kinematics.c: a planar revolute
- * joint's D columns are laid out as gdca_joint_factor_planar_revolute assumes), by the
- * specialised form where it applies */
+/* E of joint j of type `type` with D from the kinematics (kinematics.c: revolute and prismatic
+ * joints' D columns are laid out as gdca_joint_factor_hinge and
+ * gdca_joint_factor_planar_revolute assume), by the specialised forms where they apply */
 static inline int gdca_joint_factor_typed(int dim, ctc_joint_type type, const double *k,
                                           const double *d, int nc, double *e)
 {
     if (dim == 3 && type == CTC_JOINT_REVOLUTE) return gdca_joint_factor_planar_revolute(k, e);
+    if (dim == 6 && type == CTC_JOINT_REVOLUTE) {
+        return gdca_joint_factor_hinge(k, d, d + 6, 3, 0, e);
+    }
+    if (dim == 6 && type == CTC_JOINT_PRISMATIC) {
+        return gdca_joint_factor_hinge(k, d + 18 + 3, d + 24 + 3, 0, 3, e);
+    }
     return gdca_joint_factor(dim, k, d, nc, e);
 }
 
