@@ -9,8 +9,9 @@
  * (G, z); G is symmetric positive semidefinite and is kept as its factor E, G = E E^T:
  *     h11 = h11^L - h12^L G h21^L     h12 = h12^L G h12^R     h13 = h13^L - h12^L z
  *     h22 = h22^R - h21^R G h12^R                             h23 = h23^R + h21^R z
- * (Eq. 34-39). All functions take the dimension as an argument and are meant to be inlined into
- * CTC_SPECIALISE wrappers with a constant 3 or 6.
+ * (Eq. 34-39). The functions take the dimension as an argument (the joint factors specialised to
+ * one form and joint type excepted) and are meant to be inlined into CTC_SPECIALISE wrappers with
+ * a constant 3 or 6.
  */
 #ifndef CTC_GDCA_TREE_H
 #define CTC_GDCA_TREE_H
