@@ -73,7 +73,9 @@ static void run_once(bench_case *c, int what)
         ctc_kinematics(m, c->d, c->q, c->v);
         ctc_handles(m, c->d);
         break;
-    case T_INV:
+    case T_INV: /* as the first pass at a state, which computes the composite inertias that
+                   later passes at the same state keep (gdca_inverse.c) */
+        c->d->icomp_stamp = 0;
         ctc_gdca_inverse(m, c->d, c->u, c->f);
         break;
     case T_FWD:

@@ -55,7 +55,8 @@ static inline int forward_joint(const ctc_model *m, ctc_data *d, int j, const do
     gdca_joint_map(dim, nv, d->jnt_P + 3 * dim * j, f + m->jnt_vadr[j], pf);
     if (factor) {
         gdca_joint_K(dim, left, right, k);
-        st = gdca_joint_factor(dim, k, d->jnt_D + dim * dim * j, dim - nv, e);
+        st = gdca_joint_factor_typed(dim, m->joints[j].type, k, d->jnt_D + dim * dim * j, dim - nv,
+                                     e);
         ctc_dense_mulv(dim, dim, k, pf, kpf);
     } else { /* K P f = h11^R P f + h22^L P f, without forming K */
         ctc_dense_mulv(dim, dim, right + H11(dim), pf, kpf);

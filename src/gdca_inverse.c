@@ -50,23 +50,6 @@
 #define CC(dim) ((dim) * (dim) + (dim))
 #define CR(dim) ((dim) * (dim) + 2 * (dim))
 
-/* the rigid transfer T(r) as a dense dim x dim matrix */
-static inline void transfer_matrix(int dim, const double r[3], double *t)
-{
-    for (int i = 0; i < dim * dim; i++) t[i] = (i % (dim + 1) == 0) ? 1.0 : 0.0;
-    if (dim == 3) {
-        t[3] = -r[1];
-        t[6] = r[0];
-    } else { /* lower-left block -[r]x */
-        t[6 * 3 + 1] = r[2];
-        t[6 * 3 + 2] = -r[1];
-        t[6 * 4 + 0] = -r[2];
-        t[6 * 4 + 2] = r[0];
-        t[6 * 5 + 0] = r[1];
-        t[6 * 5 + 1] = -r[0];
-    }
-}
-
 /* out = T(r) a: the acceleration a handle r further on (rigid part) */
 static inline void transfer_motion(int dim, const double r[3], const double *a, double *out)
 {
@@ -97,18 +80,47 @@ static inline void transfer_force(int dim, const double r[3], const double *f, d
     }
 }
 
-/* out = T^T s T for symmetric s (dim x dim); out may alias nothing */
-static inline void congruence(int dim, const double *t, const double *s, double *out)
+/* out = T(r)^T S T(r) for symmetric S (dim x dim), written by blocks (about 110 flops for dim 6,
+ * against 684 for dense products). Spatial, with S = [A B; B^T C] and X = -[r]x (T = [1 0; X 1]):
+ *     T^T S T = [A + B X + (B X)^T + X^T C X,  B + (C X)^T;  B^T + C X,  C],
+ * where row i of M X is r x (row i of M) and column j of X^T Y is r x (column j of Y).
+ * Planar, with S = [a b^T; b C] and X = (-r_y, r_x):
+ *     T^T S T = [a + 2 b.X + X.(C X),  (b + C X)^T;  b + C X,  C].
+ * out may alias nothing. */
+static inline void congruence(int dim, const double r[3], const double *s, double *out)
 {
-    double st[CTC_DENSE_MAX * CTC_DENSE_MAX];
-    ctc_dense_mul(dim, s, t, st);
-    for (int i = 0; i < dim; i++) {
-        for (int j = i; j < dim; j++) {
-            double x = 0;
-            for (int k = 0; k < dim; k++) x += t[k * dim + i] * st[k * dim + j];
-            out[i * dim + j] = x;
-            out[j * dim + i] = x;
+    if (dim == 3) {
+        const double x0 = -r[1], x1 = r[0];
+        const double cx0 = s[4] * x0 + s[5] * x1, cx1 = s[7] * x0 + s[8] * x1;
+        const double b0 = s[3] + cx0, b1 = s[6] + cx1;
+        out[0] = s[0] + 2 * (s[3] * x0 + s[6] * x1) + (x0 * cx0 + x1 * cx1);
+        out[1] = out[3] = b0;
+        out[2] = out[6] = b1;
+        out[4] = s[4];
+        out[5] = out[7] = s[5];
+        out[8] = s[8];
+        return;
+    }
+    double bx[9], cx[9], xcx[9];
+    for (int i = 0; i < 3; i++) {
+        ctc_v3_cross(bx + 3 * i, r, s + 6 * i + 3);       /* row i of B X */
+        ctc_v3_cross(cx + 3 * i, r, s + 6 * (i + 3) + 3); /* row i of C X */
+    }
+    for (int j = 0; j < 3; j++) { /* column j of X^T (C X) */
+        double col[3] = {cx[j], cx[3 + j], cx[6 + j]}, t[3];
+        ctc_v3_cross(t, r, col);
+        xcx[j] = t[0], xcx[3 + j] = t[1], xcx[6 + j] = t[2];
+    }
+    for (int i = 0; i < 3; i++) {
+        for (int j = i; j < 3; j++) { /* top left, symmetric */
+            double v = s[6 * i + j] + bx[3 * i + j] + bx[3 * j + i] + xcx[3 * i + j];
+            out[6 * i + j] = out[6 * j + i] = v;
         }
+        for (int j = 0; j < 3; j++) { /* top right B + (C X)^T, and its transpose */
+            double v = s[6 * i + 3 + j] + cx[3 * j + i];
+            out[6 * i + 3 + j] = out[6 * (3 + j) + i] = v;
+        }
+        for (int j = 0; j < 3; j++) out[6 * (3 + i) + 3 + j] = s[6 * (3 + i) + 3 + j];
     }
 }
 
@@ -118,7 +130,7 @@ static inline void body_record(const ctc_model *m, const ctc_data *d, int k, dou
 {
     const double *r1 = d->hr + 6 * k, *r2 = r1 + 3, *w = d->omega + 3 * k;
     double *c = rec + CC(dim), *r12 = rec + CR(dim);
-    double rho[3], mc[36] = {0}, load[6], t[36];
+    double *in = rec + CI(dim), rho[3], load[6];
     ctc_v3_scale(rho, r1, -1.0);
     ctc_v3_sub(r12, r2, r1);
 
@@ -126,8 +138,13 @@ static inline void body_record(const ctc_model *m, const ctc_data *d, int k, dou
         const ctc_planar_body *b = &m->planar[k];
         const double *g = m->plane_gravity;
         double w2 = w[2] * w[2];
-        mc[0] = b->inertia;
-        mc[4] = mc[8] = b->mass;
+        /* I = T(rho)^T diag(J, m, m) T(rho) = [J + m |rho|^2, m X^T; m X, m 1], X = (-rho_y,
+           rho_x) */
+        in[0] = b->inertia + b->mass * (rho[0] * rho[0] + rho[1] * rho[1]);
+        in[1] = in[3] = -b->mass * rho[1];
+        in[2] = in[6] = b->mass * rho[0];
+        in[4] = in[8] = b->mass;
+        in[5] = in[7] = 0;
         load[0] = 0;
         load[1] = b->mass * (-w2 * rho[0] - g[0]);
         load[2] = b->mass * (-w2 * rho[1] - g[1]);
@@ -138,9 +155,24 @@ static inline void body_record(const ctc_model *m, const ctc_data *d, int k, dou
         const ctc_body_spec *b = &m->bodies[k];
         double iw[9], wr[3], wwr[3], iww[3];
         ctc_m3_rotate_sym(iw, d->xrot + 9 * k, b->inertia);
+        /* I = T(rho)^T diag(I_c, m 1) T(rho)
+             = [I_c + m (|rho|^2 1 - rho rho^T), m [rho]x; -m [rho]x, m 1] */
+        const double m0 = b->mass, rr = ctc_v3_dot(rho, rho);
+        const double mr[3] = {m0 * rho[0], m0 * rho[1], m0 * rho[2]};
         for (int i = 0; i < 3; i++) {
-            for (int j = 0; j < 3; j++) mc[6 * i + j] = iw[3 * i + j];
-            mc[6 * (i + 3) + i + 3] = b->mass;
+            for (int j = i; j < 3; j++) {
+                double v = iw[3 * i + j] + ((i == j ? m0 * rr : 0) - mr[i] * rho[j]);
+                in[6 * i + j] = in[6 * j + i] = v;
+            }
+            for (int j = 0; j < 3; j++) in[6 * (3 + i) + 3 + j] = i == j ? m0 : 0;
+        }
+        /* m [rho]x in the top right block, its transpose -m [rho]x in the bottom left */
+        const double sk[9] = {0, -mr[2], mr[1], mr[2], 0, -mr[0], -mr[1], mr[0], 0};
+        for (int i = 0; i < 3; i++) {
+            for (int j = 0; j < 3; j++) {
+                in[6 * i + 3 + j] = sk[3 * i + j];
+                in[6 * (3 + j) + i] = sk[3 * i + j];
+            }
         }
         /* M_c kappa - b = (w x I w; m (w x (w x rho) - g)) */
         ctc_m3_mulv(iww, iw, w);
@@ -153,8 +185,6 @@ static inline void body_record(const ctc_model *m, const ctc_data *d, int k, dou
         ctc_v3_set(c, 0, 0, 0);
         ctc_v3_cross(c + 3, w, wr);
     }
-    transfer_matrix(dim, rho, t);
-    congruence(dim, t, mc, rec + CI(dim));
     transfer_force(dim, rho, load, rec + CW(dim));
 }
 
@@ -214,7 +244,7 @@ static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const 
         double *N = record(d, n + i), *e = d->inv_e + dim * node->joint;
         const double *P = d->jnt_P + 3 * dim * node->joint, *beta = d->jnt_beta + dim * node->joint;
         const double *uj = a->u + m->jnt_vadr[node->joint];
-        double t[CTC_DENSE_MAX * CTC_DENSE_MAX], s[CTC_DENSE_MAX * CTC_DENSE_MAX];
+        double s[CTC_DENSE_MAX * CTC_DENSE_MAX];
         double ie[CTC_DENSE_MAX], tf[CTC_DENSE_MAX];
 
         /* e = c^L + P u + beta */
@@ -225,8 +255,7 @@ static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const 
 
         /* I = I^L + T^T I^R T (the state's: kept while a->keep),  w = w^L + T^T (I^R e + w^R) */
         if (!a->keep) {
-            transfer_matrix(dim, L + CR(dim), t);
-            congruence(dim, t, R + CI(dim), s);
+            congruence(dim, L + CR(dim), R + CI(dim), s);
             for (int r = 0; r < dim * dim; r++) N[CI(dim) + r] = L[CI(dim) + r] + s[r];
             ctc_v3_add(N + CR(dim), L + CR(dim), R + CR(dim));
         }

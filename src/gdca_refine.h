@@ -11,12 +11,15 @@
  *     r = f - (M(q) qdd + N(q, v))            (ctc_gdca_inverse of qdd),
  * and corrects qdd by the forward pass's own operator on r with every bias term zero:
  *     dq = M^-1 r,   qdd <- qdd + dq.
- * That correction pass reuses the joint factors E and the assembled matrices h11, h12, h22 of
- * the forward pass just made, so it costs vector work only (about a third of a forward pass
- * plus one composite inverse). The forward operator's relative error on a bias-free right-hand
- * side is many orders smaller than on the cancelling one, so one step brings the accelerations
- * to the accuracy of the forces' residual. A loop model's residual and correction include the
- * closing joint's load and the closure (gdca_refine_residual).
+ * That correction pass is the forward pass in a bias-free mode (gdca_forward.c): it reuses the
+ * joint factors E and the assembled matrices h11, h12, h22 of the forward pass just made, so it
+ * costs vector work only, and the composite inverse at the same state keeps its composite
+ * inertias (gdca_inverse.c): a step costs about a third of an unrefined spatial CTC evaluation
+ * and less than half of a planar one (bench/README.md, "Hot path"). The forward operator's
+ * relative error on a bias-free right-hand side is many orders smaller than on the cancelling
+ * one, so one step brings the accelerations to the accuracy of the forces' residual. A loop
+ * model's residual and correction include the closing joint's load and the closure
+ * (gdca_refine_residual).
  */
 #ifndef CTC_GDCA_REFINE_H
 #define CTC_GDCA_REFINE_H
@@ -27,7 +30,7 @@
  * bodies, or its body masses or inertias span a ratio of CTC_REFINE_MASS_RATIO or more (model.h
  * mass_ratio). Below both, the unrefined round trip GDCA(iGDCA(u)) is within about 1e-9 of u on
  * random planar and spatial chains and on Featherstone's coil (bench_accuracy), while a step
- * adds 40-65% to a CTC evaluation. With extreme proportions a chain of 32 bodies loses all but
+ * adds 30-50% to a CTC evaluation. With extreme proportions a chain of 32 bodies loses all but
  * three digits unrefined (test_hard), one step recovers most of them and a second the rest.
  * Steps stop once a correction is below CTC_REFINE_CONVERGED of the accelerations (the next
  * one would be smaller by the bias-free pass's own relative error, far below rounding of the

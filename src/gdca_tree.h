@@ -9,8 +9,9 @@
  * (G, z); G is symmetric positive semidefinite and is kept as its factor E, G = E E^T:
  *     h11 = h11^L - h12^L G h21^L     h12 = h12^L G h12^R     h13 = h13^L - h12^L z
  *     h22 = h22^R - h21^R G h12^R                             h23 = h23^R + h21^R z
- * (Eq. 34-39). All functions take the dimension as an argument and are meant to be inlined into
- * CTC_SPECIALISE wrappers with a constant 3 or 6.
+ * (Eq. 34-39). The functions take the dimension as an argument (the joint factors specialised to
+ * one form and joint type excepted) and are meant to be inlined into CTC_SPECIALISE wrappers with
+ * a constant 3 or 6.
  */
 #ifndef CTC_GDCA_TREE_H
 #define CTC_GDCA_TREE_H
@@ -54,14 +55,47 @@ static inline void gdca_joint_Y0(int dim, const double *left, const double *righ
     }
 }
 
+/* The Cholesky factor C = L L^T of the symmetric positive definite C (nc x nc; its lower
+ * triangle receives L, the upper is left as it was) and L^-1 (li, nc x nc lower triangular,
+ * row-major; the upper triangle is not written). One division per pivot: L's columns are scaled
+ * by its reciprocal, which is L^-1's diagonal. Returns 0, or -1 if a pivot is not positive. */
+static inline int gdca_chol_inv(int nc, double *c, double *li)
+{
+    for (int j = 0; j < nc; j++) {
+        double p = c[j * nc + j];
+        for (int k = 0; k < j; k++) p -= c[j * nc + k] * c[j * nc + k];
+        if (!(p > 0)) return -1;
+        p = sqrt(p);
+        const double ip = 1.0 / p;
+        c[j * nc + j] = p;
+        li[j * nc + j] = ip;
+        for (int i = j + 1; i < nc; i++) {
+            double t = c[i * nc + j];
+            for (int k = 0; k < j; k++) t -= c[i * nc + k] * c[j * nc + k];
+            c[i * nc + j] = t * ip;
+        }
+    }
+    /* L^-1 by rows: (L^-1)_ij = -(L^-1)_ii sum_{k=j}^{i-1} L_ik (L^-1)_kj, j < i */
+    for (int i = 1; i < nc; i++) {
+        for (int j = 0; j < i; j++) {
+            double t = 0;
+            for (int k = j; k < i; k++) t += c[i * nc + k] * li[k * nc + j];
+            li[i * nc + j] = -li[i * nc + i] * t;
+        }
+    }
+    return 0;
+}
+
 /* The factor E (dim x nc, row-major with row stride nc) of G = E E^T = D (D^T K D)^-1 D^T, for D
  * (dim x nc, column c at d[c dim]) with orthonormal columns, or D = identity when d is NULL (then
- * E E^T = K^-1). With D^T K D = L L^T (Cholesky), E = D L^-T: row r of E solves L e = (row r of
- * D)^T. K (dim x dim) symmetric positive definite. Returns 0, or -1 if D^T K D is not positive
- * definite (E is then NaN). G itself is never formed: every product with it goes through E. */
-static inline int gdca_joint_factor(int dim, const double *k, const double *d, int nc, double *e)
+ * E E^T = K^-1). With D^T K D = L L^T (Cholesky), E = D L^-T, from L^-1 formed once. K (dim x
+ * dim) symmetric positive definite. Returns 0, or -1 if D^T K D is not positive definite (E is
+ * then NaN). G itself is never formed: every product with it goes through E, and only E E^T
+ * matters, so the order of D's columns is free. */
+static inline int gdca_joint_factor_nc(int dim, const double *k, const double *d, int nc, double *e)
 {
     double c[CTC_DENSE_MAX * CTC_DENSE_MAX], kd[CTC_DENSE_MAX * CTC_DENSE_MAX];
+    double li[CTC_DENSE_MAX * CTC_DENSE_MAX];
 
     if (nc == 0) return 0; /* a joint that constrains nothing carries no constraint load */
     /* C = D^T K D; with D = I it is K */
@@ -80,24 +114,126 @@ static inline int gdca_joint_factor(int dim, const double *k, const double *d, i
             }
         }
     }
-    if (ctc_dense_cholesky(nc, c) != 0) {
+    if (gdca_chol_inv(nc, c, li) != 0) {
         for (int i = 0; i < dim * nc; i++) e[i] = NAN;
         return -1;
     }
+    /* E_rc = sum_{k <= c} D_rk (L^-1)_ck */
     for (int r = 0; r < dim; r++) {
-        double *er = e + r * nc;
-        for (int c0 = 0; c0 < nc; c0++) er[c0] = d ? d[c0 * dim + r] : (double)(c0 == r);
-        ctc_dense_lsolve(nc, c, er);
+        for (int c0 = 0; c0 < nc; c0++) {
+            double s = 0;
+            if (d == NULL) {
+                s = r <= c0 ? li[c0 * nc + r] : 0.0;
+            } else {
+                for (int k0 = 0; k0 <= c0; k0++) s += d[k0 * dim + r] * li[c0 * nc + k0];
+            }
+            e[r * nc + c0] = s;
+        }
     }
     return 0;
 }
 
+/* gdca_joint_factor_nc with nc = dim - 1 (single-freedom joints) made a constant, so that its
+ * loops unroll */
+static inline int gdca_joint_factor(int dim, const double *k, const double *d, int nc, double *e)
+{
+    if (nc == dim - 1) return gdca_joint_factor_nc(dim, k, d, dim - 1, e);
+    return gdca_joint_factor_nc(dim, k, d, nc, e);
+}
+
+/* E for D = [unit columns e_u, e_u+1, e_u+2; (n1 at rows g..g+2), (n2 at rows g..g+2)] (dim 6,
+ * nc 5; {u, g} = {3, 0} for a revolute joint, whose D's columns n1, n2 are angular, and {0, 3}
+ * for a prismatic one), the columns taken in that order: D^T K D picks K's block (u, u) and the
+ * products K (n_a at g), so that K D costs 2 products with 3 columns of K instead of 5 full
+ * ones, and E's rows u..u+2 are L^-T's. Returns as gdca_joint_factor. */
+static inline int gdca_joint_factor_hinge(const double *k, const double *n1, const double *n2,
+                                          int u, int g, double *e)
+{
+    double c[25], li[25], kn[2][6];
+    const double *n[2] = {n1, n2};
+
+    for (int a = 0; a < 2; a++) { /* kn_a = K (n_a at rows g) */
+        for (int i = 0; i < 6; i++) {
+            const double *ki = k + 6 * i + g;
+            kn[a][i] = ki[0] * n[a][0] + ki[1] * n[a][1] + ki[2] * n[a][2];
+        }
+    }
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) c[5 * i + j] = k[6 * (u + i) + u + j];
+        for (int a = 0; a < 2; a++) c[5 * i + 3 + a] = c[5 * (3 + a) + i] = kn[a][u + i];
+    }
+    for (int a = 0; a < 2; a++) {
+        for (int b = a; b < 2; b++) {
+            const double *kb = kn[b] + g;
+            c[5 * (3 + a) + 3 + b] = c[5 * (3 + b) + 3 + a] =
+                n[a][0] * kb[0] + n[a][1] * kb[1] + n[a][2] * kb[2];
+        }
+    }
+    if (gdca_chol_inv(5, c, li) != 0) {
+        for (int i = 0; i < 30; i++) e[i] = NAN;
+        return -1;
+    }
+    for (int i = 0; i < 3; i++) { /* rows u + i: D's row is e_i^T */
+        double *er = e + 5 * (u + i);
+        for (int c0 = 0; c0 < 5; c0++) er[c0] = c0 >= i ? li[5 * c0 + i] : 0.0;
+    }
+    for (int r = 0; r < 3; r++) { /* rows g + r: D's row is (0, 0, 0, n1_r, n2_r) */
+        double *er = e + 5 * (g + r);
+        er[0] = er[1] = er[2] = 0;
+        er[3] = n1[r] * li[5 * 3 + 3];
+        er[4] = n1[r] * li[5 * 4 + 3] + n2[r] * li[5 * 4 + 4];
+    }
+    return 0;
+}
+
+/* E of a planar revolute joint, D = [(0, 1, 0), (0, 0, 1)]: D^T K D is K's lower right 2 x 2
+ * block, and E = D L^-T has a zero first row. Returns as gdca_joint_factor. */
+static inline int gdca_joint_factor_planar_revolute(const double *k, double *e)
+{
+    double c[4] = {k[4], k[5], k[7], k[8]}, li[4];
+    if (gdca_chol_inv(2, c, li) != 0) {
+        for (int i = 0; i < 6; i++) e[i] = NAN;
+        return -1;
+    }
+    e[0] = e[1] = 0;
+    e[2] = li[0], e[3] = li[2];
+    e[4] = 0, e[5] = li[3];
+    return 0;
+}
+
+/* E of joint j of type `type` with D from the kinematics (kinematics.c: revolute and prismatic
+ * joints' D columns are laid out as gdca_joint_factor_hinge and
+ * gdca_joint_factor_planar_revolute assume), by the specialised forms where they apply */
+static inline int gdca_joint_factor_typed(int dim, ctc_joint_type type, const double *k,
+                                          const double *d, int nc, double *e)
+{
+    if (dim == 3 && type == CTC_JOINT_REVOLUTE) return gdca_joint_factor_planar_revolute(k, e);
+    if (dim == 6 && type == CTC_JOINT_REVOLUTE) {
+        return gdca_joint_factor_hinge(k, d, d + 6, 3, 0, e);
+    }
+    if (dim == 6 && type == CTC_JOINT_PRISMATIC) {
+        return gdca_joint_factor_hinge(k, d + 18 + 3, d + 24 + 3, 0, 3, e);
+    }
+    return gdca_joint_factor(dim, k, d, nc, e);
+}
+
 /* out = G x = E (E^T x), x and out (dim); out may not alias x */
-static inline void gdca_factor_apply(int dim, int nc, const double *e, const double *x, double *out)
+static inline void gdca_factor_apply_nc(int dim, int nc, const double *e, const double *x,
+                                        double *out)
 {
     double t[CTC_DENSE_MAX];
     ctc_dense_tmulv(dim, nc, e, x, t);
     ctc_dense_mulv(dim, nc, e, t, out);
+}
+
+/* gdca_factor_apply_nc with nc = dim - 1 made a constant */
+static inline void gdca_factor_apply(int dim, int nc, const double *e, const double *x, double *out)
+{
+    if (nc == dim - 1) {
+        gdca_factor_apply_nc(dim, dim - 1, e, x, out);
+    } else {
+        gdca_factor_apply_nc(dim, nc, e, x, out);
+    }
 }
 
 /* The bias vectors of the record of L:R (out) from the biases b13^L and b23^R (the records' own

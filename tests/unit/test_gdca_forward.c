@@ -12,6 +12,7 @@
 #include "chains.h"
 #include "ctc.h"
 #include "gdca_refine.h"
+#include "gdca_tree.h"
 #include "linalg.h"
 #include "oracle.h"
 #include "spatial.h"
@@ -337,4 +338,64 @@ Test(gdca_forward, refinement_brings_the_round_trip_to_the_oracles_own, .timeout
         ctc_model_free(m);
         test_chain_free(c);
     }
+}
+
+/* W = E E^T (dim x dim) of a factor E (dim x nc) */
+static void factor_product(int dim, int nc, const double *e, double *w)
+{
+    for (int i = 0; i < dim; i++) {
+        for (int j = 0; j < dim; j++) {
+            double s = 0;
+            for (int c = 0; c < nc; c++) s += e[i * nc + c] * e[j * nc + c];
+            w[i * dim + j] = s;
+        }
+    }
+}
+
+/* The joint factors specialised by joint type (planar revolute, spatial revolute and prismatic:
+ * D's unit columns picked out of K) against the general D (D^T K D)^-1 D^T, on the D of the
+ * kinematics and random symmetric positive definite K */
+static void typed_factor_vs_general(const ctc_model *m, uint64_t seed)
+{
+    const int dim = m->dim;
+    ctc_data *d = ctc_data_new(m);
+    double *q = calloc((size_t)m->nq, sizeof(double)), *v = calloc((size_t)m->nv, sizeof(double));
+    cr_assert(d && q && v);
+    uint64_t rng = seed;
+    test_random_state(m, &rng, 1.0, q, v);
+    ctc_kinematics(m, d, q, v);
+    for (int j = 0; j < m->nbodies; j++) {
+        double a[36], k[36], e1[36], e2[36], w1[36], w2[36];
+        for (int i = 0; i < dim * dim; i++) a[i] = test_uniform(&rng, -1, 1);
+        for (int i = 0; i < dim; i++) { /* K = A A^T + 0.1 I */
+            for (int c = 0; c < dim; c++) {
+                double s = i == c ? 0.1 : 0;
+                for (int l = 0; l < dim; l++) s += a[i * dim + l] * a[c * dim + l];
+                k[i * dim + c] = s;
+            }
+        }
+        const double *dj = d->jnt_D + dim * dim * j;
+        const int nc = dim - m->jnt_nv[j];
+        cr_assert_eq(gdca_joint_factor_typed(dim, m->joints[j].type, k, dj, nc, e1), 0);
+        cr_assert_eq(gdca_joint_factor(dim, k, dj, nc, e2), 0);
+        factor_product(dim, nc, e1, w1);
+        factor_product(dim, nc, e2, w2);
+        double err = test_rel_err(w1, w2, dim * dim);
+        cr_expect(err < 1e-13, "%s joint %d (type %d): E E^T differs by %.3g",
+                  dim == 3 ? "planar" : "spatial", j, (int)m->joints[j].type, err);
+    }
+    ctc_data_free(d);
+    free(q), free(v);
+}
+
+Test(gdca_forward, joint_factors_by_type_match_the_general_projection)
+{
+    unsigned hinge = (1u << CTC_JOINT_REVOLUTE) | (1u << CTC_JOINT_PRISMATIC);
+    test_chain *cs = test_chain_random_spatial(24, 77, hinge);
+    test_chain *cp = test_chain_random_planar(24, 78, 1, 0);
+    ctc_model *ms = build(&cs->spec), *mp = build(&cp->spec);
+    typed_factor_vs_general(ms, 5);
+    typed_factor_vs_general(mp, 6);
+    ctc_model_free(ms), ctc_model_free(mp);
+    test_chain_free(cs), test_chain_free(cp);
 }
