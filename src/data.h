@@ -69,8 +69,8 @@ typedef struct ctc_data {
     double *fwd_E;       /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
     double *fwd_z;       /* (n x dim)   joint k: W Y + P f */
     int fwd_refine;      /* most refinement steps of ctc_gdca_forward (gdca_refine.h): -1 (default)
-                            = CTC_REFINE_MAX_STEPS on long or stiffly proportioned open chains, else
-                            0; >= 0: at most that many */
+                            = its rule (CTC_REFINE_MAX_STEPS on stiffly proportioned chains, one on
+                            long ones, else 0); >= 0: at most that many */
     int fwd_refine_done; /* steps the last ctc_gdca_forward made */
     double *fwd_res;     /* (2 nv) the refinement's force residual and correction */
     double *inv_E;       /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */

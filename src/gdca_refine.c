@@ -15,8 +15,8 @@
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d)
 {
     if (d->fwd_refine >= 0) return d->fwd_refine;
-    int needed = m->nbodies >= CTC_REFINE_MIN_BODIES || m->mass_ratio >= CTC_REFINE_MASS_RATIO;
-    return needed ? CTC_REFINE_MAX_STEPS : 0;
+    if (m->mass_ratio >= CTC_REFINE_MASS_RATIO) return CTC_REFINE_MAX_STEPS;
+    return m->nbodies >= CTC_REFINE_MIN_BODIES ? 1 : 0;
 }
 
 void gdca_refine_residual(const ctc_model *m, ctc_data *d, const double *f, double *qacc, double *r)
