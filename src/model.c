@@ -7,7 +7,8 @@
  * in it, DESIGN.md section 3), precomputes what the kinematics and handle passes need per body,
  * and lays out the balanced binary assembly tree of GDCA (paper section 3, Fig. 3): bodies
  * [first, last] split at the middle, depth ceil(log2 n), nodes stored by height so that the nodes
- * of one height are independent of each other.
+ * of one height are independent of each other. A loop closed on body b splits the root at joint
+ * b + 1 instead (at most one level more), so that the loop's bodies form one subtree.
  */
 #include "model.h"
 
