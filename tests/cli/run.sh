@@ -136,5 +136,18 @@ expect_exit 0 "validate a loop" "$CTCSIM" validate "$tmp/five_bar_short.json"
 expect_grep "validate counts the independent coordinates" "$tmp/err" "valid (5 bodies and a loop, 5 coordinates, 3 independent, controller pd)"
 expect_grep "the normalised loop" "$tmp/out" '"cond_max":'
 
+# a loop closed on a body: the arm's four-bar, with a dependent joint outside the loop refused
+echo '{"preset": "arm_four_bar_pd", "duration": 0.2}' >"$tmp/arm.json"
+expect_exit 0 "run a loop closed on a body" "$CTCSIM" run "$tmp/arm.json" -o "$tmp/arm.csv"
+expect_grep "the summary reports its loop" "$tmp/err" ", loop residual "
+echo '{"preset": "arm_four_bar_pd", "scene": {"loop": {"body": 3}}}' >"$tmp/arm_bad.json"
+expect_exit 2 "a loop on the tip itself" "$CTCSIM" validate "$tmp/arm_bad.json"
+expect_grep "the body is named" "$tmp/err" "scene.loop.body: must be the index of a body before the tip"
+
+# every example job of the API documentation is valid
+for example in api/examples/*.json; do
+    expect_exit 0 "validate $example" "$CTCSIM" validate "$example"
+done
+
 echo "cli: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]
