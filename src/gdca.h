@@ -44,8 +44,9 @@
 
 /* Forward dynamics: joint accelerations qacc (nv, nvx for loops; rad/s^2, m/s^2) from the
  * driving forces f (nv, nvx for loops; N m, N) applied by each joint, gravity included. Also fills
- * d->jnt_load (the whole load on body k at joint k: constraint plus drive). qacc may not alias f.
- */
+ * d->jnt_load (the whole load on body k at joint k: constraint plus drive). On long or stiffly
+ * proportioned chains, open or closed, the literal pass is refined by the composite inverse's
+ * residual (gdca_refine.h; d->fwd_refine, d->fwd_refine_done). qacc may not alias f. */
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc);
 
 /* Inverse dynamics for CTC (iGDCA): the driving forces f (nv, nvx for loops; N m, N) that make
