@@ -3,7 +3,8 @@
  * stop of the inverse disassembly, against the same chain left open, and the cost of putting a
  * drifted state back onto the loop closure.
  *
- * Chains (one loop each, the closing joint from the tip to the ground, model.h):
+ * Chains (one loop each, the closing joint from the tip to the ground, model.h; "on b" rows
+ * close the same loop on body b instead, model.h, so that joints 0..b carry it):
  *   arch     n uniform 1 kg, 1 m rods about +z (planar form), absolute link angles spread evenly
  *            from 3 pi / 4 to pi / 4 (from -y) so the chain is an arch from the origin to its
  *            anchor; revolute closing joint at the tip's far end. Mobility n + 1 - 3 = n - 2:
@@ -15,6 +16,8 @@
  *            directions (spatial form), closed by a spherical joint at the tip's link end.
  *            Mobility n + 3 - 6 = n - 3: joints n/4, n/2, 3n/4 and the closing joint are
  *            dependent, every other joint independent.
+ *   arch on b, spatial on b   the arch closed on body n/4, the spatial chain on body n/8: the
+ *            anchor is the same point in that body's frame, the dependent joints the same.
  * Each loop is closed at its q0 by construction (the anchor is where forward kinematics at q0
  * puts the tip's closing point) and checked with ctc_loop_check; the state is q0 with random
  * velocities projected onto the closure, and random commanded accelerations.
@@ -314,6 +317,23 @@ static bench_scene *scene_spatial(int n, uint64_t seed)
     return s;
 }
 
+/* the same loop closed on body b: the anchor (the tip's closing point at q0) in b's frame */
+static void scene_close_on(bench_scene *s, int b)
+{
+    ctc_model *m = build(&s->spec, "on a body");
+    ctc_data *d = ctc_data_new(m);
+    double *zero = calloc((size_t)m->nv, sizeof *zero), rel[3];
+    if (!d || !zero) abort();
+    ctc_kinematics(m, d, s->q0, zero);
+    ctc_v3_sub(rel, d->loop_pt, d->xpos + 3 * b);
+    ctc_m3_tmulv(s->loop.anchor, d->xrot + 9 * b, rel);
+    s->loop.on_body = 1;
+    s->loop.body = b;
+    free(zero);
+    ctc_data_free(d);
+    ctc_model_free(m);
+}
+
 static double max_abs(const double *x, int n)
 {
     double r = 0;
@@ -513,7 +533,7 @@ int main(int argc, char **argv)
            batches);
     static const int arch_n[] = {5, 16, 64, 256, 1024, 4096};
     static const int spatial_n[] = {5, 64, 256, 1024};
-    bench_row rows[16];
+    bench_row rows[20];
     int nrows = 0;
 
     /* a case that fails is reported and left out; the run then ends with status 1 */
@@ -535,6 +555,19 @@ int main(int argc, char **argv)
     for (size_t i = 0; i < sizeof spatial_n / sizeof *spatial_n && spatial_n[i] <= max_n; i++) {
         bench_scene *s = scene_spatial(spatial_n[i], 11);
         if (bench_loop_case("spatial", &s->spec, s->q0, batches, &rows[nrows]) == 0)
+            nrows++;
+        else
+            failed = 1;
+        scene_free(s);
+    }
+    /* loops closed on a body: the same passes below an extra level of the tree */
+    for (int i = 0; i < 3; i++) {
+        const int spatial = i == 2, n = spatial ? 256 : i ? 1024 : 64;
+        if (n > max_n) continue;
+        bench_scene *s = spatial ? scene_spatial(n, 11) : scene_arch(n);
+        scene_close_on(s, spatial ? n / 8 : n / 4);
+        if (bench_loop_case(spatial ? "spatial on b" : "arch on b", &s->spec, s->q0, batches,
+                            &rows[nrows]) == 0)
             nrows++;
         else
             failed = 1;
