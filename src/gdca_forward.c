@@ -145,8 +145,8 @@ static inline gdca_end forward_end(const forward_args *a, int k, double *pf, con
 
 /* a loop model's root (gdca_loop.h): the loop's record R, joint 0 and the closing joint n on the
  * ground; or, for a loop on body b, the root's two parts L (bodies 0..b) and R with joints 0,
- * b + 1 and n, whose loads it hands to the parts' disassembly (the root node itself is not
- * assembled or disassembled). The closure's right-hand side is the Baumgarte term, or in the
+ * b + 1 and n, whose loads it hands to the parts' disassembly (the pass leaves the top node to
+ * it: gdca_par.h root_takes_top). The closure's right-hand side is the Baumgarte term, or in the
  * correction minus the closure residual d->loop_rho (gdca_refine.h). */
 static inline void forward_loop_root(const forward_args *a, const int dim, const int correct)
 {
@@ -196,7 +196,6 @@ static inline int forward_assemble(const forward_args *a, int lo, int hi, const 
     ctc_data *d = a->d;
     const int hs = d->hsize;
     int first = -1;
-    if (hi == m->ntree && m->loop_first > 0) hi--; /* a loop on a body: the root solves that node */
     for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 0);
@@ -255,7 +254,6 @@ static inline void forward_disassemble(const forward_args *a, int lo, int hi, co
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
     const int n = m->nbodies;
-    if (hi == m->ntree && m->loop_first > 0) hi--; /* a loop on a body: the root solved that node */
     for (int i = hi - 1; i >= lo; i--) {
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 0);
@@ -355,6 +353,7 @@ static void forward_planar(const ctc_model *m, ctc_data *d, const double *f, dou
                           .root = correct ? correct_root_planar : root_planar,
                           .disassemble = correct ? correct_disassemble_planar : disassemble_planar,
                           .grain = FORWARD_GRAIN_PLANAR,
+                          .root_takes_top = 1,
                           .min_bodies = FORWARD_MIN_BODIES_PLANAR};
     gdca_par_run(m, d, &pass);
 }
@@ -369,6 +368,7 @@ static void forward_spatial(const ctc_model *m, ctc_data *d, const double *f, do
                           .disassemble =
                               correct ? correct_disassemble_spatial : disassemble_spatial,
                           .grain = FORWARD_GRAIN_SPATIAL,
+                          .root_takes_top = 1,
                           .min_bodies = FORWARD_MIN_BODIES_SPATIAL};
     gdca_par_run(m, d, &pass);
 }

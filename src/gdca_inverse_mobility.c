@@ -138,7 +138,6 @@ static inline int mobility_assemble(const mobility_args *a, int lo, int hi, cons
     ctc_data *d = a->d;
     const int hs = d->hsize;
     int first = -1;
-    if (hi == m->ntree && m->loop_first > 0) hi--; /* a loop on a body: the root solves that node */
     for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
         const double *left = ctc_data_handles(m, d, node->left, 1);
@@ -188,7 +187,6 @@ static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, 
     ctc_data *d = a->d;
     const int n = m->nbodies;
     const int prune = m->has_loop && !d->inv_full;
-    if (hi == m->ntree && m->loop_first > 0) hi--; /* a loop on a body: the root solved that node */
     for (int i = hi - 1; i >= lo; i--) {
         if (prune && !m->inv_need[i]) continue;
         const ctc_tree_node *node = &m->tree[i];
@@ -245,6 +243,7 @@ void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u,
         .root = planar ? root_planar : root_spatial,
         .disassemble = planar ? disassemble_planar : disassemble_spatial,
         .grain = planar ? MOBILITY_GRAIN_PLANAR : MOBILITY_GRAIN_SPATIAL,
+        .root_takes_top = 1,
         .min_bodies = planar ? MOBILITY_MIN_BODIES_PLANAR : MOBILITY_MIN_BODIES_SPATIAL,
     };
     gdca_par_run(m, d, &pass);

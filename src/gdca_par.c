@@ -61,16 +61,24 @@ static void add_stage(par_plan *r, int kind, int lo, int hi)
     s->nchunks = kind == STAGE_ROOT ? 1 : stage_chunks(r, hi - lo);
 }
 
+/* the tree heights the assembly and the disassembly cover: all, or all but the top one (its only
+   node the root) when the root callback takes it (gdca_par.h root_takes_top) */
+static int pass_heights(const ctc_model *m, const gdca_par_pass *pass)
+{
+    return m->height - (pass->root_takes_top && m->loop_first > 0);
+}
+
 /* the stages of the pass, grouped and numbered; returns the number of chunks */
 static int plan_pass(par_plan *r)
 {
     const ctc_model *m = r->m;
     const int *hs = m->height_start;
+    const int top = pass_heights(m, r->pass);
     r->nstages = 0;
     if (r->pass->bodies) add_stage(r, STAGE_BODIES, 0, m->nbodies);
-    for (int h = 1; h <= m->height; h++) add_stage(r, STAGE_ASSEMBLE, hs[h - 1], hs[h]);
+    for (int h = 1; h <= top; h++) add_stage(r, STAGE_ASSEMBLE, hs[h - 1], hs[h]);
     add_stage(r, STAGE_ROOT, 0, 1);
-    for (int h = m->height; h >= 1; h--) add_stage(r, STAGE_DISASSEMBLE, hs[h - 1], hs[h]);
+    for (int h = top; h >= 1; h--) add_stage(r, STAGE_DISASSEMBLE, hs[h - 1], hs[h]);
 
     int chunks = 0;
     r->ngroups = 0;
@@ -180,8 +188,9 @@ void gdca_par_run(const ctc_model *m, ctc_data *d, const gdca_par_pass *pass)
     }
 
     /* serial: the same callbacks over whole ranges, in the same order */
+    const int nodes = m->height_start[pass_heights(m, pass)];
     if (pass->bodies) pass->bodies(pass->ctx, 0, m->nbodies);
-    set_singular(m, d, pass->assemble(pass->ctx, 0, m->ntree));
+    set_singular(m, d, pass->assemble(pass->ctx, 0, nodes));
     pass->root(pass->ctx);
-    pass->disassemble(pass->ctx, 0, m->ntree);
+    pass->disassemble(pass->ctx, 0, nodes);
 }

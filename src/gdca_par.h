@@ -43,6 +43,9 @@ typedef struct gdca_par_pass {
     void (*root)(void *ctx);
     /* tree nodes hi-1 down to lo */
     void (*disassemble)(void *ctx, int lo, int hi);
+    int root_takes_top; /* 1: for a loop closed on a body (model.h loop_first > 0) the root
+                           callback solves the tree's top node itself from its two parts
+                           (gdca_loop.h), so the assembly and the disassembly stop below it */
     int grain;      /* the least items per chunk: a stage of fewer than 2 grain items runs whole */
     int min_bodies; /* chains of fewer bodies run the whole pass serially: below it the pass is
                        too short for a second thread to pay (d->par_grain > 0 overrides both) */
