@@ -16,19 +16,11 @@
 #include "linalg.h"
 #include "oracle.h"
 #include "spatial.h"
+#include "model_fixture.h"
 
 static double tolerance(double cond)
 {
     return fmax(1e-10, 1e-14 * cond);
-}
-
-static ctc_model *build(const ctc_chain_spec *spec)
-{
-    char err[256] = "";
-    ctc_model *m = NULL;
-    ctc_status st = ctc_model_build(spec, &m, err, sizeof err);
-    cr_assert_eq(st, CTC_OK, "build failed: %s", err);
-    return m;
 }
 
 /* asserts qacc of GDCA matches ABA at `trials` random states */

@@ -19,6 +19,7 @@
 #include "linalg.h"
 #include "oracle.h"
 #include "spatial.h"
+#include "model_fixture.h"
 
 typedef void (*inverse_fn)(const ctc_model *, ctc_data *, const double *, double *);
 
@@ -36,15 +37,6 @@ static double mobility_tolerance(double cond)
 static double round_trip_tolerance(double cond)
 {
     return fmax(1e-10, 1e-14 * cond);
-}
-
-static ctc_model *build(const ctc_chain_spec *spec)
-{
-    char err[256] = "";
-    ctc_model *m = NULL;
-    ctc_status st = ctc_model_build(spec, &m, err, sizeof err);
-    cr_assert_eq(st, CTC_OK, "build failed: %s", err);
-    return m;
 }
 
 /* f of an inverse vs RNEA, and forward(inverse(u)) vs u when round_trip, at random states */

@@ -24,6 +24,7 @@
 #include "ctc.h"
 #include "pool.h"
 #include "sim.h"
+#include "model_fixture.h"
 
 /* ---- the pool ---- */
 
@@ -135,15 +136,6 @@ Test(gdca_parallel, pool_runs_again_after_its_workers_have_blocked)
 }
 
 /* ---- the passes ---- */
-
-static ctc_model *build(const ctc_chain_spec *spec)
-{
-    char err[256] = "";
-    ctc_model *m = NULL;
-    ctc_status st = ctc_model_build(spec, &m, err, sizeof err);
-    cr_assert_eq(st, CTC_OK, "build failed: %s", err);
-    return m;
-}
 
 /* everything one state's passes produce */
 typedef struct outputs {

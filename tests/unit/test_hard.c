@@ -28,17 +28,9 @@
 #include "oracle.h"
 #include "sim.h"
 #include "spatial.h"
+#include "model_fixture.h"
 
 #define MAXV 96 /* velocity coordinates of the largest chain here (32 spatial joints) */
-
-static ctc_model *build(const ctc_chain_spec *spec)
-{
-    char err[256] = "";
-    ctc_model *m = NULL;
-    ctc_status st = ctc_model_build(spec, &m, err, sizeof err);
-    cr_assert_eq(st, CTC_OK, "build failed: %s", err);
-    return m;
-}
 
 static int all_finite(const double *x, int n)
 {

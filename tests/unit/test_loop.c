@@ -36,6 +36,7 @@
 #include "loop.h"
 #include "loop_oracle.h"
 #include "sim.h"
+#include "model_fixture.h"
 
 #define PI 3.14159265358979323846
 #define MAXX 64
@@ -50,15 +51,6 @@ typedef struct fixture {
     const loop_oracle_dims *dims;
     const char *what; /* names the case in failure messages */
 } fixture;
-
-static ctc_model *build(const ctc_chain_spec *spec)
-{
-    char err[512] = "";
-    ctc_model *m = NULL;
-    ctc_status st = ctc_model_build(spec, &m, err, sizeof err);
-    cr_assert_eq(st, CTC_OK, "build failed: %s", err);
-    return m;
-}
 
 /* model, data and oracle of a scene (the fixture owns the scene) */
 static fixture fx_make(loop_scene *s)

@@ -10,6 +10,7 @@
 #include "chains.h"
 #include "ctc.h"
 #include "spatial.h"
+#include "model_fixture.h"
 
 /* a valid 3-body planar rod pendulum to break one field at a time */
 static test_chain *pendulum(void)
@@ -149,20 +150,12 @@ Test(model, planar_form_on_request_says_why_a_scene_is_not_planar)
     test_chain_free(c);
 }
 
-static ctc_model *build_ok(const ctc_chain_spec *spec)
-{
-    char err[256] = "";
-    ctc_model *m = NULL;
-    cr_assert_eq(ctc_model_build(spec, &m, err, sizeof err), CTC_OK, "%s", err);
-    return m;
-}
-
 Test(model, detects_planar_scenes_in_any_plane)
 {
     /* x-y plane, axes along +z and -z: planar, the plane is x-y itself */
     test_chain *c = pendulum();
     ctc_v3_set(c->joints[1].axis, 0, 0, -2);
-    ctc_model *m = build_ok(&c->spec);
+    ctc_model *m = build(&c->spec);
     cr_assert_eq(m->form, CTC_FORM_PLANAR);
     cr_assert_eq(m->dim, 3);
     cr_assert_float_eq(m->plane_n[2], 1.0, 1e-15);
@@ -176,7 +169,7 @@ Test(model, detects_planar_scenes_in_any_plane)
     /* gravity out of the plane: the same chain is spatial (and needs full-rank bodies) */
     ctc_v3_set(c->spec.gravity, 0, 0, -9.81);
     for (int k = 0; k < 3; k++) set_diag(c->bodies[k].inertia, 0.1, 0.1, 0.1);
-    m = build_ok(&c->spec);
+    m = build(&c->spec);
     cr_assert_eq(m->form, CTC_FORM_SPATIAL);
     cr_assert_eq(m->dim, 6);
     ctc_model_free(m);
@@ -189,7 +182,7 @@ Test(model, detects_planar_scenes_in_any_plane)
     ctc_v3_set(c->joints[2].axis, 1, -1, 3);
     ctc_v3_set(c->spec.gravity, 0, 0, -9.81);
     c->spec.form = CTC_FORM_AUTO;
-    m = build_ok(&c->spec);
+    m = build(&c->spec);
     cr_assert_eq(m->form, CTC_FORM_PLANAR);
     cr_assert_float_eq(m->plane_n[0], sqrt(0.5), 1e-15);
     cr_assert_float_eq(m->plane_n[1], sqrt(0.5), 1e-15);
@@ -198,12 +191,12 @@ Test(model, detects_planar_scenes_in_any_plane)
 
     /* a cylindrical joint is never planar; forcing spatial is honoured */
     c->joints[3].type = CTC_JOINT_CYLINDRICAL;
-    m = build_ok(&c->spec);
+    m = build(&c->spec);
     cr_assert_eq(m->form, CTC_FORM_SPATIAL);
     ctc_model_free(m);
     c->joints[3].type = CTC_JOINT_REVOLUTE;
     c->spec.form = CTC_FORM_SPATIAL;
-    m = build_ok(&c->spec);
+    m = build(&c->spec);
     cr_assert_eq(m->form, CTC_FORM_SPATIAL);
     ctc_model_free(m);
     test_chain_free(c);
@@ -215,7 +208,7 @@ Test(model, counts_coordinates_of_every_joint_type)
     const ctc_joint_type types[5] = {CTC_JOINT_SPHERICAL, CTC_JOINT_REVOLUTE, CTC_JOINT_FIXED,
                                      CTC_JOINT_CYLINDRICAL, CTC_JOINT_PRISMATIC};
     for (int k = 0; k < 5; k++) c->joints[k].type = types[k];
-    ctc_model *m = build_ok(&c->spec);
+    ctc_model *m = build(&c->spec);
     const int nq[5] = {4, 1, 0, 2, 1}, nv[5] = {3, 1, 0, 2, 1};
     int qadr = 0, vadr = 0;
     for (int k = 0; k < 5; k++) {
@@ -239,7 +232,7 @@ Test(model, counts_coordinates_of_every_joint_type)
 Test(model, quaternion_rate_follows_the_child_frame_angular_velocity)
 {
     test_chain *c = test_chain_random_spatial(1, 4, 1u << CTC_JOINT_SPHERICAL);
-    ctc_model *m = build_ok(&c->spec);
+    ctc_model *m = build(&c->spec);
     double q[4] = {0.8, 0.1, -0.4, 0.2}, w[3] = {0.3, -1.1, 0.7}, dq[4], h = 1e-6;
     ctc_model_q_normalize(m, q);
     ctc_model_q_rate(m, q, w, dq);
@@ -272,7 +265,7 @@ Test(model, copies_the_spec_and_symmetrises_inertia)
 {
     test_chain *c = pendulum();
     c->bodies[0].inertia[1] = 1e-12;
-    ctc_model *m = build_ok(&c->spec);
+    ctc_model *m = build(&c->spec);
     c->bodies[0].mass = 99;
     c->joints[0].location[0] = 5;
     cr_assert_eq(m->bodies[0].mass, 1.0);
@@ -312,7 +305,7 @@ Test(model, lays_out_a_balanced_tree_ordered_by_height)
 {
     for (int n = 1; n <= 130; n++) {
         test_chain *c = test_chain_rod_pendulum(n, 0.5, 1.0);
-        ctc_model *m = build_ok(&c->spec);
+        ctc_model *m = build(&c->spec);
         int joint_seen[131] = {0};
         int expect_height = 0;
         while ((1 << expect_height) < n) expect_height++;
