@@ -12,7 +12,8 @@
  * the default makes and ctc with and without refinement, at n = 16, 256 and 4096.
  * Batches of each are interleaved so that machine noise hits all of them alike; the figures are
  * medians over the batches, per evaluation, and the ratio is ctc / pair from the same run.
- * Usage: bench_dynamics [max_n] [batches]
+ * Usage: bench_dynamics [max_n [batches [parts]]]: parts "t" (the first table), "s" (the split) or
+ * both (the default)
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -32,9 +33,11 @@ enum {
     T_MOB,
     T_KIN_ONLY, /* the stage split: kinematics alone */
     T_HANDLES,
-    T_FWD0, /* GDCA forward unrefined */
-    T_FWD1, /* GDCA forward with one refinement step */
-    T_CTC0, /* ctc unrefined */
+    T_FWD0,      /* GDCA forward unrefined */
+    T_FWD1,      /* GDCA forward with one refinement step */
+    T_CTC0,      /* ctc unrefined */
+    T_FWD0_TREE, /* GDCA forward unrefined in the balanced tree's order (gdca_forward_seq.h) */
+    T_CTC_TREE,  /* ctc with the forward pass in the balanced tree's order */
     NT
 };
 
@@ -101,6 +104,12 @@ static void run_once(bench_case *c, int what)
         run_once(c, T_CTC);
         c->d->fwd_refine = refine;
         break;
+    case T_FWD0_TREE:
+    case T_CTC_TREE:
+        c->d->fwd_order = CTC_ORDER_TREE;
+        run_once(c, what == T_FWD0_TREE ? T_FWD0 : T_CTC);
+        c->d->fwd_order = CTC_ORDER_AUTO;
+        break;
     }
     sink += c->a[0] + c->f[0];
 }
@@ -166,13 +175,16 @@ static void bench_chain(const char *label, test_chain *chain, int batches, int s
     double med[NT];
     int n = m->nbodies;
     if (split) {
-        static const int which[] = {T_KIN_ONLY, T_HANDLES, T_INV, T_FWD0, T_FWD1, T_CTC, T_CTC0};
+        static const int which[] = {T_KIN_ONLY, T_HANDLES, T_INV,       T_FWD0,    T_FWD1,
+                                    T_CTC,      T_CTC0,    T_FWD0_TREE, T_CTC_TREE};
         measure(&c, batches, which, (int)(sizeof which / sizeof *which), med);
         run_once(&c, T_CTC); /* the default's refinement steps */
-        printf("| %-7s | %5d | %7.1f | %7.1f | %7.1f | %7.1f | %7.1f | %5d | %7.1f | %7.1f |\n",
+        printf("| %-7s | %5d | %7.1f | %7.1f | %7.1f | %7.1f | %7.1f | %5d | %7.1f | %7.1f | "
+               "%7.1f | %7.1f |\n",
                label, n, 1e9 * med[T_KIN_ONLY] / n, 1e9 * med[T_HANDLES] / n, 1e9 * med[T_INV] / n,
                1e9 * med[T_FWD0] / n, 1e9 * (med[T_FWD1] - med[T_FWD0]) / n, c.d->fwd_refine_done,
-               1e9 * med[T_CTC0] / n, 1e9 * med[T_CTC] / n);
+               1e9 * med[T_CTC0] / n, 1e9 * med[T_CTC] / n, 1e9 * med[T_FWD0_TREE] / n,
+               1e9 * med[T_CTC_TREE] / n);
     } else {
         static const int which[] = {T_CTC, T_PAIR, T_KIN, T_INV, T_FWD, T_MOB};
         measure(&c, batches, which, (int)(sizeof which / sizeof *which), med);
@@ -193,42 +205,48 @@ int main(int argc, char **argv)
 {
     int max_n = argc > 1 ? atoi(argv[1]) : 4096;
     int batches = argc > 2 ? atoi(argv[2]) : 15;
+    const char *parts = argc > 3 ? argv[3] : "ts";
     if (max_n < 2 || batches < 1) {
         fprintf(stderr, "usage: bench_dynamics [max_n >= 2] [batches >= 1]\n");
         return 2;
     }
-    printf("One CTC right-hand side: ctc = kinematics + handles + iGDCA + GDCA; pair = oracle "
-           "RNEA + ABA.\nMedians of %d interleaved batches; times in microseconds, per body in "
-           "nanoseconds.\n\n",
-           batches);
-    printf("| chain   |     n | ctc (us)   | pair (us)  | ratio | ctc/n ns | pair/n ns | "
-           "kin+handles | iGDCA | GDCA fwd | iGDCA mobility |\n");
-    printf("| ------- | ----: | ---------: | ---------: | ----: | ------: | ------: | -------: | "
-           "-------: | -------: | -------: |\n");
-    for (int n = 2; n <= max_n; n *= 2) {
-        test_chain *c = test_chain_random_planar(n, 7, 0, 1);
-        bench_chain("planar", c, batches, 0);
-        test_chain_free(c);
-    }
-    for (int n = 2; n <= max_n; n *= 2) {
-        test_chain *c = test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE);
-        bench_chain("spatial", c, batches, 0);
-        test_chain_free(c);
-    }
-
-    printf("\nHot path: ns per body of each stage of ctc; refine step = GDCA forward with one "
-           "refinement step less the unrefined pass; steps = those the default makes.\n\n");
-    printf("| chain   |     n | kinematics | handles | iGDCA | GDCA fwd unrefined | refine step | "
-           "steps | ctc unrefined | ctc |\n");
-    printf(
-        "| ------- | ----: | ------: | ------: | ------: | ------: | ------: | ----: | ------: | "
-        "------: |\n");
-    for (int form = 0; form < 2; form++) {
-        for (int n = 16; n <= max_n; n *= 16) {
-            test_chain *c = form ? test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE)
-                                 : test_chain_random_planar(n, 7, 0, 1);
-            bench_chain(form ? "spatial" : "planar", c, batches, 1);
+    if (strchr(parts, 't') != NULL) {
+        printf("One CTC right-hand side: ctc = kinematics + handles + iGDCA + GDCA; pair = oracle "
+               "RNEA + ABA.\nMedians of %d interleaved batches; times in microseconds, per body in "
+               "nanoseconds.\n\n",
+               batches);
+        printf("| chain   |     n | ctc (us)   | pair (us)  | ratio | ctc/n ns | pair/n ns | "
+               "kin+handles | iGDCA | GDCA fwd | iGDCA mobility |\n");
+        printf(
+            "| ------- | ----: | ---------: | ---------: | ----: | ------: | ------: | -------: | "
+            "-------: | -------: | -------: |\n");
+        for (int n = 2; n <= max_n; n *= 2) {
+            test_chain *c = test_chain_random_planar(n, 7, 0, 1);
+            bench_chain("planar", c, batches, 0);
             test_chain_free(c);
+        }
+        for (int n = 2; n <= max_n; n *= 2) {
+            test_chain *c = test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE);
+            bench_chain("spatial", c, batches, 0);
+            test_chain_free(c);
+        }
+    }
+    if (strchr(parts, 's') != NULL) {
+        printf("\nHot path: ns per body of each stage of ctc; refine step = GDCA forward with one "
+               "refinement step less the unrefined pass; steps = those the default makes.\n\n");
+        printf(
+            "| chain   |     n | kinematics | handles | iGDCA | GDCA fwd unrefined | refine step | "
+            "steps | ctc unrefined | ctc | GDCA fwd unrefined, tree | ctc, tree |\n");
+        printf("| ------- | ----: | ------: | ------: | ------: | ------: | ------: | ----: | "
+               "------: | "
+               "------: | ------: | ------: |\n");
+        for (int form = 0; form < 2; form++) {
+            for (int n = 16; n <= max_n; n *= 4) {
+                test_chain *c = form ? test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE)
+                                     : test_chain_random_planar(n, 7, 0, 1);
+                bench_chain(form ? "spatial" : "planar", c, batches, 1);
+                test_chain_free(c);
+            }
         }
     }
     return sink == 12345.678 ? 1 : 0;

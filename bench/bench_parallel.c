@@ -20,8 +20,12 @@
  *             n = 64, 128, ..., max_n bodies: one GDCA forward pass, one composite iGDCA pass
  *             and one CTC right-hand side (kinematics + handles + iGDCA + GDCA; kinematics and
  *             handles stay serial), on 1 thread and on each count of CTC_BENCH_THREADS (default
- *             2), with the measured grains; speed-up = time on 1 thread / time on k threads,
- *             from the same run. Each thread count has its own ctc_data (and pool).
+ *             2), with the measured grains, the forward pass in the balanced tree's order;
+ *             speed-up = time on 1 thread / time on k threads, from the same run. Each thread
+ *             count has its own ctc_data (and pool). Beside them the forward pass and the CTC
+ *             evaluation on 1 thread in the sequential order, which an unthreaded forward pass
+ *             takes (gdca_forward_seq.h), and "vs seq" = that time / time on k threads: where
+ *             the split tree beats it, the library may take the tree on threads.
  * Before timing, the results on k threads are checked bitwise against 1 thread; a mismatch ends
  * the run with status 1. Every timing of a case first runs round-robin for WARM_S. Batches of
  * all timings of one chain are interleaved, each batch starting one timing further on; each
@@ -299,9 +303,11 @@ static void bench_barrier(int nthreads, int batches)
 
 typedef struct chain_case {
     const ctc_model *m;
-    ctc_data *d[MAXK + 1]; /* d[0] serial, d[i] on kthreads[i - 1] threads */
+    ctc_data *d[MAXK + 2]; /* d[0] serial, d[i] on kthreads[i - 1] threads, all with the
+                              forward pass in the balanced tree's order; d[nk + 1] serial in
+                              the sequential order (gdca_forward_seq.h) */
     double *q, *v, *u;
-    double *f[MAXK + 1], *a[MAXK + 1];
+    double *f[MAXK + 2], *a[MAXK + 2];
     int grains[16]; /* grain sweep: par_grain of each timing (0: serial) */
 } chain_case;
 
@@ -344,11 +350,12 @@ static ctc_model *build(const test_chain *chain)
     return m;
 }
 
-/* a case with data on 1 thread (d[0]) and on threads[k - 1] threads (d[k], k = 1..nthreads),
- * its state and results */
+/* a case with data on 1 thread (d[0]) and on threads[k - 1] threads (d[k], k = 1..nthreads), the
+ * forward pass in the balanced tree's order, and on 1 thread in the sequential order
+ * (d[nthreads + 1]); its state and results */
 static chain_case *case_new(const ctc_model *m, const int *threads, int nthreads)
 {
-    const int ndata = 1 + nthreads;
+    const int ndata = 2 + nthreads;
     chain_case *c = calloc(1, sizeof *c);
     if (!c) abort();
     c->m = m;
@@ -363,14 +370,18 @@ static chain_case *case_new(const ctc_model *m, const int *threads, int nthreads
         c->d[k] = ctc_data_new(m);
         c->f[k] = calloc(nv, sizeof(double)), c->a[k] = calloc(nv, sizeof(double));
         if (!c->d[k] || !c->f[k] || !c->a[k]) abort();
-        if (k > 0 && ctc_data_set_threads(c->d[k], threads[k - 1], NULL, 0) != CTC_OK) abort();
+        if (k > 0 && k <= nthreads &&
+            ctc_data_set_threads(c->d[k], threads[k - 1], NULL, 0) != CTC_OK) {
+            abort();
+        }
+        c->d[k]->fwd_order = k <= nthreads ? CTC_ORDER_TREE : CTC_ORDER_SEQ;
     }
     return c;
 }
 
 static void case_free(chain_case *c)
 {
-    for (int k = 0; k <= MAXK; k++) {
+    for (int k = 0; k <= MAXK + 1; k++) {
         ctc_data_free(c->d[k]);
         free(c->f[k]), free(c->a[k]);
     }
@@ -441,7 +452,7 @@ static void bench_sweep(const char *label, test_chain *chain, int batches)
 typedef struct speed_row {
     char label[8];
     int n;
-    double t[MAXK + 1][NP]; /* s per call */
+    double t[MAXK + 2][NP]; /* s per call: 1 thread, each count, 1 thread sequential */
 } speed_row;
 
 static int bench_speedup(const char *label, test_chain *chain, int batches, speed_row *row)
@@ -458,15 +469,43 @@ static int bench_speedup(const char *label, test_chain *chain, int batches, spee
     }
     for (int k = 1; k <= nk; k++)
         if (c->d[k]->pool) ctc_pool_set_wait(c->d[k]->pool, wait_spin, wait_block);
-    double med[(MAXK + 1) * NP];
-    measure(run_speedup, c, (1 + nk) * NP, batches, med);
+    double med[(MAXK + 2) * NP];
+    measure(run_speedup, c, (2 + nk) * NP, batches, med);
     snprintf(row->label, sizeof row->label, "%s", label);
     row->n = m->nbodies;
     for (int k = 0; k <= nk; k++)
         for (int p = 0; p < NP; p++) row->t[k][p] = med[k * NP + p];
+    for (int p = 0; p < NP; p++) row->t[nk + 1][p] = med[(nk + 1) * NP + p];
     case_free(c);
     ctc_model_free(m);
     return failed;
+}
+
+/* the sequential order is a forward-pass setting: the iGDCA pass has no column of it */
+static int has_seq(int p)
+{
+    return p != P_INV;
+}
+
+/* where k threads start to pay: the least n of chain label from which every larger n of the
+   table runs at least 5% faster on k threads than on 1 (the tree on 1 thread, or seq = 1: the
+   sequential order) */
+static void print_pays(const speed_row *rows, int nrows, int k, int p, const char *label, int seq)
+{
+    int from = -1;
+    for (int i = nrows - 1; i >= 0; i--) {
+        if (strcmp(rows[i].label, label) != 0) continue;
+        if (rows[i].t[seq ? nk + 1 : 0][p] >= 1.05 * rows[i].t[k][p])
+            from = rows[i].n;
+        else
+            break;
+    }
+    printf("- %d threads, %s, %s, against %s: ", kthreads[k - 1], pass_names[p], label,
+           seq ? "the sequential order" : "the tree on 1 thread");
+    if (from > 0)
+        printf("n >= %d\n", from);
+    else
+        printf("none in the table\n");
 }
 
 static void print_speedup(const speed_row *rows, int nrows)
@@ -475,11 +514,19 @@ static void print_speedup(const speed_row *rows, int nrows)
     for (int p = 0; p < NP; p++) {
         printf(" %s 1T (us) |", pass_names[p]);
         for (int k = 0; k < nk; k++) printf(" %dT (us) | speed-up |", kthreads[k]);
+        if (has_seq(p)) {
+            printf(" %s 1T seq (us) |", pass_names[p]);
+            for (int k = 0; k < nk; k++) printf(" %dT vs seq |", kthreads[k]);
+        }
     }
     printf("\n| ------- | ----: |");
     for (int p = 0; p < NP; p++) {
         printf(" ---------: |");
         for (int k = 0; k < nk; k++) printf(" --------: | ----: |");
+        if (has_seq(p)) {
+            printf(" ---------: |");
+            for (int k = 0; k < nk; k++) printf(" ----: |");
+        }
     }
     printf("\n");
     for (int i = 0; i < nrows; i++) {
@@ -490,30 +537,21 @@ static void print_speedup(const speed_row *rows, int nrows)
             for (int k = 1; k <= nk; k++) {
                 printf(" %9.1f | %5.2f |", 1e6 * r->t[k][p], r->t[0][p] / r->t[k][p]);
             }
+            if (has_seq(p)) {
+                printf(" %10.1f |", 1e6 * r->t[nk + 1][p]);
+                for (int k = 1; k <= nk; k++) printf(" %5.2f |", r->t[nk + 1][p] / r->t[k][p]);
+            }
         }
         printf("\n");
     }
 
-    /* where k threads start to pay: the least n from which every larger n gains */
     printf("\nThe least n from which every larger n of the table runs at least 5%% faster on k "
-           "threads:\n\n");
+           "threads (the tree) than on 1 thread:\n\n");
     for (int k = 1; k <= nk; k++) {
         for (int p = 0; p < NP; p++) {
-            const char *labels[2] = {"planar", "spatial"};
-            for (int l = 0; l < 2; l++) {
-                int from = -1;
-                for (int i = nrows - 1; i >= 0; i--) {
-                    if (strcmp(rows[i].label, labels[l]) != 0) continue;
-                    if (rows[i].t[0][p] >= 1.05 * rows[i].t[k][p])
-                        from = rows[i].n;
-                    else
-                        break;
-                }
-                printf("- %d threads, %s, %s: ", kthreads[k - 1], pass_names[p], labels[l]);
-                if (from > 0)
-                    printf("n >= %d\n", from);
-                else
-                    printf("none in the table\n");
+            for (int seq = 0; seq <= has_seq(p); seq++) {
+                print_pays(rows, nrows, k, p, "planar", seq);
+                print_pays(rows, nrows, k, p, "spatial", seq);
             }
         }
     }

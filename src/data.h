@@ -21,6 +21,9 @@
 #include "model.h"
 #include "pool.h"
 
+/* the forward pass's assembly orders (data.h fwd_order) */
+enum { CTC_ORDER_AUTO = 0, CTC_ORDER_TREE = 1, CTC_ORDER_SEQ = 2 };
+
 typedef struct ctc_data {
     int dim;   /* 3 or 6, as the model's */
     int hsize; /* doubles in one handle-equation record: 3 dim^2 + 2 dim */
@@ -73,6 +76,10 @@ typedef struct ctc_data {
                             long ones, else 0); >= 0: at most that many */
     int fwd_refine_done; /* steps the last ctc_gdca_forward made */
     double *fwd_res;     /* (2 nv) the refinement's force residual and correction */
+    int fwd_order;       /* the forward pass's assembly order on an open chain
+                            (gdca_forward_seq.h): CTC_ORDER_AUTO (default) = sequential unless
+                            the pass splits over threads, CTC_ORDER_TREE = the balanced tree,
+                            CTC_ORDER_SEQ = sequential. For tests and benchmarks */
     double *inv_E;       /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
     double *inv_z;       /* (n x dim)   joint k: X Y' (mobility form) */
     int csize;           /* doubles in one composite record: dim^2 + 2 dim + 3 */
@@ -121,7 +128,11 @@ void ctc_data_free(ctc_data *d);
  * (pool.h). Heights too small to pay for the split still run on the calling thread (gdca_par.h).
  * The nthreads - 1 workers start at the first pass that uses them and belong to d: they stop when
  * d is freed or its count changes, so no two data share them unless ctc_data_share_pool says so.
- * The results are bitwise the same for every count. Returns CTC_OK, or CTC_EINVAL with a message
+ * The results are bitwise the same for every count, with one exception: an open chain's forward
+ * pass takes the sequential order on one thread and, from a measured length on (planar 2048,
+ * spatial 1024 bodies), the balanced tree on two threads or more (gdca_forward_seq.h,
+ * fwd_order), so at those lengths one thread and several agree to rounding, and any two counts
+ * of two or more bitwise. Returns CTC_OK, or CTC_EINVAL with a message
  * in err (errlen bytes; may be NULL) when nthreads is out of range. */
 ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t errlen);
 

@@ -22,7 +22,10 @@
  * residual, the factors E and the assembled matrices reused, so that only the vectors are
  * recomputed, by the same kernels and on the same threads.
  *
- * The nodes of one tree height are independent: each node's assembly writes only its own record
+ * This file is the pass over the balanced tree, which loop models and passes split over threads
+ * take; an open chain's pass on one thread takes the sequential order (gdca_forward_seq.c), with
+ * the per-joint kernels of gdca_forward_joint.h in common. The nodes of one tree height are
+ * independent: each node's assembly writes only its own record
  * and its joint's E and z, its disassembly only its joint's load and acceleration and its two
  * children's terminal loads, so gdca_par.c may split a height over threads (ctc_data_set_threads)
  * with bitwise the serial results; the root stays on the caller's thread.
@@ -32,62 +35,12 @@
 #include <math.h>
 #include <string.h>
 
+#include "gdca_forward_joint.h"
+#include "gdca_forward_seq.h"
 #include "gdca_loop.h"
 #include "gdca_par.h"
 #include "gdca_refine.h"
 #include "gdca_tree.h"
-
-/* E and z of joint j between left (NULL: ground) and right: z = W Y + P f with
- * Y = b23^L - b13^R + beta - K P f, W = E E^T. The full pass forms K and the factor E of W
- * (factor = 1) from the records' h13, h23 (b23l, b13r) and the joint's beta; the correction
- * reuses E, is given its own bias vectors and beta = 0, and does not form K. Returns 0, or -1
- * when D^T K D is not positive definite (the results are then NaN). */
-static inline int forward_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
-                                const double *right, const double *b23l, const double *b13r,
-                                const double *beta, const double *f, int factor, const int dim)
-{
-    const int nv = m->jnt_nv[j];
-    double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
-    double k[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX], pf[CTC_DENSE_MAX];
-    double kpf[CTC_DENSE_MAX];
-    int st = 0;
-
-    gdca_joint_map(dim, nv, d->jnt_P + 3 * dim * j, f + m->jnt_vadr[j], pf);
-    if (factor) {
-        gdca_joint_K(dim, left, right, k);
-        st = gdca_joint_factor_typed(dim, m->joints[j].type, k, d->jnt_D + dim * dim * j, dim - nv,
-                                     e);
-        ctc_dense_mulv(dim, dim, k, pf, kpf);
-    } else { /* K P f = h11^R P f + h22^L P f, without forming K */
-        ctc_dense_mulv(dim, dim, right + H11(dim), pf, kpf);
-        if (left != NULL) {
-            ctc_dense_mulv(dim, dim, left + H22(dim), pf, y);
-            for (int i = 0; i < dim; i++) kpf[i] += y[i];
-        }
-    }
-    for (int i = 0; i < dim; i++) {
-        y[i] = b23l[i] - b13r[i] + beta[i];
-        y[i] -= kpf[i];
-    }
-    gdca_factor_apply(dim, dim - nv, e, y, z);
-    for (int i = 0; i < dim; i++) z[i] += pf[i];
-    return st;
-}
-
-/* a zero vector: the ground's acceleration, and the bias terms of the correction */
-static const double zero6[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
-
-/* qdd_j = P^T (A1^R - A2^L - beta) written into qacc, for the given beta */
-static inline void forward_accel(const ctc_model *m, const ctc_data *d, int j, const double *a1r,
-                                 const double *a2l, const double *beta, double *qacc, const int dim)
-{
-    const double *P = d->jnt_P + 3 * dim * j;
-    for (int c = 0; c < m->jnt_nv[j]; c++) {
-        double s = 0;
-        for (int i = 0; i < dim; i++) s += P[c * dim + i] * (a1r[i] - a2l[i] - beta[i]);
-        qacc[m->jnt_vadr[j] + c] = s;
-    }
-}
 
 /* When the forward pass splits over threads (gdca_par.h): the least nodes per chunk of one tree
  * height, and the least chain length. From bench_parallel on 2 threads, idle machine
@@ -101,6 +54,15 @@ static inline void forward_accel(const ctc_model *m, const ctc_data *d, int j, c
 #define FORWARD_GRAIN_SPATIAL 2
 #define FORWARD_MIN_BODIES_PLANAR 512
 #define FORWARD_MIN_BODIES_SPATIAL 128
+
+/* The least chain length from which an open chain's forward pass takes the balanced tree, split
+ * over threads, instead of the sequential order on one thread (gdca_forward_seq.h), when the
+ * data has two threads or more. From bench_parallel on 2 threads (bench/README.md, "Parallel
+ * assembly"): the split tree beat the sequential order by 5% or more in a CTC evaluation at every
+ * n from 2048 planar (1.35x there) and 1024 spatial (1.17x), and lost below (planar 1024: 0.91x;
+ * spatial 512: 1.00x). More threads would move the crossing down; it is not measured here. */
+#define FORWARD_TREE_MIN_BODIES_PLANAR 2048
+#define FORWARD_TREE_MIN_BODIES_SPATIAL 1024
 
 /* What the stages of one forward pass share (gdca_par.h). The same pass, with correct = 1 (a
  * constant in each stage function, so each mode compiles without the other's branches), is
@@ -120,7 +82,7 @@ typedef struct forward_args {
 static inline const double *forward_bias(const forward_args *a, int x, int which, const int dim,
                                          const int correct)
 {
-    if (correct && x < a->m->nbodies) return zero6;
+    if (correct && x < a->m->nbodies) return gdca_zero6;
     return ctc_data_handles(a->m, a->d, x, 0) + (which ? H23(dim) : H13(dim));
 }
 
@@ -128,7 +90,7 @@ static inline const double *forward_bias(const forward_args *a, int x, int which
 static inline const double *forward_beta(const forward_args *a, int j, const int dim,
                                          const int correct)
 {
-    return correct ? zero6 : a->d->jnt_beta + dim * j;
+    return correct ? gdca_zero6 : a->d->jnt_beta + dim * j;
 }
 
 /* the boundary joint k's end of a loop model's root problem (gdca_loop.h): its load is unknown
@@ -168,7 +130,7 @@ static inline void forward_loop_root(const forward_args *a, const int dim, const
         .l = left >= 0 ? ctc_data_handles(m, d, left, 0) : NULL,
         .r = ctc_data_handles(m, d, right, 0),
         .shift = d->loop_r,
-        .gam = correct ? zero6 : d->loop_gam,
+        .gam = correct ? gdca_zero6 : d->loop_gam,
         .e0 = forward_end(a, 0, pf0, NULL, dim, correct),
         .ej = forward_end(a, j, pfj, NULL, dim, correct),
         .en = forward_end(a, n, pfn, off, dim, correct),
@@ -180,9 +142,10 @@ static inline void forward_loop_root(const forward_args *a, const int dim, const
     if (gdca_loop_solve(&p, &s) != 0 && d->singular_joint < 0) d->singular_joint = n;
     if (!correct) d->loop_cond = s.cond;
     gdca_loop_hand_down(m, &s, d->loop_r, correct, d->tload, d->jnt_load);
-    if (j > 0) forward_accel(m, d, 0, s.al1, zero6, forward_beta(a, 0, dim, correct), a->qacc, dim);
-    forward_accel(m, d, j, s.ar1, j > 0 ? s.al2 : zero6, forward_beta(a, j, dim, correct), a->qacc,
-                  dim);
+    if (j > 0)
+        forward_accel(m, d, 0, s.al1, gdca_zero6, forward_beta(a, 0, dim, correct), a->qacc, dim);
+    forward_accel(m, d, j, s.ar1, j > 0 ? s.al2 : gdca_zero6, forward_beta(a, j, dim, correct),
+                  a->qacc, dim);
     /* A(child) = A2 + P qdd + beta */
     forward_accel(m, d, n, s.ab, s.ar2, forward_beta(a, n, dim, correct), a->qacc, dim);
 }
@@ -205,7 +168,7 @@ static inline int forward_assemble(const forward_args *a, int lo, int hi, const 
         double *out = d->hfwd + (size_t)i * hs;
         if (forward_joint(m, d, j, left, right, forward_bias(a, node->left, 1, dim, correct),
                           forward_bias(a, node->right, 0, dim, correct),
-                          forward_beta(a, j, dim, correct), a->f, !correct, dim) != 0 &&
+                          forward_beta(a, j, dim, correct), a->f, !correct, NULL, dim) != 0 &&
             first < 0) {
             first = i;
         }
@@ -232,7 +195,7 @@ static inline void forward_root(const forward_args *a, const int dim, const int 
     const double *b13 = forward_bias(a, m->root, 0, dim, correct),
                  *beta = forward_beta(a, 0, dim, correct);
     double *tl = d->tload + (size_t)m->root * 2 * dim, a1[CTC_DENSE_MAX];
-    if (forward_joint(m, d, 0, NULL, root, zero6, b13, beta, a->f, !correct, dim) != 0 &&
+    if (forward_joint(m, d, 0, NULL, root, gdca_zero6, b13, beta, a->f, !correct, NULL, dim) != 0 &&
         d->singular_joint < 0) {
         d->singular_joint = 0;
     }
@@ -243,7 +206,7 @@ static inline void forward_root(const forward_args *a, const int dim, const int 
     }
     ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
     for (int i = 0; i < dim; i++) a1[i] += b13[i];
-    forward_accel(m, d, 0, a1, zero6, beta, a->qacc, dim);
+    forward_accel(m, d, 0, a1, gdca_zero6, beta, a->qacc, dim);
 }
 
 /* disassembly of tree nodes hi-1 down to lo, parents before children: each writes its joint's
@@ -373,9 +336,21 @@ static void forward_spatial(const ctc_model *m, ctc_data *d, const double *f, do
     gdca_par_run(m, d, &pass);
 }
 
+int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d)
+{
+    if (m->has_loop || d->fwd_order == CTC_ORDER_TREE) return 0;
+    if (d->fwd_order == CTC_ORDER_SEQ) return 1;
+    const ctc_data *o = d->pool_owner != NULL ? d->pool_owner : d;
+    const int min = m->form == CTC_FORM_PLANAR ? FORWARD_TREE_MIN_BODIES_PLANAR
+                                               : FORWARD_TREE_MIN_BODIES_SPATIAL;
+    return o->threads < 2 || m->nbodies < min;
+}
+
 void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, double *dq)
 {
-    if (m->form == CTC_FORM_PLANAR) {
+    if (gdca_forward_order_seq(m, d)) {
+        gdca_forward_seq(m, d, r, dq, 1);
+    } else if (m->form == CTC_FORM_PLANAR) {
         forward_planar(m, d, r, dq, 1);
     } else {
         forward_spatial(m, d, r, dq, 1);
@@ -390,7 +365,9 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         for (int i = 0; i < m->nind; i++) fm[m->ind_coord[i]] = f[m->ind_coord[i]];
         f = fm;
     }
-    if (m->form == CTC_FORM_PLANAR) {
+    if (gdca_forward_order_seq(m, d)) {
+        gdca_forward_seq(m, d, f, qacc, 0);
+    } else if (m->form == CTC_FORM_PLANAR) {
         forward_planar(m, d, f, qacc, 0);
     } else {
         forward_spatial(m, d, f, qacc, 0);

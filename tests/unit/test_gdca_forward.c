@@ -1,5 +1,6 @@
 /*
- * test_gdca_forward.c - GDCA forward dynamics against the articulated-body oracle and closed forms.
+ * test_gdca_forward.c - GDCA forward dynamics against the articulated-body oracle and closed forms,
+ * in both assembly orders (the balanced tree and the sequential order, gdca_forward_seq.h).
  *
  * Tolerance: 1e-10 relative to the largest acceleration, widened to 1e-14 cond(M) for chains whose
  * mass matrix is ill conditioned (any forward-dynamics method loses that much; see the oracle's
@@ -11,6 +12,7 @@
 
 #include "chains.h"
 #include "ctc.h"
+#include "gdca_forward_seq.h"
 #include "gdca_refine.h"
 #include "gdca_tree.h"
 #include "linalg.h"
@@ -23,8 +25,12 @@ static double tolerance(double cond)
     return fmax(1e-10, 1e-14 * cond);
 }
 
-/* asserts qacc of GDCA matches ABA at `trials` random states */
-static void forward_vs_aba(const ctc_model *m, uint64_t seed, int trials)
+/* the two assembly orders of an open chain's forward pass (data.h fwd_order) */
+static const int orders[] = {CTC_ORDER_TREE, CTC_ORDER_SEQ};
+static const char *const order_names[] = {"tree", "sequential"};
+
+/* asserts qacc of GDCA in the given order matches ABA at `trials` random states */
+static void forward_vs_aba_in(const ctc_model *m, uint64_t seed, int trials, int order)
 {
     ctc_data *d = ctc_data_new(m);
     ctc_oracle *o = ctc_oracle_new(m);
@@ -34,6 +40,8 @@ static void forward_vs_aba(const ctc_model *m, uint64_t seed, int trials)
     double *ref = calloc((size_t)nv + 1, sizeof(double));
     double *mass = calloc((size_t)nv * nv + 1, sizeof(double));
     cr_assert(d && o && q && v && f && a && ref && mass);
+    d->fwd_order = orders[order];
+    cr_assert_eq(gdca_forward_order_seq(m, d), order);
     uint64_t rng = seed;
     for (int t = 0; t < trials; t++) {
         test_random_state(m, &rng, 2.0, q, v);
@@ -46,12 +54,19 @@ static void forward_vs_aba(const ctc_model *m, uint64_t seed, int trials)
         ctc_oracle_mass_matrix(m, o, q, mass);
         double cond = nv ? test_cond_spd(mass, nv) : 1.0;
         double err = test_rel_err(a, ref, nv);
-        cr_assert(err <= tolerance(cond), "n=%d trial %d: error %.3g > tolerance %.3g (cond %.3g)",
+        cr_assert(err <= tolerance(cond),
+                  "%s, n=%d trial %d: error %.3g > tolerance %.3g (cond %.3g)", order_names[order],
                   m->nbodies, t, err, tolerance(cond), cond);
     }
     free(q), free(v), free(f), free(a), free(ref), free(mass);
     ctc_oracle_free(o);
     ctc_data_free(d);
+}
+
+/* forward_vs_aba_in in both orders */
+static void forward_vs_aba(const ctc_model *m, uint64_t seed, int trials)
+{
+    for (int order = 0; order < 2; order++) forward_vs_aba_in(m, seed, trials, order);
 }
 
 static const int sizes[] = {1, 2, 3, 7, 16, 64, 257};
@@ -146,6 +161,90 @@ Test(gdca_forward, planar_and_spatial_forms_agree)
     }
 }
 
+/* The joint loads of the forward pass (d->jnt_load: the whole load on body k at joint k) against
+ * those of the composite inverse pass (gdca_inverse.c, composite inertias: another formulation)
+ * at the forward pass's own accelerations, in both orders, on planar and spatial chains of every
+ * joint type: each within 1e-9 of the largest load. */
+Test(gdca_forward, joint_loads_match_the_composite_inverses_at_the_same_accelerations)
+{
+    for (int form = 0; form < 2; form++) {
+        for (int i = 0; i < NSIZES; i++) {
+            test_chain *c =
+                form ? test_chain_random_spatial(sizes[i], 520 + (uint64_t)i, TEST_ALL_JOINTS)
+                     : test_chain_random_planar(sizes[i], 540 + (uint64_t)i, 1, 0);
+            ctc_model *m = build(&c->spec);
+            const int nv = m->nv, nl = m->dim * m->nbodies;
+            double *q = calloc((size_t)m->nq, sizeof(double));
+            double *v = calloc((size_t)nv, sizeof(double)), *f = calloc((size_t)nv, sizeof(double));
+            double *a = calloc((size_t)nv, sizeof(double)), *g = calloc((size_t)nv, sizeof(double));
+            cr_assert(q && v && f && a && g);
+            uint64_t rng = 31 + (uint64_t)i;
+            test_random_state(m, &rng, 2.0, q, v);
+            for (int k = 0; k < nv; k++) f[k] = test_uniform(&rng, -5, 5);
+            for (int order = 0; order < 2; order++) {
+                ctc_data *d = ctc_data_new(m);
+                cr_assert_not_null(d);
+                d->fwd_order = orders[order];
+                ctc_kinematics(m, d, q, v);
+                ctc_handles(m, d);
+                ctc_gdca_forward(m, d, f, a);
+                ctc_gdca_inverse(m, d, a, g);
+                double big = 0, diff = 0;
+                for (int k = 0; k < nl; k++) {
+                    big = fmax(big, fabs(d->jnt_load_inv[k]));
+                    diff = fmax(diff, fabs(d->jnt_load[k] - d->jnt_load_inv[k]));
+                }
+                cr_assert(diff <= 1e-9 * big, "%s %s n = %d: loads differ by %.3g of %.3g",
+                          form ? "spatial" : "planar", order_names[order], m->nbodies, diff, big);
+                cr_assert(test_rel_err(g, f, nv) < 1e-9, "%s %s n = %d: f round trip %.3g",
+                          form ? "spatial" : "planar", order_names[order], m->nbodies,
+                          test_rel_err(g, f, nv));
+                ctc_data_free(d);
+            }
+            free(q), free(v), free(f), free(a), free(g);
+            ctc_model_free(m);
+            test_chain_free(c);
+        }
+    }
+}
+
+/* A body whose records are NaN makes every joint whose K reads them singular. The sequential
+ * order (gdca_forward_seq.c) names the lowest such joint: with r = (n - 1) / 2 the root joint,
+ * that is the lowest NaN body below r (its base-run joint; the joints below it read only finite
+ * bodies), else r itself (the tip run's joints are all above r). */
+Test(gdca_forward, the_sequential_order_names_the_lowest_singular_joint)
+{
+    test_chain *c = test_chain_random_spatial(300, 17, TEST_ALL_JOINTS);
+    ctc_model *m = build(&c->spec);
+    const int r = (m->nbodies - 1) / 2;
+    double *q = calloc((size_t)m->nq, sizeof(double)), *v = calloc((size_t)m->nv, sizeof(double));
+    double *x = calloc((size_t)m->nv, sizeof(double)), *y = calloc((size_t)m->nv, sizeof(double));
+    cr_assert(q && v && x && y);
+    uint64_t rng = 3;
+    test_random_state(m, &rng, 1.0, q, v);
+    static const int cases[][2] = {{250, 20}, {299, 151}, {150, 149}, {7, 7}, {0, 298}, {148, 5}};
+    static const int want[] = {20, 149, 149, 7, 0, 5};
+    for (int k = 0; k < 6; k++) {
+        ctc_data *d = ctc_data_new(m);
+        cr_assert_not_null(d);
+        d->fwd_order = CTC_ORDER_SEQ;
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        for (int b = 0; b < 2; b++) {
+            double *h = d->hbody + (size_t)cases[k][b] * d->hsize;
+            for (int i = 0; i < d->hsize; i++) h[i] = NAN;
+        }
+        ctc_gdca_forward(m, d, x, y);
+        cr_expect_eq(r, 149);
+        cr_expect_eq(d->singular_joint, want[k], "bodies %d and %d: %d", cases[k][0], cases[k][1],
+                     d->singular_joint);
+        ctc_data_free(d);
+    }
+    free(q), free(v), free(x), free(y);
+    ctc_model_free(m);
+    test_chain_free(c);
+}
+
 /* single rod pendulum: qdd = (tau - m g (L/2) sin q) / (m L^2 / 3) */
 Test(gdca_forward, single_rod_pendulum_matches_closed_form)
 {
@@ -221,18 +320,21 @@ Test(gdca_forward, joint_loads_balance_gravity_of_a_chain_at_rest)
      * bodies k..n-1, no moment, and nothing accelerates */
     test_chain *c = test_chain_rod_pendulum(6, 0.5, 1.5);
     ctc_model *m = build(&c->spec);
-    ctc_data *d = ctc_data_new(m);
-    double q[6] = {0}, v[6] = {0}, f[6] = {0}, a[6];
-    ctc_kinematics(m, d, q, v);
-    ctc_handles(m, d);
-    ctc_gdca_forward(m, d, f, a);
-    for (int k = 0; k < 6; k++) {
-        cr_assert(fabs(a[k]) < 1e-12);
-        const double *load = d->jnt_load + 3 * k;
-        cr_assert(fabs(load[0]) < 1e-12 && fabs(load[1]) < 1e-12);
-        cr_assert_float_eq(load[2], 1.5 * 9.81 * (6 - k), 1e-11);
+    for (int order = 0; order < 2; order++) {
+        ctc_data *d = ctc_data_new(m);
+        double q[6] = {0}, v[6] = {0}, f[6] = {0}, a[6];
+        d->fwd_order = orders[order];
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        ctc_gdca_forward(m, d, f, a);
+        for (int k = 0; k < 6; k++) {
+            cr_assert(fabs(a[k]) < 1e-12);
+            const double *load = d->jnt_load + 3 * k;
+            cr_assert(fabs(load[0]) < 1e-12 && fabs(load[1]) < 1e-12);
+            cr_assert_float_eq(load[2], 1.5 * 9.81 * (6 - k), 1e-11);
+        }
+        ctc_data_free(d);
     }
-    ctc_data_free(d);
     ctc_model_free(m);
     test_chain_free(c);
 }
@@ -244,7 +346,8 @@ Test(gdca_forward, joint_loads_balance_gravity_of_a_chain_at_rest)
  * those of the bias-free problem, added to d->jnt_load: a zero r must leave them unchanged. */
 Test(gdca_forward, correction_pass_solves_the_mass_matrix)
 {
-    for (int form = 0; form < 2; form++) {
+    for (int fo = 0; fo < 4; fo++) {
+        const int form = fo / 2, order = fo % 2;
         test_chain *c = form ? test_chain_random_spatial(23, 61, TEST_ALL_JOINTS)
                              : test_chain_random_planar(23, 61, 1, 0);
         ctc_model *m = build(&c->spec);
@@ -258,6 +361,7 @@ Test(gdca_forward, correction_pass_solves_the_mass_matrix)
         double *mass = calloc((size_t)nv * (size_t)nv, sizeof(double));
         double *load = calloc((size_t)m->dim * (size_t)m->nbodies, sizeof(double));
         cr_assert(q && v && f && a && r && dq && ref && mass && load);
+        d->fwd_order = orders[order];
         uint64_t rng = 62;
         test_random_state(m, &rng, 2.0, q, v);
         for (int i = 0; i < nv; i++) f[i] = test_uniform(&rng, -5, 5);
@@ -276,7 +380,8 @@ Test(gdca_forward, correction_pass_solves_the_mass_matrix)
         ctc_oracle_mass_matrix(m, o, q, mass);
         cr_assert_eq(test_solve_spd(mass, nv, r, ref), 0);
         double err = test_rel_err(dq, ref, nv);
-        cr_assert(err < 1e-11, "%s: M^-1 r off by %.3g", form ? "spatial" : "planar", err);
+        cr_assert(err < 1e-11, "%s, %s: M^-1 r off by %.3g", form ? "spatial" : "planar",
+                  order_names[order], err);
 
         free(q), free(v), free(f), free(a), free(r), free(dq), free(ref), free(mass), free(load);
         ctc_oracle_free(o);
@@ -294,7 +399,8 @@ Test(gdca_forward, correction_pass_solves_the_mass_matrix)
 Test(gdca_forward, refinement_brings_the_round_trip_to_the_oracles_own, .timeout = 120)
 {
     const int coil_n[] = {256, 1024};
-    for (int s = 0; s < 2; s++) {
+    for (int so = 0; so < 4; so++) {
+        const int s = so / 2, order = so % 2;
         test_chain *c = test_chain_coil(coil_n[s]);
         ctc_model *m = build(&c->spec);
         ctc_data *d = ctc_data_new(m);
@@ -304,6 +410,7 @@ Test(gdca_forward, refinement_brings_the_round_trip_to_the_oracles_own, .timeout
         double *u = calloc((size_t)nv, sizeof(double)), *f = calloc((size_t)nv, sizeof(double));
         double *a = calloc((size_t)nv, sizeof(double)), *b = calloc((size_t)nv, sizeof(double));
         cr_assert(q && v && u && f && a && b);
+        d->fwd_order = orders[order];
         uint64_t rng = 7;
         test_random_state(m, &rng, 2.0, q, v);
         for (int i = 0; i < nv; i++) u[i] = test_uniform(&rng, -1, 1);
@@ -320,10 +427,10 @@ Test(gdca_forward, refinement_brings_the_round_trip_to_the_oracles_own, .timeout
         ctc_oracle_rnea(m, o, q, v, u, f);
         ctc_oracle_aba(m, o, q, v, f, b);
         double oracle = test_rel_err(b, u, nv);
-        cr_assert(refined <= 5 * oracle + 1e-14, "n = %d: refined %.3g, the oracle's %.3g",
-                  coil_n[s], refined, oracle);
-        cr_assert(plain > 100 * refined, "n = %d: unrefined %.3g, refined %.3g", coil_n[s], plain,
-                  refined);
+        cr_assert(refined <= 5 * oracle + 1e-14, "%s, n = %d: refined %.3g, the oracle's %.3g",
+                  order_names[order], coil_n[s], refined, oracle);
+        cr_assert(plain > 100 * refined, "%s, n = %d: unrefined %.3g, refined %.3g",
+                  order_names[order], coil_n[s], plain, refined);
 
         free(q), free(v), free(u), free(f), free(a), free(b);
         ctc_oracle_free(o);

@@ -4,7 +4,10 @@
  *
  * The oracle is the serial pass: splitting a tree height over threads must not change a single
  * bit of any result - accelerations, driving forces, joint loads, the assembled records - nor
- * which joint is reported singular. Each case runs a serial data and parallel data side by side
+ * which joint is reported singular. The forward pass is compared in the balanced tree's order
+ * (data.h fwd_order), the one it splits; which order it takes by default on how many threads is
+ * checked too, and a whole simulation long enough to change order agrees with one thread to
+ * rounding. Each case runs a serial data and parallel data side by side
  * on the same random state: planar and spatial open chains of 1 to 1000 bodies (odd sizes,
  * powers of two and their neighbours), planar and spatial closed chains (loop models' roots stay
  * serial), on 2, 3 and 8 threads with every height split (grain 1) and with the measured grains.
@@ -22,6 +25,7 @@
 
 #include "chains.h"
 #include "ctc.h"
+#include "gdca_forward_seq.h"
 #include "pool.h"
 #include "sim.h"
 #include "model_fixture.h"
@@ -220,6 +224,7 @@ static void compare_on(const ctc_model *m, const double *q, const double *v, uin
 
     ctc_data *ds = ctc_data_new(m);
     cr_assert_not_null(ds);
+    ds->fwd_order = CTC_ORDER_TREE;
     outputs *s = outputs_new(m), *p = outputs_new(m);
     run_passes(m, ds, q, v, u, tau, s);
     cr_assert(all_finite(s->qacc, nvx) && all_finite(s->f, nvx) && all_finite(s->fm, nvx),
@@ -235,6 +240,7 @@ static void compare_on(const ctc_model *m, const double *q, const double *v, uin
             cr_assert_not_null(dp);
             cr_assert_eq(ctc_data_set_threads(dp, threads, NULL, 0), CTC_OK);
             dp->par_grain = grain;
+            dp->fwd_order = CTC_ORDER_TREE;
             for (int rep = 0; rep < 2; rep++) { /* the second time on warm workers */
                 run_passes(m, dp, q, v, u, tau, p);
                 expect_same(s->qacc, p->qacc, (size_t)nvx, "qacc", label, n, threads, grain);
@@ -470,6 +476,7 @@ Test(gdca_parallel, the_first_singular_joint_is_the_serial_passes_whatever_the_t
             cr_assert_not_null(d);
             cr_assert_eq(ctc_data_set_threads(d, threads, NULL, 0), CTC_OK);
             d->par_grain = 1;
+            d->fwd_order = CTC_ORDER_TREE;
             ctc_kinematics(m, d, q, v);
             ctc_handles(m, d);
             for (int b = 0; b < 2; b++) {
@@ -488,6 +495,60 @@ Test(gdca_parallel, the_first_singular_joint_is_the_serial_passes_whatever_the_t
     free(q), free(v), free(x), free(y);
     ctc_model_free(m);
     test_chain_free(c);
+}
+
+/* ---- the forward pass's order ---- */
+
+/* chains of n bodies, planar rods or spatial revolute */
+static ctc_model *order_model(int n, int spatial)
+{
+    test_chain *c = spatial ? test_chain_random_spatial(n, 5, 1u << CTC_JOINT_REVOLUTE)
+                            : test_chain_random_planar(n, 5, 0, 1);
+    ctc_model *m = build(&c->spec);
+    test_chain_free(c);
+    return m;
+}
+
+/* By default (CTC_ORDER_AUTO) an open chain's forward pass takes the sequential order on one
+ * thread at any length, and the tree on two threads or more from 2048 planar or 1024 spatial
+ * bodies (gdca_forward.c); a shared pool's owner's count decides; loop models take the tree
+ * always; the setting overrides the rule for open chains. */
+Test(gdca_parallel, the_forward_pass_takes_the_tree_on_threads_only_from_the_measured_length)
+{
+    static const struct {
+        int n, spatial, threads, seq;
+    } cases[] = {{2, 0, 1, 1},    {2047, 0, 1, 1}, {4096, 0, 1, 1}, {2047, 0, 2, 1},
+                 {2048, 0, 2, 0}, {2048, 0, 8, 0}, {1023, 1, 2, 1}, {1023, 1, 64, 1},
+                 {1024, 1, 2, 0}, {1024, 1, 1, 1}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        ctc_model *m = order_model(cases[i].n, cases[i].spatial);
+        ctc_data *d = ctc_data_new(m), *owner = ctc_data_new(m);
+        cr_assert(d && owner);
+        cr_assert_eq(ctc_data_set_threads(d, cases[i].threads, NULL, 0), CTC_OK);
+        cr_expect_eq(gdca_forward_order_seq(m, d), cases[i].seq, "n = %d %s, %d threads",
+                     cases[i].n, cases[i].spatial ? "spatial" : "planar", cases[i].threads);
+        d->fwd_order = CTC_ORDER_TREE;
+        cr_expect_eq(gdca_forward_order_seq(m, d), 0);
+        d->fwd_order = CTC_ORDER_SEQ;
+        cr_expect_eq(gdca_forward_order_seq(m, d), 1);
+        /* a data that uses another's pool goes by the owner's count */
+        d->fwd_order = CTC_ORDER_AUTO;
+        cr_assert_eq(ctc_data_set_threads(d, 1, NULL, 0), CTC_OK);
+        cr_assert_eq(ctc_data_set_threads(owner, cases[i].threads, NULL, 0), CTC_OK);
+        ctc_data_share_pool(d, owner);
+        cr_expect_eq(gdca_forward_order_seq(m, d), cases[i].seq);
+        ctc_data_free(d), ctc_data_free(owner);
+        ctc_model_free(m);
+    }
+    loop_chain *l = loop_chain_new(17, 0, 0, 33);
+    ctc_model *m = build(&l->c->spec);
+    ctc_data *d = ctc_data_new(m);
+    cr_assert_not_null(d);
+    d->fwd_order = CTC_ORDER_SEQ;
+    cr_expect_eq(gdca_forward_order_seq(m, d), 0, "a loop model takes the tree");
+    ctc_data_free(d);
+    ctc_model_free(m);
+    loop_chain_free(l);
 }
 
 /* ---- the setting ---- */
@@ -527,6 +588,7 @@ Test(gdca_parallel, a_shared_pool_serves_two_data_in_turn)
     user->par_grain = 1;
     ctc_data *both[3] = {serial, user, owner};
     for (int k = 0; k < 3; k++) {
+        both[k]->fwd_order = CTC_ORDER_TREE;
         ctc_kinematics(m, both[k], q, v);
         ctc_handles(m, both[k]);
     }
@@ -546,7 +608,8 @@ Test(gdca_parallel, a_shared_pool_serves_two_data_in_turn)
 /* ---- whole simulations ---- */
 
 #define SIM_N                                                                                      \
-    2048 /* long enough for both passes to split by default (gdca_forward.c, gdca_inverse.c) */
+    2048 /* long enough for both passes to split by default, and for the forward pass to take      \
+            the tree on threads (gdca_forward.c, gdca_inverse.c) */
 
 /* a PD run of SIM_N-link rod pendulum from q0_k = +-pi/6 to rest, RK4, 50 steps */
 static ctc_sim_result *pendulum_run(int threads, double mass_scale)
@@ -592,14 +655,40 @@ static void expect_same_run(const ctc_sim_result *a, const ctc_sim_result *b, co
     }
 }
 
-Test(gdca_parallel, a_simulation_on_two_threads_records_the_serial_samples, .timeout = 120)
+/* the largest difference of two runs' samples of channel ch, relative to the largest sample */
+static double run_difference(const ctc_sim_result *a, const ctc_sim_result *b, ctc_channel ch)
+{
+    size_t count = (size_t)a->nsamples * (size_t)a->width[ch];
+    double big = 0, diff = 0;
+    for (size_t i = 0; i < count; i++) {
+        big = fmax(big, fabs(a->ch[ch][i]));
+        diff = fmax(diff, fabs(a->ch[ch][i] - b->ch[ch][i]));
+    }
+    return diff > 0 ? diff / big : 0.0;
+}
+
+/* Two and three threads record bitwise the same samples. One thread, whose forward pass takes
+ * the sequential order at this length, records the same to the forward pass's accuracy on a
+ * chain this long: each order's accelerations are off the exact ones by up to about 1e-6 at
+ * n = 2048 (a round trip of 5e-8 at 1024 and 2e-5 at 4096 on uniform rods, bench/README.md
+ * "Hard cases"), and the runs differ by 2e-7 (qdot) and 3e-8 (q) of the largest sample. */
+Test(gdca_parallel, a_simulation_on_threads_records_the_same_samples, .timeout = 120)
 {
     for (int err = 0; err < 2; err++) { /* exact model, then a controller model of its own */
         double scale = err ? 1.1 : 1.0;
         ctc_sim_result *serial = pendulum_run(0, scale), *two = pendulum_run(2, scale);
-        expect_same_run(serial, two, err ? "model error" : "exact model");
+        ctc_sim_result *three = pendulum_run(3, scale);
+        expect_same_run(two, three, err ? "model error" : "exact model");
+        cr_assert_eq(serial->nsamples, two->nsamples);
+        for (int ch = 0; ch < CTC_NCHANNELS; ch++) {
+            if (!serial->ch[ch]) continue;
+            double e = run_difference(serial, two, (ctc_channel)ch);
+            cr_expect(e < 1e-6, "%s: channel %s: 1 and 2 threads differ by %.3g",
+                      err ? "model error" : "exact model", ctc_channel_name((ctc_channel)ch), e);
+        }
         ctc_sim_result_free(serial);
         ctc_sim_result_free(two);
+        ctc_sim_result_free(three);
     }
 }
 

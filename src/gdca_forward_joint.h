@@ -1,0 +1,71 @@
+/*
+ * gdca_forward_joint.h - the per-joint kernels of forward GDCA that its two assembly orders share
+ * (internal to the library): the balanced tree (gdca_forward.c) and the sequential order from
+ * the free tip (gdca_forward_seq.c). Both are meant to be inlined into CTC_SPECIALISE wrappers
+ * with a constant dim, like gdca_tree.h.
+ */
+#ifndef CTC_GDCA_FORWARD_JOINT_H
+#define CTC_GDCA_FORWARD_JOINT_H
+
+#include "data.h"
+#include "gdca_tree.h"
+
+/* E and z of joint j between left (NULL: ground) and right: z = W Y + P f with
+ * Y = b23^L - b13^R + beta - K P f, W = E E^T, K = h11^R + h22^L. The full pass (factor = 1) forms
+ * K and the factor E of W from the records and is given their h13, h23 (b23l, b13r) and the
+ * joint's beta; the correction (factor = 0) reuses E, is given its own bias vectors and beta = 0,
+ * and does not form K. kk (dim x dim) may be NULL; if not, the full pass stores K there and the
+ * correction takes K P f from it, else K P f = h11^R P f + h22^L P f. Returns 0, or -1 when
+ * D^T K D is not positive definite (the results are then NaN). */
+static inline int forward_joint(const ctc_model *m, ctc_data *d, int j, const double *left,
+                                const double *right, const double *b23l, const double *b13r,
+                                const double *beta, const double *f, int factor, double *kk,
+                                const int dim)
+{
+    const int nv = m->jnt_nv[j];
+    double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
+    double kloc[CTC_DENSE_MAX * CTC_DENSE_MAX], y[CTC_DENSE_MAX], pf[CTC_DENSE_MAX];
+    double kpf[CTC_DENSE_MAX];
+    double *k = kk != NULL ? kk : kloc;
+    int st = 0;
+
+    gdca_joint_map(dim, nv, d->jnt_P + 3 * dim * j, f + m->jnt_vadr[j], pf);
+    if (factor) {
+        gdca_joint_K(dim, left, right, k);
+        st = gdca_joint_factor_typed(dim, m->joints[j].type, k, d->jnt_D + dim * dim * j, dim - nv,
+                                     e);
+        ctc_dense_mulv(dim, dim, k, pf, kpf);
+    } else if (kk != NULL) {
+        ctc_dense_mulv(dim, dim, kk, pf, kpf);
+    } else { /* K P f = h11^R P f + h22^L P f, without forming K */
+        ctc_dense_mulv(dim, dim, right + H11(dim), pf, kpf);
+        if (left != NULL) {
+            ctc_dense_mulv(dim, dim, left + H22(dim), pf, y);
+            for (int i = 0; i < dim; i++) kpf[i] += y[i];
+        }
+    }
+    for (int i = 0; i < dim; i++) {
+        y[i] = b23l[i] - b13r[i] + beta[i];
+        y[i] -= kpf[i];
+    }
+    gdca_factor_apply(dim, dim - nv, e, y, z);
+    for (int i = 0; i < dim; i++) z[i] += pf[i];
+    return st;
+}
+
+/* a zero vector: the ground's acceleration, and the bias terms of the correction */
+static const double gdca_zero6[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+
+/* qdd_j = P^T (A1^R - A2^L - beta) written into qacc, for the given beta */
+static inline void forward_accel(const ctc_model *m, const ctc_data *d, int j, const double *a1r,
+                                 const double *a2l, const double *beta, double *qacc, const int dim)
+{
+    const double *P = d->jnt_P + 3 * dim * j;
+    for (int c = 0; c < m->jnt_nv[j]; c++) {
+        double s = 0;
+        for (int i = 0; i < dim; i++) s += P[c * dim + i] * (a1r[i] - a2l[i] - beta[i]);
+        qacc[m->jnt_vadr[j] + c] = s;
+    }
+}
+
+#endif
