@@ -11,8 +11,9 @@ import { cliCsv, keepAliveClient, sleep, startServer, submit, waitFor, waitJob }
 /* runs for many minutes: only ever cancelled */
 const LONG = { preset: 'n_link_pendulum', n: 64, duration: 600, integrator: { method: 'rk4', step: 0.0001 }, output: { interval: 0.1 } };
 const SHORT = { preset: 'triple_pendulum_pid', duration: 0.5 };
-/* about 0.8 s of work (6 s under ASan): 100000 RK4 steps of the triple pendulum */
-const MEDIUM = { preset: 'triple_pendulum_pid', name: 'medium', duration: 4, integrator: { method: 'rk4', step: 0.00004 } };
+/* about 0.75 s of work (5-6 s under ASan): 300000 RK4 steps of the triple pendulum; the test
+   must see it running, so it may not be much shorter (4 s of it took 0.24 s by 2026-11) */
+const MEDIUM = { preset: 'triple_pendulum_pid', name: 'medium', duration: 12, integrator: { method: 'rk4', step: 0.00004 } };
 
 const running = (j) => j.status === 'running' && j.progress > 0;
 
