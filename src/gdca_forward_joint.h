@@ -48,7 +48,7 @@ static inline int forward_joint(const ctc_model *m, ctc_data *d, int j, const do
         y[i] = b23l[i] - b13r[i] + beta[i];
         y[i] -= kpf[i];
     }
-    gdca_factor_apply(dim, dim - nv, e, y, z);
+    gdca_factor_apply_typed(dim, m->joints[j].type, dim - nv, e, y, z);
     for (int i = 0; i < dim; i++) z[i] += pf[i];
     return st;
 }

@@ -86,20 +86,9 @@ static inline const double *seq_beta(const seq_args *a, int j, const int dim, co
     return correct ? gdca_zero6 : a->d->jnt_beta + dim * j;
 }
 
-/* out (dim x dim, symmetric) = h - X X^T with X = M E (trans = 0) or M^T E (trans = 1), M (dim x
-   dim), E (dim x nc): the upper triangle computed, mirrored */
-static inline void seq_downdate(int dim, int nc, const double *h, const double *mm, int trans,
-                                const double *e, double *out)
+/* out (dim x dim, symmetric) = h - X X^T for X (dim x nc): the upper triangle computed, mirrored */
+static inline void seq_downdate(int dim, int nc, const double *h, const double *x, double *out)
 {
-    double x[CTC_DENSE_MAX * CTC_DENSE_MAX];
-    for (int i = 0; i < dim; i++) {
-        for (int c = 0; c < nc; c++) {
-            double s = 0;
-            for (int k = 0; k < dim; k++)
-                s += (trans ? mm[k * dim + i] : mm[i * dim + k]) * e[k * nc + c];
-            x[i * nc + c] = s;
-        }
-    }
     for (int i = 0; i < dim; i++) {
         for (int j = i; j < dim; j++) {
             double s = 0;
@@ -109,57 +98,119 @@ static inline void seq_downdate(int dim, int nc, const double *h, const double *
     }
 }
 
-/* seq_downdate with nc = dim - 1 (single-freedom joints) a constant */
-static inline void seq_downdate_nc(int dim, int nc, const double *h, const double *mm, int trans,
-                                   const double *e, double *out)
+/* out = h - X X^T with X = M E (trans = 0) or M^T E (trans = 1), M (dim x dim), E (dim x nc) the
+   factor of joint j, its zeros skipped for the joint types gdca_joint_factor_typed specialises */
+static inline void seq_downdate_joint(const seq_args *a, int j, const double *h, const double *mm,
+                                      int trans, const double *e, double *out, const int dim)
 {
-    if (nc == dim - 1) {
-        seq_downdate(dim, dim - 1, h, mm, trans, e, out);
-    } else {
-        seq_downdate(dim, nc, h, mm, trans, e, out);
+    const ctc_joint_type type = a->m->joints[j].type;
+    const int nc = dim - a->m->jnt_nv[j];
+    double x[CTC_DENSE_MAX * CTC_DENSE_MAX];
+    if (dim == 6 && (type == CTC_JOINT_REVOLUTE || type == CTC_JOINT_PRISMATIC)) {
+        gdca_mul_hinge(mm, trans, e, type == CTC_JOINT_REVOLUTE ? 3 : 0, x);
+        seq_downdate(6, 5, h, x, out);
+        return;
     }
+    if (dim == 3 && type == CTC_JOINT_REVOLUTE) {
+        gdca_mul_planar_revolute(mm, trans, e, x);
+        seq_downdate(3, 2, h, x, out);
+        return;
+    }
+    for (int i = 0; i < dim; i++) {
+        for (int c = 0; c < nc; c++) {
+            double s = 0;
+            for (int k = 0; k < dim; k++) {
+                s += (trans ? mm[k * dim + i] : mm[i * dim + k]) * e[k * nc + c];
+            }
+            x[i * nc + c] = s;
+        }
+    }
+    seq_downdate(dim, nc, h, x, out);
 }
 
-/* the tip run's assembly of S_i = i : S_{i+1} at joint i + 1; returns its joint if singular,
-   else -1 */
-static inline int seq_tip_assemble(const seq_args *a, int i, const int dim, const int correct)
+/* the tip run's assembly of S_i = i : S_{i+1} at joint j = i + 1, once E of the joint is made
+   (correct: E and K reused): z, h11 and h13 */
+static inline void seq_tip_assemble(const seq_args *a, int i, const int dim, const int correct)
 {
     ctc_data *d = a->d;
     const int j = i + 1;
     const double *left = seq_body(a, i), *right = seq_part(a, j);
     const double *b13l = seq_body_bias(a, i, H13(dim), correct);
     double *out = d->hfwd + (size_t)i * d->hsize, t[CTC_DENSE_MAX];
-    int st = forward_joint(a->m, d, j, left, right, seq_body_bias(a, i, H23(dim), correct),
-                           seq_tip_bias(a, j, dim, correct), seq_beta(a, j, dim, correct), a->f,
-                           !correct, out + H22(dim), dim);
+    forward_joint(a->m, d, j, left, right, seq_body_bias(a, i, H23(dim), correct),
+                  seq_tip_bias(a, j, dim, correct), seq_beta(a, j, dim, correct), a->f, 0,
+                  out + H22(dim), dim);
     const double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
     if (!correct) {
-        seq_downdate_nc(dim, dim - a->m->jnt_nv[j], left + H11(dim), left + H12(dim), 0, e,
-                        out + H11(dim));
+        seq_downdate_joint(a, j, left + H11(dim), left + H12(dim), 0, e, out + H11(dim), dim);
     }
     ctc_dense_mulv(dim, dim, left + H12(dim), z, t);
     for (int r = 0; r < dim; r++) out[H13(dim) + r] = b13l[r] - t[r];
-    return st != 0 ? j : -1;
 }
 
-/* the base run's assembly of B_k = B_{k-1} : k at joint k; returns k if singular, else -1 */
-static inline int seq_base_assemble(const seq_args *a, int k, const int dim, const int correct)
+/* the base run's assembly of B_k = B_{k-1} : k at joint k, once E of the joint is made: z, h22
+   and h23 */
+static inline void seq_base_assemble(const seq_args *a, int k, const int dim, const int correct)
 {
     ctc_data *d = a->d;
     const double *left = k > 0 ? seq_part(a, k - 1) : NULL, *right = seq_body(a, k);
     const double *b23r = seq_body_bias(a, k, H23(dim), correct);
     double *out = d->hfwd + (size_t)k * d->hsize, t[CTC_DENSE_MAX];
-    int st = forward_joint(a->m, d, k, left, right, seq_base_bias(a, k - 1, dim),
-                           seq_body_bias(a, k, H13(dim), correct), seq_beta(a, k, dim, correct),
-                           a->f, !correct, out + H11(dim), dim);
+    forward_joint(a->m, d, k, left, right, seq_base_bias(a, k - 1, dim),
+                  seq_body_bias(a, k, H13(dim), correct), seq_beta(a, k, dim, correct), a->f, 0,
+                  out + H11(dim), dim);
     const double *e = d->fwd_E + dim * dim * k, *z = d->fwd_z + dim * k;
     if (!correct) {
-        seq_downdate_nc(dim, dim - a->m->jnt_nv[k], right + H22(dim), right + H12(dim), 1, e,
-                        out + H22(dim));
+        seq_downdate_joint(a, k, right + H22(dim), right + H12(dim), 1, e, out + H22(dim), dim);
     }
     ctc_dense_tmulv(dim, dim, right + H12(dim), z, t);
     for (int r = 0; r < dim; r++) out[H23(dim) + r] = b23r[r] + t[r];
-    return st != 0 ? k : -1;
+}
+
+/* K of the tip run's joint i + 1 (K = h11(S_{i+1}) + h22(body i), into S_i's h22 slot) or the
+   base run's joint k (K = h11(body k) + h22(B_{k-1}), into B_k's h11 slot); returns K */
+static inline double *seq_tip_K(const seq_args *a, int i, const int dim)
+{
+    double *kk = a->d->hfwd + (size_t)i * a->d->hsize + H22(dim);
+    gdca_joint_K(dim, seq_body(a, i), seq_part(a, i + 1), kk);
+    return kk;
+}
+
+static inline double *seq_base_K(const seq_args *a, int k, const int dim)
+{
+    double *kk = a->d->hfwd + (size_t)k * a->d->hsize + H11(dim);
+    gdca_joint_K(dim, k > 0 ? seq_part(a, k - 1) : NULL, seq_body(a, k), kk);
+    return kk;
+}
+
+/* E of joint j from K (kk); returns j if D^T K D was not positive definite, else -1 */
+static inline int seq_factor(const seq_args *a, int j, const double *kk, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    int st = gdca_joint_factor_typed(dim, m->joints[j].type, kk, d->jnt_D + dim * dim * j,
+                                     dim - m->jnt_nv[j], d->fwd_E + dim * dim * j);
+    return st != 0 ? j : -1;
+}
+
+/* E of the tip run's joint jt and the base run's joint jb from their K: the two factors side
+   by side (gdca_chol_inv_lanes) when the joints are of one type that has a lane form; returns
+   the lower singular joint, or -1 */
+static inline int seq_factor_pair(const seq_args *a, int jt, const double *kt, int jb,
+                                  const double *kb, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const ctc_joint_type type = m->joints[jt].type;
+    if (type != m->joints[jb].type || !gdca_joint_factor_has_lanes(dim, type)) {
+        const int st = seq_factor(a, jt, kt, dim), sb = seq_factor(a, jb, kb, dim);
+        return sb >= 0 ? sb : st;
+    }
+    const double *k[2] = {kt, kb};
+    const double *dd[2] = {d->jnt_D + dim * dim * jt, d->jnt_D + dim * dim * jb};
+    double *e[2] = {d->fwd_E + dim * dim * jt, d->fwd_E + dim * dim * jb};
+    const int bad = gdca_joint_factor_lanes(dim, type, 2, k, dd, e);
+    return bad & 2 ? jb : bad & 1 ? jt : -1;
 }
 
 /* qdd_j = P^T (K F - s + b13^R - b23^L - beta) for the stored K */
@@ -181,7 +232,8 @@ static inline void seq_tip_disassemble(const seq_args *a, int i, const int dim, 
     const double *left = seq_body(a, i), *fi = d->tload + dim * i;
     double *fj = d->tload + dim * j, s[CTC_DENSE_MAX];
     ctc_dense_tmulv(dim, dim, left + H12(dim), fi, s);
-    gdca_factor_apply(dim, dim - a->m->jnt_nv[j], d->fwd_E + dim * dim * j, s, fj);
+    gdca_factor_apply_typed(dim, a->m->joints[j].type, dim - a->m->jnt_nv[j],
+                            d->fwd_E + dim * dim * j, s, fj);
     for (int r = 0; r < dim; r++) fj[r] += d->fwd_z[dim * j + r];
     seq_accel(a, j, d->hfwd + (size_t)i * d->hsize + H22(dim), fj, s,
               seq_tip_bias(a, j, dim, correct), seq_body_bias(a, i, H23(dim), correct), dim,
@@ -195,7 +247,8 @@ static inline void seq_base_disassemble(const seq_args *a, int k, const int dim,
     const double *right = seq_body(a, k), *fn = d->tload + dim * (k + 1);
     double *fk = d->tload + dim * k, s[CTC_DENSE_MAX];
     ctc_dense_mulv(dim, dim, right + H12(dim), fn, s);
-    gdca_factor_apply(dim, dim - a->m->jnt_nv[k], d->fwd_E + dim * dim * k, s, fk);
+    gdca_factor_apply_typed(dim, a->m->joints[k].type, dim - a->m->jnt_nv[k],
+                            d->fwd_E + dim * dim * k, s, fk);
     for (int r = 0; r < dim; r++) fk[r] += d->fwd_z[dim * k + r];
     seq_accel(a, k, d->hfwd + (size_t)k * d->hsize + H11(dim), fk, s,
               seq_body_bias(a, k, H13(dim), correct), seq_base_bias(a, k - 1, dim), dim, correct);
@@ -239,10 +292,21 @@ static inline void seq_pass(const seq_args *a, const int dim, const int correct)
     const int n = a->m->nbodies, r = a->r, ntip = n - 1 - r;
     int singular = -1;
 
-    /* the two runs interleaved: tip node n - 2 - t and base node t; ntip >= r */
+    /* the two runs interleaved: tip node n - 2 - t and base node t (ntip >= r), their joints'
+       factors made side by side */
     for (int t = 0; t < ntip; t++) {
-        singular = seq_first(singular, seq_tip_assemble(a, n - 2 - t, dim, correct));
-        if (t < r) singular = seq_first(singular, seq_base_assemble(a, t, dim, correct));
+        const int i = n - 2 - t;
+        if (!correct) {
+            double *kt = seq_tip_K(a, i, dim);
+            if (t < r) {
+                double *kb = seq_base_K(a, t, dim);
+                singular = seq_first(singular, seq_factor_pair(a, i + 1, kt, t, kb, dim));
+            } else {
+                singular = seq_first(singular, seq_factor(a, i + 1, kt, dim));
+            }
+        }
+        seq_tip_assemble(a, i, dim, correct);
+        if (t < r) seq_base_assemble(a, t, dim, correct);
     }
     d->singular_joint = seq_first(singular, seq_root(a, dim, correct));
     for (int t = 0; t < ntip; t++) {
