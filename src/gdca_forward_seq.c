@@ -128,89 +128,45 @@ static inline void seq_downdate_joint(const seq_args *a, int j, const double *h,
     seq_downdate(dim, nc, h, x, out);
 }
 
-/* the tip run's assembly of S_i = i : S_{i+1} at joint j = i + 1, once E of the joint is made
-   (correct: E and K reused): z, h11 and h13 */
-static inline void seq_tip_assemble(const seq_args *a, int i, const int dim, const int correct)
+/* the tip run's assembly of S_i = i : S_{i+1} at joint j = i + 1 (correct: E and K reused): K,
+   E, z, h11 and h13; returns j if D^T K D was not positive definite, else -1 */
+static inline int seq_tip_assemble(const seq_args *a, int i, const int dim, const int correct)
 {
     ctc_data *d = a->d;
     const int j = i + 1;
     const double *left = seq_body(a, i), *right = seq_part(a, j);
     const double *b13l = seq_body_bias(a, i, H13(dim), correct);
     double *out = d->hfwd + (size_t)i * d->hsize, t[CTC_DENSE_MAX];
-    forward_joint(a->m, d, j, left, right, seq_body_bias(a, i, H23(dim), correct),
-                  seq_tip_bias(a, j, dim, correct), seq_beta(a, j, dim, correct), a->f, 0,
-                  out + H22(dim), dim);
+    const int st = forward_joint(a->m, d, j, left, right, seq_body_bias(a, i, H23(dim), correct),
+                                 seq_tip_bias(a, j, dim, correct), seq_beta(a, j, dim, correct),
+                                 a->f, !correct, out + H22(dim), dim);
     const double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
     if (!correct) {
         seq_downdate_joint(a, j, left + H11(dim), left + H12(dim), 0, e, out + H11(dim), dim);
     }
     ctc_dense_mulv(dim, dim, left + H12(dim), z, t);
     for (int r = 0; r < dim; r++) out[H13(dim) + r] = b13l[r] - t[r];
+    return st != 0 ? j : -1;
 }
 
-/* the base run's assembly of B_k = B_{k-1} : k at joint k, once E of the joint is made: z, h22
-   and h23 */
-static inline void seq_base_assemble(const seq_args *a, int k, const int dim, const int correct)
+/* the base run's assembly of B_k = B_{k-1} : k at joint k: K, E, z, h22 and h23; returns k if
+   singular, else -1 */
+static inline int seq_base_assemble(const seq_args *a, int k, const int dim, const int correct)
 {
     ctc_data *d = a->d;
     const double *left = k > 0 ? seq_part(a, k - 1) : NULL, *right = seq_body(a, k);
     const double *b23r = seq_body_bias(a, k, H23(dim), correct);
     double *out = d->hfwd + (size_t)k * d->hsize, t[CTC_DENSE_MAX];
-    forward_joint(a->m, d, k, left, right, seq_base_bias(a, k - 1, dim),
-                  seq_body_bias(a, k, H13(dim), correct), seq_beta(a, k, dim, correct), a->f, 0,
-                  out + H11(dim), dim);
+    const int st = forward_joint(a->m, d, k, left, right, seq_base_bias(a, k - 1, dim),
+                                 seq_body_bias(a, k, H13(dim), correct),
+                                 seq_beta(a, k, dim, correct), a->f, !correct, out + H11(dim), dim);
     const double *e = d->fwd_E + dim * dim * k, *z = d->fwd_z + dim * k;
     if (!correct) {
         seq_downdate_joint(a, k, right + H22(dim), right + H12(dim), 1, e, out + H22(dim), dim);
     }
     ctc_dense_tmulv(dim, dim, right + H12(dim), z, t);
     for (int r = 0; r < dim; r++) out[H23(dim) + r] = b23r[r] + t[r];
-}
-
-/* K of the tip run's joint i + 1 (K = h11(S_{i+1}) + h22(body i), into S_i's h22 slot) or the
-   base run's joint k (K = h11(body k) + h22(B_{k-1}), into B_k's h11 slot); returns K */
-static inline double *seq_tip_K(const seq_args *a, int i, const int dim)
-{
-    double *kk = a->d->hfwd + (size_t)i * a->d->hsize + H22(dim);
-    gdca_joint_K(dim, seq_body(a, i), seq_part(a, i + 1), kk);
-    return kk;
-}
-
-static inline double *seq_base_K(const seq_args *a, int k, const int dim)
-{
-    double *kk = a->d->hfwd + (size_t)k * a->d->hsize + H11(dim);
-    gdca_joint_K(dim, k > 0 ? seq_part(a, k - 1) : NULL, seq_body(a, k), kk);
-    return kk;
-}
-
-/* E of joint j from K (kk); returns j if D^T K D was not positive definite, else -1 */
-static inline int seq_factor(const seq_args *a, int j, const double *kk, const int dim)
-{
-    const ctc_model *m = a->m;
-    ctc_data *d = a->d;
-    int st = gdca_joint_factor_typed(dim, m->joints[j].type, kk, d->jnt_D + dim * dim * j,
-                                     dim - m->jnt_nv[j], d->fwd_E + dim * dim * j);
-    return st != 0 ? j : -1;
-}
-
-/* E of the tip run's joint jt and the base run's joint jb from their K: the two factors side
-   by side (gdca_chol_inv_lanes) when the joints are of one type that has a lane form; returns
-   the lower singular joint, or -1 */
-static inline int seq_factor_pair(const seq_args *a, int jt, const double *kt, int jb,
-                                  const double *kb, const int dim)
-{
-    const ctc_model *m = a->m;
-    ctc_data *d = a->d;
-    const ctc_joint_type type = m->joints[jt].type;
-    if (type != m->joints[jb].type || !gdca_joint_factor_has_lanes(dim, type)) {
-        const int st = seq_factor(a, jt, kt, dim), sb = seq_factor(a, jb, kb, dim);
-        return sb >= 0 ? sb : st;
-    }
-    const double *k[2] = {kt, kb};
-    const double *dd[2] = {d->jnt_D + dim * dim * jt, d->jnt_D + dim * dim * jb};
-    double *e[2] = {d->fwd_E + dim * dim * jt, d->fwd_E + dim * dim * jb};
-    const int bad = gdca_joint_factor_lanes(dim, type, 2, k, dd, e);
-    return bad & 2 ? jb : bad & 1 ? jt : -1;
+    return st != 0 ? k : -1;
 }
 
 /* qdd_j = P^T (K F - s + b13^R - b23^L - beta) for the stored K */
@@ -292,21 +248,10 @@ static inline void seq_pass(const seq_args *a, const int dim, const int correct)
     const int n = a->m->nbodies, r = a->r, ntip = n - 1 - r;
     int singular = -1;
 
-    /* the two runs interleaved: tip node n - 2 - t and base node t (ntip >= r), their joints'
-       factors made side by side */
+    /* the two runs interleaved: tip node n - 2 - t and base node t; ntip >= r */
     for (int t = 0; t < ntip; t++) {
-        const int i = n - 2 - t;
-        if (!correct) {
-            double *kt = seq_tip_K(a, i, dim);
-            if (t < r) {
-                double *kb = seq_base_K(a, t, dim);
-                singular = seq_first(singular, seq_factor_pair(a, i + 1, kt, t, kb, dim));
-            } else {
-                singular = seq_first(singular, seq_factor(a, i + 1, kt, dim));
-            }
-        }
-        seq_tip_assemble(a, i, dim, correct);
-        if (t < r) seq_base_assemble(a, t, dim, correct);
+        singular = seq_first(singular, seq_tip_assemble(a, n - 2 - t, dim, correct));
+        if (t < r) singular = seq_first(singular, seq_base_assemble(a, t, dim, correct));
     }
     d->singular_joint = seq_first(singular, seq_root(a, dim, correct));
     for (int t = 0; t < ntip; t++) {

@@ -57,53 +57,34 @@ static inline void gdca_joint_Y0(int dim, const double *left, const double *righ
 
 /* The Cholesky factor C = L L^T of the symmetric positive definite C (nc x nc; its lower
  * triangle receives L, the upper is left as it was) and L^-1 (li, nc x nc lower triangular,
- * row-major; the upper triangle is not written), for `lanes` independent matrices c[l], li[l]
- * at once: every step is taken for each lane before the next step, so that the lanes' chains
- * of dependent operations (through the pivots' roots and reciprocals) overlap in the processor
- * (gdca_forward_seq.c factors two joints at a time). One division per pivot: L's columns are
- * scaled by 1 / sqrt(p), which is L^-1's diagonal. Returns a mask with bit l set if lane l had a
- * pivot that was not positive (its results are then NaN or meaningless), 0 if all factored. */
-static inline int gdca_chol_inv_lanes(int nc, int lanes, double *const c[], double *const li[])
+ * row-major; the upper triangle is not written). One division per pivot: L's columns are scaled
+ * by 1 / sqrt(p), which is L^-1's diagonal. Returns 0, or -1 if a pivot is not positive. */
+static inline int gdca_chol_inv(int nc, double *c, double *li)
 {
-    int bad = 0;
     for (int j = 0; j < nc; j++) {
-        for (int l = 0; l < lanes; l++) {
-            double *cl = c[l];
-            double p = cl[j * nc + j];
-            for (int k = 0; k < j; k++) p -= cl[j * nc + k] * cl[j * nc + k];
-            if (!(p > 0)) {
-                bad |= 1 << l;
-                p = NAN;
-            }
-            /* 1 / sqrt(p) as sqrt(p) times 1 / p: the root and the division run side by side
-               instead of one after the other */
-            const double rp = 1.0 / p, sp = sqrt(p), ip = sp * rp;
-            cl[j * nc + j] = sp;
-            li[l][j * nc + j] = ip;
-            for (int i = j + 1; i < nc; i++) {
-                double t = cl[i * nc + j];
-                for (int k = 0; k < j; k++) t -= cl[i * nc + k] * cl[j * nc + k];
-                cl[i * nc + j] = t * ip;
-            }
+        double p = c[j * nc + j];
+        for (int k = 0; k < j; k++) p -= c[j * nc + k] * c[j * nc + k];
+        if (!(p > 0)) return -1;
+        /* 1 / sqrt(p) as sqrt(p) times 1 / p: the root and the division run side by side instead
+           of one after the other, on the dependency chain through the pivots */
+        const double rp = 1.0 / p, sp = sqrt(p), ip = sp * rp;
+        c[j * nc + j] = sp;
+        li[j * nc + j] = ip;
+        for (int i = j + 1; i < nc; i++) {
+            double t = c[i * nc + j];
+            for (int k = 0; k < j; k++) t -= c[i * nc + k] * c[j * nc + k];
+            c[i * nc + j] = t * ip;
         }
     }
     /* L^-1 by rows: (L^-1)_ij = -(L^-1)_ii sum_{k=j}^{i-1} L_ik (L^-1)_kj, j < i */
     for (int i = 1; i < nc; i++) {
         for (int j = 0; j < i; j++) {
-            for (int l = 0; l < lanes; l++) {
-                double t = 0;
-                for (int k = j; k < i; k++) t += c[l][i * nc + k] * li[l][k * nc + j];
-                li[l][i * nc + j] = -li[l][i * nc + i] * t;
-            }
+            double t = 0;
+            for (int k = j; k < i; k++) t += c[i * nc + k] * li[k * nc + j];
+            li[i * nc + j] = -li[i * nc + i] * t;
         }
     }
-    return bad;
-}
-
-/* gdca_chol_inv_lanes on one matrix: returns 0, or -1 if a pivot is not positive */
-static inline int gdca_chol_inv(int nc, double *c, double *li)
-{
-    return gdca_chol_inv_lanes(nc, 1, &c, &li) != 0 ? -1 : 0;
+    return 0;
 }
 
 /* The factor E (dim x nc, row-major with row stride nc) of G = E E^T = D (D^T K D)^-1 D^T, for D
@@ -165,111 +146,74 @@ static inline int gdca_joint_factor(int dim, const double *k, const double *d, i
  * nc 5; {u, g} = {3, 0} for a revolute joint, whose D's columns n1, n2 are angular, and {0, 3}
  * for a prismatic one), the columns taken in that order: D^T K D picks K's block (u, u) and the
  * products K (n_a at g), so that K D costs 2 products with 3 columns of K instead of 5 full
- * ones, and E's rows u..u+2 are L^-T's. For `lanes` (1 or 2) joints of the same kind at once (k[l],
- * n1[l], n2[l] -> e[l]; gdca_chol_inv_lanes). Returns a mask of the lanes whose D^T K D was not
- * positive definite (their E is then NaN), 0 if none. */
-static inline int gdca_joint_factor_hinge_lanes(int lanes, const double *const k[],
-                                                const double *const n1[], const double *const n2[],
-                                                int u, int g, double *const e[])
+ * ones, and E's rows u..u+2 are L^-T's. Returns as gdca_joint_factor. */
+static inline int gdca_joint_factor_hinge(const double *k, const double *n1, const double *n2,
+                                          int u, int g, double *e)
 {
-    double cm[2][25], lm[2][25], kn[2][2][6];
-    double *c[2] = {cm[0], cm[1]}, *li[2] = {lm[0], lm[1]};
+    double c[25], li[25], kn[2][6];
+    const double *n[2] = {n1, n2};
 
-    for (int l = 0; l < lanes; l++) {
-        const double *n[2] = {n1[l], n2[l]};
-        for (int a = 0; a < 2; a++) { /* kn_a = K (n_a at rows g) */
-            for (int i = 0; i < 6; i++) {
-                const double *ki = k[l] + 6 * i + g;
-                kn[l][a][i] = ki[0] * n[a][0] + ki[1] * n[a][1] + ki[2] * n[a][2];
-            }
-        }
-        for (int i = 0; i < 3; i++) {
-            for (int j = 0; j < 3; j++) cm[l][5 * i + j] = k[l][6 * (u + i) + u + j];
-            for (int a = 0; a < 2; a++) {
-                cm[l][5 * i + 3 + a] = cm[l][5 * (3 + a) + i] = kn[l][a][u + i];
-            }
-        }
-        for (int a = 0; a < 2; a++) {
-            for (int b = a; b < 2; b++) {
-                const double *kb = kn[l][b] + g;
-                cm[l][5 * (3 + a) + 3 + b] = cm[l][5 * (3 + b) + 3 + a] =
-                    n[a][0] * kb[0] + n[a][1] * kb[1] + n[a][2] * kb[2];
-            }
+    for (int a = 0; a < 2; a++) { /* kn_a = K (n_a at rows g) */
+        for (int i = 0; i < 6; i++) {
+            const double *ki = k + 6 * i + g;
+            kn[a][i] = ki[0] * n[a][0] + ki[1] * n[a][1] + ki[2] * n[a][2];
         }
     }
-    const int bad = gdca_chol_inv_lanes(5, lanes, c, li);
-    for (int l = 0; l < lanes; l++) {
-        double *el = e[l];
-        if (bad & (1 << l)) {
-            for (int i = 0; i < 30; i++) el[i] = NAN;
-            continue;
-        }
-        for (int i = 0; i < 3; i++) { /* rows u + i: D's row is e_i^T */
-            double *er = el + 5 * (u + i);
-            for (int c0 = 0; c0 < 5; c0++) er[c0] = c0 >= i ? lm[l][5 * c0 + i] : 0.0;
-        }
-        for (int r = 0; r < 3; r++) { /* rows g + r: D's row is (0, 0, 0, n1_r, n2_r) */
-            double *er = el + 5 * (g + r);
-            er[0] = er[1] = er[2] = 0;
-            er[3] = n1[l][r] * lm[l][5 * 3 + 3];
-            er[4] = n1[l][r] * lm[l][5 * 4 + 3] + n2[l][r] * lm[l][5 * 4 + 4];
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) c[5 * i + j] = k[6 * (u + i) + u + j];
+        for (int a = 0; a < 2; a++) c[5 * i + 3 + a] = c[5 * (3 + a) + i] = kn[a][u + i];
+    }
+    for (int a = 0; a < 2; a++) {
+        for (int b = a; b < 2; b++) {
+            const double *kb = kn[b] + g;
+            c[5 * (3 + a) + 3 + b] = c[5 * (3 + b) + 3 + a] =
+                n[a][0] * kb[0] + n[a][1] * kb[1] + n[a][2] * kb[2];
         }
     }
-    return bad;
+    if (gdca_chol_inv(5, c, li) != 0) {
+        for (int i = 0; i < 30; i++) e[i] = NAN;
+        return -1;
+    }
+    for (int i = 0; i < 3; i++) { /* rows u + i: D's row is e_i^T */
+        double *er = e + 5 * (u + i);
+        for (int c0 = 0; c0 < 5; c0++) er[c0] = c0 >= i ? li[5 * c0 + i] : 0.0;
+    }
+    for (int r = 0; r < 3; r++) { /* rows g + r: D's row is (0, 0, 0, n1_r, n2_r) */
+        double *er = e + 5 * (g + r);
+        er[0] = er[1] = er[2] = 0;
+        er[3] = n1[r] * li[5 * 3 + 3];
+        er[4] = n1[r] * li[5 * 4 + 3] + n2[r] * li[5 * 4 + 4];
+    }
+    return 0;
 }
 
 /* E of a planar revolute joint, D = [(0, 1, 0), (0, 0, 1)]: D^T K D is K's lower right 2 x 2
- * block, and E = D L^-T has a zero first row. For `lanes` joints at once, as
- * gdca_joint_factor_hinge_lanes. */
-static inline int gdca_joint_factor_planar_revolute_lanes(int lanes, const double *const k[],
-                                                          double *const e[])
+ * block, and E = D L^-T has a zero first row. Returns as gdca_joint_factor. */
+static inline int gdca_joint_factor_planar_revolute(const double *k, double *e)
 {
-    double cm[2][4], lm[2][4];
-    double *c[2] = {cm[0], cm[1]}, *li[2] = {lm[0], lm[1]};
-    for (int l = 0; l < lanes; l++) {
-        cm[l][0] = k[l][4], cm[l][1] = k[l][5], cm[l][2] = k[l][7], cm[l][3] = k[l][8];
+    double c[4] = {k[4], k[5], k[7], k[8]}, li[4];
+    if (gdca_chol_inv(2, c, li) != 0) {
+        for (int i = 0; i < 6; i++) e[i] = NAN;
+        return -1;
     }
-    const int bad = gdca_chol_inv_lanes(2, lanes, c, li);
-    for (int l = 0; l < lanes; l++) {
-        double *el = e[l];
-        if (bad & (1 << l)) {
-            for (int i = 0; i < 6; i++) el[i] = NAN;
-            continue;
-        }
-        el[0] = el[1] = 0;
-        el[2] = lm[l][0], el[3] = lm[l][2];
-        el[4] = 0, el[5] = lm[l][3];
-    }
-    return bad;
-}
-
-/* 1 if joints of type `type` in form dim have a lane form of their factor (the two above) */
-static inline int gdca_joint_factor_has_lanes(int dim, ctc_joint_type type)
-{
-    return type == CTC_JOINT_REVOLUTE || (dim == 6 && type == CTC_JOINT_PRISMATIC);
-}
-
-/* E of `lanes` joints of the one type `type` (gdca_joint_factor_has_lanes) at once, with D from
- * the kinematics (d[l]); returns a mask as gdca_joint_factor_hinge_lanes */
-static inline int gdca_joint_factor_lanes(int dim, ctc_joint_type type, int lanes,
-                                          const double *const k[], const double *const d[],
-                                          double *const e[])
-{
-    if (dim == 3) return gdca_joint_factor_planar_revolute_lanes(lanes, k, e);
-    const int rev = type == CTC_JOINT_REVOLUTE, off = rev ? 0 : 18 + 3;
-    const double *n1[2], *n2[2];
-    for (int l = 0; l < lanes; l++) n1[l] = d[l] + off, n2[l] = d[l] + off + 6;
-    return gdca_joint_factor_hinge_lanes(lanes, k, n1, n2, rev ? 3 : 0, rev ? 0 : 3, e);
+    e[0] = e[1] = 0;
+    e[2] = li[0], e[3] = li[2];
+    e[4] = 0, e[5] = li[3];
+    return 0;
 }
 
 /* E of joint j of type `type` with D from the kinematics (kinematics.c: revolute and prismatic
- * joints' D columns are laid out as gdca_joint_factor_hinge_lanes and
- * gdca_joint_factor_planar_revolute_lanes assume), by the specialised forms where they apply */
+ * joints' D columns are laid out as gdca_joint_factor_hinge and
+ * gdca_joint_factor_planar_revolute assume), by the specialised forms where they apply */
 static inline int gdca_joint_factor_typed(int dim, ctc_joint_type type, const double *k,
                                           const double *d, int nc, double *e)
 {
-    if (gdca_joint_factor_has_lanes(dim, type)) {
-        return gdca_joint_factor_lanes(dim, type, 1, &k, &d, &e) != 0 ? -1 : 0;
+    if (dim == 3 && type == CTC_JOINT_REVOLUTE) return gdca_joint_factor_planar_revolute(k, e);
+    if (dim == 6 && type == CTC_JOINT_REVOLUTE) {
+        return gdca_joint_factor_hinge(k, d, d + 6, 3, 0, e);
+    }
+    if (dim == 6 && type == CTC_JOINT_PRISMATIC) {
+        return gdca_joint_factor_hinge(k, d + 18 + 3, d + 24 + 3, 0, 3, e);
     }
     return gdca_joint_factor(dim, k, d, nc, e);
 }
@@ -294,7 +238,7 @@ static inline void gdca_factor_apply(int dim, int nc, const double *e, const dou
 }
 
 /* x = M E (trans = 0) or M^T E (trans = 1) (6 x 5), M (6 x 6), for E of
- * gdca_joint_factor_hinge_lanes with its zeros skipped: E's columns 0..2 are non-zero only in rows
+ * gdca_joint_factor_hinge with its zeros skipped: E's columns 0..2 are non-zero only in rows
  * u..u+c, so 108 multiply-adds instead of 180. Each sum runs over increasing rows of E, as the
  * dense product's, so the results are the dense product's (but for the sign of a zero). */
 static inline void gdca_mul_hinge(const double *mm, int trans, const double *e, int u, double *x)
@@ -315,7 +259,7 @@ static inline void gdca_mul_hinge(const double *mm, int trans, const double *e, 
     }
 }
 
-/* out = G x = E (E^T x) for E of gdca_joint_factor_hinge_lanes, its zeros skipped (36 multiply-adds
+/* out = G x = E (E^T x) for E of gdca_joint_factor_hinge, its zeros skipped (36 multiply-adds
  * instead of 60), in the dense order; out may not alias x */
 static inline void gdca_factor_apply_hinge(const double *e, int u, const double *x, double *out)
 {
@@ -338,7 +282,7 @@ static inline void gdca_factor_apply_hinge(const double *e, int u, const double 
     out[u + 2] = eu[12] * t[2] + eu[13] * t[3] + eu[14] * t[4];
 }
 
-/* x = M E or M^T E (3 x 2) for E of gdca_joint_factor_planar_revolute_lanes (first row zero, e[4] =
+/* x = M E or M^T E (3 x 2) for E of gdca_joint_factor_planar_revolute (first row zero, e[4] =
  * 0) */
 static inline void gdca_mul_planar_revolute(const double *mm, int trans, const double *e, double *x)
 {
@@ -349,7 +293,7 @@ static inline void gdca_mul_planar_revolute(const double *mm, int trans, const d
     }
 }
 
-/* out = G x for E of gdca_joint_factor_planar_revolute_lanes, its zeros skipped, in the dense order
+/* out = G x for E of gdca_joint_factor_planar_revolute, its zeros skipped, in the dense order
  */
 static inline void gdca_factor_apply_planar_revolute(const double *e, const double *x, double *out)
 {
