@@ -10,6 +10,25 @@
 #include "data.h"
 #include "gdca_tree.h"
 
+/* out = A x for A (dim x dim) and x = P f, the motion or load along a joint of type `type`: in
+ * spatial form a revolute joint's P is (axis; 0) and a prismatic one's (0; axis), so half of x
+ * is zero and its columns of A are skipped (18 multiply-adds of 36). The sums run over the
+ * columns in increasing order, as the dense product's, so the numbers are the same (but for
+ * the sign of a zero). */
+static inline void forward_mulv_joint(int dim, ctc_joint_type type, const double *a,
+                                      const double *x, double *out)
+{
+    if (dim == 6 && (type == CTC_JOINT_REVOLUTE || type == CTC_JOINT_PRISMATIC)) {
+        const int c0 = type == CTC_JOINT_REVOLUTE ? 0 : 3;
+        for (int i = 0; i < 6; i++) {
+            const double *ai = a + 6 * i + c0;
+            out[i] = ai[0] * x[c0] + ai[1] * x[c0 + 1] + ai[2] * x[c0 + 2];
+        }
+        return;
+    }
+    ctc_dense_mulv(dim, dim, a, x, out);
+}
+
 /* E and z of joint j between left (NULL: ground) and right: z = W Y + P f with
  * Y = b23^L - b13^R + beta - K P f, W = E E^T, K = h11^R + h22^L. The full pass (factor = 1) forms
  * K and the factor E of W from the records and is given their h13, h23 (b23l, b13r) and the
@@ -29,18 +48,18 @@ static inline int forward_joint(const ctc_model *m, ctc_data *d, int j, const do
     double *k = kk != NULL ? kk : kloc;
     int st = 0;
 
+    const ctc_joint_type type = m->joints[j].type;
     gdca_joint_map(dim, nv, d->jnt_P + 3 * dim * j, f + m->jnt_vadr[j], pf);
     if (factor) {
         gdca_joint_K(dim, left, right, k);
-        st = gdca_joint_factor_typed(dim, m->joints[j].type, k, d->jnt_D + dim * dim * j, dim - nv,
-                                     e);
-        ctc_dense_mulv(dim, dim, k, pf, kpf);
+        st = gdca_joint_factor_typed(dim, type, k, d->jnt_D + dim * dim * j, dim - nv, e);
+        forward_mulv_joint(dim, type, k, pf, kpf);
     } else if (kk != NULL) {
-        ctc_dense_mulv(dim, dim, kk, pf, kpf);
+        forward_mulv_joint(dim, type, kk, pf, kpf);
     } else { /* K P f = h11^R P f + h22^L P f, without forming K */
-        ctc_dense_mulv(dim, dim, right + H11(dim), pf, kpf);
+        forward_mulv_joint(dim, type, right + H11(dim), pf, kpf);
         if (left != NULL) {
-            ctc_dense_mulv(dim, dim, left + H22(dim), pf, y);
+            forward_mulv_joint(dim, type, left + H22(dim), pf, y);
             for (int i = 0; i < dim; i++) kpf[i] += y[i];
         }
     }
@@ -48,7 +67,7 @@ static inline int forward_joint(const ctc_model *m, ctc_data *d, int j, const do
         y[i] = b23l[i] - b13r[i] + beta[i];
         y[i] -= kpf[i];
     }
-    gdca_factor_apply_typed(dim, m->joints[j].type, dim - nv, e, y, z);
+    gdca_factor_apply_typed(dim, type, dim - nv, e, y, z);
     for (int i = 0; i < dim; i++) z[i] += pf[i];
     return st;
 }

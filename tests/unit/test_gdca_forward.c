@@ -12,6 +12,7 @@
 
 #include "chains.h"
 #include "ctc.h"
+#include "gdca_forward_joint.h"
 #include "gdca_forward_seq.h"
 #include "gdca_refine.h"
 #include "gdca_tree.h"
@@ -491,6 +492,11 @@ static void typed_factor_vs_general(const ctc_model *m, uint64_t seed)
         gdca_factor_apply_typed(dim, m->joints[j].type, nc, e1, x, g1);
         gdca_factor_apply(dim, nc, e1, x, g2);
         for (int i = 0; i < dim; i++) cr_expect_eq(g1[i], g2[i], "G x, joint %d row %d", j, i);
+        double pf[6], y1[6], y2[6];
+        gdca_joint_map(dim, m->jnt_nv[j], d->jnt_P + 3 * dim * j, x, pf);
+        forward_mulv_joint(dim, m->joints[j].type, k, pf, y1);
+        ctc_dense_mulv(dim, dim, k, pf, y2);
+        for (int i = 0; i < dim; i++) cr_expect_eq(y1[i], y2[i], "K P f, joint %d row %d", j, i);
         const ctc_joint_type t = m->joints[j].type;
         for (int trans = 0; trans < 2; trans++) {
             if (dim == 6 && (t == CTC_JOINT_REVOLUTE || t == CTC_JOINT_PRISMATIC)) {
