@@ -8,6 +8,9 @@
  *   fwd ctc     the same for CTC-like forces f = RNEA(u), u random in [-1, 1]: f then nearly
  *               balances gravity and the velocity terms, and qdd = u is the small difference;
  *   rt gdca     the round trip GDCA(iGDCA(u)) against u (iGDCA in its composite form);
+ *   rt tree     the same with the forward pass in the balanced tree's order, which it takes
+ *               when split over threads (ctc_gdca_forward on one thread takes the sequential
+ *               order on open chains: gdca_forward_seq.h);
  *   rt aba      the oracle's own round trip ABA(RNEA(u)) against u;
  *   inv comp    the composite iGDCA's f against RNEA's;
  *   inv mob     the paper's mobility-form iGDCA's f against RNEA's;
@@ -50,6 +53,7 @@ enum {
     M_FWD_RAND,
     M_FWD_CTC,
     M_RT_GDCA,
+    M_RT_TREE,
     M_RT_ABA,
     M_INV_COMP,
     M_INV_MOB,
@@ -64,9 +68,9 @@ enum {
 };
 
 static const char *const measure_name[NM] = {
-    "fwd rand",         "fwd ctc",         "rt gdca",        "rt aba",         "inv comp",
-    "inv mob",          "bwd gdca (rand)", "bwd aba (rand)", "bwd gdca (ctc)", "bwd aba (ctc)",
-    "judge gap (rand)", "judge gap (ctc)", "cond(M)",
+    "fwd rand",      "fwd ctc",          "rt gdca",         "rt tree",        "rt aba",
+    "inv comp",      "inv mob",          "bwd gdca (rand)", "bwd aba (rand)", "bwd gdca (ctc)",
+    "bwd aba (ctc)", "judge gap (rand)", "judge gap (ctc)", "cond(M)",
 };
 
 #define NSIZES 5
@@ -203,6 +207,10 @@ static int measure_chain(int chain, int n, int states, double res[NM])
         update(&res[M_INV_COMP], test_rel_err(fc, f, m->nv));
         ctc_gdca_forward(m, d, fc, a);
         update(&res[M_RT_GDCA], test_rel_err(a, u, m->nv));
+        d->fwd_order = CTC_ORDER_TREE; /* the other assembly order (gdca_forward_seq.h) */
+        ctc_gdca_forward(m, d, fc, a);
+        d->fwd_order = CTC_ORDER_AUTO;
+        update(&res[M_RT_TREE], test_rel_err(a, u, m->nv));
         ctc_gdca_inverse_mobility(m, d, u, scratch);
         bad |= d->singular_joint != -1;
         update(&res[M_INV_MOB], test_rel_err(scratch, f, m->nv));
@@ -347,11 +355,11 @@ int main(int argc, char **argv)
            "random states\n(velocities up to 2 rad/s or m/s per joint). ctc_gdca_forward as "
            "built.\n\n",
            states);
-    static const int fwd_cols[] = {M_FWD_RAND, M_FWD_CTC, M_RT_GDCA, M_RT_ABA, M_COND};
+    static const int fwd_cols[] = {M_FWD_RAND, M_FWD_CTC, M_RT_GDCA, M_RT_TREE, M_RT_ABA, M_COND};
     static const int inv_cols[] = {M_INV_COMP,   M_INV_MOB,      M_BWD_GDCA_RAND, M_BWD_ABA_RAND,
                                    M_JUDGE_RAND, M_BWD_GDCA_CTC, M_BWD_ABA_CTC,   M_JUDGE_CTC};
     printf("Forward dynamics and round trips:\n\n");
-    print_table(fwd_cols, 5);
+    print_table(fwd_cols, 6);
     printf("Inverse dynamics, and backward errors max |f - iGDCA(qdd)| / max |f|:\n\n");
     print_table(inv_cols, 8);
     printf("Growth with n: exponent p of a least-squares fit measure ~ n^p over the sizes:\n\n");

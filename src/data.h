@@ -129,7 +129,7 @@ void ctc_data_free(ctc_data *d);
  * The nthreads - 1 workers start at the first pass that uses them and belong to d: they stop when
  * d is freed or its count changes, so no two data share them unless ctc_data_share_pool says so.
  * The results are bitwise the same for every count, with one exception: an open chain's forward
- * pass takes the sequential order on one thread and, from a measured length on (planar 2048,
+ * pass takes the sequential order on one thread and, from a measured length on (planar 4096,
  * spatial 1024 bodies), the balanced tree on two threads or more (gdca_forward_seq.h,
  * fwd_order), so at those lengths one thread and several agree to rounding, and any two counts
  * of two or more bitwise. Returns CTC_OK, or CTC_EINVAL with a message

@@ -59,9 +59,9 @@
  * over threads, instead of the sequential order on one thread (gdca_forward_seq.h), when the
  * data has two threads or more. From bench_parallel on 2 threads (bench/README.md, "Parallel
  * assembly"): the split tree beat the sequential order by 5% or more in a CTC evaluation at every
- * n from 2048 planar (1.35x there) and 1024 spatial (1.17x), and lost below (planar 1024: 0.91x;
- * spatial 512: 1.00x). More threads would move the crossing down; it is not measured here. */
-#define FORWARD_TREE_MIN_BODIES_PLANAR 2048
+ * n from 4096 planar (1.14x there; 2048: 1.04x) and 1024 spatial (1.06x; 512: 0.89x). More
+ * threads would move the crossing down; it is not measured here. */
+#define FORWARD_TREE_MIN_BODIES_PLANAR 4096
 #define FORWARD_TREE_MIN_BODIES_SPATIAL 1024
 
 /* What the stages of one forward pass share (gdca_par.h). The same pass, with correct = 1 (a

@@ -15,9 +15,11 @@
  * a run is a chain of dependent steps (each joint's factor needs the assembly before it), and
  * the two halves' chains overlap in the processor.
  *
- * With K = h11^R + h22^L, W = E E^T = D (D^T K D)^-1 D^T, z = W (b23^L - b13^R + beta - K P f) + P
- * f at each joint (gdca_tree.h, Eq. 27 and 34-39 with F2^R = 0 or no F1^L): tip, joint j = i + 1, L
- * = body i, R = S_{i+1}: h11(S_i) = h11^L - A A^T,  A = h12^L E,      h13(S_i) = h13^L - h12^L z
+ * At each joint (gdca_tree.h, Eq. 27 and 34-39 with F2^R = 0, or with no F1^L), with
+ *     K = h11^R + h22^L,   W = E E^T = D (D^T K D)^-1 D^T,
+ *     z = W (b23^L - b13^R + beta - K P f) + P f:
+ *     tip, joint j = i + 1, L = body i, R = S_{i+1}:
+ *         h11(S_i) = h11^L - A A^T,  A = h12^L E,      h13(S_i) = h13^L - h12^L z
  *     base, joint k, L = B_{k-1}, R = body k:
  *         h22(B_k) = h22^R - B B^T,  B = h21^R E,      h23(B_k) = h23^R + h21^R z
  *     root, joint r, L = B_{r-1} (the ground: h22 = h23 = 0), R = S_r:  F_r = z_r.
