@@ -210,43 +210,6 @@ Test(gdca_forward, joint_loads_match_the_composite_inverses_at_the_same_accelera
     }
 }
 
-/* A body whose records are NaN makes every joint whose K reads them singular. The sequential
- * order (gdca_forward_seq.c) names the lowest such joint: with r = (n - 1) / 2 the root joint,
- * that is the lowest NaN body below r (its base-run joint; the joints below it read only finite
- * bodies), else r itself (the tip run's joints are all above r). */
-Test(gdca_forward, the_sequential_order_names_the_lowest_singular_joint)
-{
-    test_chain *c = test_chain_random_spatial(300, 17, TEST_ALL_JOINTS);
-    ctc_model *m = build(&c->spec);
-    const int r = (m->nbodies - 1) / 2;
-    double *q = calloc((size_t)m->nq, sizeof(double)), *v = calloc((size_t)m->nv, sizeof(double));
-    double *x = calloc((size_t)m->nv, sizeof(double)), *y = calloc((size_t)m->nv, sizeof(double));
-    cr_assert(q && v && x && y);
-    uint64_t rng = 3;
-    test_random_state(m, &rng, 1.0, q, v);
-    static const int cases[][2] = {{250, 20}, {299, 151}, {150, 149}, {7, 7}, {0, 298}, {148, 5}};
-    static const int want[] = {20, 149, 149, 7, 0, 5};
-    for (int k = 0; k < 6; k++) {
-        ctc_data *d = ctc_data_new(m);
-        cr_assert_not_null(d);
-        d->fwd_order = CTC_ORDER_SEQ;
-        ctc_kinematics(m, d, q, v);
-        ctc_handles(m, d);
-        for (int b = 0; b < 2; b++) {
-            double *h = d->hbody + (size_t)cases[k][b] * d->hsize;
-            for (int i = 0; i < d->hsize; i++) h[i] = NAN;
-        }
-        ctc_gdca_forward(m, d, x, y);
-        cr_expect_eq(r, 149);
-        cr_expect_eq(d->singular_joint, want[k], "bodies %d and %d: %d", cases[k][0], cases[k][1],
-                     d->singular_joint);
-        ctc_data_free(d);
-    }
-    free(q), free(v), free(x), free(y);
-    ctc_model_free(m);
-    test_chain_free(c);
-}
-
 /* single rod pendulum: qdd = (tau - m g (L/2) sin q) / (m L^2 / 3) */
 Test(gdca_forward, single_rod_pendulum_matches_closed_form)
 {
