@@ -55,34 +55,44 @@ static inline void gdca_joint_Y0(int dim, const double *left, const double *righ
     }
 }
 
-/* The Cholesky factor C = L L^T of the symmetric positive definite C (nc x nc; its lower
- * triangle receives L, the upper is left as it was) and L^-1 (li, nc x nc lower triangular,
- * row-major; the upper triangle is not written). One division per pivot: L's columns are scaled
- * by 1 / sqrt(p), which is L^-1's diagonal. Returns 0, or -1 if a pivot is not positive. */
+/* L^-1 (li, nc x nc lower triangular, row-major; the upper triangle is not written) of the
+ * Cholesky factor L of the symmetric positive definite C = L L^T (nc x nc, row-major; its lower
+ * triangle is read and overwritten as scratch). By way of C = U diag(d) U^T with U unit lower
+ * triangular: each pivot d_j takes one division and no square root, so no root lies on the chain
+ * of dependent operations through the pivots; then L^-1 = diag(d)^-1/2 U^-1, whose nc roots are
+ * independent of one another. Returns 0, or -1 if a pivot is not positive. */
 static inline int gdca_chol_inv(int nc, double *c, double *li)
 {
+    double d[CTC_DENSE_MAX], rd[CTC_DENSE_MAX], w[CTC_DENSE_MAX];
     for (int j = 0; j < nc; j++) {
+        /* w_k = U_jk d_k; d_j = C_jj - sum_k U_jk w_k; U_ij = (C_ij - sum_k U_ik w_k) / d_j */
         double p = c[j * nc + j];
-        for (int k = 0; k < j; k++) p -= c[j * nc + k] * c[j * nc + k];
+        for (int k = 0; k < j; k++) {
+            w[k] = c[j * nc + k] * d[k];
+            p -= c[j * nc + k] * w[k];
+        }
         if (!(p > 0)) return -1;
-        /* 1 / sqrt(p) as sqrt(p) times 1 / p: the root and the division run side by side instead
-           of one after the other, on the dependency chain through the pivots */
-        const double rp = 1.0 / p, sp = sqrt(p), ip = sp * rp;
-        c[j * nc + j] = sp;
-        li[j * nc + j] = ip;
+        d[j] = p;
+        rd[j] = 1.0 / p;
         for (int i = j + 1; i < nc; i++) {
             double t = c[i * nc + j];
-            for (int k = 0; k < j; k++) t -= c[i * nc + k] * c[j * nc + k];
-            c[i * nc + j] = t * ip;
+            for (int k = 0; k < j; k++) t -= c[i * nc + k] * w[k];
+            c[i * nc + j] = t * rd[j];
         }
     }
-    /* L^-1 by rows: (L^-1)_ij = -(L^-1)_ii sum_{k=j}^{i-1} L_ik (L^-1)_kj, j < i */
+    /* U^-1 by rows: (U^-1)_ij = -(U_ij + sum_{k=j+1}^{i-1} U_ik (U^-1)_kj), j < i */
     for (int i = 1; i < nc; i++) {
         for (int j = 0; j < i; j++) {
-            double t = 0;
-            for (int k = j; k < i; k++) t += c[i * nc + k] * li[k * nc + j];
-            li[i * nc + j] = -li[i * nc + i] * t;
+            double t = c[i * nc + j];
+            for (int k = j + 1; k < i; k++) t += c[i * nc + k] * li[k * nc + j];
+            li[i * nc + j] = -t;
         }
+    }
+    /* row i times 1 / sqrt(d_i) */
+    for (int i = 0; i < nc; i++) {
+        const double s = sqrt(rd[i]);
+        li[i * nc + i] = s;
+        for (int j = 0; j < i; j++) li[i * nc + j] *= s;
     }
     return 0;
 }
