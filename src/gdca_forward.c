@@ -142,8 +142,9 @@ static inline void forward_loop_root(const forward_args *a, const int dim, const
     if (gdca_loop_solve(&p, &s) != 0 && d->singular_joint < 0) d->singular_joint = n;
     if (!correct) d->loop_cond = s.cond;
     gdca_loop_hand_down(m, &s, d->loop_r, correct, d->tload, d->jnt_load);
-    if (j > 0)
+    if (j > 0) {
         forward_accel(m, d, 0, s.al1, gdca_zero6, forward_beta(a, 0, dim, correct), a->qacc, dim);
+    }
     forward_accel(m, d, j, s.ar1, j > 0 ? s.al2 : gdca_zero6, forward_beta(a, j, dim, correct),
                   a->qacc, dim);
     /* A(child) = A2 + P qdd + beta */

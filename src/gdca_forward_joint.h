@@ -1,7 +1,7 @@
 /*
  * gdca_forward_joint.h - the per-joint kernels of forward GDCA that its two assembly orders share
- * (internal to the library): the balanced tree (gdca_forward.c) and the sequential order from
- * the free tip (gdca_forward_seq.c). Both are meant to be inlined into CTC_SPECIALISE wrappers
+ * (internal to the library): the balanced tree (gdca_forward.c) and the sequential order
+ * (gdca_forward_seq.c). Both are meant to be inlined into CTC_SPECIALISE wrappers
  * with a constant dim, like gdca_tree.h.
  */
 #ifndef CTC_GDCA_FORWARD_JOINT_H
