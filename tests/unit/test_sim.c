@@ -629,7 +629,8 @@ Test(sim, bdf_projects_a_loop_without_restarting_at_every_step)
     /* Projecting after a step and restarting CVODE sent it back to order 1 each time, and the
        drift of those short steps asked for the next projection: 122,632 steps for the preset's
        10 s (rtol 1e-8), 98 times Baumgarte's. Projecting inside CVODE's steps keeps its
-       history: measured 785 steps, Baumgarte 1,257 */
+       history: measured 785 steps on those 10 s, Baumgarte 1,257. This run is shorter; the
+       assertions are the ratio's */
     const ctc_integ_spec bdf = {.method = CTC_INTEG_BDF, .rtol = 1e-8, .atol = 1e-10};
     ctc_sim_result *proj = five_bar_run(bdf, CTC_LOOP_PROJECT);
     ctc_sim_result *baum = five_bar_run(bdf, CTC_LOOP_BAUMGARTE);
@@ -640,10 +641,9 @@ Test(sim, bdf_projects_a_loop_without_restarting_at_every_step)
                   mp->rhs_evals, mb->rhs_evals);
     cr_expect_gt(mp->projections, 0, "it drifts, so it projects");
     cr_expect_leq(mp->projections, mp->steps);
-    /* the drift of one step is within the tolerances, and the samples say the same */
+    /* the drift of one step is within the tolerances (loop_res_max is the largest of the samples'
+       position residuals, sim.c) */
     cr_expect_leq(mp->loop_res_max, 1e-8, "residual %g", mp->loop_res_max);
-    for (int j = 0; j < proj->nsamples; j++)
-        cr_assert_leq(proj->ch[CTC_CH_LOOP][2 * j], mp->loop_res_max);
     /* the error dynamics hold as well as with Baumgarte's terms */
     cr_expect_leq(mp->errdyn_dev, 1e-6, "error-dynamics deviation %g", mp->errdyn_dev);
     ctc_sim_result_free(proj);
