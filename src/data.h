@@ -52,8 +52,9 @@ typedef struct ctc_data {
     double loop_gam[6];  /* a loop on body b: (0; w_b x (w_b x loop_r)), what b's classical
                             acceleration at loop_pt adds to the rigid shift of its acceleration at
                             its handle 2 (gdca_loop_shift_accel), m/s^2 */
-    double baumgarte[2]; /* forward pass: (a, b) adds D^T(A_t + beta) = 2 a dphi + b^2 phi to the
-                            closure, i.e. phi'' + 2 a phi' + b^2 phi = 0 (1/s, 1/s); 0 = none */
+    double baumgarte[2]; /* forward pass: (a, b) adds D^T(A_t + beta - A_child) = 2 a dphi + b^2
+                            phi to the closure, i.e. phi'' + 2 a phi' + b^2 phi = 0 (1/s, 1/s); 0 =
+                            none */
     double *xbuf;        /* (2 nvx + nq) loop models: scratch of the passes and loop.c */
     int inv_full;        /* 1: the inverse pass of a loop model disassembles every node (no early
                             stop; for benchmarks and tests). Default 0 */
@@ -67,7 +68,8 @@ typedef struct ctc_data {
     double *hbody; /* (n x hsize) */
 
     /* GDCA tree records and joint solutions */
-    double *hfwd;        /* (ntree x hsize) forward assemblies */
+    double *hfwd;        /* (ntree x hsize) forward assemblies; in the sequential order slot i
+                            holds S_i or B_i and their joint's K (gdca_forward_seq.c) */
     double *hinv;        /* (ntree x hsize) inverse assemblies of the mobility form */
     double *fwd_E;       /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
     double *fwd_z;       /* (n x dim)   joint k: W Y + P f */
@@ -75,11 +77,12 @@ typedef struct ctc_data {
                             = its rule (CTC_REFINE_MAX_STEPS on stiffly proportioned chains, one on
                             long ones, else 0); >= 0: at most that many */
     int fwd_refine_done; /* steps the last ctc_gdca_forward made */
-    double *fwd_res;     /* (2 nv) the refinement's force residual and correction */
+    double *fwd_res;     /* (2 nvx) the refinement's force residual and correction */
     int fwd_order;       /* the forward pass's assembly order on an open chain
-                            (gdca_forward_seq.h): CTC_ORDER_AUTO (default) = sequential unless
-                            the pass splits over threads, CTC_ORDER_TREE = the balanced tree,
-                            CTC_ORDER_SEQ = sequential. For tests and benchmarks */
+                            (gdca_forward_seq.h): CTC_ORDER_AUTO (default) = the balanced tree
+                            with two threads or more from a measured length on
+                            (gdca_forward_order_seq), else sequential; CTC_ORDER_TREE = the
+                            balanced tree, CTC_ORDER_SEQ = sequential. For tests and benchmarks */
     double *inv_E;       /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
     double *inv_z;       /* (n x dim)   joint k: X Y' (mobility form) */
     int csize;           /* doubles in one composite record: dim^2 + 2 dim + 3 */
@@ -87,11 +90,13 @@ typedef struct ctc_data {
                       I (dim x dim), w (dim), c (dim), r12 (3) */
     double *inv_e; /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */
     double *tload; /* ((2n - 1) x 2 dim) per assembly during a disassembly: F1 and F2
-                      (forward, mobility inverse) or A1 and F2 (composite inverse) */
+                      (forward, mobility inverse) or A1 and F2 (composite inverse); the
+                      sequential forward order keeps each joint's load at [dim k] */
 
     /* results */
     double *jnt_load;     /* (njoints x dim) load on body k at joint k from the forward pass,
-                             N m / N; k = n: the load of the closing joint on the ground */
+                             N m / N; k = n: the load of the closing joint on its child (the
+                             ground, or body b) */
     double *jnt_load_inv; /* (njoints x dim) the same from the inverse pass (loop models: only
                              the joints the pruned disassembly reaches, model.h inv_need) */
     int singular_joint;   /* -1, or a joint whose matrix K was not positive definite */

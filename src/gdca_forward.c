@@ -23,12 +23,12 @@
  * recomputed, by the same kernels and on the same threads.
  *
  * This file is the pass over the balanced tree, which loop models and passes split over threads
- * take; an open chain's pass on one thread takes the sequential order (gdca_forward_seq.c), with
- * the per-joint kernels of gdca_forward_joint.h in common. The nodes of one tree height are
- * independent: each node's assembly writes only its own record
- * and its joint's E and z, its disassembly only its joint's load and acceleration and its two
- * children's terminal loads, so gdca_par.c may split a height over threads (ctc_data_set_threads)
- * with bitwise the serial results; the root stays on the caller's thread.
+ * take (gdca_forward_order_seq below); other open-chain passes take the sequential order
+ * (gdca_forward_seq.c), with the per-joint kernels of gdca_forward_joint.h in common. The nodes of
+ * one tree height are independent: each node's assembly writes only its own record and its joint's
+ * E and z, its disassembly only its joint's load and acceleration and its two children's terminal
+ * loads, so gdca_par.c may split a height over threads (ctc_data_set_threads) with bitwise the
+ * serial results; the root stays on the caller's thread.
  */
 #include "gdca.h"
 
@@ -49,7 +49,9 @@
  * n = 256 planar (1.15x) and n = 64 spatial (1.39x), but a CTC evaluation, whose serial
  * kinematics and handles leave the records in the caller's cache, gained only from 512 planar
  * (0.80x at 256, 0.98-1.0x at 512, 1.32x at 1024 with the inverse split too) and 128 spatial
- * (1.10x). */
+ * (1.10x). Those measurements were open chains; since open chains take the tree on threads only
+ * from FORWARD_TREE_MIN_BODIES_* below, the least lengths here act on loop models and on a
+ * forced tree order (d->fwd_order). */
 #define FORWARD_GRAIN_PLANAR 2
 #define FORWARD_GRAIN_SPATIAL 2
 #define FORWARD_MIN_BODIES_PLANAR 512

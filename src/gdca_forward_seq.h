@@ -6,9 +6,11 @@
  * depth, which is what a pass split over threads needs (gdca_par.h). On one thread the depth buys
  * nothing, and the order that joins each body to the assembly of the bodies after it, from the
  * free tip down to the base, does about half the arithmetic: every assembly of that order holds
- * the free end, so only its handle-1 equations are ever formed (gdca_forward_seq.c). An open
- * chain's forward pass takes it unless the pass is to split over threads (gdca_forward_order);
- * loop models, whose root joins both ends of the chain to the ground, always take the tree.
+ * the free end, so only its handle-1 equations are ever formed (gdca_forward_seq.c), and the
+ * same from the grounded base. An open chain's forward pass takes it unless the pass is to split
+ * over threads (gdca_forward_order_seq: two threads or more and a measured length); loop models,
+ * whose root solves the loop's boundary equations together (gdca_loop.h), always take the
+ * tree.
  */
 #ifndef CTC_GDCA_FORWARD_SEQ_H
 #define CTC_GDCA_FORWARD_SEQ_H
@@ -23,7 +25,8 @@ int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d);
  * refinement (correct = 0), or its bias-free correction (correct = 1; gdca_refine.h), which
  * reuses the factors and records of the full pass just made at this state. Serial. Fills
  * d->jnt_load (correct: adds to it), d->singular_joint, d->fwd_E, d->fwd_z, the forward node
- * records (h11, h13 and K in the h22 slot) and d->tload. qacc may not alias f. */
+ * records (S_i: h11, h13 and K in the h22 slot; B_k: h22, h23 and K in the h11 slot) and
+ * d->tload. qacc may not alias f. */
 void gdca_forward_seq(const ctc_model *m, ctc_data *d, const double *f, double *qacc, int correct);
 
 #endif

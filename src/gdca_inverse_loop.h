@@ -24,7 +24,8 @@
  *      being J_k (dependent chain coordinates) and P_n's (dependent closing coordinates);
  *   2. the composite pass with those accelerations gives tau;
  *   3. B^T F = (-tau_k; 0) over the dependent coordinates gives F, and the balance f.
- * That is two O(n) passes and two dim x dim solves, with no mobility differences. Loops whose
+ * That is two O(n) passes and one dim x dim factorisation (two solves with it, and dim more for
+ * the condition estimate), with no mobility differences. Loops whose
  * dependent count is not dim (passive ones, nind = 0) go to the mobility form.
  */
 #ifndef CTC_GDCA_INVERSE_LOOP_H
@@ -36,7 +37,7 @@
  * independent coordinates, as described above (0 for the dependent coordinates). Fills
  * d->jnt_load_inv for every joint, the closing joint's with F, and d->loop_cond with the
  * condition estimate of B after equilibration. A singular B gives NaN forces and
- * d->singular_joint = n. Uses d->xbuf. */
+ * d->singular_joint = n, and leaves d->jnt_load_inv as it was. Uses d->xbuf. */
 void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double *f);
 
 /* The open chain's composite iGDCA (gdca_inverse.c) on the chain's coordinates: f (nv) =

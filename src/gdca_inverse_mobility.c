@@ -16,11 +16,14 @@
  * F1 = (h11)^-1 (P u + beta - h13) (Eq. 46). The disassembly recovers each joint's load and its
  * driving force f = P^T F (Eq. 51-52: D^T P = 0, P^T P = 1).
  *
- * Loop models (paper section 5) use this form only. Across a dependent joint the acceleration
+ * Loop models (paper section 5): ctc_gdca_inverse uses this form for them only when their
+ * dependent coordinates do not number dim (gdca_inverse_loop.h); it is the paper's
+ * closed-chain iGDCA. Across a dependent joint the acceleration
  * is unknown, so the joint is assembled with the forward, projected rule and no driving force:
  *     W = D (D^T K D)^-1 D^T,   F = W (h21^L F1 - h12^R F2 + h23^L - h13^R + beta);
- * across an independent one with the commanded acceleration as above. The root's two handles
- * are jointed to the ground (gdca_loop.h), each end's case (independent or dependent terminal
+ * across an independent one with the commanded acceleration as above. The root's boundary
+ * joints (0 and the closing joint, and b + 1 for a loop closed on body b: gdca_loop.h) are
+ * solved together, each end's case (independent or dependent terminal
  * joint, Eq. 55-65) choosing its unknowns. The disassembly visits only the nodes on the way to
  * an independent joint (model.h inv_need, Fig. 4); the loads of the others are not needed.
  *

@@ -1,9 +1,10 @@
 /*
  * gdca_refine.c - when ctc_gdca_forward refines its result (gdca_refine.h).
  *
- * The correction pass itself is the forward pass of gdca_forward.c in its bias-free mode (every
- * body's h13 = h23 = 0 and every beta = 0, the factors and the assembled matrices reused), so it
- * shares that pass's kernels and its split over threads; this file holds the step rule.
+ * The correction pass itself is the forward pass in its bias-free mode (gdca_forward.c and
+ * gdca_forward_seq.c: every body's h13 = h23 = 0 and every beta = 0, the factors and the
+ * assembled matrices reused), so it shares that pass's kernels and its split over threads; this
+ * file holds the step rule and the residual.
  */
 #include "gdca_refine.h"
 

@@ -11,15 +11,15 @@
  *     r = f - (M(q) qdd + N(q, v))            (ctc_gdca_inverse of qdd),
  * and corrects qdd by the forward pass's own operator on r with every bias term zero:
  *     dq = M^-1 r,   qdd <- qdd + dq.
- * That correction pass is the forward pass in a bias-free mode (gdca_forward.c): it reuses the
- * joint factors E and the assembled matrices h11, h12, h22 of the forward pass just made, so it
- * costs vector work only, and the composite inverse at the same state keeps its composite
- * inertias (gdca_inverse.c): a step costs about a third of an unrefined spatial CTC evaluation
- * and less than half of a planar one (bench/README.md, "Hot path"). The forward operator's
- * relative error on a bias-free right-hand side is many orders smaller than on the cancelling
- * one, so one step brings the accelerations to the accuracy of the forces' residual. A loop
- * model's residual and correction include the closing joint's load and the closure
- * (gdca_refine_residual).
+ * That correction pass is the forward pass in a bias-free mode, in the order the forward pass
+ * took (gdca_forward.c, gdca_forward_seq.c): it reuses the joint factors E and the assembled
+ * matrices of the forward pass just made, so it costs vector work only, and the composite inverse
+ * at the same state keeps its composite inertias (gdca_inverse.c): a step costs about a third of an
+ * unrefined spatial CTC evaluation and less than half of a planar one (bench/README.md, "Hot
+ * path"). The forward operator's relative error on a bias-free right-hand side is many orders
+ * smaller than on the cancelling one, so one step brings the accelerations to the accuracy of the
+ * forces' residual. A loop model's residual and correction include the closing joint's load and the
+ * closure (gdca_refine_residual).
  */
 #ifndef CTC_GDCA_REFINE_H
 #define CTC_GDCA_REFINE_H
@@ -32,15 +32,16 @@
  * random planar and spatial chains and on Featherstone's coil (bench_accuracy), while a step
  * adds 30-50% to a CTC evaluation. With extreme proportions a chain of 32 bodies loses all but
  * three digits unrefined (test_hard), one step recovers most of them and a second the rest;
- * masses 1e6 apart along a loop take three (test_loop). Such stiffly proportioned chains get up
- * to CTC_REFINE_MAX_STEPS steps. A long, evenly proportioned chain gets one: after one step the
- * round trip is already at the articulated-body oracle's own (uniform rods, n = 1024: 1.2e-7
- * against ABA's 1.4e-7; random spatial, n = 256: 3.1e-9 against 4.6e-9; the coil, n = 4096:
- * 3.4e-5 against 4.8e-5, from 0.67 unrefined), and further steps only move it within that
- * rounding level while each costs a third to a half of an evaluation. Steps stop once a
- * correction is below CTC_REFINE_CONVERGED of the accelerations (the next one would be smaller
- * by the bias-free pass's own relative error, far below rounding of the result), or shrinks by
- * less than a factor CTC_REFINE_STALL (the residual has reached its rounding level). */
+ * masses 1e6 apart along an 8R loop need three (3.4e-3, 3e-5, 2e-7, then 3.4e-10 after each
+ * step: bench/README.md, "Closed chains"). Such stiffly proportioned chains get up to
+ * CTC_REFINE_MAX_STEPS steps. A long, evenly proportioned chain gets one: after one step the
+ * round trip is already at the articulated-body oracle's own (bench_accuracy, sequential order:
+ * random spatial, n = 256: 5.5e-9 against ABA's 5.5e-9; the coil, n = 4096: 9.1e-5 against
+ * 6.1e-5, from 0.3 unrefined), and further steps only move it within that rounding level while each
+ * costs a third to a half of an evaluation. Steps stop once a correction is below
+ * CTC_REFINE_CONVERGED of the accelerations (the next one would be smaller by the bias-free pass's
+ * own relative error, far below rounding of the result), or shrinks by less than a factor
+ * CTC_REFINE_STALL (the residual has reached its rounding level). */
 #define CTC_REFINE_MIN_BODIES 64
 #define CTC_REFINE_MASS_RATIO 100.0
 #define CTC_REFINE_MAX_STEPS 3
@@ -60,17 +61,19 @@ int gdca_refine_steps(const ctc_model *m, const ctc_data *d);
  * construction), and the closure's residual goes to d->loop_rho (data.h); the closing joint's
  * accelerations in qacc are replaced by those of the accurate pass, P_n^T (A_child - A_t -
  * beta_n). The correction then solves the bias-free loop problem with that closure residual as
- * its right-hand side (gdca_forward.c), so (qacc, F) move together towards the solution of the
+ * its right-hand side (gdca_forward.c: loop models take the balanced tree), so (qacc, F) move
+ * together towards the solution of the
  * constrained equations. Uses the composite records and d->tload. */
 void gdca_refine_residual(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
                           double *r);
 
-/* The correction dq (nv; rad/s^2, m/s^2) = M^-1 r for joint forces r (nv; N m, N), by the
- * forward pass with all bias terms zero (gdca_forward.c), reusing the factors and records of the
- * last ctc_gdca_forward at this state (open chains). Splits over the data's threads as the
- * forward pass does, with bitwise the serial results. Adds the correction's joint loads to
- * d->jnt_load, and overwrites the bias parts (h13, h23) of the forward node records, d->fwd_z
- * and d->tload. dq may not alias r. */
+/* The correction dq (nv, nvx for loops; rad/s^2, m/s^2) = M^-1 r for joint forces r (N m, N),
+ * by the forward pass with all bias terms zero in the order the last ctc_gdca_forward took
+ * (gdca_forward.c, gdca_forward_seq.c), reusing its factors and records at this state; a loop
+ * model's right-hand side includes -d->loop_rho. Splits over the data's threads as the forward
+ * pass does, with bitwise the serial results. Adds the correction's joint loads to d->jnt_load,
+ * and overwrites the bias parts of the forward node records, d->fwd_z and d->tload. dq may not
+ * alias r. */
 void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, double *dq);
 
 #endif

@@ -162,11 +162,11 @@ typedef struct ctc_model {
 
     int ntree;           /* n - 1 internal nodes */
     ctc_tree_node *tree; /* (ntree) ordered by height: children before parents, root last */
-    int height;          /* root height: ceil(log2 n), or one more when a loop closed on a body
-                            splits the root off the middle */
-    int *height_start;   /* (height + 2) nodes of height h are tree[height_start[h-1] ..
-                            height_start[h] - 1] for h >= 1; height_start[0] = 0 */
-    int root;            /* assembly index of the whole chain */
+    int height;        /* root height: ceil(log2 n), or up to one more when a loop closed on a body
+                          splits the root off the middle */
+    int *height_start; /* (height + 2) nodes of height h are tree[height_start[h-1] ..
+                          height_start[h] - 1] for h >= 1; height_start[0] = 0 */
+    int root;          /* assembly index of the whole chain */
 
     /* loop models (has_loop = 1); open chains have has_loop = 0, njoints = n, nvx = nv, nind = nv,
        every joint independent and the loop fields zero / NULL */

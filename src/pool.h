@@ -12,8 +12,9 @@
  * Who runs which chunk: the m chunks of a stage belong to the threads in contiguous blocks
  * (chunk j to thread j k / m), so that with one chunk per thread and the same split at every
  * stage a thread keeps working on the same part of the data. A thread first runs its own
- * chunks, then takes any chunk of the stage that nobody has claimed once the stage could start
- * and its owner has let GRACE_NS pass: the owner is late (not yet woken, or descheduled by the
+ * chunks, then takes any chunk of the stage that nobody has claimed once the stage could start,
+ * at once if its owner has not joined the run, else after its owner has let GRACE_NS pass: the
+ * owner is late (not yet woken, or descheduled by the
  * operating system). So nobody waits for a thread that holds no chunk, and a run never waits for
  * its workers to check in or out. Claims carry the run's generation, so a worker that wakes up
  * after its run is over cannot claim a chunk of the next one; it touches the job only after a
