@@ -88,13 +88,6 @@ static inline const double *forward_bias(const forward_args *a, int x, int which
     return ctc_data_handles(a->m, a->d, x, 0) + (which ? H23(dim) : H13(dim));
 }
 
-/* joint j's beta: zero in the correction */
-static inline const double *forward_beta(const forward_args *a, int j, const int dim,
-                                         const int correct)
-{
-    return correct ? gdca_zero6 : a->d->jnt_beta + dim * j;
-}
-
 /* the boundary joint k's end of a loop model's root problem (gdca_loop.h): its load is unknown
  * along D, its driving force (correct: its force residual) known */
 static inline gdca_end forward_end(const forward_args *a, int k, double *pf, const double *off,
@@ -104,7 +97,7 @@ static inline gdca_end forward_end(const forward_args *a, int k, double *pf, con
     const ctc_data *d = a->d;
     gdca_joint_map(dim, m->jnt_nv[k], d->jnt_P + 3 * dim * k, a->f + m->jnt_vadr[k], pf);
     return (gdca_end){d->jnt_D + dim * dim * k, dim - m->jnt_nv[k], pf,
-                      forward_beta(a, k, dim, correct), off};
+                      gdca_forward_beta(a->d, k, dim, correct), off};
 }
 
 /* a loop model's root (gdca_loop.h): the loop's record R, joint 0 and the closing joint n on the
@@ -145,12 +138,13 @@ static inline void forward_loop_root(const forward_args *a, const int dim, const
     if (!correct) d->loop_cond = s.cond;
     gdca_loop_hand_down(m, &s, d->loop_r, correct, d->tload, d->jnt_load);
     if (j > 0) {
-        forward_accel(m, d, 0, s.al1, gdca_zero6, forward_beta(a, 0, dim, correct), a->qacc, dim);
+        forward_accel(m, d, 0, s.al1, gdca_zero6, gdca_forward_beta(a->d, 0, dim, correct), a->qacc,
+                      dim);
     }
-    forward_accel(m, d, j, s.ar1, j > 0 ? s.al2 : gdca_zero6, forward_beta(a, j, dim, correct),
-                  a->qacc, dim);
+    forward_accel(m, d, j, s.ar1, j > 0 ? s.al2 : gdca_zero6,
+                  gdca_forward_beta(a->d, j, dim, correct), a->qacc, dim);
     /* A(child) = A2 + P qdd + beta */
-    forward_accel(m, d, n, s.ab, s.ar2, forward_beta(a, n, dim, correct), a->qacc, dim);
+    forward_accel(m, d, n, s.ab, s.ar2, gdca_forward_beta(a->d, n, dim, correct), a->qacc, dim);
 }
 
 /* assembly of tree nodes lo..hi-1, children before parents; returns the first node whose joint
@@ -171,7 +165,8 @@ static inline int forward_assemble(const forward_args *a, int lo, int hi, const 
         double *out = d->hfwd + (size_t)i * hs;
         if (forward_joint(m, d, j, left, right, forward_bias(a, node->left, 1, dim, correct),
                           forward_bias(a, node->right, 0, dim, correct),
-                          forward_beta(a, j, dim, correct), a->f, !correct, NULL, dim) != 0 &&
+                          gdca_forward_beta(a->d, j, dim, correct), a->f, !correct, NULL,
+                          dim) != 0 &&
             first < 0) {
             first = i;
         }
@@ -196,7 +191,7 @@ static inline void forward_root(const forward_args *a, const int dim, const int 
     }
     const double *root = ctc_data_handles(m, d, m->root, 0);
     const double *b13 = forward_bias(a, m->root, 0, dim, correct),
-                 *beta = forward_beta(a, 0, dim, correct);
+                 *beta = gdca_forward_beta(a->d, 0, dim, correct);
     double *tl = d->tload + (size_t)m->root * 2 * dim, a1[CTC_DENSE_MAX];
     if (forward_joint(m, d, 0, NULL, root, gdca_zero6, b13, beta, a->f, !correct, NULL, dim) != 0 &&
         d->singular_joint < 0) {
@@ -240,7 +235,7 @@ static inline void forward_disassemble(const forward_args *a, int lo, int hi, co
         ctc_dense_tmulv(dim, dim, left + H12(dim), f1, a2l);
         ctc_dense_mulv(dim, dim, left + H22(dim), fj, t);
         for (int r = 0; r < dim; r++) a2l[r] += b23l[r] - t[r];
-        forward_accel(m, d, j, a1r, a2l, forward_beta(a, j, dim, correct), a->qacc, dim);
+        forward_accel(m, d, j, a1r, a2l, gdca_forward_beta(a->d, j, dim, correct), a->qacc, dim);
 
         for (int r = 0; r < dim; r++) load[r] = correct ? load[r] + fj[r] : fj[r];
         gdca_pass_loads(dim, d->tload, node, f1, f2, fj);

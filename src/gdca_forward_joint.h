@@ -72,8 +72,12 @@ static inline int forward_joint(const ctc_model *m, ctc_data *d, int j, const do
     return st;
 }
 
-/* a zero vector: the ground's acceleration, and the bias terms of the correction */
-static const double gdca_zero6[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+/* joint j's beta: zero in the refinement's bias-free correction */
+static inline const double *gdca_forward_beta(const ctc_data *d, int j, const int dim,
+                                              const int correct)
+{
+    return correct ? gdca_zero6 : d->jnt_beta + dim * j;
+}
 
 /* qdd_j = P^T (A1^R - A2^L - beta) written into qacc, for the given beta */
 static inline void forward_accel(const ctc_model *m, const ctc_data *d, int j, const double *a1r,

@@ -82,52 +82,21 @@ static inline const double *seq_base_bias(const seq_args *a, int k, const int di
     return k < 0 ? gdca_zero6 : seq_part(a, k) + H23(dim);
 }
 
-/* joint j's beta: zero in the correction */
-static inline const double *seq_beta(const seq_args *a, int j, const int dim, const int correct)
-{
-    return correct ? gdca_zero6 : a->d->jnt_beta + dim * j;
-}
-
-/* out (dim x dim, symmetric) = h - X X^T for X (dim x nc): the upper triangle computed, mirrored */
-static inline void seq_downdate(int dim, int nc, const double *h, const double *x, double *out)
-{
-    for (int i = 0; i < dim; i++) {
-        for (int j = i; j < dim; j++) {
-            double s = 0;
-            for (int c = 0; c < nc; c++) s += x[i * nc + c] * x[j * nc + c];
-            out[i * dim + j] = out[j * dim + i] = h[i * dim + j] - s;
-        }
-    }
-}
-
 /* out = h - X X^T with X = M E (trans = 0) or M^T E (trans = 1), M (dim x dim), E (dim x nc) the
    factor of joint j, its zeros skipped for the joint types gdca_joint_factor_typed specialises */
 static inline void seq_downdate_joint(const seq_args *a, int j, const double *h, const double *mm,
                                       int trans, const double *e, double *out, const int dim)
 {
     const ctc_joint_type type = a->m->joints[j].type;
-    const int nc = dim - a->m->jnt_nv[j];
     double x[CTC_DENSE_MAX * CTC_DENSE_MAX];
-    if (dim == 6 && (type == CTC_JOINT_REVOLUTE || type == CTC_JOINT_PRISMATIC)) {
-        gdca_mul_hinge(mm, trans, e, type == CTC_JOINT_REVOLUTE ? 3 : 0, x);
-        seq_downdate(6, 5, h, x, out);
+    if (gdca_joint_factor_is_typed(dim, type)) { /* nc = dim - 1, a constant */
+        gdca_mul_E_typed(dim, type, dim - 1, mm, trans, e, x);
+        gdca_downdate(dim, dim - 1, h, x, out);
         return;
     }
-    if (dim == 3 && type == CTC_JOINT_REVOLUTE) {
-        gdca_mul_planar_revolute(mm, trans, e, x);
-        seq_downdate(3, 2, h, x, out);
-        return;
-    }
-    for (int i = 0; i < dim; i++) {
-        for (int c = 0; c < nc; c++) {
-            double s = 0;
-            for (int k = 0; k < dim; k++) {
-                s += (trans ? mm[k * dim + i] : mm[i * dim + k]) * e[k * nc + c];
-            }
-            x[i * nc + c] = s;
-        }
-    }
-    seq_downdate(dim, nc, h, x, out);
+    const int nc = dim - a->m->jnt_nv[j];
+    gdca_mul_E(dim, nc, mm, trans, e, x);
+    gdca_downdate(dim, nc, h, x, out);
 }
 
 /* the tip run's assembly of S_i = i : S_{i+1} at joint j = i + 1 (correct: E and K reused): K,
@@ -139,9 +108,10 @@ static inline int seq_tip_assemble(const seq_args *a, int i, const int dim, cons
     const double *left = seq_body(a, i), *right = seq_part(a, j);
     const double *b13l = seq_body_bias(a, i, H13(dim), correct);
     double *out = d->hfwd + (size_t)i * d->hsize, t[CTC_DENSE_MAX];
-    const int st = forward_joint(a->m, d, j, left, right, seq_body_bias(a, i, H23(dim), correct),
-                                 seq_tip_bias(a, j, dim, correct), seq_beta(a, j, dim, correct),
-                                 a->f, !correct, out + H22(dim), dim);
+    const int st =
+        forward_joint(a->m, d, j, left, right, seq_body_bias(a, i, H23(dim), correct),
+                      seq_tip_bias(a, j, dim, correct), gdca_forward_beta(a->d, j, dim, correct),
+                      a->f, !correct, out + H22(dim), dim);
     const double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
     if (!correct) {
         seq_downdate_joint(a, j, left + H11(dim), left + H12(dim), 0, e, out + H11(dim), dim);
@@ -161,7 +131,8 @@ static inline int seq_base_assemble(const seq_args *a, int k, const int dim, con
     double *out = d->hfwd + (size_t)k * d->hsize, t[CTC_DENSE_MAX];
     const int st = forward_joint(a->m, d, k, left, right, seq_base_bias(a, k - 1, dim),
                                  seq_body_bias(a, k, H13(dim), correct),
-                                 seq_beta(a, k, dim, correct), a->f, !correct, out + H11(dim), dim);
+                                 gdca_forward_beta(a->d, k, dim, correct), a->f, !correct,
+                                 out + H11(dim), dim);
     const double *e = d->fwd_E + dim * dim * k, *z = d->fwd_z + dim * k;
     if (!correct) {
         seq_downdate_joint(a, k, right + H22(dim), right + H12(dim), 1, e, out + H22(dim), dim);
@@ -179,7 +150,8 @@ static inline void seq_accel(const seq_args *a, int j, const double *kk, const d
     double x[CTC_DENSE_MAX];
     ctc_dense_mulv(dim, dim, kk, fj, x);
     for (int r = 0; r < dim; r++) x[r] += b13r[r] - b23l[r] - s[r];
-    forward_accel(a->m, a->d, j, x, gdca_zero6, seq_beta(a, j, dim, correct), a->qacc, dim);
+    forward_accel(a->m, a->d, j, x, gdca_zero6, gdca_forward_beta(a->d, j, dim, correct), a->qacc,
+                  dim);
 }
 
 /* the tip run's disassembly at joint j = i + 1: F_j from F_i */
@@ -221,8 +193,8 @@ static inline int seq_root(const seq_args *a, const int dim, const int correct)
     const double *left = r > 0 ? seq_part(a, r - 1) : NULL, *right = seq_part(a, r);
     const double *b23l = seq_base_bias(a, r - 1, dim), *b13r = seq_tip_bias(a, r, dim, correct);
     double *fr = d->tload + dim * r, a1[CTC_DENSE_MAX], a2[CTC_DENSE_MAX];
-    int st = forward_joint(a->m, d, r, left, right, b23l, b13r, seq_beta(a, r, dim, correct), a->f,
-                           !correct, NULL, dim);
+    int st = forward_joint(a->m, d, r, left, right, b23l, b13r,
+                           gdca_forward_beta(a->d, r, dim, correct), a->f, !correct, NULL, dim);
     for (int i = 0; i < dim; i++) fr[i] = d->fwd_z[dim * r + i];
     /* A1^R = h11^R F + h13^R,  A2^L = -h22^L F + h23^L */
     ctc_dense_mulv(dim, dim, right + H11(dim), fr, a1);
@@ -233,7 +205,7 @@ static inline int seq_root(const seq_args *a, const int dim, const int correct)
     } else {
         for (int i = 0; i < dim; i++) a2[i] = 0;
     }
-    forward_accel(a->m, d, r, a1, a2, seq_beta(a, r, dim, correct), a->qacc, dim);
+    forward_accel(a->m, d, r, a1, a2, gdca_forward_beta(a->d, r, dim, correct), a->qacc, dim);
     return st != 0 ? r : -1;
 }
 

@@ -42,6 +42,7 @@
 
 #include "dense.h"
 #include "gdca_par.h"
+#include "gdca_tree.h"
 #include "spatial.h"
 
 /* offsets in a composite record */
@@ -49,36 +50,6 @@
 #define CW(dim) ((dim) * (dim))
 #define CC(dim) ((dim) * (dim) + (dim))
 #define CR(dim) ((dim) * (dim) + 2 * (dim))
-
-/* out = T(r) a: the acceleration a handle r further on (rigid part) */
-static inline void transfer_motion(int dim, const double r[3], const double *a, double *out)
-{
-    if (dim == 3) {
-        out[0] = a[0];
-        out[1] = a[1] - r[1] * a[0];
-        out[2] = a[2] + r[0] * a[0];
-    } else {
-        double t[3];
-        ctc_v3_cross(t, a, r);
-        ctc_v3_copy(out, a);
-        ctc_v3_add(out + 3, a + 3, t);
-    }
-}
-
-/* out = T(r)^T f: a load at a point r further on, as a load at this point */
-static inline void transfer_force(int dim, const double r[3], const double *f, double *out)
-{
-    if (dim == 3) {
-        out[0] = f[0] - r[1] * f[1] + r[0] * f[2];
-        out[1] = f[1];
-        out[2] = f[2];
-    } else {
-        double t[3];
-        ctc_v3_cross(t, r, f + 3);
-        ctc_v3_add(out, f, t);
-        ctc_v3_copy(out + 3, f + 3);
-    }
-}
 
 /* out = T(r)^T S T(r) for symmetric S (dim x dim), written by blocks (about 110 flops for dim 6,
  * against 684 for dense products). Spatial, with S = [A B; B^T C] and X = -[r]x (T = [1 0; X 1]):
@@ -185,7 +156,7 @@ static inline void body_record(const ctc_model *m, const ctc_data *d, int k, dou
         ctc_v3_set(c, 0, 0, 0);
         ctc_v3_cross(c + 3, w, wr);
     }
-    transfer_force(dim, rho, load, rec + CW(dim));
+    gdca_transfer_force(dim, rho, load, rec + CW(dim));
 }
 
 static inline double *record(const ctc_data *d, int a)
@@ -261,11 +232,11 @@ static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const 
         }
         ctc_dense_mulv(dim, dim, R + CI(dim), e, ie);
         for (int r = 0; r < dim; r++) ie[r] += R[CW(dim) + r];
-        transfer_force(dim, L + CR(dim), ie, tf);
+        gdca_transfer_force(dim, L + CR(dim), ie, tf);
         for (int r = 0; r < dim; r++) N[CW(dim) + r] = L[CW(dim) + r] + tf[r];
 
         /* c = T(r12^R) e + c^R (r12 = r12^L + r12^R above) */
-        transfer_motion(dim, R + CR(dim), e, tf);
+        gdca_transfer_motion(dim, R + CR(dim), e, tf);
         for (int r = 0; r < dim; r++) N[CC(dim) + r] = tf[r] + R[CC(dim) + r];
     }
     return -1;
@@ -304,10 +275,10 @@ static inline void inverse_disassemble(const inverse_args *a, int lo, int hi, co
         double *load = d->jnt_load_inv + dim * node->joint, tf[CTC_DENSE_MAX];
         const double *e = d->inv_e + dim * node->joint;
 
-        transfer_motion(dim, L + CR(dim), a1, tlR); /* A1^R */
+        gdca_transfer_motion(dim, L + CR(dim), a1, tlR); /* A1^R */
         for (int r = 0; r < dim; r++) tlR[r] += e[r];
         ctc_dense_mulv(dim, dim, R + CI(dim), tlR, load);
-        transfer_force(dim, R + CR(dim), f2, tf);
+        gdca_transfer_force(dim, R + CR(dim), f2, tf);
         for (int r = 0; r < dim; r++) {
             load[r] += R[CW(dim) + r] - tf[r];
             tlR[dim + r] = f2[r];
@@ -401,7 +372,7 @@ void gdca_inverse_handle2_accel(const ctc_model *m, const ctc_data *d, int k, do
 {
     const int dim = m->dim;
     const double *rec = record(d, k), *a1 = d->tload + (size_t)k * 2 * dim;
-    transfer_motion(dim, rec + CR(dim), a1, a);
+    gdca_transfer_motion(dim, rec + CR(dim), a1, a);
     for (int r = 0; r < dim; r++) a[r] += rec[CC(dim) + r];
 }
 

@@ -181,36 +181,26 @@ void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double 
     lu_solve(dim, b, piv, 1, z);
     for (int r = 0; r < dim; r++) load[r] = rs[r] * z[r];
 
-    /* the balance: f_k = tau_k + J_k^T F in the loop, f_n = P_n^T F; the joint loads carry F too */
+    /* the balance: F moved from p_t to joint k's centre, s_k = T(p_t - x_k)^T F, adds to the load
+       of every joint of the loop, and J_k^T F = P_k^T s_k to an independent one's driving force:
+       f_k = tau_k + P_k^T s_k in the loop, f_n = P_n^T F */
+    memcpy(d->jnt_load_inv + dim * n, load, (size_t)dim * sizeof *load);
     for (int k = 0; k <= n; k++) {
+        double s[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
+        if (k == n) {
+            memcpy(s, load, (size_t)dim * sizeof *load);
+        } else if (k >= m->loop_first) {
+            double *lk = d->jnt_load_inv + dim * k, r[3];
+            for (int a = 0; a < 3; a++) r[a] = d->loop_pt[a] - d->xpos[3 * k + a];
+            gdca_transfer_force(dim, r, load, s);
+            for (int a = 0; a < dim; a++) lk[a] += s[a];
+        }
+        const double *P = d->jnt_P + 3 * dim * k;
         for (int c = 0; c < m->jnt_nv[k]; c++) {
             const int i = m->jnt_vadr[k] + c;
-            if (!m->jnt_indep[k]) {
-                f[i] = 0;
-                continue;
-            }
-            double col[CTC_DENSE_MAX], s = k < n ? tau[i] : 0.0;
-            if (k >= m->loop_first) {
-                dependent_column(m, d, k, c, col);
-                for (int r = 0; r < dim; r++) s += col[r] * load[r];
-            }
-            f[i] = s;
-        }
-    }
-    memcpy(d->jnt_load_inv + dim * n, load, (size_t)dim * sizeof *load);
-    for (int k = m->loop_first; k < n; k++) { /* L_k += F moved from p_t to joint k's centre */
-        double *lk = d->jnt_load_inv + dim * k, r[3];
-        const double *x = d->xpos + 3 * k;
-        for (int a = 0; a < 3; a++) r[a] = d->loop_pt[a] - x[a];
-        if (dim == 3) {
-            lk[0] += load[0] + r[0] * load[2] - r[1] * load[1];
-            lk[1] += load[1];
-            lk[2] += load[2];
-        } else {
-            lk[0] += load[0] + r[1] * load[5] - r[2] * load[4];
-            lk[1] += load[1] + r[2] * load[3] - r[0] * load[5];
-            lk[2] += load[2] + r[0] * load[4] - r[1] * load[3];
-            for (int a = 3; a < 6; a++) lk[a] += load[a];
+            double fi = k < n ? tau[i] : 0.0;
+            for (int a = 0; a < dim; a++) fi += P[c * dim + a] * s[a];
+            f[i] = m->jnt_indep[k] ? fi : 0.0;
         }
     }
 }

@@ -73,14 +73,13 @@ static inline int inverse_joint(const ctc_model *m, ctc_data *d, int j, const do
 static inline gdca_end mobility_end(const ctc_model *m, const ctc_data *d, int k, const double *u,
                                     double *a, const int dim)
 {
-    static const double zero[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
     memcpy(a, d->jnt_beta + dim * k, (size_t)dim * sizeof *a);
     if (!m->jnt_indep[k])
-        return (gdca_end){d->jnt_D + dim * dim * k, dim - m->jnt_nv[k], zero, a, NULL};
+        return (gdca_end){d->jnt_D + dim * dim * k, dim - m->jnt_nv[k], gdca_zero6, a, NULL};
     double pu[CTC_DENSE_MAX];
     gdca_joint_map(dim, m->jnt_nv[k], d->jnt_P + 3 * dim * k, u + m->jnt_vadr[k], pu);
     for (int i = 0; i < dim; i++) a[i] += pu[i];
-    return (gdca_end){NULL, dim, zero, a, NULL};
+    return (gdca_end){NULL, dim, gdca_zero6, a, NULL};
 }
 
 /* a loop model's root: the loop's record with joint 0 and the closing joint on the ground, or,

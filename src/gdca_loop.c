@@ -26,34 +26,8 @@ static inline double s_at(const gdca_end *e, int dim, int row, int c)
 void gdca_loop_shift_accel(int dim, const double *r, const double *gam, const double *in,
                            double *out)
 {
-    if (dim == 3) {
-        out[0] = in[0] + gam[0];
-        out[1] = in[1] - in[0] * r[1] + gam[1];
-        out[2] = in[2] + in[0] * r[0] + gam[2];
-        return;
-    }
-    out[0] = in[0] + gam[0];
-    out[1] = in[1] + gam[1];
-    out[2] = in[2] + gam[2];
-    out[3] = in[3] + in[1] * r[2] - in[2] * r[1] + gam[3];
-    out[4] = in[4] + in[2] * r[0] - in[0] * r[2] + gam[4];
-    out[5] = in[5] + in[0] * r[1] - in[1] * r[0] + gam[5];
-}
-
-void gdca_loop_shift_load(int dim, const double *r, const double *in, double *out)
-{
-    if (dim == 3) {
-        out[0] = in[0] + r[0] * in[2] - r[1] * in[1];
-        out[1] = in[1];
-        out[2] = in[2];
-        return;
-    }
-    out[0] = in[0] + r[1] * in[5] - r[2] * in[4];
-    out[1] = in[1] + r[2] * in[3] - r[0] * in[5];
-    out[2] = in[2] + r[0] * in[4] - r[1] * in[3];
-    out[3] = in[3];
-    out[4] = in[4];
-    out[5] = in[5];
+    gdca_transfer_motion(dim, r, in, out);
+    for (int i = 0; i < dim; i++) out[i] += gam[i];
 }
 
 /* a1 = h11 f1 + h12 f2 (+ b13), a2 = h21 f1 + h22 f2 (+ b23), the biases b the record's h13,
@@ -77,7 +51,6 @@ static void record_accel(int dim, const double *h, const double *const b[2], con
 static void root_accel(const gdca_loop_root *p, const double f[3][CTC_DENSE_MAX], int bias,
                        gdca_loop_sol *s, double w[3][CTC_DENSE_MAX])
 {
-    static const double zero[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
     const int dim = p->dim;
     double neg[CTC_DENSE_MAX] = {0};
     for (int i = 0; i < dim; i++) neg[i] = -f[2][i];
@@ -91,10 +64,10 @@ static void root_accel(const gdca_loop_root *p, const double f[3][CTC_DENSE_MAX]
         return;
     }
     double fl2[CTC_DENSE_MAX] = {0};
-    gdca_loop_shift_load(dim, p->shift, f[2], fl2);
+    gdca_transfer_force(dim, p->shift, f[2], fl2);
     for (int i = 0; i < dim; i++) fl2[i] -= f[1][i];
     record_accel(dim, p->l, p->lb, f[0], fl2, bias, s->al1, s->al2);
-    gdca_loop_shift_accel(dim, p->shift, bias ? p->gam : zero, s->al2, s->ab);
+    gdca_loop_shift_accel(dim, p->shift, bias ? p->gam : gdca_zero6, s->al2, s->ab);
     for (int i = 0; i < dim; i++) {
         w[0][i] = s->al1[i];
         w[1][i] = s->ar1[i] - s->al2[i];
@@ -210,7 +183,7 @@ void gdca_loop_hand_down(const ctc_model *m, const gdca_loop_sol *s, const doubl
         return;
     }
     double *tl = tload + (size_t)top->left * 2 * dim, *tr = tload + (size_t)top->right * 2 * dim;
-    gdca_loop_shift_load(dim, shift, s->fn, tl + dim);
+    gdca_transfer_force(dim, shift, s->fn, tl + dim);
     for (int i = 0; i < dim; i++) {
         tl[i] = s->f0[i];
         tl[dim + i] -= s->fj[i];

@@ -13,15 +13,13 @@
  *     joint j   L, handle 2 (or the ground) -> R, handle 1
  *     joint n   R, handle 2 -> body b at p2 (or the ground)
  * Body b's acceleration at p2 is its acceleration at p1 shifted rigidly (gdca_loop_shift_accel)
- * plus d->loop_gam; a load at p2 on it is the load shifted to p1 (gdca_loop_shift_load). With
- * A1 = h11 F1 + h12 F2 + h13, A2 = h21 F1 + h22 F2 + h23 for each record, each joint asks
- *     F = S x + fo,     S^T (A_child - A_parent - a) = -off
- * where for each joint either
- *     its acceleration is unknown (a dependent joint, or any joint in the forward pass):
- *         S = D (its constraint directions), fo = P f (its driving force), a = beta;
- *     or it is commanded (an independent joint in the inverse pass, Eq. 19):
- *         S = 1 (the whole load is unknown), fo = 0, a = P u + beta,
- * and off (the closing joint's only, else zero) is the forward pass's Baumgarte term
+ * plus d->loop_gam; a load at p2 on it is the load shifted to p1 (gdca_transfer_force,
+ * gdca_tree.h). With A1 = h11 F1 + h12 F2 + h13, A2 = h21 F1 + h22 F2 + h23 for each record, each
+ * joint asks F = S x + fo,     S^T (A_child - A_parent - a) = -off where for each joint either its
+ * acceleration is unknown (a dependent joint, or any joint in the forward pass): S = D (its
+ * constraint directions), fo = P f (its driving force), a = beta; or it is commanded (an
+ * independent joint in the inverse pass, Eq. 19): S = 1 (the whole load is unknown), fo = 0, a = P
+ * u + beta, and off (the closing joint's only, else zero) is the forward pass's Baumgarte term
  * D_n^T (A_t + beta_n - A_child) = 2 a dphi + b^2 phi (data.h). Each unknown x is conjugate to
  * the relative acceleration its rows measure, so the system in all the unknowns is symmetric: a
  * congruence of the loop's mobility, positive definite when the unknown accelerations determine
@@ -81,13 +79,10 @@ void gdca_loop_offset(const ctc_model *m, const ctc_data *d, double *off);
 void gdca_loop_hand_down(const ctc_model *m, const gdca_loop_sol *s, const double *shift, int add,
                          double *tload, double *jnt_load);
 
-/* out = body b's classical acceleration at p2 from the one at p1 (dim): (alpha; a + alpha x r)
- * + gam, r = p2 - p1 (3). out may not alias in. */
+/* out = body b's classical acceleration at p2 from the one at p1 (dim): the rigid shift
+ * (alpha; a + alpha x r) of gdca_tree.h's gdca_transfer_motion, + gam, r = p2 - p1 (3). out may
+ * not alias in. */
 void gdca_loop_shift_accel(int dim, const double *r, const double *gam, const double *in,
                            double *out);
-
-/* out = the load at p1 equal to the load in at p2 on the same body: (m + r x f; f), r = p2 - p1.
- * out may not alias in. */
-void gdca_loop_shift_load(int dim, const double *r, const double *in, double *out);
 
 #endif

@@ -20,6 +20,7 @@
 
 #include "dense.h"
 #include "model.h"
+#include "spatial.h"
 
 /* offsets of the blocks of a handle-equation record (data.h) */
 #define H11(dim) 0
@@ -27,6 +28,41 @@
 #define H22(dim) (2 * (dim) * (dim))
 #define H13(dim) (3 * (dim) * (dim))
 #define H23(dim) (3 * (dim) * (dim) + (dim))
+
+/* out = T(r) a: the acceleration (or velocity) a of a rigid body at a point, moved to the point r
+   further on (planar: (w, v); spatial: (w; v), v + w x r); out may not alias a */
+static inline void gdca_transfer_motion(int dim, const double r[3], const double *a, double *out)
+{
+    if (dim == 3) {
+        out[0] = a[0];
+        out[1] = a[1] - r[1] * a[0];
+        out[2] = a[2] + r[0] * a[0];
+    } else {
+        double t[3];
+        ctc_v3_cross(t, a, r);
+        ctc_v3_copy(out, a);
+        ctc_v3_add(out + 3, a + 3, t);
+    }
+}
+
+/* out = T(r)^T f: a load f at the point r further on, as a load at this point (its moment
+   gains r x the force); out may not alias f */
+static inline void gdca_transfer_force(int dim, const double r[3], const double *f, double *out)
+{
+    if (dim == 3) {
+        out[0] = f[0] - r[1] * f[1] + r[0] * f[2];
+        out[1] = f[1];
+        out[2] = f[2];
+    } else {
+        double t[3];
+        ctc_v3_cross(t, r, f + 3);
+        ctc_v3_add(out, f, t);
+        ctc_v3_copy(out + 3, f + 3);
+    }
+}
+
+/* a zero vector: the ground's acceleration, and bias terms left out */
+static const double gdca_zero6[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
 
 /* K = h11^R + h22^L; a NULL left is the ground (h22 = 0) */
 static inline void gdca_joint_K(int dim, const double *left, const double *right, double *k)
@@ -313,6 +349,13 @@ static inline void gdca_factor_apply_planar_revolute(const double *e, const doub
     out[2] = e[5] * t1;
 }
 
+/* 1 if gdca_joint_factor_typed makes a specialised factor (nc = dim - 1) for joints of type
+   `type` in form dim */
+static inline int gdca_joint_factor_is_typed(int dim, ctc_joint_type type)
+{
+    return type == CTC_JOINT_REVOLUTE || (dim == 6 && type == CTC_JOINT_PRISMATIC);
+}
+
 /* out = G x for the E that gdca_joint_factor_typed made for a joint of type `type` */
 static inline void gdca_factor_apply_typed(int dim, ctc_joint_type type, int nc, const double *e,
                                            const double *x, double *out)
@@ -342,6 +385,48 @@ static inline void gdca_assemble_bias(int dim, const double *left, const double 
     for (int i = 0; i < dim; i++) out[H23(dim) + i] = b23r[i] + t[i];
 }
 
+/* x = M E (trans = 0) or M^T E (trans = 1) (dim x nc), M (dim x dim), E (dim x nc) */
+static inline void gdca_mul_E(int dim, int nc, const double *mm, int trans, const double *e,
+                              double *x)
+{
+    for (int i = 0; i < dim; i++) {
+        for (int c = 0; c < nc; c++) {
+            double s = 0;
+            for (int k = 0; k < dim; k++) {
+                s += (trans ? mm[k * dim + i] : mm[i * dim + k]) * e[k * nc + c];
+            }
+            x[i * nc + c] = s;
+        }
+    }
+}
+
+/* x = M E or M^T E for the E that gdca_joint_factor_typed made for a joint of type `type`, its
+   zeros skipped where that factor is specialised (the dense product's numbers) */
+static inline void gdca_mul_E_typed(int dim, ctc_joint_type type, int nc, const double *mm,
+                                    int trans, const double *e, double *x)
+{
+    if (dim == 6 && (type == CTC_JOINT_REVOLUTE || type == CTC_JOINT_PRISMATIC)) {
+        gdca_mul_hinge(mm, trans, e, type == CTC_JOINT_REVOLUTE ? 3 : 0, x);
+    } else if (dim == 3 && type == CTC_JOINT_REVOLUTE) {
+        gdca_mul_planar_revolute(mm, trans, e, x);
+    } else {
+        gdca_mul_E(dim, nc, mm, trans, e, x);
+    }
+}
+
+/* out (dim x dim, symmetric) = h - X X^T for X (dim x nc): the upper triangle computed,
+   mirrored; out may be h */
+static inline void gdca_downdate(int dim, int nc, const double *h, const double *x, double *out)
+{
+    for (int i = 0; i < dim; i++) {
+        for (int j = i; j < dim; j++) {
+            double s = 0;
+            for (int c = 0; c < nc; c++) s += x[i * nc + c] * x[j * nc + c];
+            out[i * dim + j] = out[j * dim + i] = h[i * dim + j] - s;
+        }
+    }
+}
+
 /* The record of L:R (out) from the records of L and R and the joint's factor E (G = E E^T) and
  * z (Eq. 34-39): with A = h12^L E and B = h21^R E,
  *     h11 = h11^L - A A^T,   h12 = A B^T,   h22 = h22^R - B B^T,
@@ -350,34 +435,11 @@ static inline void gdca_assemble_nc(int dim, int nc, const double *left, const d
                                     const double *e, const double *z, double *out)
 {
     double a[CTC_DENSE_MAX * CTC_DENSE_MAX], b[CTC_DENSE_MAX * CTC_DENSE_MAX];
-    const double *l12 = left + H12(dim), *r12 = right + H12(dim);
 
-    /* A = h12^L E, B = (h12^R)^T E, each dim x nc */
-    for (int i = 0; i < dim; i++) {
-        for (int c = 0; c < nc; c++) {
-            double sa = 0, sb = 0;
-            for (int k = 0; k < dim; k++) {
-                sa += l12[i * dim + k] * e[k * nc + c];
-                sb += r12[k * dim + i] * e[k * nc + c];
-            }
-            a[i * nc + c] = sa;
-            b[i * nc + c] = sb;
-        }
-    }
-    /* symmetric blocks: upper triangle, mirrored */
-    for (int i = 0; i < dim; i++) {
-        for (int j = i; j < dim; j++) {
-            double s11 = 0, s22 = 0;
-            for (int c = 0; c < nc; c++) {
-                s11 += a[i * nc + c] * a[j * nc + c];
-                s22 += b[i * nc + c] * b[j * nc + c];
-            }
-            out[H11(dim) + i * dim + j] = out[H11(dim) + j * dim + i] =
-                left[H11(dim) + i * dim + j] - s11;
-            out[H22(dim) + i * dim + j] = out[H22(dim) + j * dim + i] =
-                right[H22(dim) + i * dim + j] - s22;
-        }
-    }
+    gdca_mul_E(dim, nc, left + H12(dim), 0, e, a);  /* A = h12^L E */
+    gdca_mul_E(dim, nc, right + H12(dim), 1, e, b); /* B = (h12^R)^T E */
+    gdca_downdate(dim, nc, left + H11(dim), a, out + H11(dim));
+    gdca_downdate(dim, nc, right + H22(dim), b, out + H22(dim));
     for (int i = 0; i < dim; i++) {
         for (int j = 0; j < dim; j++) {
             double s12 = 0;

@@ -23,6 +23,7 @@
 #include <string.h>
 
 #include "dense.h"
+#include "gdca_tree.h"
 #include "kinematics.h"
 #include "spatial.h"
 
@@ -300,19 +301,9 @@ void ctc_loop_residual_norms(const ctc_model *m, const ctc_data *d, double *pos,
 
 void ctc_loop_coord_twist(const ctc_model *m, const ctc_data *d, int k, int c, double *tw)
 {
-    const int dim = m->dim;
-    const double *col = d->jnt_P + 3 * dim * k + c * dim, *x = d->xpos + 3 * k, *pt = d->loop_pt;
-    if (dim == 3) {
-        tw[0] = col[0];
-        tw[1] = col[1] - col[0] * (pt[1] - x[1]);
-        tw[2] = col[2] + col[0] * (pt[0] - x[0]);
-    } else {
-        double r[3], t[3];
-        ctc_v3_sub(r, pt, x);
-        ctc_v3_cross(t, col, r);
-        ctc_v3_copy(tw, col);
-        ctc_v3_add(tw + 3, col + 3, t);
-    }
+    double r[3];
+    ctc_v3_sub(r, d->loop_pt, d->xpos + 3 * k);
+    gdca_transfer_motion(m->dim, r, d->jnt_P + 3 * m->dim * k + c * m->dim, tw);
 }
 
 /* the loop Jacobian's column of chain coordinate (k, c): g = -D_n^T (unit twist) (nc) */
