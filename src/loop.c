@@ -77,10 +77,9 @@ static void quat_from_matrix(const double r[9], double q[4])
 }
 
 /* The closing joint's child (model.h): the ground, or body b, as a pose and a motion (world or
- * plane coordinates; planar: angle theta, rot unused) */
+ * plane coordinates; planar: rot[0], rot[3] its angle's cosine and sine) */
 typedef struct loop_child {
     double x[3], rot[9], w[3], v[3]; /* origin, orientation, angular velocity, origin velocity */
-    double theta;                    /* planar: the angle */
 } loop_child;
 
 static void loop_child_of(const ctc_model *m, const ctc_data *d, loop_child *c)
@@ -93,20 +92,20 @@ static void loop_child_of(const ctc_model *m, const ctc_data *d, loop_child *c)
     memcpy(c->rot, d->xrot + 9 * b, sizeof c->rot);
     memcpy(c->w, d->omega + 3 * b, sizeof c->w);
     memcpy(c->v, d->xvel + 3 * b, sizeof c->v);
-    c->theta = atan2(c->rot[3], c->rot[0]);
 }
 
 /* a loop on a body: r = p2 - p1 from the body's handle 2 (joint b+1's centre) to the closing
  * point, and gam = (0; w x (w x r)), the centripetal part of the body's acceleration moved there */
-static void loop_shift(const ctc_model *m, ctc_data *d, const loop_child *c)
+static void loop_shift(const ctc_model *m, ctc_data *d)
 {
     memset(d->loop_r, 0, sizeof d->loop_r);
     memset(d->loop_gam, 0, sizeof d->loop_gam);
     if (m->loop_body < 0) return;
+    const double *w = d->omega + 3 * m->loop_body;
     double t[3], g[3];
     ctc_v3_sub(d->loop_r, d->loop_pt, d->xpos + 3 * m->loop_first);
-    ctc_v3_cross(t, c->w, d->loop_r);
-    ctc_v3_cross(g, c->w, t);
+    ctc_v3_cross(t, w, d->loop_r);
+    ctc_v3_cross(g, w, t);
     memcpy(d->loop_gam + (m->dim == 3 ? 1 : 3), g, (size_t)(m->dim == 3 ? 2 : 3) * sizeof *g);
 }
 
@@ -121,10 +120,11 @@ static void loop_planar(const ctc_model *m, ctc_data *d)
     loop_child ch;
     loop_child_of(m, d, &ch);
     /* the anchor in the plane, and the child's velocity there */
-    const double cb = cos(ch.theta), sb = sin(ch.theta), wb = ch.w[2];
+    const double cb = ch.rot[0], sb = ch.rot[3], wb = ch.w[2];
     double ag[2] = {ch.x[0] + cb * an[0] - sb * an[1], ch.x[1] + sb * an[0] + cb * an[1]};
     double va[2] = {ch.v[0] - wb * (ag[1] - ch.x[1]), ch.v[1] + wb * (ag[0] - ch.x[0])};
-    double theta = atan2(s, c) - ch.theta; /* the tip's angle relative to the child */
+    /* the tip's angle relative to the child */
+    double theta = atan2(s * cb - c * sb, c * cb + s * sb);
 
     memset(P, 0, 9 * sizeof *P);
     memset(D, 0, 9 * sizeof *D);
@@ -162,7 +162,6 @@ static void loop_planar(const ctc_model *m, ctc_data *d)
         d->loop_dphi[0] = wb - w;
         d->loop_dphi[1] = dv[0] * nr[0] + dv[1] * nr[1];
     }
-    loop_shift(m, d, &ch);
 }
 
 static void loop_spatial(const ctc_model *m, ctc_data *d)
@@ -210,7 +209,6 @@ static void loop_spatial(const ctc_model *m, ctc_data *d)
                     r[a] * ch.rot[b] + r[3 + a] * ch.rot[3 + b] + r[6 + a] * ch.rot[6 + b];
         quat_from_matrix(rt, d->loop_q);
         ctc_v3_copy(d->loop_pt, pt);
-        loop_shift(m, d, &ch);
         return;
     }
 
@@ -242,7 +240,6 @@ static void loop_spatial(const ctc_model *m, ctc_data *d)
             d->loop_phi[2 + a] = gap[a];
             d->loop_dphi[2 + a] = va[a] - vt[a];
         }
-        loop_shift(m, d, &ch);
         return;
     }
 
@@ -271,7 +268,6 @@ static void loop_spatial(const ctc_model *m, ctc_data *d)
     for (int a = 0; a < 3; a++) d->loop_dphi[a] = wrel[a];
     d->loop_dphi[3] = ctc_v3_dot(dv, n1);
     d->loop_dphi[4] = ctc_v3_dot(dv, n2);
-    loop_shift(m, d, &ch);
 }
 
 void ctc_loop_kinematics(const ctc_model *m, ctc_data *d)
@@ -282,6 +278,7 @@ void ctc_loop_kinematics(const ctc_model *m, ctc_data *d)
     } else {
         loop_spatial(m, d);
     }
+    loop_shift(m, d);
 }
 
 /* number of closure residuals */
