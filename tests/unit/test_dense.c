@@ -1,6 +1,7 @@
 /*
- * test_dense.c - the small dense kernels of src/dense.h against plain triple-loop products
- * written here, and the Cholesky solve against the systems it was made from.
+ * test_dense.c - the small dense kernels of src/dense.h and the assembly's downdate (gdca_tree.h)
+ * against plain products written here, and the Cholesky solve against the systems it was made
+ * from.
  */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -8,6 +9,7 @@
 
 #include "chains.h"
 #include "dense.h"
+#include "gdca_tree.h"
 
 #define N CTC_DENSE_MAX
 
@@ -164,27 +166,8 @@ Test(dense, cholesky_rejects_indefinite_and_singular_matrices)
     }
 }
 
-Test(dense, products_match_plain_loops)
+Test(dense, matrix_vector_products_match_hand_worked_values)
 {
-    /* mulv/tmulv on rectangular matrices, mul, mul_nt = A B^T, mul_tn = A^T B, exact to rounding */
-    uint64_t rng = 4;
-    for (int n = 1; n <= N; n++) {
-        double a[N * N], b[N * N], at[N * N], bt[N * N], got[N * N], want[N * N];
-        random_matrix(&rng, n, n, a);
-        random_matrix(&rng, n, n, b);
-        transpose(n, a, at);
-        transpose(n, b, bt);
-        ctc_dense_mul(n, a, b, got);
-        plain_mul(n, a, b, want);
-        cr_assert_leq(max_abs_diff(n * n, got, want), 1e-15, "n = %d: mul", n);
-        ctc_dense_mul_nt(n, a, b, got);
-        plain_mul(n, a, bt, want);
-        cr_assert_leq(max_abs_diff(n * n, got, want), 1e-15, "n = %d: mul_nt", n);
-        ctc_dense_mul_tn(n, a, b, got);
-        plain_mul(n, at, b, want);
-        cr_assert_leq(max_abs_diff(n * n, got, want), 1e-15, "n = %d: mul_tn", n);
-    }
-
     /* a 2 x 3 example worked by hand */
     const double r[6] = {1, 2, 3, 4, 5, 6}, x3[3] = {1, -1, 2}, x2[2] = {2, -1};
     double y2[2], y3[3];
@@ -195,46 +178,42 @@ Test(dense, products_match_plain_loops)
               y3[1], y3[2]);
 }
 
-Test(dense, symmetric_updates_match_plain_products)
+Test(dense, the_assembly_downdate_matches_plain_products)
 {
-    /* S0 - A B^T with A = X, B = X C (C symmetric) and S0 - A B with A = X C, B = X^T: both
-       products are X C X^T, symmetric; the result matches the plain product to rounding and is
-       exactly symmetric, also when S aliases S0 */
+    /* gdca_downdate (gdca_tree.h): h - X X^T for X (n x nc), h symmetric; the result matches the
+       plain product to rounding and is exactly symmetric, also when out aliases h */
     uint64_t rng = 5;
     for (int n = 1; n <= N; n++) {
-        double x[N * N], xt[N * N], c[N * N], xc[N * N], s0[N * N], want[N * N], got[N * N];
-        double prod[N * N];
-        random_matrix(&rng, n, n, x);
-        transpose(n, x, xt);
-        for (int i = 0; i < n; i++) {
-            for (int j = i; j < n; j++) {
-                c[i * n + j] = c[j * n + i] = test_uniform(&rng, -1, 1);
-                s0[i * n + j] = s0[j * n + i] = test_uniform(&rng, -1, 1);
+        for (int nc = 1; nc <= n; nc++) {
+            double x[N * N], xt[N * N], h[N * N], want[N * N], got[N * N], prod[N * N];
+            random_matrix(&rng, n, nc, x);
+            for (int i = 0; i < n; i++) {
+                for (int c = 0; c < nc; c++) xt[c * n + i] = x[i * nc + c];
+                for (int j = i; j < n; j++) h[i * n + j] = h[j * n + i] = test_uniform(&rng, -1, 1);
             }
-        }
-        plain_mul(n, x, c, xc);
-        plain_mul(n, xc, xt, prod);
-        for (int i = 0; i < n * n; i++) want[i] = s0[i] - prod[i];
-
-        for (int variant = 0; variant < 4; variant++) {
-            int nt = variant < 2, in_place = variant % 2;
-            if (in_place) {
-                memcpy(got, s0, sizeof got);
-            } else {
-                memset(got, 0, sizeof got);
-            }
-            const double *src = in_place ? got : s0;
-            if (nt) {
-                ctc_dense_sym_sub_nt(n, src, x, xc, got);
-            } else {
-                ctc_dense_sym_sub(n, src, xc, xt, got);
-            }
-            double e = max_abs_diff(n * n, got, want);
-            cr_assert_leq(e, 1e-14, "n = %d, %s%s: differs by %.3e", n,
-                          nt ? "sym_sub_nt" : "sym_sub", in_place ? " in place" : "", e);
             for (int i = 0; i < n; i++) {
                 for (int j = 0; j < n; j++) {
-                    cr_assert_eq(got[i * n + j], got[j * n + i], "n = %d: not symmetric", n);
+                    double t = 0;
+                    for (int c = 0; c < nc; c++) t += x[i * nc + c] * xt[c * n + j];
+                    prod[i * n + j] = t;
+                }
+            }
+            for (int i = 0; i < n * n; i++) want[i] = h[i] - prod[i];
+            for (int in_place = 0; in_place < 2; in_place++) {
+                if (in_place) {
+                    memcpy(got, h, sizeof got);
+                    gdca_downdate(n, nc, got, x, got);
+                } else {
+                    memset(got, 0, sizeof got);
+                    gdca_downdate(n, nc, h, x, got);
+                }
+                double e = max_abs_diff(n * n, got, want);
+                cr_assert_leq(e, 1e-14, "n = %d, nc = %d%s: differs by %.3e", n, nc,
+                              in_place ? " in place" : "", e);
+                for (int i = 0; i < n; i++) {
+                    for (int j = 0; j < n; j++) {
+                        cr_assert_eq(got[i * n + j], got[j * n + i], "n = %d: not symmetric", n);
+                    }
                 }
             }
         }
