@@ -27,16 +27,19 @@
  * judge rounds too, relative to the terms M qdd and N it adds up, which random forces can make
  * far larger than f; "judge gap" = max |iGDCA(qdd) - RNEA(qdd)| / max |f| over both solvers'
  * qdd shows that floor: a backward error near it says only "no worse than the judge can see".
- * (Should ctc_gdca_forward come to use the composite iGDCA itself, the judge gap, from RNEA,
- * keeps the check independent.) cond(M) is the 2-norm condition number of the mass matrix from the
- * oracle's CRBA and LAPACK's dsyev, at n <= 1024 (the largest over the states), as the scale of
- * what any forward solver may lose.
+ * (ctc_gdca_forward's refinement drives its residual against the composite iGDCA to rounding
+ * (gdca_refine.h), so "bwd gdca (ctc)" is no independent check of it; the judge gap, from RNEA,
+ * and the round trips against the exact u are.) cond(M) is the 2-norm condition number of the mass
+ * matrix from the oracle's CRBA and LAPACK's dsyev, at n <= 1024 (the largest over the states), as
+ * the scale of what any forward solver may lose.
  *
  * Growth with n: the ratio of each measure between successive sizes, and the exponent p of a
  * least-squares fit measure ~ n^p over all sizes. Last, the hard-cases requirement: GDCA
- * against the oracle within 1e-8 on the coil at n = 4096, for each measure that involves GDCA.
- * ctc_gdca_forward is measured as it stands, so a change to it (an iterative refinement, say)
- * shows by simply running this again. Usage: bench_accuracy [max_n] [states]
+ * against the oracle within 1e-8 on the coil at n = 4096 on random forces ("fwd rand"; the exit
+ * status is 1 when it is not met). On CTC forces no forward solver can be held to 1e-8 - the
+ * oracle's own round trip is far above it there - so "fwd ctc" and "rt gdca" are printed against
+ * "rt aba" instead. ctc_gdca_forward is measured as it stands, so a change to it shows by simply
+ * running this again. Usage: bench_accuracy [max_n] [states]
  */
 #include <lapacke.h>
 #include <math.h>
@@ -312,26 +315,29 @@ static void print_ratios(void)
     printf("\n");
 }
 
-static void print_requirement(void)
+/* the requirement on the coil at REQUIREMENT_N (random forces); returns 1 when it is not met */
+static int print_requirement(void)
 {
-    static const int gdca[] = {M_FWD_RAND, M_FWD_CTC, M_RT_GDCA};
     int s = NSIZES - 1;
     if (sizes[s] != REQUIREMENT_N || isnan(result[2][s][M_FWD_RAND])) {
         printf("requirement: coil n = %d not measured\n", REQUIREMENT_N);
-        return;
+        return 0;
     }
-    printf("requirement: GDCA vs oracle <= %.0e on the coil at n = %d\n", REQUIREMENT,
-           REQUIREMENT_N);
-    for (int j = 0; j < 3; j++) {
-        double x = result[2][s][gdca[j]];
-        printf("  %-9s %8.1e  %s\n", measure_name[gdca[j]], x,
-               x <= REQUIREMENT ? "met" : "NOT met");
-    }
-    printf("  (the oracle's own round trip, rt aba: %.1e; backward errors, random forces: gdca "
-           "%.1e, aba %.1e, judge gap %.1e; ctc forces: gdca %.1e, aba %.1e, judge gap %.1e)\n",
-           result[2][s][M_RT_ABA], result[2][s][M_BWD_GDCA_RAND], result[2][s][M_BWD_ABA_RAND],
-           result[2][s][M_JUDGE_RAND], result[2][s][M_BWD_GDCA_CTC], result[2][s][M_BWD_ABA_CTC],
-           result[2][s][M_JUDGE_CTC]);
+    const double x = result[2][s][M_FWD_RAND];
+    printf("requirement: GDCA vs oracle <= %.0e on the coil at n = %d, random forces\n",
+           REQUIREMENT, REQUIREMENT_N);
+    printf("  %-9s %8.1e  %s\n", measure_name[M_FWD_RAND], x, x <= REQUIREMENT ? "met" : "NOT met");
+    printf("  CTC forces, against the oracle's own round trip (rt aba %.1e): fwd ctc %.1e (%.1fx), "
+           "rt gdca %.1e (%.1fx), rt tree %.1e (%.1fx)\n",
+           result[2][s][M_RT_ABA], result[2][s][M_FWD_CTC],
+           result[2][s][M_FWD_CTC] / result[2][s][M_RT_ABA], result[2][s][M_RT_GDCA],
+           result[2][s][M_RT_GDCA] / result[2][s][M_RT_ABA], result[2][s][M_RT_TREE],
+           result[2][s][M_RT_TREE] / result[2][s][M_RT_ABA]);
+    printf("  (backward errors, random forces: gdca %.1e, aba %.1e, judge gap %.1e; ctc forces: "
+           "gdca %.1e, aba %.1e, judge gap %.1e)\n",
+           result[2][s][M_BWD_GDCA_RAND], result[2][s][M_BWD_ABA_RAND], result[2][s][M_JUDGE_RAND],
+           result[2][s][M_BWD_GDCA_CTC], result[2][s][M_BWD_ABA_CTC], result[2][s][M_JUDGE_CTC]);
+    return !(x <= REQUIREMENT);
 }
 
 int main(int argc, char **argv)
@@ -366,6 +372,6 @@ int main(int argc, char **argv)
     print_exponents();
     printf("Growth with n: ratio between successive sizes:\n\n");
     print_ratios();
-    print_requirement();
+    bad |= print_requirement();
     return bad;
 }

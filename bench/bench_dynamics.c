@@ -9,7 +9,9 @@
  * A second table splits ctc per body for the hot-path figures of bench/README.md: kinematics,
  * handles, the composite iGDCA, GDCA forward without refinement (d->fwd_refine = 0) and one
  * refinement step (GDCA forward with d->fwd_refine = 1, less the unrefined pass), with the steps
- * the default makes and ctc with and without refinement, at n = 16, 256 and 4096.
+ * the default makes and ctc with and without refinement, and the unrefined forward pass and ctc
+ * with the forward pass in the balanced tree's order (gdca_forward_seq.h), at n = 16, 64, 256,
+ * 1024 and 4096.
  * Batches of each are interleaved so that machine noise hits all of them alike; the figures are
  * medians over the batches, per evaluation, and the ratio is ctc / pair from the same run.
  * Usage: bench_dynamics [max_n [batches [parts]]]: parts "t" (the first table), "s" (the split) or
@@ -206,8 +208,8 @@ int main(int argc, char **argv)
     int max_n = argc > 1 ? atoi(argv[1]) : 4096;
     int batches = argc > 2 ? atoi(argv[2]) : 15;
     const char *parts = argc > 3 ? argv[3] : "ts";
-    if (max_n < 2 || batches < 1) {
-        fprintf(stderr, "usage: bench_dynamics [max_n >= 2] [batches >= 1]\n");
+    if (max_n < 2 || batches < 1 || parts[strspn(parts, "ts")] != '\0') {
+        fprintf(stderr, "usage: bench_dynamics [max_n >= 2 [batches >= 1 [parts: t s]]]\n");
         return 2;
     }
     if (strchr(parts, 't') != NULL) {

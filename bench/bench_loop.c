@@ -1,7 +1,7 @@
 /*
- * bench_loop.c - the cost of one CTC evaluation of a closed chain, with and without the early
- * stop of the inverse disassembly, against the same chain left open, and the cost of putting a
- * drifted state back onto the loop closure.
+ * bench_loop.c - the cost of one CTC evaluation of a closed chain with the library's loop inverse
+ * and with the paper's closed-chain iGDCA (with and without its early stop), against the same
+ * chain left open, and the cost of putting a drifted state back onto the loop closure.
  *
  * Chains (one loop each, the closing joint from the tip to the ground, model.h; "on b" rows
  * close the same loop on body b instead, model.h, so that joints 0..b carry it):
@@ -24,11 +24,15 @@
  *
  * Timings per evaluation:
  *   ctc        kinematics + handles + iGDCA + GDCA forward, the work of one CTC right-hand side,
- *              with the early stop of the inverse disassembly (the default) and without it
- *              (d->inv_full = 1);
- *   iGDCA      the inverse pass alone, both ways (loop models always use the mobility form);
+ *              with the library's loop inverse (ctc_gdca_inverse: the open chain's composite
+ *              pass and one dim x dim solve at the closing joint, gdca_inverse_loop.h) and with
+ *              the paper's iGDCA (ctc_gdca_inverse_mobility) in its place;
+ *   iGDCA      the inverse pass alone: the library's, the paper's with its early stop (the
+ *              nodes it visits are counted) and the paper's without it (d->inv_full = 1);
  *   open       the same chain without its loop: ctc (composite iGDCA), the composite iGDCA and
  *              the mobility-form iGDCA alone;
+ * every inverse pass timed alone is a first pass at its state (the composite pass's kept
+ * inertias, gdca_inverse.c, cleared before each), as in bench_dynamics;
  *   projection ctc_loop_assemble (tol 1e-12, at most 20 Newton iterations) from the state with
  *              1e-9 added to every dependent chain coordinate and rate, restored each time.
  * Batches of all timings are interleaved so that machine noise hits them alike; each batch
@@ -39,13 +43,13 @@
  * the settling time showed as a spurious 13% difference between two identical timings. The
  * figures are medians over the batches.
  *
- * Checks before timing, reported in the second table: the early-stopped and the full inverse
- * pass give bitwise the same driving forces, all finite; those forces against the dense loop
- * oracle (tests/support/loop_oracle.h; n <= ORACLE_MAX_N); GDCA forward on them against the
- * commanded accelerations of the independent coordinates (the round trip, closed and open);
- * the projection converges. A case that fails is reported on stderr and left out of the tables,
- * and the run ends with status 1.
- * Usage: bench_loop [max_n] [batches]
+ * Checks before timing, reported in the second table: the paper's iGDCA gives bitwise the same
+ * driving forces with and without its early stop, and every pass's are finite; the library's and
+ * the paper's forces against the dense loop oracle (tests/support/loop_oracle.h; n <=
+ * ORACLE_MAX_N); GDCA forward on the library's against the commanded accelerations of the
+ * independent coordinates (the round trip, closed and open); the projection converges. A case that
+ * fails is reported on stderr and left out of the tables, and the run ends with status 1. Usage:
+ * bench_loop [max_n] [batches]
  */
 #include <math.h>
 #include <stdio.h>
@@ -123,6 +127,7 @@ static volatile double sink;
    iGDCA disassembling every node */
 static void inverse(const ctc_model *m, ctc_data *d, const double *u, double *f, int which)
 {
+    d->icomp_stamp = 0; /* a first pass at the state: no composite inertias kept from the last */
     d->inv_full = which == 2;
     if (which == 0)
         ctc_gdca_inverse(m, d, u, f);
@@ -157,6 +162,7 @@ static void run_once(bench_case *c, int what)
         ctc_eval(c->open, c->d_open, c->q, c->v, c->u, c->fo, c->ao, 0);
         break;
     case T_OPEN_INV:
+        c->d_open->icomp_stamp = 0;
         ctc_gdca_inverse(c->open, c->d_open, c->u, c->fo);
         break;
     case T_OPEN_MOB:

@@ -1,7 +1,7 @@
 /*
  * bench_mujoco.c - ctcsim against MuJoCo 2.2.2 (Debian's libmujoco): one CTC right-hand side on
- * serial chains of 2 ... 1024 bodies, whole CTC simulations at equal error, and a stiff 64-link
- * chain on which MuJoCo's RK4 at 1 ms diverges.
+ * serial chains of 2 ... max_n bodies (MuJoCo up to 1024), whole CTC simulations at equal error,
+ * and a stiff 64-link chain on which MuJoCo's RK4 at 1 ms diverges.
  *
  * The chains are built once as ctcsim specs (tests/support/chains.h) and written out as MJCF with
  * the same masses, centres of mass, inertias, joint axes and locations and gravity: one body per
@@ -327,9 +327,9 @@ typedef struct rhs_case {
     ctc_data *cd;
     mjModel *m; /* NULL: ctcsim only */
     mjData *d;
-    double *q, *v, *u;  /* the state and the commanded accelerations */
-    double *f, *a;      /* ctcsim's forces and accelerations */
-    double *tau, *qacc; /* MuJoCo's */
+    double *q, *v, *u; /* the state and the commanded accelerations */
+    double *f, *a;     /* ctcsim's forces and accelerations */
+    double *tau;       /* MuJoCo's forces */
 } rhs_case;
 
 static void run_once(rhs_case *c, int what)
@@ -1142,7 +1142,7 @@ int main(int argc, char **argv)
     int max_n = argc > 1 ? atoi(argv[1]) : 4096;
     int batches = argc > 2 ? atoi(argv[2]) : 15;
     const char *parts = argc > 3 ? argv[3] : "rsd";
-    if (max_n < 2 || batches < 1) {
+    if (max_n < 2 || batches < 1 || parts[strspn(parts, "rsd")] != '\0') {
         fprintf(stderr, "usage: bench_mujoco [max_n >= 2 [batches >= 1 [parts: r s d]]]\n");
         return 2;
     }

@@ -60,8 +60,9 @@
 /* The least chain length from which an open chain's forward pass takes the balanced tree, split
  * over threads, instead of the sequential order on one thread (gdca_forward_seq.h), when the
  * data has two threads or more. From bench_parallel on 2 threads (bench/README.md, "Parallel
- * assembly"): the split tree beat the sequential order by 5% or more in a CTC evaluation at every
- * n from 4096 planar (1.14x there; 2048: 1.04x) and 1024 spatial (1.06x; 512: 0.89x). More
+ * assembly", two runs): in a CTC evaluation the split tree beat the sequential order at every n
+ * from 4096 planar (1.14x there in both runs; 2048: 1.02-1.04x) and was level or ahead from 1024
+ * spatial (1.00-1.06x at 1024, 1.03-1.08x at 2048, 1.10-1.13x at 4096; 512: 0.85-0.89x). More
  * threads would move the crossing down; it is not measured here. */
 #define FORWARD_TREE_MIN_BODIES_PLANAR 4096
 #define FORWARD_TREE_MIN_BODIES_SPATIAL 1024
