@@ -61,8 +61,6 @@ _Static_assert(sizeof(((job_error *)0)->field) == PATH_LEN, "paths are written i
 #define DEFAULT_MAX_SPEED 1e6 /* rad/s or m/s */
 
 /* defaults of a loop (job_json.h) */
-#define DEFAULT_LOOP_TOL 1e-12 /* m or rad: projection trigger and Newton tolerance */
-#define DEFAULT_BAUMGARTE 10.0 /* 1/s, alpha and beta */
 
 #define MAX_WHOLE 9007199254740992.0 /* 2^53: whole numbers beyond are not exact in a double */
 #define AXIS_MIN_LENGTH 1e-12        /* as ctc_model_build */
@@ -894,7 +892,8 @@ static int parse_stabilization(parser *p, const cJSON *loop, cJSON *out_loop)
     put_string(p, out, "method", names[method]);
     switch (s->loop_stab) {
     case CTC_LOOP_PROJECT:
-        if (member_number(p, v, path, "tol", OPTIONAL, DEFAULT_LOOP_TOL, &s->loop_tol) != 0) {
+        if (member_number(p, v, path, "tol", OPTIONAL, CTC_SIM_DEFAULT_LOOP_TOL, &s->loop_tol) !=
+            0) {
             return -1;
         }
         if (!(s->loop_tol > 0)) {
@@ -908,7 +907,8 @@ static int parse_stabilization(parser *p, const cJSON *loop, cJSON *out_loop)
         char at[PATH_LEN];
         for (int i = 0; i < 2; i++) {
             double *x = &s->baumgarte[i];
-            if (member_number(p, v, path, keys[i], OPTIONAL, DEFAULT_BAUMGARTE, x) != 0) return -1;
+            if (member_number(p, v, path, keys[i], OPTIONAL, CTC_SIM_DEFAULT_BAUMGARTE, x) != 0)
+                return -1;
             if (!(*x >= 0)) {
                 return error_at(p->err, JOB_INVALID_FIELD, key_path(at, path, keys[i]),
                                 "must not be negative (got %g 1/s)", *x);

@@ -43,7 +43,8 @@
  *                      of the ground; the joints before it (0..body) carry the loop and must
  *                      be independent (unless every joint is dependent)
  *           "stabilization"  how the state is kept on the closure (sim.h), default "project":
- *                      {"method": "project", "tol": 1e-12 (m or rad, > 0)}
+ *                      {"method": "project", "tol": 1e-12 (m or rad, and m/s or rad/s for
+ *                      the rates, > 0)}
  *                    | {"method": "baumgarte", "alpha": 10, "beta": 10 (1/s, >= 0, not both 0)}
  *                    | {"method": "none"}
  *           "cond_max" > 1, default 1e5: the run stops as "singular" when the condition

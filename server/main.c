@@ -27,6 +27,7 @@
 
 #include "http.h"
 #include "jobq.h"
+#include "pool.h"
 #include "routes.h"
 #include "store.h"
 
@@ -40,6 +41,7 @@ typedef struct server_settings {
     long long port;
     const char *db;
     long long workers;
+    long long job_threads; /* the most threads one job's dynamics may use */
     long long max_queue;
     long long max_body; /* bytes */
     const char *token;  /* NULL = none */
@@ -78,6 +80,8 @@ static const setting settings[] = {
      "SQLite database of the jobs (created when absent)"},
     {"--workers", "CTCSIM_WORKERS", SETTING_INTEGER, AT(workers), 1, 1024, "N",
      "simulations run at once"},
+    {"--job-threads", "CTCSIM_JOB_THREADS", SETTING_INTEGER, AT(job_threads), 1, CTC_MAX_THREADS,
+     "N", "most threads one job's dynamics may use (its \"threads\"; more are refused with 400)"},
     {"--max-queue", "CTCSIM_MAX_QUEUE", SETTING_INTEGER, AT(max_queue), 1, 1000000, "N",
      "jobs waiting at most; more are refused with 503"},
     {"--max-body", "CTCSIM_MAX_BODY", SETTING_BYTES, AT(max_body), 1024, 1LL << 30, "BYTES",
@@ -139,6 +143,8 @@ static void print_help(const server_settings *def)
         default_text(st, def, def_text, sizeof def_text);
         if (st == &settings[3]) /* --workers */
             snprintf(def_text, sizeof def_text, "the online cores, %lld here", def->workers);
+        if (st == &settings[4]) /* --job-threads */
+            snprintf(def_text, sizeof def_text, "the online cores, %lld here", def->job_threads);
         printf("  %-26s %s\n  %-26s (default %s%s%s)\n", flag, st->help, "", def_text,
                st->env ? "; " : "", st->env ? st->env : "");
     }
@@ -269,6 +275,7 @@ int main(int argc, char **argv)
         .port = 8080,
         .db = "ctcsim.db",
         .workers = cores >= 1 ? (cores <= 1024 ? cores : 1024) : 1,
+        .job_threads = cores >= 1 ? (cores <= CTC_MAX_THREADS ? cores : CTC_MAX_THREADS) : 1,
         .max_queue = 1024,
         .max_body = 8 * 1024 * 1024,
         .token = NULL,
@@ -313,7 +320,11 @@ int main(int argc, char **argv)
         database_error(cfg.db, err);
         return EXIT_DATABASE;
     }
-    routes_ctx ctx = {.queue = queue, .db_path = cfg.db, .api_dir = cfg.api, .max_wait = MAX_WAIT};
+    routes_ctx ctx = {.queue = queue,
+                      .db_path = cfg.db,
+                      .api_dir = cfg.api,
+                      .max_wait = MAX_WAIT,
+                      .job_threads = (int)cfg.job_threads};
     http_config hc = {.bind = cfg.bind,
                       .port = (int)cfg.port,
                       .threads = (int)cfg.http_threads,

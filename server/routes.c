@@ -160,12 +160,20 @@ static int body_is_json(const http_request *req, http_reply *rep)
     return -1;
 }
 
-/* Parses the body as a job; NULL after replying the parser's error. */
-static job *body_job(const http_request *req, http_reply *rep)
+/* Parses the body as a job that this server accepts; NULL after replying the parser's error, or
+   400 INVALID_FIELD when it asks for more threads than the server allows. */
+static job *body_job(const http_request *req, http_reply *rep, const routes_ctx *ctx)
 {
     job *j = NULL;
     job_error e = {0};
-    if (job_parse(req->body, req->body_len, &j, &e) == 0) return j;
+    if (job_parse(req->body, req->body_len, &j, &e) == 0) {
+        if (j->spec.threads <= ctx->job_threads) return j;
+        http_reply_error(rep, 400, "INVALID_FIELD", "threads",
+                         "must be at most %d on this server (its --job-threads; got %d)",
+                         ctx->job_threads, j->spec.threads);
+        job_free(j);
+        return NULL;
+    }
     if (e.code == JOB_NO_MEMORY)
         http_reply_error(rep, 503, "NO_MEMORY", e.field, "%s", e.message);
     else
@@ -361,7 +369,7 @@ static void post_jobs(const http_request *req, http_reply *rep, void *arg)
         return;
     }
     if (body_is_json(req, rep) != 0 || query_wait(req, rep, ctx, &wait) != 0) return;
-    job *j = body_job(req, rep);
+    job *j = body_job(req, rep, ctx);
     if (!j) return;
     char *spec = NULL;
     store *s = NULL;
@@ -719,9 +727,8 @@ done:
 
 static void post_validate(const http_request *req, http_reply *rep, void *arg)
 {
-    (void)arg;
     if (body_is_json(req, rep) != 0) return;
-    job *j = body_job(req, rep);
+    job *j = body_job(req, rep, arg);
     if (!j) return;
     cJSON *o = cJSON_CreateObject();
     cJSON_AddBoolToObject(o, "valid", 1);

@@ -22,13 +22,12 @@
  *    coordinates, or null), "wall_s" (or null), "location": "/api/jobs/ID"}
  *
  * POST /api/jobs             body: a job or {"preset": ...} (job_json.h). Validates first (400
- *                            with the parser's code, field and message). Stores it queued, then
- *                            202 {row} with Location. ?wait=S (0 < S <= 300) holds the answer
- *                            until the job finishes: then 200 {job} as GET /api/jobs/{id}, or
- *                            202 {row} if S ran out.
- * GET  /api/jobs             ?limit=N (1..200, default 50) &cursor=ID (rows with id < ID)
- *                            &status=S -> 200 {"jobs": [rows], "next_cursor": ID or null}
- * GET  /api/jobs/{id}        200 {row + "spec": normalised job, "metrics": {...} or null
+ *                            with the parser's code, field and message; a "threads" above the
+ *                            server's --job-threads is 400 INVALID_FIELD too). Stores it queued,
+ * then 202 {row} with Location. ?wait=S (0 < S <= 300) holds the answer until the job finishes:
+ * then 200 {job} as GET /api/jobs/{id}, or 202 {row} if S ran out. GET  /api/jobs ?limit=N (1..200,
+ * default 50) &cursor=ID (rows with id < ID) &status=S -> 200 {"jobs": [rows], "next_cursor": ID or
+ * null} GET  /api/jobs/{id}        200 {row + "spec": normalised job, "metrics": {...} or null
  *                            (result_out.h), "message": text or null}
  * GET  /api/jobs/{id}/series ?channels=q,tau (default: all recorded) &joints=0,2 (coordinate
  *                            indices; default all) &every=N (default 1) &format=json|csv
@@ -66,6 +65,7 @@ typedef struct routes_ctx {
                             closed when the thread exits (a pthread key destructor) */
     const char *api_dir; /* directory holding openapi.yaml */
     double max_wait;     /* s, the largest ?wait= accepted (300) */
+    int job_threads;     /* the most "threads" a job may ask for (--job-threads) */
     atomic_int stopping; /* set at shutdown (read by the HTTP threads, hence atomic): POST
                             /api/jobs answers 503 SHUTTING_DOWN */
 } routes_ctx;

@@ -99,6 +99,10 @@ const CASES = [
     { name: 'no content type', raw: true, headers: {}, body: JSON.stringify(SHORT), status: 415, code: 'UNSUPPORTED_MEDIA_TYPE' },
     { name: 'validate: text/plain', path: '/api/validate', headers: { 'content-type': 'text/plain' }, json: SHORT, status: 415, code: 'UNSUPPORTED_MEDIA_TYPE' },
 
+    /* the server's own limit on a job's threads (server A: --job-threads 2) */
+    { name: 'threads above --job-threads', json: { ...SHORT, threads: 3 }, status: 400, code: 'INVALID_FIELD', field: 'threads', message: /at most 2 on this server/ },
+    { name: 'validate: threads above --job-threads', path: '/api/validate', json: { ...SHORT, threads: 3 }, status: 400, code: 'INVALID_FIELD', field: 'threads', message: /at most 2 on this server/ },
+
     /* routes and methods */
     { name: 'unknown route', method: 'GET', path: '/api/nope', status: 404, code: 'NOT_FOUND' },
     { name: 'unknown route below a job', method: 'GET', path: '/api/jobs/{done}/nope', status: 404, code: 'NOT_FOUND' },
@@ -164,8 +168,8 @@ const CASES = [
 const servers = {};
 const ids = {};
 
-test('the servers start (A: --max-body 64K, B: --token)', async () => {
-    servers.A = await startServer({ workers: 2, args: ['--max-body', '64K'] });
+test('the servers start (A: --max-body 64K --job-threads 2, B: --token)', async () => {
+    servers.A = await startServer({ workers: 2, args: ['--max-body', '64K', '--job-threads', '2'] });
     servers.B = await startServer({ workers: 1, args: ['--token', TOKEN] });
 });
 
@@ -224,6 +228,11 @@ test('a body just under --max-body (60 KB of white space) is accepted', async ()
     assert.equal(res.status, 202, res.text);
 });
 
+test('a job asking for as many threads as --job-threads is accepted', async () => {
+    const res = await servers.A.post('/api/jobs', { ...SHORT, threads: 2 });
+    assert.equal(res.status, 202, res.text);
+});
+
 test('application/json with a charset is accepted', async () => {
     const res = await servers.A.request('POST', '/api/jobs', {
         headers: { 'content-type': 'application/json; charset=utf-8' },
@@ -238,9 +247,9 @@ test('after all of them the service is healthy and counts the jobs it took', asy
     assert.equal(res.json.status, 'ok');
     assert.equal(res.json.database, 'ok');
     assert.equal(res.json.workers, 2);
-    /* done, 3 long ones, 2 accepted above: no bad request was stored */
+    /* done, 3 long ones, 3 accepted above: no bad request was stored */
     const total = Object.values(res.json.jobs).reduce((a, b) => a + b, 0);
-    assert.equal(total, 6, JSON.stringify(res.json.jobs));
+    assert.equal(total, 7, JSON.stringify(res.json.jobs));
 });
 
 test('the long jobs are cancelled: queued 200, running 202', async () => {
