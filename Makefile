@@ -14,8 +14,9 @@
 CC ?= cc
 # -O3 without the vectoriser: the library's 3- and 6-vector kernels ran 1.4-1.6x as fast as at
 # -O2 (one CTC evaluation, gcc 12.2), and gcc's vectoriser made them 7-12% slower, here and with
-# -march=native (bench/README.md, "Hot path")
-OPT ?= -O3 -fno-tree-vectorize
+# -march=native (bench/README.md, "Latest"); make bench adds -march=native -DNDEBUG
+OPT_DEFAULT := -O3 -fno-tree-vectorize
+OPT ?= $(OPT_DEFAULT)
 BUILD ?= build
 SANITIZE ?=
 
@@ -47,7 +48,7 @@ APP_OBJ := $(APP_SRC:server/%.c=$(BUILD)/obj/server/%.o)
 APP_LIB := $(BUILD)/libctcapp.a
 CLI := $(BUILD)/ctcsim
 SERVER := $(BUILD)/ctcsim-server
-SERVER_LDLIBS := -lmicrohttpd -lsqlite3 -lpthread
+SERVER_LDLIBS := -lmicrohttpd -lsqlite3
 # the served page: web/ plus uPlot's files from npm ci (nothing from node_modules is committed)
 WEB_OUT := build/web
 WEB_NPM := build/web-npm
@@ -174,7 +175,7 @@ run: deps
 	$(SERVER) --web $(WEB_OUT) $(RUN_ARGS)
 
 bench: bench-deps
-	@$(MAKE) --no-print-directory BUILD=$(BUILD)/bench-o3 OPT="-O3 -fno-tree-vectorize -march=native -DNDEBUG" \
+	@$(MAKE) --no-print-directory BUILD=$(BUILD)/bench-o3 OPT="$(OPT_DEFAULT) -march=native -DNDEBUG" \
 		$(BENCH_SRC:bench/%.c=$(BUILD)/bench-o3/bench/%) $(BUILD)/bench-o3/ctcsim-server
 	@for b in $(BENCH_SRC:bench/%.c=$(BUILD)/bench-o3/bench/%); do echo "== $$b"; $$b || exit 1; done
 	@echo "== bench/bench_server.sh"

@@ -13,12 +13,15 @@
  */
 #include "gdca_par.h"
 
+#include <assert.h>
 #include <limits.h>
 #include <stdatomic.h>
 
 #include "pool.h"
 
-#define MAX_STAGES 64 /* bodies, 2 x 20 heights (CTC_MAX_BODIES = 10^6 < 2^20), root */
+#define MAX_STAGES                                                                                 \
+    64 /* bodies, 2 x 21 heights (CTC_MAX_BODIES = 10^6 < 2^20, and one more height when a loop    \
+          closed on a body splits the root), root */
 
 enum { STAGE_BODIES, STAGE_ASSEMBLE, STAGE_ROOT, STAGE_DISASSEMBLE };
 
@@ -54,6 +57,7 @@ static int stage_chunks(const par_plan *r, int count)
 
 static void add_stage(par_plan *r, int kind, int lo, int hi)
 {
+    assert(r->nstages < MAX_STAGES);
     par_stage *s = &r->stage[r->nstages++];
     s->kind = kind;
     s->lo = lo;

@@ -55,8 +55,6 @@
 
 #define SIM_DEFAULT_MAX_SPEED 1e6
 #define SIM_MAX_SAMPLES 50000000L
-#define SIM_DEFAULT_LOOP_TOL 1e-12
-#define SIM_DEFAULT_BAUMGARTE 10.0
 #define SIM_LOOP_MAX_ITER 50
 #define SIM_RHS_SINGULAR 2 /* the right-hand side's code for a singular loop */
 #define SIM_PROJ_FAILED 3  /* sim_project's code when the closure cannot be solved */
@@ -290,7 +288,7 @@ static ctc_status check_with_model(const ctc_sim_spec *s, const ctc_model *m, ch
 /* the projection's trigger and Newton's tolerance (m, rad) */
 static double loop_tol_of(const ctc_sim_spec *s)
 {
-    return s->loop_tol > 0 ? s->loop_tol : SIM_DEFAULT_LOOP_TOL;
+    return s->loop_tol > 0 ? s->loop_tol : CTC_SIM_DEFAULT_LOOP_TOL;
 }
 
 /* The spec's initial state (q0 normalised, v0) in q (nq) and v (nv), put onto the loop's closure
@@ -874,7 +872,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     if (plant->has_loop) {
         ctc_loop_stab stab = spec->loop_stab;
         double a = spec->baumgarte[0], b = spec->baumgarte[1];
-        if (a == 0 && b == 0) a = b = SIM_DEFAULT_BAUMGARTE;
+        if (a == 0 && b == 0) a = b = CTC_SIM_DEFAULT_BAUMGARTE;
         c.dp->baumgarte[0] = stab == CTC_LOOP_BAUMGARTE ? a : 0;
         c.dp->baumgarte[1] = stab == CTC_LOOP_BAUMGARTE ? b : 0;
     }

@@ -99,8 +99,9 @@ typedef struct ctc_sim_spec {
     /* loop models only */
     ctc_loop_stab loop_stab;
     double loop_tol;      /* projection: the position (m, rad) or velocity (m/s, rad/s)
-                             residual that triggers it, and the Newton tolerance; 0 = 1e-12 */
-    double baumgarte[2];  /* a, b (1/s) for CTC_LOOP_BAUMGARTE; 0, 0 = 10, 10 */
+                             residual that triggers it, and the Newton tolerance; 0 =
+                             CTC_SIM_DEFAULT_LOOP_TOL */
+    double baumgarte[2];  /* a, b (1/s) for CTC_LOOP_BAUMGARTE; 0, 0 = CTC_SIM_DEFAULT_BAUMGARTE */
     double loop_cond_max; /* stop as singular beyond this condition estimate; 0 =
                              CTC_SIM_DEFAULT_COND_MAX */
     /* threads of the GDCA passes, the calling thread included (data.h ctc_data_set_threads):
@@ -112,6 +113,11 @@ typedef struct ctc_sim_spec {
        ctc_data_set_threads), and metrics.cpu_s counts the calling thread only */
     int threads;
 } ctc_sim_spec;
+
+/* The defaults of loop_tol (the residual, m or rad, or its rate, m/s or rad/s, that triggers a
+ * projection, and the Newton tolerance) and of baumgarte's a and b (1/s) */
+#define CTC_SIM_DEFAULT_LOOP_TOL 1e-12
+#define CTC_SIM_DEFAULT_BAUMGARTE 10.0
 
 /* The default limit on the condition estimates of a closed chain's solves: the inverse pass's
  * closure matrix (gdca_inverse_loop.h) and the forward pass's boundary system (gdca_loop.h), both

@@ -122,3 +122,11 @@ done:
     free(y);
     return cond;
 }
+
+int test_all_finite(const double *x, int n)
+{
+    for (int i = 0; i < n; i++) {
+        if (!isfinite(x[i])) return 0;
+    }
+    return 1;
+}

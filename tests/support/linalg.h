@@ -16,4 +16,7 @@ int test_solve_spd(const double *m, int n, const double *b, double *x);
 /* Largest |a_i - b_i| over max |b_i| (or over 1 when b is all zero). */
 double test_rel_err(const double *a, const double *b, int n);
 
+/* 1 if every one of the n entries of x is finite */
+int test_all_finite(const double *x, int n);
+
 #endif

@@ -188,13 +188,6 @@ static void run_passes(const ctc_model *m, ctc_data *d, const double *q, const d
     memcpy(o->load, d->jnt_load, nl);
 }
 
-static int all_finite(const double *x, int n)
-{
-    for (int i = 0; i < n; i++)
-        if (!isfinite(x[i])) return 0;
-    return 1;
-}
-
 /* asserts bitwise equality of two arrays of count doubles */
 static void expect_same(const double *serial, const double *par, size_t count, const char *what,
                         const char *label, int n, int threads, int grain)
@@ -229,7 +222,8 @@ static void compare_on(const ctc_model *m, const double *q, const double *v, uin
     ds->fwd_order = CTC_ORDER_TREE;
     outputs *s = outputs_new(m), *p = outputs_new(m);
     run_passes(m, ds, q, v, u, tau, s);
-    cr_assert(all_finite(s->qacc, nvx) && all_finite(s->f, nvx) && all_finite(s->fm, nvx),
+    cr_assert(test_all_finite(s->qacc, nvx) && test_all_finite(s->f, nvx) &&
+                  test_all_finite(s->fm, nvx),
               "%s n = %d: the serial results are not finite", label, n);
     cr_assert_eq(s->sing_f, -1);
 

@@ -32,13 +32,6 @@
 
 #define MAXV 96 /* velocity coordinates of the largest chain here (32 spatial joints) */
 
-static int all_finite(const double *x, int n)
-{
-    for (int i = 0; i < n; i++)
-        if (!isfinite(x[i])) return 0;
-    return 1;
-}
-
 /* the worst errors of one chain over a few random states */
 typedef struct dyn_errors {
     double fwd;    /* GDCA vs ABA, random driving forces in [-5, 5] */
@@ -66,7 +59,7 @@ static dyn_errors measure(const ctc_model *m, uint64_t seed, int trials, double 
         for (int i = 0; i < nv; i++) f[i] = test_uniform(&rng, -5, 5);
         ctc_gdca_forward(m, d, f, a);
         ctc_oracle_aba(m, o, q, v, f, ref);
-        cr_assert(d->singular_joint == -1 && all_finite(a, nv) && all_finite(ref, nv),
+        cr_assert(d->singular_joint == -1 && test_all_finite(a, nv) && test_all_finite(ref, nv),
                   "n = %d trial %d: forward not finite (singular joint %d)", m->nbodies, t,
                   d->singular_joint);
         e.fwd = fmax(e.fwd, test_rel_err(a, ref, nv));
@@ -74,11 +67,11 @@ static dyn_errors measure(const ctc_model *m, uint64_t seed, int trials, double 
         for (int i = 0; i < nv; i++) u[i] = test_uniform(&rng, -1, 1);
         ctc_gdca_inverse(m, d, u, fi);
         ctc_oracle_rnea(m, o, q, v, u, f);
-        cr_assert(all_finite(fi, nv) && all_finite(f, nv), "n = %d trial %d: inverse not finite",
-                  m->nbodies, t);
+        cr_assert(test_all_finite(fi, nv) && test_all_finite(f, nv),
+                  "n = %d trial %d: inverse not finite", m->nbodies, t);
         e.inv = fmax(e.inv, test_rel_err(fi, f, nv));
         ctc_gdca_forward(m, d, fi, a);
-        cr_assert(all_finite(a, nv), "n = %d trial %d: round trip not finite", m->nbodies, t);
+        cr_assert(test_all_finite(a, nv), "n = %d trial %d: round trip not finite", m->nbodies, t);
         e.rt = fmax(e.rt, test_rel_err(a, u, nv));
         ctc_oracle_aba(m, o, q, v, f, ref);
         e.rt_aba = fmax(e.rt_aba, test_rel_err(ref, u, nv));
@@ -217,7 +210,7 @@ static void check_light_tip(int spatial, const light_tip_bounds *b)
             if (!driven) f[2] = 0; /* the tip swings freely */
             ctc_gdca_forward(m, d, f, a);
             ctc_oracle_aba(m, o, q, v, f, ref);
-            cr_assert(all_finite(a, 3) && d->singular_joint == -1, "trial %d: not finite", t);
+            cr_assert(test_all_finite(a, 3) && d->singular_joint == -1, "trial %d: not finite", t);
             double e = 0;
             for (int i = 0; i < 3; i++) e = fmax(e, fabs(a[i] - ref[i]) / fabs(ref[i]));
             if (driven)
@@ -285,13 +278,13 @@ static void check_spin(ctc_joint_type type, const double bounds[3])
         for (int i = 0; i < nv; i++) f[i] = test_uniform(&rng, -5, 5);
         ctc_gdca_forward(m, d, f, a);
         ctc_oracle_aba(m, o, q, v, f, ref);
-        cr_assert(all_finite(a, nv) && d->singular_joint == -1, "trial %d: not finite", t);
+        cr_assert(test_all_finite(a, nv) && d->singular_joint == -1, "trial %d: not finite", t);
         worst_fwd = fmax(worst_fwd, test_rel_err(a, ref, nv));
         for (int i = 0; i < nv; i++) u[i] = test_uniform(&rng, -1, 1);
         ctc_gdca_inverse(m, d, u, fi);
         ctc_oracle_rnea(m, o, q, v, u, fr);
         worst_inv = fmax(worst_inv, test_rel_err(fi, fr, nv));
-        cr_assert(all_finite(fi, nv), "trial %d: inverse not finite", t);
+        cr_assert(test_all_finite(fi, nv), "trial %d: inverse not finite", t);
         ctc_gdca_forward(m, d, fi, a);
         worst_rt = fmax(worst_rt, test_rel_err(a, u, nv));
         ctc_oracle_aba(m, o, q, v, fr, ref);
@@ -408,7 +401,7 @@ Test(hard, five_bar_driven_into_a_straightened_dyad_stops_as_singular)
     for (int s = 0; s < res->nsamples; s++) {
         const double *tau = res->ch[CTC_CH_TAU] + (size_t)s * (size_t)res->width[CTC_CH_TAU];
         const double *q = res->ch[CTC_CH_Q] + (size_t)s * (size_t)res->nq;
-        cr_assert(all_finite(tau, res->width[CTC_CH_TAU]) && all_finite(q, res->nq),
+        cr_assert(test_all_finite(tau, res->width[CTC_CH_TAU]) && test_all_finite(q, res->nq),
                   "sample %d (t = %g s) not finite", s, res->t[s]);
         for (int i = 0; i < res->width[CTC_CH_TAU]; i++) tau_max = fmax(tau_max, fabs(tau[i]));
         q4_min = fmin(q4_min, fabs(remainder(q[4], 2 * CTC_PI)));

@@ -724,7 +724,7 @@ Test(job_json, a_loop_counts_its_independent_coordinates_and_fills_its_defaults)
     cr_assert(j->loop.anchor[0] == 1 && j->loop.anchor[1] == 0 && j->loop.anchor[2] == 0);
     cr_assert_eq(s->loop_stab, CTC_LOOP_PROJECT);
     cr_assert_eq(s->loop_tol, 1e-12);
-    cr_assert_eq(s->loop_cond_max, CTC_SIM_DEFAULT_COND_MAX);
+    cr_assert_eq(s->loop_cond_max, 1e5, "the documented default (api/job.schema.json)");
     cr_assert_eq(s->channels, CTC_CH_ALL, "every channel, the loop's included");
     cr_assert(j->gains[0].kp == 100 && j->gains[0].kv == 20 && j->gains[0].ki == 0);
     cr_assert_eq(j->traj[0].type, CTC_TRAJ_CONSTANT);

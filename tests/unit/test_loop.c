@@ -270,9 +270,11 @@ Test(loop_oracle, derivatives_match_finite_differences_on_a_loop_closed_on_a_bod
     check_oracle_derivatives(on_body(loop_scene_spatial(7, CTC_JOINT_PRISMATIC, 5), 2), 15);
 }
 
-Test(loop_oracle, closing_joint_rate_is_the_derivative_of_its_angle_on_the_closure)
+/* the closing joint's rate (C v) against the central difference of its angle along v, on the
+   closure, for a loop closed on the ground or on body b (whose rotation enters the angle) */
+static void check_closing_rate(loop_scene *s, const char *what)
 {
-    fixture f = fx_make(loop_scene_spatial(7, CTC_JOINT_REVOLUTE, 7));
+    fixture f = fx_make(s);
     uint64_t rng = 8;
     double worst = 0;
     for (int t = 0; t < 5; t++) {
@@ -289,8 +291,16 @@ Test(loop_oracle, closing_joint_rate_is_the_derivative_of_its_angle_on_the_closu
         loop_oracle_closing(f.o, qm, NULL, cm, cb, am);
         worst = fmax(worst, fabs(rate - remainder(ap[0] - am[0], 2 * PI) / (2 * hh)));
     }
-    cr_expect_leq(worst, 1e-7, "closing rate vs d(angle)/dt: %g", worst);
+    cr_expect_leq(worst, 1e-7, "%s: closing rate vs d(angle)/dt: %g", what, worst);
     fx_free(&f);
+}
+
+Test(loop_oracle, closing_joint_rate_is_the_derivative_of_its_angle_on_the_closure)
+{
+    check_closing_rate(loop_scene_spatial(7, CTC_JOINT_REVOLUTE, 7), "on the ground");
+    loop_scene *s = on_body(loop_scene_spatial(7, CTC_JOINT_REVOLUTE, 7), 0);
+    set_independent(s, (const int[]){0, 7, -1}); /* joint 0 carries the loop */
+    check_closing_rate(s, "on body 0");
 }
 
 Test(loop_oracle, parallelogram_four_bar_matches_its_closed_form)
