@@ -60,6 +60,7 @@ struct ctc_bdf {
     ctc_integrator *it; /* the owner, for the rhs wrapper */
     int rhs_rc;         /* the user's rhs's last non-zero return, 0 if none */
     double rhs_t;       /* and the time it was called at */
+    int proj_on;        /* 1 once CVODE's projection is set up (its memory exists) */
     int proj_rc;        /* the projection's last non-zero return, 0 if none */
     double proj_t;      /* and its time */
     double h_init;      /* the step CVODE starts from after a (re)initialisation, 0 = its choice */
@@ -218,10 +219,13 @@ int ctc_bdf_reset(ctc_integrator *it)
 int ctc_bdf_set_projection(ctc_integrator *it)
 {
     ctc_bdf *b = it->bdf;
-    if (it->proj == NULL) return CVodeSetProjFrequency(b->cvode, 0) == CV_SUCCESS ? 0 : -1;
+    if (it->proj == NULL) { /* off: nothing to do if it was never on (CVODE has no memory for it) */
+        return !b->proj_on || CVodeSetProjFrequency(b->cvode, 0) == CV_SUCCESS ? 0 : -1;
+    }
     int flag = CVodeSetProjFn(b->cvode, bdf_project);
     if (flag == CV_SUCCESS) flag = CVodeSetProjErrEst(b->cvode, SUNFALSE);
     if (flag == CV_SUCCESS) flag = CVodeSetProjFrequency(b->cvode, 1);
+    if (flag == CV_SUCCESS) b->proj_on = 1;
     return flag == CV_SUCCESS ? 0 : -1;
 }
 

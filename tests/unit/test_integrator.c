@@ -659,6 +659,26 @@ Test(integrator, a_failed_projection_stops_the_step_and_only_bdf_projects)
     }
 }
 
+/* NULL turns the projection off, also on a bdf integrator that never had one, and a run after
+   it is not projected */
+Test(integrator, a_null_projection_turns_it_off)
+{
+    problem p = problem_default();
+    p.proj_fail_after = 0.5; /* a projection called after t = 0.5 would fail the run */
+    ctc_integ_spec spec = adaptive_spec(CTC_INTEG_BDF, 1e-6, 1e-9);
+    ctc_integrator *it = make(&spec, 2, oscillator, &p);
+    char msg[ERRLEN] = "";
+    cr_assert_eq(ctc_integrator_set_projection(it, NULL, msg, ERRLEN), CTC_OK, "%s", msg);
+    cr_assert_eq(ctc_integrator_set_projection(it, onto_circle, msg, ERRLEN), CTC_OK, "%s", msg);
+    cr_assert_eq(ctc_integrator_set_projection(it, NULL, msg, ERRLEN), CTC_OK, "%s", msg);
+    double y[2] = {1, 0};
+    cr_assert_eq(ctc_integrator_reset(it, 0, y), 0);
+    int rc = 0;
+    while (rc == 0 && ctc_integrator_time(it) < 2) rc = ctc_integrator_step(it, 2, msg, ERRLEN);
+    cr_expect_eq(rc, 0, "%s", msg);
+    ctc_integrator_free(it);
+}
+
 Test(integrator, every_method_lands_exactly_on_tstop)
 {
     /* output times k / 10 (not multiples of rk4's 0.03, and 0.1 + 0.2 != 0.3 in binary): every
