@@ -13,8 +13,8 @@
 /* out = A x for A (dim x dim) and x = P f, the motion or load along a joint of type `type`: in
  * spatial form a revolute joint's P is (axis; 0) and a prismatic one's (0; axis), so half of x
  * is zero and its columns of A are skipped (18 multiply-adds of 36). The sums run over the
- * columns in increasing order, as the dense product's, so the numbers are the same (but for
- * the sign of a zero). */
+ * columns in increasing order, as the dense product's (gdca_tree.h says when the numbers are the
+ * same). */
 static inline void forward_mulv_joint(int dim, ctc_joint_type type, const double *a,
                                       const double *x, double *out)
 {

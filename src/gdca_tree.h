@@ -12,6 +12,13 @@
  * (Eq. 34-39). The functions take the dimension as an argument (the joint factors specialised to
  * one form and joint type excepted) and are meant to be inlined into CTC_SPECIALISE wrappers with
  * a constant 3 or 6.
+ *
+ * The kernels that skip a typed joint factor's zeros (gdca_mul_hinge, gdca_factor_apply_hinge
+ * and their planar forms) sum the dense products' non-zero terms in the dense order, so they give
+ * the dense products' numbers (but for the sign of a zero) where the compiler does not contract
+ * products and sums into fused multiply-adds, as gcc does not in ISO C mode (-std=c11). A build
+ * that contracts (make bench: -ffp-contract=fast) may round the two shapes of loop differently,
+ * within the products' rounding (test_gdca_forward).
  */
 #ifndef CTC_GDCA_TREE_H
 #define CTC_GDCA_TREE_H
@@ -99,20 +106,18 @@ static inline void gdca_joint_Y0(int dim, const double *left, const double *righ
  * independent of one another. Returns 0, or -1 if a pivot is not positive. */
 static inline int gdca_chol_inv(int nc, double *c, double *li)
 {
-    double d[CTC_DENSE_MAX], rd[CTC_DENSE_MAX], w[CTC_DENSE_MAX];
+    double rd[CTC_DENSE_MAX], w[CTC_DENSE_MAX * CTC_DENSE_MAX];
     for (int j = 0; j < nc; j++) {
-        /* w_k = U_jk d_k; d_j = C_jj - sum_k U_jk w_k; U_ij = (C_ij - sum_k U_ik w_k) / d_j */
+        /* with w_ik = U_ik d_k kept from column k (the numerator before its division):
+           d_j = C_jj - sum_k U_jk w_jk, w_ij = C_ij - sum_k U_ik w_jk, U_ij = w_ij / d_j */
         double p = c[j * nc + j];
-        for (int k = 0; k < j; k++) {
-            w[k] = c[j * nc + k] * d[k];
-            p -= c[j * nc + k] * w[k];
-        }
+        for (int k = 0; k < j; k++) p -= c[j * nc + k] * w[j * nc + k];
         if (!(p > 0)) return -1;
-        d[j] = p;
         rd[j] = 1.0 / p;
         for (int i = j + 1; i < nc; i++) {
             double t = c[i * nc + j];
-            for (int k = 0; k < j; k++) t -= c[i * nc + k] * w[k];
+            for (int k = 0; k < j; k++) t -= c[i * nc + k] * w[j * nc + k];
+            w[i * nc + j] = t;
             c[i * nc + j] = t * rd[j];
         }
     }
@@ -286,7 +291,7 @@ static inline void gdca_factor_apply(int dim, int nc, const double *e, const dou
 /* x = M E (trans = 0) or M^T E (trans = 1) (6 x 5), M (6 x 6), for E of
  * gdca_joint_factor_hinge with its zeros skipped: E's columns 0..2 are non-zero only in rows
  * u..u+c, so 108 multiply-adds instead of 180. Each sum runs over increasing rows of E, as the
- * dense product's, so the results are the dense product's (but for the sign of a zero). */
+ * dense product's. */
 static inline void gdca_mul_hinge(const double *mm, int trans, const double *e, int u, double *x)
 {
     for (int i = 0; i < 6; i++) {

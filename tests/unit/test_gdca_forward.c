@@ -7,6 +7,7 @@
  * own round trip).
  */
 #include <criterion/criterion.h>
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 
@@ -405,6 +406,29 @@ Test(gdca_forward, refinement_brings_the_round_trip_to_the_oracles_own, .timeout
     }
 }
 
+/* Expects got (r x c) to equal want within the rounding of the products that formed them: each
+ * entry within 16 eps times bound's (the same product of the operands' absolute values). The
+ * typed kernels sum the dense products' non-zero terms in the same order, so without
+ * contraction into FMAs (gcc's default in ISO C mode) they give the same numbers; a build that
+ * contracts (make bench: -ffp-contract=fast) may round the two shapes of loop differently. */
+static void expect_same_products(const char *what, int j, int r, int c, const double *got,
+                                 const double *want, const double *bound)
+{
+    for (int i = 0; i < r * c; i++) {
+        cr_expect(fabs(got[i] - want[i]) <= 16 * DBL_EPSILON * bound[i],
+                  "%s, joint %d entry %d: %.17g against %.17g", what, j, i, got[i], want[i]);
+    }
+}
+
+/* y = |A| |x|, A (r x c): the bound of A x's rounding */
+static void abs_mulv(int r, int c, const double *a, const double *x, double *y)
+{
+    for (int i = 0; i < r; i++) {
+        y[i] = 0;
+        for (int k = 0; k < c; k++) y[i] += fabs(a[i * c + k]) * fabs(x[k]);
+    }
+}
+
 /* W = E E^T (dim x dim) of a factor E (dim x nc) */
 static void factor_product(int dim, int nc, const double *e, double *w)
 {
@@ -450,16 +474,22 @@ static void typed_factor_vs_general(const ctc_model *m, uint64_t seed)
                   dim == 3 ? "planar" : "spatial", j, (int)m->joints[j].type, err);
 
         /* the products that skip the typed factor's zeros give the dense products' numbers */
-        double x[6], g1[6], g2[6], p1[36], p2[36];
+        double x[6], g1[6], g2[6], p1[36], p2[36], bound[36], et_x[6];
         for (int i = 0; i < dim; i++) x[i] = test_uniform(&rng, -1, 1);
         gdca_factor_apply_typed(dim, m->joints[j].type, nc, e1, x, g1);
         gdca_factor_apply(dim, nc, e1, x, g2);
-        for (int i = 0; i < dim; i++) cr_expect_eq(g1[i], g2[i], "G x, joint %d row %d", j, i);
+        for (int c = 0; c < nc; c++) { /* |E|^T |x|, then |E| of it */
+            et_x[c] = 0;
+            for (int i = 0; i < dim; i++) et_x[c] += fabs(e1[i * nc + c]) * fabs(x[i]);
+        }
+        abs_mulv(dim, nc, e1, et_x, bound);
+        expect_same_products("G x", j, dim, 1, g1, g2, bound);
         double pf[6], y1[6], y2[6];
         gdca_joint_map(dim, m->jnt_nv[j], d->jnt_P + 3 * dim * j, x, pf);
         forward_mulv_joint(dim, m->joints[j].type, k, pf, y1);
         ctc_dense_mulv(dim, dim, k, pf, y2);
-        for (int i = 0; i < dim; i++) cr_expect_eq(y1[i], y2[i], "K P f, joint %d row %d", j, i);
+        abs_mulv(dim, dim, k, pf, bound);
+        expect_same_products("K P f", j, dim, 1, y1, y2, bound);
         const ctc_joint_type t = m->joints[j].type;
         for (int trans = 0; trans < 2; trans++) {
             if (dim == 6 && (t == CTC_JOINT_REVOLUTE || t == CTC_JOINT_PRISMATIC)) {
@@ -471,16 +501,17 @@ static void typed_factor_vs_general(const ctc_model *m, uint64_t seed)
             }
             for (int i = 0; i < dim; i++) { /* the dense M E or M^T E */
                 for (int c = 0; c < nc; c++) {
-                    double sum = 0;
+                    double sum = 0, abs_sum = 0;
                     for (int l = 0; l < dim; l++) {
-                        sum += (trans ? a[l * dim + i] : a[i * dim + l]) * e1[l * nc + c];
+                        const double mil = trans ? a[l * dim + i] : a[i * dim + l];
+                        sum += mil * e1[l * nc + c];
+                        abs_sum += fabs(mil) * fabs(e1[l * nc + c]);
                     }
                     p2[i * nc + c] = sum;
+                    bound[i * nc + c] = abs_sum;
                 }
             }
-            for (int i = 0; i < dim * nc; i++) {
-                cr_expect_eq(p1[i], p2[i], "M E (trans %d), joint %d entry %d", trans, j, i);
-            }
+            expect_same_products(trans ? "M^T E" : "M E", j, dim, nc, p1, p2, bound);
         }
     }
     ctc_data_free(d);
