@@ -473,7 +473,8 @@ static void typed_factor_vs_general(const ctc_model *m, uint64_t seed)
         cr_expect(err < 1e-13, "%s joint %d (type %d): E E^T differs by %.3g",
                   dim == 3 ? "planar" : "spatial", j, (int)m->joints[j].type, err);
 
-        /* the products that skip the typed factor's zeros give the dense products' numbers */
+        /* the products that skip the typed factor's zeros give the dense products' numbers, to
+           their rounding where the build contracts (expect_same_products) */
         double x[6], g1[6], g2[6], p1[36], p2[36], bound[36], et_x[6];
         for (int i = 0; i < dim; i++) x[i] = test_uniform(&rng, -1, 1);
         gdca_factor_apply_typed(dim, m->joints[j].type, nc, e1, x, g1);
