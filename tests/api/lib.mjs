@@ -90,6 +90,19 @@ export async function waitFor(fn, { timeoutMs = 10000, intervalMs = 50, what } =
     }
 }
 
+/* Waits until /api/health shows no busy worker and no queued job, and returns it. A worker frees
+ * its slot just after it stores its job's final status, so a job may read final a moment before
+ * its worker stops counting as busy. */
+export function waitIdle(srv, { timeoutMs = 5000 } = {}) {
+    return waitFor(
+        async () => {
+            const r = await srv.get('/api/health');
+            return r.json.busy === 0 && r.json.queued === 0 ? r : null;
+        },
+        { timeoutMs, what: () => 'the workers to be idle' },
+    );
+}
+
 /* ---- requests ---- */
 
 function parseBody(text) {
