@@ -10,20 +10,24 @@
 #include "data.h"
 #include "gdca_tree.h"
 
-/* out = A x for A (dim x dim) and x = P f, the motion or load along a joint of type `type`: in
- * spatial form a revolute joint's P is (axis; 0) and a prismatic one's (0; axis), so half of x
- * is zero and its columns of A are skipped (18 multiply-adds of 36). The sums run over the
- * columns in increasing order, as the dense product's (gdca_tree.h says when the numbers are the
- * same). */
+/* out = A x for A (dim x dim) symmetric (K, h11, h22) and x = P f, the motion or load along a
+ * joint of type `type`: in spatial form a revolute joint's P is (axis; 0) and a prismatic one's
+ * (0; axis), so half of x is zero and its columns of A are skipped (18 multiply-adds of 36); the
+ * three columns left are read as A's rows, as 6-vectors (simd.h). The sums run over them in
+ * increasing order, as the dense product's (gdca_tree.h says when the numbers are the same). */
 static inline void forward_mulv_joint(int dim, ctc_joint_type type, const double *a,
                                       const double *x, double *out)
 {
     if (dim == 6 && (type == CTC_JOINT_REVOLUTE || type == CTC_JOINT_PRISMATIC)) {
         const int c0 = type == CTC_JOINT_REVOLUTE ? 0 : 3;
-        for (int i = 0; i < 6; i++) {
-            const double *ai = a + 6 * i + c0;
-            out[i] = ai[0] * x[c0] + ai[1] * x[c0 + 1] + ai[2] * x[c0 + 2];
+        ctc_v6 acc, row; /* A's columns c0..c0+2 as its rows: A is symmetric */
+        ctc_v6_load(&row, a + 6 * c0);
+        ctc_v6_scale(&acc, x[c0], &row);
+        for (int k = 1; k < 3; k++) {
+            ctc_v6_load(&row, a + 6 * (c0 + k));
+            ctc_v6_madd(&acc, x[c0 + k], &row);
         }
+        ctc_v6_store(out, &acc);
         return;
     }
     ctc_dense_mulv(dim, dim, a, x, out);

@@ -32,6 +32,10 @@
  * (and are about equally accurate: bench/README.md); it has no parallel depth to offer, which is
  * why a pass split over threads takes the balanced tree.
  *
+ * Every product with a matrix reads its rows, so that in spatial form they run on 6-vectors
+ * (gdca_tree.h): the symmetric K, h11 and h22 as they are, a body's h12 where the product wants
+ * h12^T, and the body's h21 = h12^T (d->h21, from ctc_handles) where it wants h12.
+ *
  * The refinement's correction (gdca_refine.h) is this pass in a bias-free mode (correct = 1), as
  * in gdca_forward.c: bodies' h13 = h23 = 0, beta = 0, E, K and the records' matrices reused, the
  * vectors recomputed into the records' bias slots, d->fwd_z and d->tload (the correction's own
@@ -54,6 +58,12 @@ typedef struct seq_args {
 static inline const double *seq_body(const seq_args *a, int k)
 {
     return a->d->hbody + (size_t)k * a->d->hsize;
+}
+
+/* body k's h21 = h12^T */
+static inline const double *seq_h21(const seq_args *a, int k, const int dim)
+{
+    return a->d->h21 + (size_t)k * dim * dim;
 }
 
 /* the record of S_i (i >= r: the tip's body record for i = n - 1) or B_k (k < r): node slot i */
@@ -82,20 +92,25 @@ static inline const double *seq_base_bias(const seq_args *a, int k, const int di
     return k < 0 ? gdca_zero6 : seq_part(a, k) + H23(dim);
 }
 
-/* out = h - X X^T with X = M E (trans = 0) or M^T E (trans = 1), M (dim x dim), E (dim x nc) the
-   factor of joint j, its zeros skipped for the joint types gdca_joint_factor_typed specialises */
-static inline void seq_downdate_joint(const seq_args *a, int j, const double *h, const double *mm,
-                                      int trans, const double *e, double *out, const int dim)
+/* out = h - X X^T with X = A^T E, A (dim x dim: h12^R in the base run, h21^L = (h12^L)^T in the
+   tip run, so that A's rows are read), E (dim x nc) the factor of joint j, its zeros skipped for
+   the joint types gdca_joint_factor_typed specialises */
+static inline void seq_downdate_joint(const seq_args *a, int j, const double *h, const double *at,
+                                      const double *e, double *out, const int dim)
 {
     const ctc_joint_type type = a->m->joints[j].type;
     double x[CTC_DENSE_MAX * CTC_DENSE_MAX];
+    if (dim == 6 && (type == CTC_JOINT_REVOLUTE || type == CTC_JOINT_PRISMATIC)) {
+        gdca_downdate_hinge_t(h, at, e, type == CTC_JOINT_REVOLUTE ? 3 : 0, out);
+        return;
+    }
     if (gdca_joint_factor_is_typed(dim, type)) { /* nc = dim - 1, a constant */
-        gdca_mul_E_typed(dim, type, dim - 1, mm, trans, e, x);
+        gdca_mul_E_typed(dim, type, dim - 1, at, 1, e, x);
         gdca_downdate(dim, dim - 1, h, x, out);
         return;
     }
     const int nc = dim - a->m->jnt_nv[j];
-    gdca_mul_E(dim, nc, mm, trans, e, x);
+    gdca_mul_E(dim, nc, at, 1, e, x);
     gdca_downdate(dim, nc, h, x, out);
 }
 
@@ -114,9 +129,9 @@ static inline int seq_tip_assemble(const seq_args *a, int i, const int dim, cons
                       a->f, !correct, out + H22(dim), dim);
     const double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
     if (!correct) {
-        seq_downdate_joint(a, j, left + H11(dim), left + H12(dim), 0, e, out + H11(dim), dim);
+        seq_downdate_joint(a, j, left + H11(dim), seq_h21(a, i, dim), e, out + H11(dim), dim);
     }
-    ctc_dense_mulv(dim, dim, left + H12(dim), z, t);
+    gdca_tmulv(dim, seq_h21(a, i, dim), z, t); /* h12^L z */
     for (int r = 0; r < dim; r++) out[H13(dim) + r] = b13l[r] - t[r];
     return st != 0 ? j : -1;
 }
@@ -135,9 +150,9 @@ static inline int seq_base_assemble(const seq_args *a, int k, const int dim, con
                                  out + H11(dim), dim);
     const double *e = d->fwd_E + dim * dim * k, *z = d->fwd_z + dim * k;
     if (!correct) {
-        seq_downdate_joint(a, k, right + H22(dim), right + H12(dim), 1, e, out + H22(dim), dim);
+        seq_downdate_joint(a, k, right + H22(dim), right + H12(dim), e, out + H22(dim), dim);
     }
-    ctc_dense_tmulv(dim, dim, right + H12(dim), z, t);
+    gdca_tmulv(dim, right + H12(dim), z, t);
     for (int r = 0; r < dim; r++) out[H23(dim) + r] = b23r[r] + t[r];
     return st != 0 ? k : -1;
 }
@@ -148,7 +163,7 @@ static inline void seq_accel(const seq_args *a, int j, const double *kk, const d
                              const int correct)
 {
     double x[CTC_DENSE_MAX];
-    ctc_dense_mulv(dim, dim, kk, fj, x);
+    gdca_tmulv(dim, kk, fj, x); /* K is symmetric */
     for (int r = 0; r < dim; r++) x[r] += b13r[r] - b23l[r] - s[r];
     forward_accel(a->m, a->d, j, x, gdca_zero6, gdca_forward_beta(a->d, j, dim, correct), a->qacc,
                   dim);
@@ -161,7 +176,7 @@ static inline void seq_tip_disassemble(const seq_args *a, int i, const int dim, 
     const int j = i + 1;
     const double *left = seq_body(a, i), *fi = d->tload + dim * i;
     double *fj = d->tload + dim * j, s[CTC_DENSE_MAX];
-    ctc_dense_tmulv(dim, dim, left + H12(dim), fi, s);
+    gdca_tmulv(dim, left + H12(dim), fi, s);
     gdca_factor_apply_typed(dim, a->m->joints[j].type, dim - a->m->jnt_nv[j],
                             d->fwd_E + dim * dim * j, s, fj);
     for (int r = 0; r < dim; r++) fj[r] += d->fwd_z[dim * j + r];
@@ -174,9 +189,9 @@ static inline void seq_tip_disassemble(const seq_args *a, int i, const int dim, 
 static inline void seq_base_disassemble(const seq_args *a, int k, const int dim, const int correct)
 {
     ctc_data *d = a->d;
-    const double *right = seq_body(a, k), *fn = d->tload + dim * (k + 1);
+    const double *fn = d->tload + dim * (k + 1);
     double *fk = d->tload + dim * k, s[CTC_DENSE_MAX];
-    ctc_dense_mulv(dim, dim, right + H12(dim), fn, s);
+    gdca_tmulv(dim, seq_h21(a, k, dim), fn, s); /* h12^R F_{k+1} */
     gdca_factor_apply_typed(dim, a->m->joints[k].type, dim - a->m->jnt_nv[k],
                             d->fwd_E + dim * dim * k, s, fk);
     for (int r = 0; r < dim; r++) fk[r] += d->fwd_z[dim * k + r];
@@ -197,10 +212,10 @@ static inline int seq_root(const seq_args *a, const int dim, const int correct)
                            gdca_forward_beta(a->d, r, dim, correct), a->f, !correct, NULL, dim);
     for (int i = 0; i < dim; i++) fr[i] = d->fwd_z[dim * r + i];
     /* A1^R = h11^R F + h13^R,  A2^L = -h22^L F + h23^L */
-    ctc_dense_mulv(dim, dim, right + H11(dim), fr, a1);
+    gdca_tmulv(dim, right + H11(dim), fr, a1); /* h11 and h22 are symmetric */
     for (int i = 0; i < dim; i++) a1[i] += b13r[i];
     if (left != NULL) {
-        ctc_dense_mulv(dim, dim, left + H22(dim), fr, a2);
+        gdca_tmulv(dim, left + H22(dim), fr, a2);
         for (int i = 0; i < dim; i++) a2[i] = b23l[i] - a2[i];
     } else {
         for (int i = 0; i < dim; i++) a2[i] = 0;

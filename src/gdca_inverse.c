@@ -227,10 +227,10 @@ static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const 
         /* I = I^L + T^T I^R T (the state's: kept while a->keep),  w = w^L + T^T (I^R e + w^R) */
         if (!a->keep) {
             congruence(dim, L + CR(dim), R + CI(dim), s);
-            for (int r = 0; r < dim * dim; r++) N[CI(dim) + r] = L[CI(dim) + r] + s[r];
+            gdca_add_sq(dim, L + CI(dim), s, N + CI(dim));
             ctc_v3_add(N + CR(dim), L + CR(dim), R + CR(dim));
         }
-        ctc_dense_mulv(dim, dim, R + CI(dim), e, ie);
+        gdca_tmulv(dim, R + CI(dim), e, ie); /* I is symmetric */
         for (int r = 0; r < dim; r++) ie[r] += R[CW(dim) + r];
         gdca_transfer_force(dim, L + CR(dim), ie, tf);
         for (int r = 0; r < dim; r++) N[CW(dim) + r] = L[CW(dim) + r] + tf[r];
@@ -254,7 +254,7 @@ static inline void inverse_root(const inverse_args *a, const int dim)
         for (int r = 0; r < dim; r++) tl[r] += d->jnt_P[col * dim + r] * u[col];
     }
     for (int r = 0; r < dim; r++) tl[dim + r] = 0;
-    ctc_dense_mulv(dim, dim, root + CI(dim), tl, load0);
+    gdca_tmulv(dim, root + CI(dim), tl, load0);
     for (int r = 0; r < dim; r++) load0[r] += root[CW(dim) + r];
     inverse_drive(m, d, 0, a->f, dim);
 }
@@ -277,7 +277,7 @@ static inline void inverse_disassemble(const inverse_args *a, int lo, int hi, co
 
         gdca_transfer_motion(dim, L + CR(dim), a1, tlR); /* A1^R */
         for (int r = 0; r < dim; r++) tlR[r] += e[r];
-        ctc_dense_mulv(dim, dim, R + CI(dim), tlR, load);
+        gdca_tmulv(dim, R + CI(dim), tlR, load);
         gdca_transfer_force(dim, R + CR(dim), f2, tf);
         for (int r = 0; r < dim; r++) {
             load[r] += R[CW(dim) + r] - tf[r];

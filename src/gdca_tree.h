@@ -19,6 +19,13 @@
  * products and sums into fused multiply-adds, as gcc does not in ISO C mode (-std=c11). A build
  * that contracts (make bench: -ffp-contract=fast) may round the two shapes of loop differently,
  * within the products' rounding (test_gdca_forward).
+ *
+ * In spatial form the kernels that the sequential order and the composite inverse spend most of
+ * their time in work on 6-vectors and 4-vectors (simd.h): sums of 6 x 6 blocks (gdca_add_sq),
+ * products A^T x by A's rows (gdca_tmulv; A x for the symmetric K, h11, h22 and composite
+ * inertias), and the sequential order's downdate (gdca_downdate_hinge_t). Without them gcc keeps
+ * these in scalar code (its vectoriser, tried, made the whole slower: Makefile). They round
+ * otherwise than the scalar loops, within the products' rounding (test_dense).
  */
 #ifndef CTC_GDCA_TREE_H
 #define CTC_GDCA_TREE_H
@@ -27,6 +34,7 @@
 
 #include "dense.h"
 #include "model.h"
+#include "simd.h"
 #include "spatial.h"
 
 /* offsets of the blocks of a handle-equation record (data.h) */
@@ -71,11 +79,34 @@ static inline void gdca_transfer_force(int dim, const double r[3], const double 
 /* a zero vector: the ground's acceleration, and bias terms left out */
 static const double gdca_zero6[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
 
+/* y = A^T x, A (dim x dim), by A's rows as 6-vectors in spatial form (simd.h); for a symmetric A
+ * (K, h11, h22, composite inertias) it is A x read by rows */
+static inline void gdca_tmulv(int dim, const double *a, const double *x, double *y)
+{
+    if (dim == 6) {
+        ctc_v6_tmulv(a, x, y);
+    } else {
+        ctc_dense_tmulv(dim, dim, a, x, y);
+    }
+}
+
+/* out = a + b (dim x dim), in spatial form as 4-vectors (simd.h) */
+static inline void gdca_add_sq(int dim, const double *a, const double *b, double *out)
+{
+    if (dim == 6) {
+        ctc_v36_add(a, b, out);
+    } else {
+        for (int i = 0; i < dim * dim; i++) out[i] = a[i] + b[i];
+    }
+}
+
 /* K = h11^R + h22^L; a NULL left is the ground (h22 = 0) */
 static inline void gdca_joint_K(int dim, const double *left, const double *right, double *k)
 {
-    for (int i = 0; i < dim * dim; i++) {
-        k[i] = right[H11(dim) + i] + (left ? left[H22(dim) + i] : 0.0);
+    if (left != NULL) {
+        gdca_add_sq(dim, right + H11(dim), left + H22(dim), k);
+    } else {
+        for (int i = 0; i < dim * dim; i++) k[i] = right[H11(dim) + i];
     }
 }
 
@@ -204,11 +235,15 @@ static inline int gdca_joint_factor_hinge(const double *k, const double *n1, con
     double c[25], li[25], kn[2][6];
     const double *n[2] = {n1, n2};
 
-    for (int a = 0; a < 2; a++) { /* kn_a = K (n_a at rows g) */
-        for (int i = 0; i < 6; i++) {
-            const double *ki = k + 6 * i + g;
-            kn[a][i] = ki[0] * n[a][0] + ki[1] * n[a][1] + ki[2] * n[a][2];
+    for (int a = 0; a < 2; a++) { /* kn_a = K (n_a at rows g), by K's rows g..g+2 (K = K^T) */
+        ctc_v6 acc, row;
+        ctc_v6_load(&row, k + 6 * g);
+        ctc_v6_scale(&acc, n[a][0], &row);
+        for (int i = 1; i < 3; i++) {
+            ctc_v6_load(&row, k + 6 * (g + i));
+            ctc_v6_madd(&acc, n[a][i], &row);
         }
+        ctc_v6_store(kn[a], &acc);
     }
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < 3; j++) c[5 * i + j] = k[6 * (u + i) + u + j];
@@ -429,6 +464,33 @@ static inline void gdca_downdate(int dim, int nc, const double *h, const double 
             for (int c = 0; c < nc; c++) s += x[i * nc + c] * x[j * nc + c];
             out[i * dim + j] = out[j * dim + i] = h[i * dim + j] - s;
         }
+    }
+}
+
+/* out (6 x 6, symmetric) = h - X X^T with X = M^T E, for E of gdca_joint_factor_hinge (nc 5, u
+ * as there): the columns of X formed as 6-vectors (simd.h) from the rows of M and E's non-zero
+ * entries, then each row of out as h's row less five multiples of them. out[i][j] and out[j][i]
+ * take the same products in the same order, so out is exactly symmetric. out may be h. */
+static inline void gdca_downdate_hinge_t(const double *h, const double *mm, const double *e, int u,
+                                         double *out)
+{
+    const int g = 3 - u;
+    double xt[30];
+    ctc_v6 r[6], x[5];
+    for (int k = 0; k < 6; k++) ctc_v6_load(&r[k], mm + 6 * k);
+    for (int c = 0; c < 5; c++) {
+        ctc_v6_scale(&x[c], e[5 * u + c], &r[u]);
+        for (int i = 1; i < 3 && i <= c; i++) ctc_v6_madd(&x[c], e[5 * (u + i) + c], &r[u + i]);
+        if (c >= 3) {
+            for (int i = 0; i < 3; i++) ctc_v6_madd(&x[c], e[5 * (g + i) + c], &r[g + i]);
+        }
+        ctc_v6_store(xt + 6 * c, &x[c]);
+    }
+    for (int i = 0; i < 6; i++) {
+        ctc_v6 o;
+        ctc_v6_load(&o, h + 6 * i);
+        for (int c = 0; c < 5; c++) ctc_v6_msub(&o, xt[6 * c + i], &x[c]);
+        ctc_v6_store(out + 6 * i, &o);
     }
 }
 

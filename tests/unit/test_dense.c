@@ -178,6 +178,83 @@ Test(dense, matrix_vector_products_match_hand_worked_values)
               y3[1], y3[2]);
 }
 
+Test(dense, the_vector_kernels_match_plain_products)
+{
+    /* gdca_tmulv and gdca_add_sq (6-vectors and 4-vectors in spatial form, simd.h; plain loops
+       in planar form) against plain loops written here, to rounding */
+    uint64_t rng = 9;
+    for (int dim = 3; dim <= 6; dim += 3) {
+        for (int trial = 0; trial < 20; trial++) {
+            double a[N * N], b[N * N], x[N], y[N], want[N * N], got[N * N];
+            random_matrix(&rng, dim, dim, a);
+            random_matrix(&rng, dim, dim, b);
+            random_matrix(&rng, dim, 1, x);
+            gdca_tmulv(dim, a, x, y);
+            for (int j = 0; j < dim; j++) {
+                want[j] = 0;
+                for (int i = 0; i < dim; i++) want[j] += a[i * dim + j] * x[i];
+            }
+            cr_assert_leq(max_abs_diff(dim, y, want), 1e-15, "A^T x, dim %d", dim);
+            gdca_add_sq(dim, a, b, got);
+            for (int i = 0; i < dim * dim; i++)
+                cr_assert_eq(got[i], a[i] + b[i], "A + B, dim %d", dim);
+        }
+    }
+}
+
+Test(dense, the_hinge_downdate_matches_plain_products)
+{
+    /* gdca_downdate_hinge_t: h - X X^T with X = A^T E and E of a hinge's factor (zero entries
+       where gdca_joint_factor_hinge leaves them: rows u..u+2 below their diagonal, rows g..g+2
+       in columns 0..2), against plain products, to rounding; exactly symmetric, also in place */
+    uint64_t rng = 11;
+    for (int u = 0; u <= 3; u += 3) {
+        const int g = 3 - u;
+        for (int trial = 0; trial < 20; trial++) {
+            double a[36], e[30], h[36], x[30], want[36], got[36];
+            random_matrix(&rng, 6, 6, a);
+            random_matrix(&rng, 6, 5, e);
+            for (int i = 0; i < 3; i++) {
+                for (int c = 0; c < i; c++) e[5 * (u + i) + c] = 0;
+                for (int c = 0; c < 3; c++) e[5 * (g + i) + c] = 0;
+            }
+            for (int i = 0; i < 6; i++) {
+                for (int j = i; j < 6; j++) h[6 * i + j] = h[6 * j + i] = test_uniform(&rng, -1, 1);
+            }
+            for (int i = 0; i < 6; i++) { /* X = A^T E */
+                for (int c = 0; c < 5; c++) {
+                    double s = 0;
+                    for (int k = 0; k < 6; k++) s += a[6 * k + i] * e[5 * k + c];
+                    x[5 * i + c] = s;
+                }
+            }
+            for (int i = 0; i < 6; i++) {
+                for (int j = 0; j < 6; j++) {
+                    double s = 0;
+                    for (int c = 0; c < 5; c++) s += x[5 * i + c] * x[5 * j + c];
+                    want[6 * i + j] = h[6 * i + j] - s;
+                }
+            }
+            for (int in_place = 0; in_place < 2; in_place++) {
+                if (in_place) {
+                    memcpy(got, h, sizeof got);
+                    gdca_downdate_hinge_t(got, a, e, u, got);
+                } else {
+                    gdca_downdate_hinge_t(h, a, e, u, got);
+                }
+                double err = max_abs_diff(36, got, want);
+                cr_assert_leq(err, 1e-14, "u = %d%s: differs by %.3e", u,
+                              in_place ? " in place" : "", err);
+                for (int i = 0; i < 6; i++) {
+                    for (int j = 0; j < 6; j++) {
+                        cr_assert_eq(got[6 * i + j], got[6 * j + i], "u = %d: not symmetric", u);
+                    }
+                }
+            }
+        }
+    }
+}
+
 Test(dense, the_assembly_downdate_matches_plain_products)
 {
     /* gdca_downdate (gdca_tree.h): h - X X^T for X (n x nc), h symmetric; the result matches the
