@@ -6,7 +6,8 @@
  *     h_i3 = ( a0 ;  a0 x r_i + g + w x (w x r_i) ),     a0 = I^-1 (-w x I w)
  * Planar: h_ij = [1/J, -y_j/J, x_j/J; -y_i/J, y_i y_j/J + 1/m, -y_i x_j/J;
  *                 x_i/J, -x_i y_j/J, x_i x_j/J + 1/m],   h_i3 = (0, g_x - w^2 x_i, g_y - w^2 y_i).
- * h21 = h12^T is the same block with i = 2, j = 1, written to d->h21 on its own (data.h).
+ * In spatial form h21 = h12^T, the same block with i = 2, j = 1, is written to d->h21 on its own
+ * (data.h).
  */
 #include "handles.h"
 
@@ -46,7 +47,6 @@ static void handles_planar(const ctc_model *m, ctc_data *d)
         planar_block(h, r1, r1, ij, im);      /* h11 */
         planar_block(h + 9, r1, r2, ij, im);  /* h12 */
         planar_block(h + 18, r2, r2, ij, im); /* h22 */
-        planar_block(d->h21 + 9 * k, r2, r1, ij, im);
         ctc_v3_set(h + 27, 0, g[0] - w2 * r1[0], g[1] - w2 * r1[1]);
         ctc_v3_set(h + 30, 0, g[0] - w2 * r2[0], g[1] - w2 * r2[1]);
     }
