@@ -27,7 +27,6 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->jnt_beta = calloc(nj * dim, sizeof(double));
     d->hr = calloc(n * 6, sizeof(double));
     d->hbody = calloc(n * (size_t)d->hsize, sizeof(double));
-    d->h21 = calloc(n * dim * dim, sizeof(double));
     d->hfwd = calloc(nt * (size_t)d->hsize, sizeof(double));
     d->hinv = calloc(nt * (size_t)d->hsize, sizeof(double));
     d->fwd_E = calloc(n * dim * dim, sizeof(double));
@@ -47,7 +46,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->xbuf = calloc(2 * (size_t)m->nvx + (size_t)m->nq + 1, sizeof(double));
     if (d->xpos == NULL || d->xrot == NULL || d->xcom == NULL || d->omega == NULL ||
         d->xvel == NULL || d->jnt_P == NULL || d->jnt_D == NULL || d->jnt_beta == NULL ||
-        d->hr == NULL || d->hbody == NULL || d->h21 == NULL || d->hfwd == NULL || d->hinv == NULL ||
+        d->hr == NULL || d->hbody == NULL || d->hfwd == NULL || d->hinv == NULL ||
         d->fwd_E == NULL || d->fwd_z == NULL || d->fwd_res == NULL || d->inv_E == NULL ||
         d->inv_z == NULL || d->icomp == NULL || d->inv_e == NULL || d->tload == NULL ||
         d->jnt_load == NULL || d->jnt_load_inv == NULL || d->xbuf == NULL) {
@@ -71,7 +70,6 @@ void ctc_data_free(ctc_data *d)
     free(d->jnt_beta);
     free(d->hr);
     free(d->hbody);
-    free(d->h21);
     free(d->hfwd);
     free(d->hinv);
     free(d->fwd_E);

@@ -66,8 +66,6 @@ typedef struct ctc_data {
     /* body handle equations, from ctc_handles */
     double *hr;    /* (n x 6) r1, r2: handle positions relative to the centre of mass, m */
     double *hbody; /* (n x hsize) */
-    double *h21;   /* (n x dim x dim) spatial form only: each body's h21 = h12^T, row-major, so
-                      that the sequential forward pass's products with h12 read rows */
 
     /* GDCA tree records and joint solutions */
     double *hfwd;        /* (ntree x hsize) forward assemblies; in the sequential order slot i

@@ -32,9 +32,10 @@
  * (and are about equally accurate: bench/README.md); it has no parallel depth to offer, which is
  * why a pass split over threads takes the balanced tree.
  *
- * In spatial form every product with a matrix reads its rows, so that it runs on 6-vectors
- * (gdca_tree.h): the symmetric K, h11 and h22 as they are, a body's h12 where the product wants
- * h12^T, and the body's h21 = h12^T (d->h21, from ctc_handles) where it wants h12.
+ * In spatial form the products that read a matrix by rows run on 6-vectors (gdca_tree.h): those
+ * with the symmetric K, h11 and h22, those with h12^T, and the base run's downdate. The tip run's
+ * products with h12 read its columns and stay scalar: a transposed copy of each body's h12, kept
+ * by ctc_handles, was tried and cost the handles more than it saved (bench/README.md).
  *
  * The refinement's correction (gdca_refine.h) is this pass in a bias-free mode (correct = 1), as
  * in gdca_forward.c: bodies' h13 = h23 = 0, beta = 0, E, K and the records' matrices reused, the
@@ -58,12 +59,6 @@ typedef struct seq_args {
 static inline const double *seq_body(const seq_args *a, int k)
 {
     return a->d->hbody + (size_t)k * a->d->hsize;
-}
-
-/* body k's h21 = h12^T (spatial form) */
-static inline const double *seq_h21(const seq_args *a, int k)
-{
-    return a->d->h21 + (size_t)k * 36;
 }
 
 /* the record of S_i (i >= r: the tip's body record for i = n - 1) or B_k (k < r): node slot i */
@@ -92,38 +87,26 @@ static inline const double *seq_base_bias(const seq_args *a, int k, const int di
     return k < 0 ? gdca_zero6 : seq_part(a, k) + H23(dim);
 }
 
-/* out = h - X X^T with X = h12 E (tip run, trans = 0) or h12^T E (base run, trans = 1), h12 that
-   of body k, E (dim x nc) the factor of joint j, its zeros skipped for the joint types
-   gdca_joint_factor_typed specialises; in spatial form by rows (X = A^T E with A = h21 or h12) */
-static inline void seq_downdate_joint(const seq_args *a, int j, int k, const double *h, int trans,
-                                      const double *e, double *out, const int dim)
+/* out = h - X X^T with X = M E (trans = 0: the tip run, M = h12^L) or M^T E (trans = 1: the base
+   run, M = h12^R), E (dim x nc) the factor of joint j, its zeros skipped for the joint types
+   gdca_joint_factor_typed specialises; the base run's spatial hinges by M's rows as 6-vectors */
+static inline void seq_downdate_joint(const seq_args *a, int j, const double *h, const double *mm,
+                                      int trans, const double *e, double *out, const int dim)
 {
     const ctc_joint_type type = a->m->joints[j].type;
-    const double *h12 = seq_body(a, k) + H12(dim);
     double x[CTC_DENSE_MAX * CTC_DENSE_MAX];
-    if (dim == 6 && (type == CTC_JOINT_REVOLUTE || type == CTC_JOINT_PRISMATIC)) {
-        gdca_downdate_hinge_t(h, trans ? h12 : seq_h21(a, k), e, type == CTC_JOINT_REVOLUTE ? 3 : 0,
-                              out);
+    if (dim == 6 && trans && (type == CTC_JOINT_REVOLUTE || type == CTC_JOINT_PRISMATIC)) {
+        gdca_downdate_hinge_t(h, mm, e, type == CTC_JOINT_REVOLUTE ? 3 : 0, out);
         return;
     }
     if (gdca_joint_factor_is_typed(dim, type)) { /* nc = dim - 1, a constant */
-        gdca_mul_E_typed(dim, type, dim - 1, h12, trans, e, x);
+        gdca_mul_E_typed(dim, type, dim - 1, mm, trans, e, x);
         gdca_downdate(dim, dim - 1, h, x, out);
         return;
     }
     const int nc = dim - a->m->jnt_nv[j];
-    gdca_mul_E(dim, nc, h12, trans, e, x);
+    gdca_mul_E(dim, nc, mm, trans, e, x);
     gdca_downdate(dim, nc, h, x, out);
-}
-
-/* y = h12 x for body k's h12: in spatial form by the rows of its h21 (6-vectors) */
-static inline void seq_h12_mulv(const seq_args *a, int k, const double *x, double *y, const int dim)
-{
-    if (dim == 6) {
-        gdca_tmulv(6, seq_h21(a, k), x, y);
-    } else {
-        ctc_dense_mulv(dim, dim, seq_body(a, k) + H12(dim), x, y);
-    }
 }
 
 /* the tip run's assembly of S_i = i : S_{i+1} at joint j = i + 1 (correct: E and K reused): K,
@@ -141,9 +124,9 @@ static inline int seq_tip_assemble(const seq_args *a, int i, const int dim, cons
                       a->f, !correct, out + H22(dim), dim);
     const double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
     if (!correct) {
-        seq_downdate_joint(a, j, i, left + H11(dim), 0, e, out + H11(dim), dim);
+        seq_downdate_joint(a, j, left + H11(dim), left + H12(dim), 0, e, out + H11(dim), dim);
     }
-    seq_h12_mulv(a, i, z, t, dim);
+    ctc_dense_mulv(dim, dim, left + H12(dim), z, t);
     for (int r = 0; r < dim; r++) out[H13(dim) + r] = b13l[r] - t[r];
     return st != 0 ? j : -1;
 }
@@ -162,7 +145,7 @@ static inline int seq_base_assemble(const seq_args *a, int k, const int dim, con
                                  out + H11(dim), dim);
     const double *e = d->fwd_E + dim * dim * k, *z = d->fwd_z + dim * k;
     if (!correct) {
-        seq_downdate_joint(a, k, k, right + H22(dim), 1, e, out + H22(dim), dim);
+        seq_downdate_joint(a, k, right + H22(dim), right + H12(dim), 1, e, out + H22(dim), dim);
     }
     gdca_tmulv(dim, right + H12(dim), z, t);
     for (int r = 0; r < dim; r++) out[H23(dim) + r] = b23r[r] + t[r];
@@ -201,9 +184,9 @@ static inline void seq_tip_disassemble(const seq_args *a, int i, const int dim, 
 static inline void seq_base_disassemble(const seq_args *a, int k, const int dim, const int correct)
 {
     ctc_data *d = a->d;
-    const double *fn = d->tload + dim * (k + 1);
+    const double *right = seq_body(a, k), *fn = d->tload + dim * (k + 1);
     double *fk = d->tload + dim * k, s[CTC_DENSE_MAX];
-    seq_h12_mulv(a, k, fn, s, dim); /* h12^R F_{k+1} */
+    ctc_dense_mulv(dim, dim, right + H12(dim), fn, s);
     gdca_factor_apply_typed(dim, a->m->joints[k].type, dim - a->m->jnt_nv[k],
                             d->fwd_E + dim * dim * k, s, fk);
     for (int r = 0; r < dim; r++) fk[r] += d->fwd_z[dim * k + r];

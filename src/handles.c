@@ -6,8 +6,6 @@
  *     h_i3 = ( a0 ;  a0 x r_i + g + w x (w x r_i) ),     a0 = I^-1 (-w x I w)
  * Planar: h_ij = [1/J, -y_j/J, x_j/J; -y_i/J, y_i y_j/J + 1/m, -y_i x_j/J;
  *                 x_i/J, -x_i y_j/J, x_i x_j/J + 1/m],   h_i3 = (0, g_x - w^2 x_i, g_y - w^2 y_i).
- * In spatial form h21 = h12^T, the same block with i = 2, j = 1, is written to d->h21 on its own
- * (data.h).
  */
 #include "handles.h"
 
@@ -97,7 +95,6 @@ static void handles_spatial(const ctc_model *m, ctc_data *d)
         spatial_block(h, iw, g1, g1, r1, im);      /* h11 */
         spatial_block(h + 36, iw, g1, g2, r2, im); /* h12 */
         spatial_block(h + 72, iw, g2, g2, r2, im); /* h22 */
-        spatial_block(d->h21 + 36 * k, iw, g2, g1, r1, im);
 
         /* gyroscopic term: a0 = I^-1 (-w x I w), I w = R I_b R^T w */
         double wb[3], iwb[3], iww[3], gyro[3], a0[3];

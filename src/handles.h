@@ -19,10 +19,9 @@
 
 #include "data.h"
 
-/* Fills d->hr, d->hbody and (spatial form) d->h21 from the kinematics in d (ctc_kinematics
- * first), and marks d as holding a new state (d->handles_stamp), so that the composite inverse
- * recomputes the parts of its records that it keeps between calls at one state (gdca.h).
- * Allocates nothing. */
+/* Fills d->hr and d->hbody from the kinematics in d (ctc_kinematics first), and marks d as
+ * holding a new state (d->handles_stamp), so that the composite inverse recomputes the parts of
+ * its records that it keeps between calls at one state (gdca.h). Allocates nothing. */
 void ctc_handles(const ctc_model *m, ctc_data *d);
 
 #endif
