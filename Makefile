@@ -18,7 +18,7 @@ CC ?= cc
 OPT_DEFAULT := -O3 -fno-tree-vectorize
 # make bench builds for this machine: its instruction set (with fused multiply-adds, where it has
 # them) and contraction of a * b + c into them, which gcc leaves off in ISO C mode (-std=c11). A
-# spatial CTC evaluation takes 0.88 of the time it takes uncontracted (bench/README.md,
+# spatial CTC evaluation takes 0.88-0.90 of the time it takes uncontracted (bench/README.md,
 # "Latest"). The unit tests pass in either build, and make bench runs them in its own first; the
 # default build stays portable (baseline x86-64 has no FMA).
 OPT_BENCH := $(OPT_DEFAULT) -march=native -ffp-contract=fast -DNDEBUG
