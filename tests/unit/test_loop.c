@@ -573,13 +573,16 @@ static double check_forward(fixture *f, uint64_t seed, int states, int driven)
     return worst;
 }
 
+/* one scene of a table of cases, with the joints that drive its loop (set_independent) */
+typedef struct loop_case {
+    loop_scene *s;
+    const int *indep; /* -1-terminated; NULL: the scene's */
+    const char *what;
+} loop_case;
+
 Test(loop, gdca_forward_matches_the_kkt_oracle)
 {
-    struct {
-        loop_scene *s;
-        const int *indep; /* NULL: the scene's */
-        const char *what;
-    } cases[] = {
+    loop_case cases[] = {
         {loop_scene_five_bar(), NULL, "five-bar"},
         {loop_scene_five_bar(), (const int[]){0, 2, 5, -1}, "five-bar, closing joint driven"},
         {loop_scene_four_bar(1.0, 0), NULL, "four-bar"},
@@ -611,11 +614,7 @@ Test(loop, gdca_forward_matches_the_kkt_oracle)
  * Forward dynamics, both inverse forms and the round trip against the oracle. */
 Test(loop, a_loop_closed_on_a_body_matches_the_oracle)
 {
-    struct {
-        loop_scene *s;
-        const int *indep;
-        const char *what;
-    } cases[] = {
+    loop_case cases[] = {
         {on_body(loop_scene_five_bar(), 0), (const int[]){0, 1, 2, -1},
          "five-bar on body 0, joints 1, 2 drive the loop"},
         {on_body(loop_scene_five_bar(), 0), (const int[]){0, 2, 4, -1},
@@ -690,11 +689,7 @@ static double forward_error(fixture *f, int steps, uint64_t seed)
  * forced step changes nothing beyond rounding. */
 Test(loop, the_forward_refinement_of_a_loop_reaches_the_oracle)
 {
-    struct {
-        loop_scene *s;
-        const int *indep;
-        const char *what;
-    } cases[] = {
+    loop_case cases[] = {
         {alternate_masses(loop_scene_five_bar(), 1e4), NULL, "five-bar, masses 1e4 apart"},
         {alternate_masses(loop_scene_spatial(7, CTC_JOINT_REVOLUTE, 7), 1e4), NULL,
          "8R, masses 1e4 apart"},
