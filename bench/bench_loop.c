@@ -59,6 +59,7 @@
 
 #include "chains.h"
 #include "ctc.h"
+#include "linalg.h"
 #include "loop_oracle.h"
 #include "spatial.h"
 
@@ -347,13 +348,6 @@ static double max_abs(const double *x, int n)
     return r;
 }
 
-static int all_finite(const double *x, int n)
-{
-    for (int i = 0; i < n; i++)
-        if (!isfinite(x[i])) return 0;
-    return 1;
-}
-
 /* max |qacc - u| over the independent coordinates, relative to max |u| */
 static double trip_error(const ctc_model *m, const double *u, const double *qacc)
 {
@@ -409,8 +403,8 @@ static int bench_loop_case(const char *label, const ctc_chain_spec *spec, const 
     ctc_eval(m, c.d, c.q, c.v, c.u, f_full, c.a, 2);
     ctc_eval(m, c.d, c.q, c.v, c.u, f_paper, c.a, 1);
     ctc_eval(m, c.d, c.q, c.v, c.u, c.f, c.a, 0);
-    if (!all_finite(c.f, m->nvx) || !all_finite(f_full, m->nvx) || !all_finite(c.a, m->nvx) ||
-        !all_finite(f_paper, m->nvx)) {
+    if (!test_all_finite(c.f, m->nvx) || !test_all_finite(f_full, m->nvx) ||
+        !test_all_finite(c.a, m->nvx) || !test_all_finite(f_paper, m->nvx)) {
         ctc_gdca_inverse(m, c.d, c.u, c.f); /* for its singular_joint and loop_cond */
         snprintf(err, sizeof err,
                  "non-finite driving forces or accelerations (inverse pass: singular_joint %d, "
@@ -440,7 +434,7 @@ static int bench_loop_case(const char *label, const ctc_chain_spec *spec, const 
         row->f_paper /= max_abs(f_full, m->nvx);
     }
     ctc_eval(open, c.d_open, c.q, c.v, c.u, c.fo, c.ao, 0);
-    if (!all_finite(c.fo, m->nv) || !all_finite(c.ao, m->nv)) {
+    if (!test_all_finite(c.fo, m->nv) || !test_all_finite(c.ao, m->nv)) {
         snprintf(err, sizeof err, "open chain: non-finite driving forces or accelerations");
         goto done;
     }
