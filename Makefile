@@ -6,7 +6,7 @@
 #   make run     install what is missing (as root), build, and start the service on
 #                127.0.0.1:8080 with its database in ./ctcsim.db (RUN_ARGS adds flags)
 #   make test    build and run the unit tests, then again under AddressSanitizer + UBSan
-#   make bench   build with optimisation and run the benchmarks
+#   make bench   build for this machine, run the unit tests in that build, then the benchmarks
 #   make clean   remove build/
 #
 # Overridable: CC, OPT (optimisation flags), BUILD (output folder), EXTRA_CFLAGS, EXTRA_LDFLAGS.

@@ -60,8 +60,6 @@ _Static_assert(sizeof(((job_error *)0)->field) == PATH_LEN, "paths are written i
 #define DEFAULT_MAX_STEPS 10000000.0
 #define DEFAULT_MAX_SPEED 1e6 /* rad/s or m/s */
 
-/* defaults of a loop (job_json.h) */
-
 #define MAX_WHOLE 9007199254740992.0 /* 2^53: whole numbers beyond are not exact in a double */
 #define AXIS_MIN_LENGTH 1e-12        /* as ctc_model_build */
 #define QUAT_UNIT_TOL 1e-6           /* |norm - 1| allowed of a quaternion in q0 */

@@ -141,10 +141,10 @@ static void print_help(const server_settings *def)
         char flag[64], def_text[64];
         snprintf(flag, sizeof flag, "%s %s", st->flag, st->arg);
         default_text(st, def, def_text, sizeof def_text);
-        if (st == &settings[3]) /* --workers */
-            snprintf(def_text, sizeof def_text, "the online cores, %lld here", def->workers);
-        if (st == &settings[4]) /* --job-threads */
-            snprintf(def_text, sizeof def_text, "the online cores, %lld here", def->job_threads);
+        if (st->offset == AT(workers) || st->offset == AT(job_threads)) { /* from the machine */
+            const long long x = *(const long long *)(const void *)((const char *)def + st->offset);
+            snprintf(def_text, sizeof def_text, "the online cores, %lld here", x);
+        }
         printf("  %-26s %s\n  %-26s (default %s%s%s)\n", flag, st->help, "", def_text,
                st->env ? "; " : "", st->env ? st->env : "");
     }

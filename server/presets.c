@@ -451,12 +451,14 @@ static void rod_chain_end(int n, const double *length, const double *q, double e
     }
 }
 
-/* "scene.loop": a closing joint from the tip, its centre at location (tip frame), to the anchor
- * (world); dependent; stabilised by projection (the default, written out) */
+/* "scene.loop": a closing joint from the tip, its centre at location (tip frame), to the anchor:
+ * on the ground (world frame) for body < 0, else on that body (its frame, "body"); dependent;
+ * stabilised by projection (the default, written out) */
 static void put_loop(doc_builder *b, cJSON *scene, const char *type, const double *axis,
-                     const double location[3], const double anchor[3])
+                     const double location[3], const double anchor[3], int body)
 {
     cJSON *loop = put_object(b, scene, "loop");
+    if (body >= 0) put_number(b, loop, "body", body);
     cJSON *joint = put_object(b, loop, "joint");
     put_string(b, joint, "type", type);
     if (axis != NULL) put_vector(b, joint, "axis", 3, axis);
@@ -516,7 +518,7 @@ static cJSON *five_bar(const char *preset_name, const char *name, preset_ctrl ct
     cJSON *scene = put_object(&b, doc, "scene");
     put_vec3(&b, scene, "gravity", 0, -9.81, 0);
     put_rods(&b, scene, FIVE_BAR_N, five_bar_length, five_bar_mass, independent);
-    put_loop(&b, scene, "revolute", z_axis, rod_end, anchor);
+    put_loop(&b, scene, "revolute", z_axis, rod_end, anchor, -1);
     put_vector(&b, scene, "q0", FIVE_BAR_N, q0);
     put_vector(&b, scene, "v0", FIVE_BAR_N, v0);
 
@@ -578,7 +580,7 @@ static cJSON *four_bar_passive(const cJSON *request, job_error *err)
     cJSON *scene = put_object(&b, doc, "scene");
     put_vec3(&b, scene, "gravity", 0, -9.81, 0);
     put_rods(&b, scene, FOUR_BAR_N, four_bar_length, four_bar_length, independent);
-    put_loop(&b, scene, "revolute", z_axis, rocker_end, anchor);
+    put_loop(&b, scene, "revolute", z_axis, rocker_end, anchor, -1);
     put_vector(&b, scene, "q0", FOUR_BAR_N, q0);
     put_vector(&b, scene, "v0", FOUR_BAR_N, v0);
     put_controller(&b, doc, PRESET_NONE);
@@ -625,8 +627,7 @@ static cJSON *arm_four_bar_pd(const cJSON *request, job_error *err)
     cJSON *scene = put_object(&b, doc, "scene");
     put_vec3(&b, scene, "gravity", 0, -9.81, 0);
     put_rods(&b, scene, ARM_FOUR_BAR_N, arm_four_bar_length, arm_four_bar_length, independent);
-    put_loop(&b, scene, "revolute", z_axis, rocker_end, anchor);
-    put_number(&b, cJSON_GetObjectItem(scene, "loop"), "body", 0);
+    put_loop(&b, scene, "revolute", z_axis, rocker_end, anchor, 0);
     put_vector(&b, scene, "q0", ARM_FOUR_BAR_N, q0);
     put_vector(&b, scene, "v0", ARM_FOUR_BAR_N, v0);
 
@@ -698,7 +699,7 @@ static cJSON *rssr_passive(const cJSON *request, job_error *err)
     put_bar(&b, bodies, "crank", RSSR_CRANK, "revolute", z_axis, origin);
     put_bar(&b, bodies, "coupler", RSSR_COUPLER, "spherical", NULL, crank_end);
     put_bar(&b, bodies, "rocker", RSSR_ROCKER, "spherical", NULL, coupler_end);
-    put_loop(&b, scene, "revolute", y_axis, rocker_end, anchor);
+    put_loop(&b, scene, "revolute", y_axis, rocker_end, anchor, -1);
     put_vector(&b, scene, "q0", 9, q0);
     put_vector(&b, scene, "v0", 7, v0);
     put_controller(&b, doc, PRESET_NONE);

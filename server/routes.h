@@ -23,11 +23,13 @@
  *
  * POST /api/jobs             body: a job or {"preset": ...} (job_json.h). Validates first (400
  *                            with the parser's code, field and message; a "threads" above the
- *                            server's --job-threads is 400 INVALID_FIELD too). Stores it queued,
- * then 202 {row} with Location. ?wait=S (0 < S <= 300) holds the answer until the job finishes:
- * then 200 {job} as GET /api/jobs/{id}, or 202 {row} if S ran out. GET  /api/jobs ?limit=N (1..200,
- * default 50) &cursor=ID (rows with id < ID) &status=S -> 200 {"jobs": [rows], "next_cursor": ID or
- * null} GET  /api/jobs/{id}        200 {row + "spec": normalised job, "metrics": {...} or null
+ *                            server's --job-threads is 400 INVALID_FIELD too). Stores it
+ *                            queued, then 202 {row} with Location. ?wait=S (0 < S <= 300)
+ *                            holds the answer until the job finishes: then 200 {job} as
+ *                            GET /api/jobs/{id}, or 202 {row} if S ran out.
+ * GET  /api/jobs             ?limit=N (1..200, default 50) &cursor=ID (rows with id < ID)
+ *                            &status=S -> 200 {"jobs": [rows], "next_cursor": ID or null}
+ * GET  /api/jobs/{id}        200 {row + "spec": normalised job, "metrics": {...} or null
  *                            (result_out.h), "message": text or null}
  * GET  /api/jobs/{id}/series ?channels=q,tau (default: all recorded) &joints=0,2 (coordinate
  *                            indices; default all) &every=N (default 1) &format=json|csv
