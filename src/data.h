@@ -98,7 +98,10 @@ typedef struct ctc_data {
                              N m / N; k = n: the load of the closing joint on its child (the
                              ground, or body b) */
     double *jnt_load_inv; /* (njoints x dim) the same from the inverse pass (loop models: only
-                             the joints the pruned disassembly reaches, model.h inv_need) */
+                             the joints the pruned disassembly reaches, model.h inv_need). A
+                             refined ctc_gdca_forward overwrites it with its residual pass's loads
+                             (gdca_refine.h; on a loop model those of the open chain, without
+                             the closing load): read it right after ctc_gdca_inverse */
     int singular_joint;   /* -1, or a joint whose matrix K was not positive definite */
 
     /* threads of the GDCA passes (gdca_par.h); set with ctc_data_set_threads */

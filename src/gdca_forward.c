@@ -22,7 +22,8 @@
  * residual, the factors E and the assembled matrices reused, so that only the vectors are
  * recomputed, by the same kernels and on the same threads.
  *
- * This file is the pass over the balanced tree, which loop models and passes split over threads
+ * This file is the pass over the model's tree (balanced; its root split at a loop's first joint
+ * when the loop closes on a body: model.h), which loop models and passes split over threads
  * take (gdca_forward_order_seq below); other open-chain passes take the sequential order
  * (gdca_forward_seq.c), with the per-joint kernels of gdca_forward_joint.h in common. The nodes of
  * one tree height are independent: each node's assembly writes only its own record and its joint's
@@ -76,8 +77,8 @@
 typedef struct forward_args {
     const ctc_model *m;
     ctc_data *d;
-    const double *f; /* (nv) driving forces; correct: the force residual r */
-    double *qacc;    /* (nv) accelerations; correct: their correction dq = M^-1 r */
+    const double *f; /* (nv; nvx for loops) driving forces; correct: the force residual r */
+    double *qacc;    /* (nv; nvx for loops) accelerations; correct: their correction M^-1 r */
 } forward_args;
 
 /* the bias h13 (which = 0) or h23 (which = 1) of assembly index x: its record's, but zero for a

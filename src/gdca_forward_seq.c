@@ -33,9 +33,11 @@
  * why a pass split over threads takes the balanced tree.
  *
  * In spatial form the products that read a matrix by rows run on 6-vectors (gdca_tree.h): those
- * with the symmetric K, h11 and h22, those with h12^T, and the base run's downdate. The tip run's
- * products with h12 read its columns and stay scalar: a transposed copy of each body's h12, kept
- * by ctc_handles, was tried and cost the handles more than it saved (bench/README.md).
+ * with the symmetric K, h11 and h22 (K P f and the hinge factor's K n for revolute and prismatic
+ * joints), those with h12^T, and the base run's downdate. The products with h12 itself (the tip
+ * run's downdate and h13, the base run's disassembly) read its columns and stay scalar: a
+ * transposed copy of each body's h12, kept by ctc_handles, was tried and cost the handles more
+ * than it saved (bench/README.md).
  *
  * The refinement's correction (gdca_refine.h) is this pass in a bias-free mode (correct = 1), as
  * in gdca_forward.c: bodies' h13 = h23 = 0, beta = 0, E, K and the records' matrices reused, the

@@ -160,8 +160,8 @@ void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double 
     }
     d->loop_cond = lu_cond1(dim, b, piv, bnorm);
 
-    /* 1. the closure: B x = -(A_t(u0) + P_n qdd_n + beta_n); with B = R^-1 Bs C^-1, x = C y and
-       Bs y = R rhs */
+    /* 1. the closure: B x = -(P_n qdd_n + beta_n - (A_child - A_t)) at u0; with B = R^-1 Bs C^-1,
+       x = C y and Bs y = R rhs */
     double rel[CTC_DENSE_MAX], pu[CTC_DENSE_MAX], y[CTC_DENSE_MAX];
     gdca_inverse_composite(m, d, qdd, tau);
     gdca_inverse_closing_accel(m, d, rel);

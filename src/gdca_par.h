@@ -1,6 +1,7 @@
 /*
- * gdca_par.h - one GDCA pass over the balanced assembly tree, one tree height at a time, with the
- * nodes of a height split over the threads of the data's pool (internal to the library; used by
+ * gdca_par.h - one GDCA pass over the model's assembly tree (balanced; for a loop closed on a body,
+ * the root splits at the loop's first joint: model.h loop_first), one tree height at a time, with
+ * the nodes of a height split over the threads of the data's pool (internal to the library; used by
  * gdca_forward.c, gdca_inverse.c and gdca_inverse_mobility.c).
  *
  * A pass is four kinds of work (DESIGN.md section 4): an optional per-body stage, the assembly
@@ -9,6 +10,7 @@
  * higher ones in the disassembly (model.h: m->tree is ordered by height, height_start gives each
  * height's contiguous range), so the stages run in the order
  *     bodies, assembly heights 1 .. H, root, disassembly heights H .. 1
+ * (heights up to H - 1 when the root callback takes the top node: root_takes_top)
  * and the items of one stage are cut into contiguous chunks that the threads of the data's pool
  * run, each thread the same part of every stage unless it is late (pool.h): a stage of c items
  * gets min(c / grain, threads) chunks, and one with fewer than two runs whole on one thread, as
