@@ -18,9 +18,10 @@
 static inline void forward_mulv_joint(int dim, ctc_joint_type type, const double *a,
                                       const double *x, double *out)
 {
-    if (dim == 6 && (type == CTC_JOINT_REVOLUTE || type == CTC_JOINT_PRISMATIC)) {
-        const int c0 = type == CTC_JOINT_REVOLUTE ? 0 : 3;
-        ctc_v6 acc, row; /* A's columns c0..c0+2 as its rows: A is symmetric */
+    const int u = gdca_hinge_u(dim, type);
+    if (u >= 0) {
+        const int c0 = 3 - u; /* P's non-zero half */
+        ctc_v6 acc, row;      /* A's columns c0..c0+2 as its rows: A is symmetric */
         ctc_v6_load(&row, a + 6 * c0);
         ctc_v6_scale(&acc, x[c0], &row);
         for (int k = 1; k < 3; k++) {

@@ -97,8 +97,9 @@ static inline void seq_downdate_joint(const seq_args *a, int j, const double *h,
 {
     const ctc_joint_type type = a->m->joints[j].type;
     double x[CTC_DENSE_MAX * CTC_DENSE_MAX];
-    if (dim == 6 && trans && (type == CTC_JOINT_REVOLUTE || type == CTC_JOINT_PRISMATIC)) {
-        gdca_downdate_hinge_t(h, mm, e, type == CTC_JOINT_REVOLUTE ? 3 : 0, out);
+    const int u = gdca_hinge_u(dim, type);
+    if (trans && u >= 0) {
+        gdca_downdate_hinge_t(h, mm, e, u, out);
         return;
     }
     if (gdca_joint_factor_is_typed(dim, type)) { /* nc = dim - 1, a constant */

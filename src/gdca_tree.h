@@ -396,15 +396,26 @@ static inline int gdca_joint_factor_is_typed(int dim, ctc_joint_type type)
     return type == CTC_JOINT_REVOLUTE || (dim == 6 && type == CTC_JOINT_PRISMATIC);
 }
 
+/* For a spatial hinge (a revolute or prismatic joint in spatial form), the first row u of the
+ * unit columns of its constraint basis D (gdca_joint_factor_hinge): 3 for a revolute joint, whose
+ * unit columns are forces, 0 for a prismatic one; its motion map P is non-zero in the other half,
+ * rows 3 - u .. 5 - u. -1 for any other joint or form. */
+static inline int gdca_hinge_u(int dim, ctc_joint_type type)
+{
+    if (dim != 6) return -1;
+    return type == CTC_JOINT_REVOLUTE ? 3 : type == CTC_JOINT_PRISMATIC ? 0 : -1;
+}
+
 /* out = G x for the E that gdca_joint_factor_typed made for a joint of type `type` */
 static inline void gdca_factor_apply_typed(int dim, ctc_joint_type type, int nc, const double *e,
                                            const double *x, double *out)
 {
+    /* u a constant in each call, so that the hinge's indices are */
     if (dim == 3 && type == CTC_JOINT_REVOLUTE) {
         gdca_factor_apply_planar_revolute(e, x, out);
-    } else if (dim == 6 && type == CTC_JOINT_REVOLUTE) {
+    } else if (gdca_hinge_u(dim, type) == 3) {
         gdca_factor_apply_hinge(e, 3, x, out);
-    } else if (dim == 6 && type == CTC_JOINT_PRISMATIC) {
+    } else if (gdca_hinge_u(dim, type) == 0) {
         gdca_factor_apply_hinge(e, 0, x, out);
     } else {
         gdca_factor_apply(dim, nc, e, x, out);
@@ -445,8 +456,9 @@ static inline void gdca_mul_E(int dim, int nc, const double *mm, int trans, cons
 static inline void gdca_mul_E_typed(int dim, ctc_joint_type type, int nc, const double *mm,
                                     int trans, const double *e, double *x)
 {
-    if (dim == 6 && (type == CTC_JOINT_REVOLUTE || type == CTC_JOINT_PRISMATIC)) {
-        gdca_mul_hinge(mm, trans, e, type == CTC_JOINT_REVOLUTE ? 3 : 0, x);
+    const int u = gdca_hinge_u(dim, type);
+    if (u >= 0) {
+        gdca_mul_hinge(mm, trans, e, u, x);
     } else if (dim == 3 && type == CTC_JOINT_REVOLUTE) {
         gdca_mul_planar_revolute(mm, trans, e, x);
     } else {

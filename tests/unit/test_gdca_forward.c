@@ -495,8 +495,8 @@ static void typed_factor_vs_general(const ctc_model *m, uint64_t seed)
         }
         const ctc_joint_type t = m->joints[j].type;
         for (int trans = 0; trans < 2; trans++) {
-            if (dim == 6 && (t == CTC_JOINT_REVOLUTE || t == CTC_JOINT_PRISMATIC)) {
-                gdca_mul_hinge(a, trans, e1, t == CTC_JOINT_REVOLUTE ? 3 : 0, p1);
+            if (gdca_hinge_u(dim, t) >= 0) {
+                gdca_mul_hinge(a, trans, e1, gdca_hinge_u(dim, t), p1);
             } else if (dim == 3 && t == CTC_JOINT_REVOLUTE) {
                 gdca_mul_planar_revolute(a, trans, e1, p1);
             } else {
