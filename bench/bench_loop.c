@@ -233,6 +233,16 @@ static ctc_model *build(const ctc_chain_spec *spec, const char *label)
     return m;
 }
 
+/* s's loop anchor where its tip's closing point is at q0: world (body < 0) or body's frame */
+static void scene_anchor(bench_scene *s, int body, const char *label)
+{
+    char err[256];
+    if (test_loop_anchor(&s->spec, s->q0, body, s->loop.anchor, err, sizeof err) != CTC_OK) {
+        fprintf(stderr, "bench_loop: %s n = %d: %s\n", label, s->spec.nbodies, err);
+        exit(1);
+    }
+}
+
 static bench_scene *scene_alloc(int n)
 {
     bench_scene *s = calloc(1, sizeof *s);
@@ -312,33 +322,16 @@ static bench_scene *scene_spatial(int n, uint64_t seed)
     s->independent[n] = 0;
 
     /* the anchor: the tip's closing point at q0 */
-    ctc_model *m = build(&s->spec, "spatial");
-    ctc_data *d = ctc_data_new(m);
-    double *zero = calloc((size_t)m->nv, sizeof *zero);
-    if (!d || !zero) abort();
-    ctc_kinematics(m, d, s->q0, zero);
-    ctc_v3_copy(s->loop.anchor, d->loop_pt);
-    free(zero);
-    ctc_data_free(d);
-    ctc_model_free(m);
+    scene_anchor(s, -1, "spatial");
     return s;
 }
 
 /* the same loop closed on body b: the anchor (the tip's closing point at q0) in b's frame */
 static void scene_close_on(bench_scene *s, int b)
 {
-    ctc_model *m = build(&s->spec, "on a body");
-    ctc_data *d = ctc_data_new(m);
-    double *zero = calloc((size_t)m->nv, sizeof *zero), rel[3];
-    if (!d || !zero) abort();
-    ctc_kinematics(m, d, s->q0, zero);
-    ctc_v3_sub(rel, d->loop_pt, d->xpos + 3 * b);
-    ctc_m3_tmulv(s->loop.anchor, d->xrot + 9 * b, rel);
+    scene_anchor(s, b, "on a body");
     s->loop.on_body = 1;
     s->loop.body = b;
-    free(zero);
-    ctc_data_free(d);
-    ctc_model_free(m);
 }
 
 static double max_abs(const double *x, int n)

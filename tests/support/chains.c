@@ -4,9 +4,12 @@
 #include "chains.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "data.h"
+#include "kinematics.h"
 #include "shapes.h"
 #include "spatial.h"
 
@@ -225,4 +228,31 @@ test_chain *test_chain_spatial_double_pendulum(ctc_joint_type type)
         ctc_v3_set(c->joints[k].location, k ? 1 : 0, 0, 0);
     }
     return c;
+}
+
+ctc_status test_loop_anchor(const ctc_chain_spec *spec, const double *q0, int body,
+                            double anchor[3], char *err, size_t errlen)
+{
+    ctc_model *m = NULL;
+    ctc_status st = ctc_model_build(spec, &m, err, errlen);
+    if (st != CTC_OK) return st;
+    ctc_data *d = ctc_data_new(m);
+    double *zero = calloc((size_t)m->nv, sizeof *zero);
+    if (d == NULL || zero == NULL) {
+        snprintf(err, errlen, "out of memory");
+        st = CTC_ENOMEM;
+    } else {
+        ctc_kinematics(m, d, q0, zero);
+        if (body < 0) {
+            ctc_v3_copy(anchor, d->loop_pt);
+        } else {
+            double rel[3];
+            ctc_v3_sub(rel, d->loop_pt, d->xpos + 3 * body);
+            ctc_m3_tmulv(anchor, d->xrot + 9 * body, rel);
+        }
+    }
+    free(zero);
+    ctc_data_free(d);
+    ctc_model_free(m);
+    return st;
 }

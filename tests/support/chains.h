@@ -55,6 +55,12 @@ test_chain *test_chain_coil(int n);
 
 void test_chain_free(test_chain *c);
 
+/* The anchor that closes spec's loop (spec->loop set, its anchor ignored) at q0: where the
+ * library's kinematics put the tip's closing point, in world coordinates when body < 0, else in
+ * body `body`'s frame, R_b^T (p - x_b). Returns CTC_OK, or the model's error (message in err). */
+ctc_status test_loop_anchor(const ctc_chain_spec *spec, const double *q0, int body,
+                            double anchor[3], char *err, size_t errlen);
+
 /* Random state: q (nq) angles in [-pi, pi], displacements in [-0.5, 0.5] m, random unit
  * quaternions; v (nv) in [-vmax, vmax]. */
 void test_random_state(const ctc_model *m, uint64_t *rng, double vmax, double *q, double *v);

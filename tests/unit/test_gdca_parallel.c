@@ -338,25 +338,14 @@ static loop_chain *loop_chain_new(int n, int spatial, int on_body, uint64_t seed
     /* the anchor: where the loop's kinematics put the tip's closing point at q0 */
     l->c->spec.loop = &l->loop;
     l->c->spec.independent = l->independent;
-    ctc_model *m = build(&l->c->spec);
-    ctc_data *d = ctc_data_new(m);
-    double *zero = calloc((size_t)m->nv, sizeof(double));
-    cr_assert(d && zero);
-    ctc_kinematics(m, d, l->q0, zero);
-    memcpy(l->loop.anchor, d->loop_pt, sizeof l->loop.anchor);
-    if (on_body) { /* the same point in body b's frame: R_b^T (p - x_b) */
-        const int b = spatial ? n / 8 : n / 3;
-        const double *r = d->xrot + 9 * b, *x = d->xpos + 3 * b, *p = d->loop_pt;
-        for (int i = 0; i < 3; i++) {
-            l->loop.anchor[i] =
-                r[i] * (p[0] - x[0]) + r[3 + i] * (p[1] - x[1]) + r[6 + i] * (p[2] - x[2]);
-        }
+    const int b = on_body ? (spatial ? n / 8 : n / 3) : -1;
+    char err[256] = "";
+    cr_assert_eq(test_loop_anchor(&l->c->spec, l->q0, b, l->loop.anchor, err, sizeof err), CTC_OK,
+                 "%s", err);
+    if (on_body) { /* the anchor is in body b's frame */
         l->loop.on_body = 1;
         l->loop.body = b;
     }
-    free(zero);
-    ctc_data_free(d);
-    ctc_model_free(m);
     return l;
 }
 
