@@ -6,10 +6,12 @@
 #   make run     install what is missing (as root), build, and start the service on
 #                127.0.0.1:8080 with its database in ./ctcsim.db (RUN_ARGS adds flags)
 #   make test    build and run the unit tests, then again under AddressSanitizer + UBSan
+#                (built with SAN_CC); each test binary has a time limit (tests/run.sh)
 #   make bench   build for this machine, run the unit tests in that build, then the benchmarks
 #   make clean   remove build/
 #
-# Overridable: CC, OPT (optimisation flags), BUILD (output folder), EXTRA_CFLAGS, EXTRA_LDFLAGS.
+# Overridable: CC, SAN_CC, OPT (optimisation flags), BUILD (output folder), EXTRA_CFLAGS,
+# EXTRA_LDFLAGS. Builds run one compile per core (NPROC) unless the command line gives -j.
 
 CC ?= cc
 # -O3 without the vectoriser: the library's 3- and 6-vector kernels ran 1.4-1.6x as fast as at
@@ -25,6 +27,15 @@ OPT_BENCH := $(OPT_DEFAULT) -march=native -ffp-contract=fast -DNDEBUG
 OPT ?= $(OPT_DEFAULT)
 BUILD ?= build
 SANITIZE ?=
+NPROC := $(shell nproc 2>/dev/null || echo 1)
+JOBS = $(if $(filter -j% j%,$(MAKEFLAGS)),,-j$(NPROC))
+# The sanitizer pass's compiler. Criterion forks each test's worker from a runner that has other
+# threads (BoxFort's child pump, nanomsg's I/O thread), and the worker allocates before it execs.
+# GCC 12's ASan runtime (libasan 8) takes no lock around fork(), so a worker forked while another
+# thread held an allocator lock waits for it forever: the CI hang of issue 27. LLVM 18 and later
+# lock the allocator and the stack depot around fork (pthread_atfork in the ASan runtime), so the
+# pass is built with Debian's clang-19. The plain pass uses glibc's malloc, which is fork-safe.
+SAN_CC ?= clang-19
 
 WARN := -Wall -Wextra -Wshadow -Wstrict-prototypes -Werror
 CFLAGS := -std=c11 $(WARN) $(OPT) -g -D_POSIX_C_SOURCE=200809L -Isrc $(EXTRA_CFLAGS)
@@ -38,7 +49,7 @@ endif
 
 # Debian packages the build and the tests need
 DEB_PACKAGES := gcc make libc6-dev libcriterion-dev libcjson-dev liblapacke-dev libsundials-dev \
-	libmicrohttpd-dev libsqlite3-dev chromium
+	libmicrohttpd-dev libsqlite3-dev chromium clang-19 libclang-rt-19-dev
 # the web page's uPlot and the tests also need node (>= 18) and npm: Debian's nodejs and npm are
 # installed when the machine has none
 BENCH_PACKAGES := wrk curl libmujoco-dev
@@ -66,7 +77,8 @@ SUPPORT_OBJ := $(SUPPORT_SRC:tests/support/%.c=$(BUILD)/obj/support/%.o)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all deps bench-deps install-packages web run test check check-asan bench clean FORCE
+.PHONY: all deps bench-deps install-packages web run test check check-build check-asan bench clean \
+	FORCE
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -171,15 +183,19 @@ $(WEB_OUT)/.stamp: $(WEB_SRC) $(WEB_NPM)/node_modules/.package-lock.json
 tests/web/node_modules/.package-lock.json: tests/web/package.json tests/web/package-lock.json
 	cd tests/web && npm ci --no-audit --no-fund --loglevel=error
 
-# runs the suite as built in $(BUILD)
-check: $(TEST_BIN) $(CLI) $(SERVER) web tests/web/node_modules/.package-lock.json
+# builds everything the suite needs, in parallel, then runs it as built in $(BUILD)
+CHECK_DEPS := $(TEST_BIN) $(CLI) $(SERVER) web tests/web/node_modules/.package-lock.json
+check-build: $(CHECK_DEPS)
+
+check:
+	@$(MAKE) --no-print-directory $(JOBS) check-build
 	@sh tests/run.sh $(TEST_BIN)
 	@CTCSIM=$(CLI) sh tests/cli/run.sh
 	@CTCSIM=$(CLI) CTCSIM_SERVER=$(SERVER) sh tests/api/run.sh
 	@CTCSIM_SERVER=$(SERVER) WEB_ROOT=$(WEB_OUT) API_DIR=api sh tests/web/run.sh
 
 check-asan:
-	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan SANITIZE=1 OPT=-O1 check
+	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan SANITIZE=1 OPT=-O1 CC=$(SAN_CC) check
 
 test: deps
 	@$(MAKE) --no-print-directory check
@@ -187,13 +203,13 @@ test: deps
 	@$(MAKE) --no-print-directory check-asan
 
 run: deps
-	@$(MAKE) --no-print-directory $(SERVER) web
+	@$(MAKE) --no-print-directory $(JOBS) $(SERVER) web
 	$(SERVER) --web $(WEB_OUT) $(RUN_ARGS)
 
 # the unit tests run in the benchmarks' build first, so that the arithmetic they time (fused
 # where the machine has FMA) is the tested arithmetic
 bench: bench-deps
-	@$(MAKE) --no-print-directory BUILD=$(BUILD)/bench-o3 OPT="$(OPT_BENCH)" \
+	@$(MAKE) --no-print-directory $(JOBS) BUILD=$(BUILD)/bench-o3 OPT="$(OPT_BENCH)" \
 		$(BENCH_SRC:bench/%.c=$(BUILD)/bench-o3/bench/%) $(BUILD)/bench-o3/ctcsim-server \
 		$(TEST_SRC:tests/unit/%.c=$(BUILD)/bench-o3/tests/%)
 	@echo "== the unit tests, built as the benchmarks are"

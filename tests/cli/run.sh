@@ -15,13 +15,16 @@ fail() {
     echo "FAIL: $1"
 }
 
-# expect_exit CODE NAME COMMAND...: runs the command, stdout to $tmp/out, stderr to $tmp/err
+# expect_exit CODE NAME COMMAND...: runs the command, stdout to $tmp/out, stderr to $tmp/err,
+# stopped after CLI_TIME_LIMIT seconds (default 120; each takes well under a second)
 expect_exit() {
     want=$1 name=$2
     shift 2
-    "$@" >"$tmp/out" 2>"$tmp/err"
+    timeout -k 5 "${CLI_TIME_LIMIT:-120}" "$@" >"$tmp/out" 2>"$tmp/err"
     got=$?
-    if [ "$got" -eq "$want" ]; then pass; else
+    if [ "$got" -eq 124 ] || [ "$got" -eq 137 ]; then
+        fail "$name: stopped after ${CLI_TIME_LIMIT:-120} s (CLI_TIME_LIMIT)"
+    elif [ "$got" -eq "$want" ]; then pass; else
         fail "$name: exit $got, expected $want"
         sed 's/^/    /' "$tmp/err" | head -n 5
     fi

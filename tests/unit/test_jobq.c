@@ -211,8 +211,8 @@ Test(jobq, jobs_run_to_done_with_the_series_of_a_direct_run)
         "{\"preset\": \"triple_pendulum_lqr\", \"duration\": 0.5}",
         "{\"preset\": \"triple_pendulum_passive\", \"duration\": 0.5}",
         "{\"preset\": \"spatial_double_pendulum_pid\", \"duration\": 0.5}",
-        "{\"preset\": \"n_link_pendulum\", \"n\": 16, \"duration\": 0.5, \"integrator\": "
-        "{\"method\": \"bdf\"}}",
+        ("{\"preset\": \"n_link_pendulum\", \"n\": 16, \"duration\": 0.5, "
+         "\"integrator\": {\"method\": \"bdf\"}}"),
     };
     enum { N = sizeof requests / sizeof requests[0] };
     jobq *q = start_queue(2, 8, 0);
