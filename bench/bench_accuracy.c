@@ -210,9 +210,9 @@ static int measure_chain(int chain, int n, int states, double res[NM])
         update(&res[M_INV_COMP], test_rel_err(fc, f, m->nv));
         ctc_gdca_forward(m, d, fc, a);
         update(&res[M_RT_GDCA], test_rel_err(a, u, m->nv));
-        d->fwd_order = CTC_ORDER_TREE; /* the other assembly order (gdca_forward_seq.h) */
+        d->opt.fwd_order = CTC_ORDER_TREE; /* the other assembly order (gdca_forward_seq.h) */
         ctc_gdca_forward(m, d, fc, a);
-        d->fwd_order = CTC_ORDER_AUTO;
+        d->opt.fwd_order = CTC_ORDER_AUTO;
         update(&res[M_RT_TREE], test_rel_err(a, u, m->nv));
         ctc_gdca_inverse_mobility(m, d, u, scratch);
         bad |= d->singular_joint != -1;

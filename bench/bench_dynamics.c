@@ -7,11 +7,11 @@
  *   pair  = the oracle's RNEA + ABA on the same state (each does its own kinematics);
  * and, to show where the time goes, each stage of ctc alone and the paper's mobility-form iGDCA.
  * A second table splits ctc per body for the hot-path figures of bench/README.md: kinematics,
- * handles, the composite iGDCA, GDCA forward without refinement (d->fwd_refine = 0) and one
- * refinement step (GDCA forward with d->fwd_refine = 1, less the unrefined pass), with the steps
- * the default makes and ctc with and without refinement, and the unrefined forward pass and ctc
- * with the forward pass in the balanced tree's order (gdca_forward_seq.h), at n = 16, 64, 256,
- * 1024 and 4096.
+ * handles, the composite iGDCA, GDCA forward without refinement (d->opt.fwd_refine = 0) and one
+ * refinement step (GDCA forward with d->opt.fwd_refine = 1, less the unrefined pass), with the
+ * steps the default makes and ctc with and without refinement, and the unrefined forward pass
+ * and ctc with the forward pass in the balanced tree's order (gdca_forward_seq.h), at n = 16, 64,
+ * 256, 1024 and 4096.
  * Batches of each are interleaved so that machine noise hits all of them alike; the figures are
  * medians over the batches, per evaluation, and the ratio is ctc / pair from the same run.
  * Usage: bench_dynamics [max_n [batches [parts]]]: parts "t" (the first table), "s" (the split) or
@@ -62,7 +62,7 @@ static volatile double sink;
 static void run_once(bench_case *c, int what)
 {
     const ctc_model *m = c->m;
-    const int refine = c->d->fwd_refine;
+    const int refine = c->d->opt.fwd_refine;
     switch (what) {
     case T_CTC:
         ctc_kinematics(m, c->d, c->q, c->v);
@@ -97,20 +97,20 @@ static void run_once(bench_case *c, int what)
         break;
     case T_FWD0:
     case T_FWD1:
-        c->d->fwd_refine = what == T_FWD0 ? 0 : 1;
+        c->d->opt.fwd_refine = what == T_FWD0 ? 0 : 1;
         ctc_gdca_forward(m, c->d, c->f, c->a);
-        c->d->fwd_refine = refine;
+        c->d->opt.fwd_refine = refine;
         break;
     case T_CTC0:
-        c->d->fwd_refine = 0;
+        c->d->opt.fwd_refine = 0;
         run_once(c, T_CTC);
-        c->d->fwd_refine = refine;
+        c->d->opt.fwd_refine = refine;
         break;
     case T_FWD0_TREE:
     case T_CTC_TREE:
-        c->d->fwd_order = CTC_ORDER_TREE;
+        c->d->opt.fwd_order = CTC_ORDER_TREE;
         run_once(c, what == T_FWD0_TREE ? T_FWD0 : T_CTC);
-        c->d->fwd_order = CTC_ORDER_AUTO;
+        c->d->opt.fwd_order = CTC_ORDER_AUTO;
         break;
     }
     sink += c->a[0] + c->f[0];

@@ -28,7 +28,7 @@
  *              pass and one dim x dim solve at the closing joint, gdca_inverse_loop.h) and with
  *              the paper's iGDCA (ctc_gdca_inverse_mobility) in its place;
  *   iGDCA      the inverse pass alone: the library's, the paper's with its early stop (the
- *              nodes it visits are counted) and the paper's without it (d->inv_full = 1);
+ *              nodes it visits are counted) and the paper's without it (d->opt.inv_full = 1);
  *   open       the same chain without its loop: ctc (composite iGDCA), the composite iGDCA and
  *              the mobility-form iGDCA alone;
  * every inverse pass timed alone is a first pass at its state (the composite pass's kept
@@ -129,12 +129,12 @@ static volatile double sink;
 static void inverse(const ctc_model *m, ctc_data *d, const double *u, double *f, int which)
 {
     d->icomp_stamp = 0; /* a first pass at the state: no composite inertias kept from the last */
-    d->inv_full = which == 2;
+    d->opt.inv_full = which == 2;
     if (which == 0)
         ctc_gdca_inverse(m, d, u, f);
     else
         ctc_gdca_inverse_mobility(m, d, u, f);
-    d->inv_full = 0;
+    d->opt.inv_full = 0;
 }
 
 static void ctc_eval(const ctc_model *m, ctc_data *d, const double *q, const double *v,

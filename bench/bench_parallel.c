@@ -11,9 +11,9 @@
  *             many plain threads (CHUNK_NS of work, then a crossing) for comparison; and one run
  *             of one stage on warm workers and on blocked ones (after 2 ms idle).
  *   grain     for each pass (GDCA forward, composite iGDCA), form and n = 64, 128, ..., 4096,
- *             on 2 threads: the time of one pass as the grain varies (d->par_grain: a stage of c
- *             items is cut into at most c / grain chunks, and runs whole below 2; no least chain
- *             length), and serially. The grains that do best at the larger n, and the least n
+ *             on 2 threads: the time of one pass as the grain varies (d->opt.par_grain: a stage
+ *             of c items is cut into at most c / grain chunks, and runs whole below 2; no least
+ *             chain length), and serially. The grains that do best at the larger n, and the least n
  *             where a split beats the serial pass, are the thresholds written into
  *             gdca_forward.c and gdca_inverse.c.
  *   speed-up  planar rod chains and spatial revolute chains (the chains of bench_dynamics) of
@@ -384,7 +384,7 @@ static chain_case *case_new(const ctc_model *m, const int *threads, int nthreads
             ctc_data_set_threads(c->d[k], threads[k - 1], NULL, 0) != CTC_OK) {
             abort();
         }
-        c->d[k]->fwd_order = k <= nthreads ? CTC_ORDER_TREE : CTC_ORDER_SEQ;
+        c->d[k]->opt.fwd_order = k <= nthreads ? CTC_ORDER_TREE : CTC_ORDER_SEQ;
     }
     return c;
 }
@@ -424,7 +424,7 @@ static void run_sweep(void *arg, int w)
     sweep_case *s = arg;
     chain_case *c = s->c;
     ctc_data *d = c->d[1];
-    d->par_grain = sweep[w] ? sweep[w] : c->m->nbodies; /* a grain of n splits nothing */
+    d->opt.par_grain = sweep[w] ? sweep[w] : c->m->nbodies; /* a grain of n splits nothing */
     run_pass(c->m, d, s->pass, c->q, c->v, c->u, c->f[1], c->a[1]);
     sink += c->a[1][0] + c->f[1][0];
 }
@@ -434,7 +434,7 @@ static void bench_sweep(const char *label, test_chain *chain, int batches)
     ctc_model *m = build(chain);
     static const int two[1] = {2};
     chain_case *c = case_new(m, two, 1);
-    c->d[1]->par_grain = 1; /* so that the pool starts */
+    c->d[1]->opt.par_grain = 1; /* so that the pool starts */
     run_pass(m, c->d[1], P_CTC, c->q, c->v, c->u, c->f[1], c->a[1]);
     if (c->d[1]->pool) ctc_pool_set_wait(c->d[1]->pool, wait_spin, wait_block);
     for (int pass = P_FWD; pass <= P_INV; pass++) {

@@ -16,6 +16,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->hsize = (int)(3 * dim * dim + 2 * dim);
     d->singular_joint = -1;
     d->threads = 1;
+    d->opt = ctc_options_default();
 
     d->xpos = calloc(n * 3, sizeof(double));
     d->xrot = calloc(n * 9, sizeof(double));
@@ -31,13 +32,12 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->hinv = calloc(nt * (size_t)d->hsize, sizeof(double));
     d->fwd_E = calloc(n * dim * dim, sizeof(double));
     d->fwd_z = calloc(n * dim, sizeof(double));
-    d->fwd_refine = -1;
     d->fwd_res = calloc(2 * (size_t)m->nvx + 1, sizeof(double));
     d->inv_E = calloc(n * dim * dim, sizeof(double));
     d->inv_z = calloc(n * dim, sizeof(double));
     d->csize = (int)(dim * dim + 2 * dim + 3);
     d->icomp = calloc((2 * n - 1) * (size_t)d->csize, sizeof(double));
-    d->inv_e = calloc(n * dim, sizeof(double));
+    d->icomp_e = calloc(n * dim, sizeof(double));
     d->tload = calloc((2 * n - 1) * 2 * dim, sizeof(double));
     d->jnt_load = calloc(nj * dim, sizeof(double));
     d->jnt_load_inv = calloc(nj * dim, sizeof(double));
@@ -48,7 +48,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
         d->xvel == NULL || d->jnt_P == NULL || d->jnt_D == NULL || d->jnt_beta == NULL ||
         d->hr == NULL || d->hbody == NULL || d->hfwd == NULL || d->hinv == NULL ||
         d->fwd_E == NULL || d->fwd_z == NULL || d->fwd_res == NULL || d->inv_E == NULL ||
-        d->inv_z == NULL || d->icomp == NULL || d->inv_e == NULL || d->tload == NULL ||
+        d->inv_z == NULL || d->icomp == NULL || d->icomp_e == NULL || d->tload == NULL ||
         d->jnt_load == NULL || d->jnt_load_inv == NULL || d->xbuf == NULL) {
         ctc_data_free(d);
         return NULL;
@@ -78,7 +78,7 @@ void ctc_data_free(ctc_data *d)
     free(d->inv_E);
     free(d->inv_z);
     free(d->icomp);
-    free(d->inv_e);
+    free(d->icomp_e);
     free(d->tload);
     free(d->jnt_load);
     free(d->jnt_load_inv);

@@ -19,14 +19,15 @@
 #define CTC_DATA_H
 
 #include "model.h"
+#include "options.h"
 #include "pool.h"
-
-/* the forward pass's assembly orders (data.h fwd_order) */
-enum { CTC_ORDER_AUTO = 0, CTC_ORDER_TREE = 1, CTC_ORDER_SEQ = 2 };
 
 typedef struct ctc_data {
     int dim;   /* 3 or 6, as the model's */
     int hsize; /* doubles in one handle-equation record: 3 dim^2 + 2 dim */
+
+    /* settings of the passes (options.h): how they compute, not what; ctc_options_default() */
+    ctc_options opt;
 
     /* kinematics, from ctc_kinematics: world frame (planar form: the plane's frame e1, e2, n) */
     double *xpos;  /* (n x 3) origin of body k's frame = its handle 1 = joint k's centre, m */
@@ -56,8 +57,6 @@ typedef struct ctc_data {
                             phi to the closure, i.e. phi'' + 2 a phi' + b^2 phi = 0 (1/s, 1/s); 0 =
                             none */
     double *xbuf;        /* (2 nvx + nq) loop models: scratch of the passes and loop.c */
-    int inv_full;        /* 1: the inverse pass of a loop model disassembles every node (no early
-                            stop; for benchmarks and tests). Default 0 */
     double loop_rho[6];  /* the refinement's closure residual D_n^T (A_t + beta_n - A_child) - off
                             of the accelerations so far (gdca_refine.h), m/s^2 or rad/s^2 */
     double loop_cond;    /* condition estimate of the last closed-chain boundary solve (1 =
@@ -73,22 +72,14 @@ typedef struct ctc_data {
     double *hinv;        /* (ntree x hsize) inverse assemblies of the mobility form */
     double *fwd_E;       /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
     double *fwd_z;       /* (n x dim)   joint k: W Y + P f */
-    int fwd_refine;      /* most refinement steps of ctc_gdca_forward (gdca_refine.h): -1 (default)
-                            = its rule (CTC_REFINE_MAX_STEPS on stiffly proportioned chains, one on
-                            long ones, else 0); >= 0: at most that many */
     int fwd_refine_done; /* steps the last ctc_gdca_forward made */
     double *fwd_res;     /* (2 nvx) the refinement's force residual and correction */
-    int fwd_order;       /* the forward pass's assembly order on an open chain
-                            (gdca_forward_seq.h): CTC_ORDER_AUTO (default) = the balanced tree
-                            with two threads or more from a measured length on
-                            (gdca_forward_order_seq), else sequential; CTC_ORDER_TREE = the
-                            balanced tree, CTC_ORDER_SEQ = sequential. For tests and benchmarks */
     double *inv_E;       /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
     double *inv_z;       /* (n x dim)   joint k: X Y' (mobility form) */
     int csize;           /* doubles in one composite record: dim^2 + 2 dim + 3 */
     double *icomp; /* ((2n - 1) x csize) inverse assemblies in composite form (gdca_inverse.c):
                       I (dim x dim), w (dim), c (dim), r12 (3) */
-    double *inv_e; /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */
+    double *icomp_e; /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */
     double *tload; /* ((2n - 1) x 2 dim) per assembly during a disassembly: F1 and F2
                       (forward, mobility inverse) or A1 and F2 (composite inverse); the
                       sequential forward order keeps each joint's load at [dim k] */
@@ -107,10 +98,6 @@ typedef struct ctc_data {
     /* threads of the GDCA passes (gdca_par.h); set with ctc_data_set_threads */
     int threads;                 /* the passes may use this many threads, the caller's included:
                                     1 (default) = serial */
-    int par_grain;               /* the least items per chunk of a stage of a pass (one tree
-                                    height, or the bodies; gdca_par.h), and no least chain
-                                    length; 0 (default) = the pass's measured values. For tests
-                                    and benchmarks */
     struct ctc_pool *pool;       /* the workers: started by the first pass that splits a stage,
                                     stopped by ctc_data_free or a new thread count; else NULL */
     int pool_failed;             /* 1: the pool could not start; serial until threads change */
@@ -120,7 +107,7 @@ typedef struct ctc_data {
     /* state stamps: ctc_handles increments handles_stamp (a new state); the composite inverse
        sets icomp_stamp to it once icomp holds the parts of its records that depend on the
        state only (the body records, the nodes' I and r12), and while the two match it
-       recomputes only w, c and inv_e (gdca_inverse.c) */
+       recomputes only w, c and icomp_e (gdca_inverse.c) */
     unsigned long long handles_stamp;
     unsigned long long icomp_stamp;
 } ctc_data;
@@ -139,7 +126,7 @@ void ctc_data_free(ctc_data *d);
  * The results are bitwise the same for every count, with one exception: an open chain's forward
  * pass takes the sequential order on one thread and, from a measured length on (planar 4096,
  * spatial 1024 bodies), the balanced tree on two threads or more (gdca_forward_seq.h,
- * fwd_order), so at those lengths one thread and several agree to rounding, and any two counts
+ * opt.fwd_order), so at those lengths one thread and several agree to rounding, and any two counts
  * of two or more bitwise. Returns CTC_OK, or CTC_EINVAL with a message
  * in err (errlen bytes; may be NULL) when nthreads is out of range. */
 ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t errlen);

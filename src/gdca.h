@@ -49,7 +49,7 @@
  * driving forces f (nv, nvx for loops; N m, N) applied by each joint, gravity included. Also fills
  * d->jnt_load (the whole load on body k at joint k: constraint plus drive). On long or stiffly
  * proportioned chains, open or closed, the literal pass is refined by the composite inverse's
- * residual (gdca_refine.h; d->fwd_refine, d->fwd_refine_done). qacc may not alias f. */
+ * residual (gdca_refine.h; d->opt.fwd_refine, d->fwd_refine_done). qacc may not alias f. */
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc);
 
 /* Inverse dynamics for CTC (iGDCA): the driving forces f (nv, nvx for loops; N m, N) that make
@@ -64,7 +64,7 @@ void ctc_gdca_inverse(const ctc_model *m, ctc_data *d, const double *u, double *
  * shares the body records with the forward pass (Eq. 42-43) but loses accuracy on long or
  * stiffly proportioned chains (about eps cond(M)); for comparison and benchmarks. For loop models
  * it is the paper's closed-chain iGDCA with the mixed assembly rule and the early stop
- * (d->inv_full = 1 turns the early stop off); ctc_gdca_inverse uses it only for loops whose
+ * (d->opt.inv_full = 1 turns the early stop off); ctc_gdca_inverse uses it only for loops whose
  * dependent coordinates do not number dim (passive ones). */
 void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u, double *f);
 

@@ -52,7 +52,7 @@
  * (0.80x at 256, 0.98-1.0x at 512, 1.32x at 1024 with the inverse split too) and 128 spatial
  * (1.10x). Those measurements were open chains; since open chains take the tree on threads only
  * from FORWARD_TREE_MIN_BODIES_* below, the least lengths here act on loop models and on a
- * forced tree order (d->fwd_order). */
+ * forced tree order (d->opt.fwd_order). */
 #define FORWARD_GRAIN_PLANAR 2
 #define FORWARD_GRAIN_SPATIAL 2
 #define FORWARD_MIN_BODIES_PLANAR 512
@@ -338,8 +338,8 @@ static void forward_spatial(const ctc_model *m, ctc_data *d, const double *f, do
 
 int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d)
 {
-    if (m->has_loop || d->fwd_order == CTC_ORDER_TREE) return 0;
-    if (d->fwd_order == CTC_ORDER_SEQ) return 1;
+    if (m->has_loop || d->opt.fwd_order == CTC_ORDER_TREE) return 0;
+    if (d->opt.fwd_order == CTC_ORDER_SEQ) return 1;
     const ctc_data *o = d->pool_owner != NULL ? d->pool_owner : d;
     const int min = m->form == CTC_FORM_PLANAR ? FORWARD_TREE_MIN_BODIES_PLANAR
                                                : FORWARD_TREE_MIN_BODIES_SPATIAL;

@@ -17,7 +17,7 @@
 
 #include "data.h"
 
-/* 1 if the forward pass of m with d's settings (data.h fwd_order, threads) takes the sequential
+/* 1 if the forward pass of m with d's settings (options.h fwd_order, threads) takes the sequential
  * order, 0 for the balanced tree */
 int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d);
 

@@ -212,7 +212,7 @@ static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const 
     for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
         const double *L = record(d, node->left), *R = record(d, node->right);
-        double *N = record(d, n + i), *e = d->inv_e + dim * node->joint;
+        double *N = record(d, n + i), *e = d->icomp_e + dim * node->joint;
         const double *P = d->jnt_P + 3 * dim * node->joint, *beta = d->jnt_beta + dim * node->joint;
         const double *uj = a->u + m->jnt_vadr[node->joint];
         double s[CTC_DENSE_MAX * CTC_DENSE_MAX];
@@ -273,7 +273,7 @@ static inline void inverse_disassemble(const inverse_args *a, int lo, int hi, co
         double *tlL = d->tload + (size_t)node->left * 2 * dim;
         double *tlR = d->tload + (size_t)node->right * 2 * dim;
         double *load = d->jnt_load_inv + dim * node->joint, tf[CTC_DENSE_MAX];
-        const double *e = d->inv_e + dim * node->joint;
+        const double *e = d->icomp_e + dim * node->joint;
 
         gdca_transfer_motion(dim, L + CR(dim), a1, tlR); /* A1^R */
         for (int r = 0; r < dim; r++) tlR[r] += e[r];

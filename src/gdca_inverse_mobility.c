@@ -188,7 +188,7 @@ static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, 
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
     const int n = m->nbodies;
-    const int prune = m->has_loop && !d->inv_full;
+    const int prune = m->has_loop && !d->opt.inv_full;
     for (int i = hi - 1; i >= lo; i--) {
         if (prune && !m->inv_need[i]) continue;
         const ctc_tree_node *node = &m->tree[i];

@@ -177,9 +177,9 @@ static ctc_pool *data_pool(ctc_data *d)
 void gdca_par_run(const ctc_model *m, ctc_data *d, const gdca_par_pass *pass)
 {
     const ctc_data *o = d->pool_owner ? d->pool_owner : d;
-    if (o->threads > 1 && (d->par_grain > 0 || m->nbodies >= pass->min_bodies)) {
+    if (o->threads > 1 && (d->opt.par_grain > 0 || m->nbodies >= pass->min_bodies)) {
         par_plan r = {.m = m, .d = d, .pass = pass, .nthreads = o->threads};
-        r.grain = d->par_grain > 0 ? d->par_grain : pass->grain;
+        r.grain = d->opt.par_grain > 0 ? d->opt.par_grain : pass->grain;
         if (r.grain < 1) r.grain = 1;
         atomic_init(&r.first_singular, INT_MAX);
         int chunks = plan_pass(&r);

@@ -50,7 +50,7 @@ typedef struct gdca_par_pass {
                            (gdca_loop.h), so the assembly and the disassembly stop below it */
     int grain;      /* the least items per chunk: a stage of fewer than 2 grain items runs whole */
     int min_bodies; /* chains of fewer bodies run the whole pass serially: below it the pass is
-                       too short for a second thread to pay (d->par_grain > 0 overrides both) */
+                       too short for a second thread to pay (d->opt.par_grain > 0 overrides both) */
 } gdca_par_pass;
 
 /* Runs the pass on the threads d allows (data.h: ctc_data_set_threads), starting d's pool at the

@@ -15,7 +15,7 @@
 
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d)
 {
-    if (d->fwd_refine >= 0) return d->fwd_refine;
+    if (d->opt.fwd_refine >= 0) return d->opt.fwd_refine;
     if (m->mass_ratio >= CTC_REFINE_MASS_RATIO) return CTC_REFINE_MAX_STEPS;
     return m->nbodies >= CTC_REFINE_MIN_BODIES ? 1 : 0;
 }

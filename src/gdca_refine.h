@@ -26,7 +26,7 @@
 
 #include "data.h"
 
-/* By default (d->fwd_refine < 0) a chain is refined when it has at least CTC_REFINE_MIN_BODIES
+/* By default (d->opt.fwd_refine < 0) a chain is refined when it has at least CTC_REFINE_MIN_BODIES
  * bodies, or its body masses or inertias span a ratio of CTC_REFINE_MASS_RATIO or more (model.h
  * mass_ratio). Below both, the unrefined round trip GDCA(iGDCA(u)) is within about 1e-9 of u on
  * random planar and spatial chains and on Featherstone's coil (bench_accuracy), while a step
@@ -48,7 +48,7 @@
 #define CTC_REFINE_CONVERGED 1e-8
 #define CTC_REFINE_STALL 10.0
 
-/* The most refinement steps ctc_gdca_forward makes on model m with settings d: d->fwd_refine
+/* The most refinement steps ctc_gdca_forward makes on model m with settings d: d->opt.fwd_refine
  * when >= 0, else by the rule above CTC_REFINE_MAX_STEPS (mass ratio), 1 (length) or 0. */
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d);
 

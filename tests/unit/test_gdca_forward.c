@@ -27,7 +27,7 @@ static double tolerance(double cond)
     return fmax(1e-10, 1e-14 * cond);
 }
 
-/* the two assembly orders of an open chain's forward pass (data.h fwd_order) */
+/* the two assembly orders of an open chain's forward pass (options.h fwd_order) */
 static const int orders[] = {CTC_ORDER_TREE, CTC_ORDER_SEQ};
 static const char *const order_names[] = {"tree", "sequential"};
 
@@ -42,7 +42,7 @@ static void forward_vs_aba_in(const ctc_model *m, uint64_t seed, int trials, int
     double *ref = calloc((size_t)nv + 1, sizeof(double));
     double *mass = calloc((size_t)nv * nv + 1, sizeof(double));
     cr_assert(d && o && q && v && f && a && ref && mass);
-    d->fwd_order = orders[order];
+    d->opt.fwd_order = orders[order];
     cr_assert_eq(gdca_forward_order_seq(m, d), order);
     uint64_t rng = seed;
     for (int t = 0; t < trials; t++) {
@@ -187,7 +187,7 @@ Test(gdca_forward, joint_loads_match_the_composite_inverses_at_the_same_accelera
             for (int order = 0; order < 2; order++) {
                 ctc_data *d = ctc_data_new(m);
                 cr_assert_not_null(d);
-                d->fwd_order = orders[order];
+                d->opt.fwd_order = orders[order];
                 ctc_kinematics(m, d, q, v);
                 ctc_handles(m, d);
                 ctc_gdca_forward(m, d, f, a);
@@ -289,7 +289,7 @@ Test(gdca_forward, joint_loads_balance_gravity_of_a_chain_at_rest)
     for (int order = 0; order < 2; order++) {
         ctc_data *d = ctc_data_new(m);
         double q[6] = {0}, v[6] = {0}, f[6] = {0}, a[6];
-        d->fwd_order = orders[order];
+        d->opt.fwd_order = orders[order];
         ctc_kinematics(m, d, q, v);
         ctc_handles(m, d);
         ctc_gdca_forward(m, d, f, a);
@@ -327,13 +327,13 @@ Test(gdca_forward, correction_pass_solves_the_mass_matrix)
         double *mass = calloc((size_t)nv * (size_t)nv, sizeof(double));
         double *load = calloc((size_t)m->dim * (size_t)m->nbodies, sizeof(double));
         cr_assert(q && v && f && a && r && dq && ref && mass && load);
-        d->fwd_order = orders[order];
+        d->opt.fwd_order = orders[order];
         uint64_t rng = 62;
         test_random_state(m, &rng, 2.0, q, v);
         for (int i = 0; i < nv; i++) f[i] = test_uniform(&rng, -5, 5);
         ctc_kinematics(m, d, q, v);
         ctc_handles(m, d);
-        d->fwd_refine = 0;
+        d->opt.fwd_refine = 0;
         ctc_gdca_forward(m, d, f, a); /* the factors the correction reuses */
 
         for (int i = 0; i < m->dim * m->nbodies; i++) load[i] = d->jnt_load[i];
@@ -376,7 +376,7 @@ Test(gdca_forward, refinement_brings_the_round_trip_to_the_oracles_own, .timeout
         double *u = calloc((size_t)nv, sizeof(double)), *f = calloc((size_t)nv, sizeof(double));
         double *a = calloc((size_t)nv, sizeof(double)), *b = calloc((size_t)nv, sizeof(double));
         cr_assert(q && v && u && f && a && b);
-        d->fwd_order = orders[order];
+        d->opt.fwd_order = orders[order];
         uint64_t rng = 7;
         test_random_state(m, &rng, 2.0, q, v);
         for (int i = 0; i < nv; i++) u[i] = test_uniform(&rng, -1, 1);
@@ -387,7 +387,7 @@ Test(gdca_forward, refinement_brings_the_round_trip_to_the_oracles_own, .timeout
         ctc_gdca_forward(m, d, f, a);
         cr_assert_eq(d->fwd_refine_done, 1);
         double refined = test_rel_err(a, u, nv);
-        d->fwd_refine = 0;
+        d->opt.fwd_refine = 0;
         ctc_gdca_forward(m, d, f, a);
         double plain = test_rel_err(a, u, nv);
         ctc_oracle_rnea(m, o, q, v, u, f);
@@ -531,4 +531,32 @@ Test(gdca_forward, joint_factors_by_type_and_their_products_match_the_general_on
     typed_factor_vs_general(mp, 6);
     ctc_model_free(ms), ctc_model_free(mp);
     test_chain_free(cs), test_chain_free(cp);
+}
+
+/* A new data block takes the library's rules (options.h), and its options, not its state, choose
+ * the assembly order: an open chain on one thread takes the sequential order by rule, the tree
+ * when told, and a loop model always the tree. */
+Test(gdca_forward, new_data_takes_the_default_options_and_they_choose_the_order)
+{
+    test_chain *c = test_chain_rod_pendulum(8, 0.5, 1.0);
+    ctc_model *m = build(&c->spec);
+    ctc_data *d = ctc_data_new(m);
+    const ctc_options def = ctc_options_default();
+    cr_assert_eq(def.fwd_order, CTC_ORDER_AUTO);
+    cr_assert_eq(def.fwd_refine, -1);
+    cr_assert_eq(def.inv_full, 0);
+    cr_assert_eq(def.par_grain, 0);
+    cr_assert_eq(d->opt.fwd_order, def.fwd_order);
+    cr_assert_eq(d->opt.fwd_refine, def.fwd_refine);
+    cr_assert_eq(d->opt.inv_full, def.inv_full);
+    cr_assert_eq(d->opt.par_grain, def.par_grain);
+
+    cr_expect_eq(gdca_forward_order_seq(m, d), 1, "an open chain on one thread: sequential");
+    d->opt.fwd_order = CTC_ORDER_TREE;
+    cr_expect_eq(gdca_forward_order_seq(m, d), 0, "told the tree");
+    d->opt.fwd_order = CTC_ORDER_SEQ;
+    cr_expect_eq(gdca_forward_order_seq(m, d), 1, "told the sequential order");
+    ctc_data_free(d);
+    ctc_model_free(m);
+    test_chain_free(c);
 }

@@ -5,7 +5,7 @@
  * The oracle is the serial pass: splitting a tree height over threads must not change a single
  * bit of any result - accelerations, driving forces, joint loads, the assembled records - nor
  * which joint is reported singular. The forward pass is compared in the balanced tree's order
- * (data.h fwd_order), the one it splits; which order it takes by default on how many threads is
+ * (options.h fwd_order), the one it splits; which order it takes by default on how many threads is
  * checked too. Each case runs a serial data and parallel data side by side
  * on the same random state: planar and spatial open chains of 1 to 1000 bodies (odd sizes,
  * powers of two and their neighbours), planar and spatial closed chains (loop models' roots stay
@@ -219,7 +219,7 @@ static void compare_on(const ctc_model *m, const double *q, const double *v, uin
 
     ctc_data *ds = ctc_data_new(m);
     cr_assert_not_null(ds);
-    ds->fwd_order = CTC_ORDER_TREE;
+    ds->opt.fwd_order = CTC_ORDER_TREE;
     outputs *s = outputs_new(m), *p = outputs_new(m);
     run_passes(m, ds, q, v, u, tau, s);
     cr_assert(test_all_finite(s->qacc, nvx) && test_all_finite(s->f, nvx) &&
@@ -235,8 +235,8 @@ static void compare_on(const ctc_model *m, const double *q, const double *v, uin
             ctc_data *dp = ctc_data_new(m);
             cr_assert_not_null(dp);
             cr_assert_eq(ctc_data_set_threads(dp, threads, NULL, 0), CTC_OK);
-            dp->par_grain = grain;
-            dp->fwd_order = CTC_ORDER_TREE;
+            dp->opt.par_grain = grain;
+            dp->opt.fwd_order = CTC_ORDER_TREE;
             for (int rep = 0; rep < 2; rep++) { /* the second time on warm workers */
                 run_passes(m, dp, q, v, u, tau, p);
                 expect_same(s->qacc, p->qacc, (size_t)nvx, "qacc", label, n, threads, grain);
@@ -397,9 +397,9 @@ Test(gdca_parallel, loops_closed_on_a_body_give_bitwise_the_serial_results_on_an
     for (int i = 0; i < 4; i++) compare_loop(spatial[i], 1, 1, 820 + (uint64_t)i);
 }
 
-/* The paper's loop iGDCA (ctc_gdca_inverse_mobility, the form with the early stop; d->inv_full = 1
- * turns the stop off) gives bitwise the serial forces and loads on threads, with and without the
- * stop, and the stop does not change the forces beyond rounding. */
+/* The paper's loop iGDCA (ctc_gdca_inverse_mobility, the form with the early stop;
+ * d->opt.inv_full = 1 turns the stop off) gives bitwise the serial forces and loads on threads,
+ * with and without the stop, and the stop does not change the forces beyond rounding. */
 Test(gdca_parallel, the_early_stop_of_a_loops_inverse_pass_is_kept_on_threads)
 {
     loop_chain *l = loop_chain_new(200, 0, 0, 901);
@@ -415,9 +415,9 @@ Test(gdca_parallel, the_early_stop_of_a_loops_inverse_pass_is_kept_on_threads)
     for (int i = 0; i < m->nvx; i++) u[i] = test_uniform(&rng, -1, 1);
     for (int i = 0; i < m->nv; i++) v[i] = test_uniform(&rng, -1, 1);
     cr_assert_eq(ctc_data_set_threads(dp, 2, NULL, 0), CTC_OK);
-    dp->par_grain = 1;
+    dp->opt.par_grain = 1;
     for (int full = 0; full < 2; full++) {
-        ds->inv_full = dp->inv_full = full;
+        ds->opt.inv_full = dp->opt.inv_full = full;
         ctc_kinematics(m, ds, l->q0, v), ctc_handles(m, ds);
         ctc_kinematics(m, dp, l->q0, v), ctc_handles(m, dp);
         ctc_gdca_inverse_mobility(m, ds, u, fs);
@@ -493,8 +493,8 @@ Test(gdca_parallel, the_first_singular_joint_is_the_serial_passes_whatever_the_t
             ctc_data *d = ctc_data_new(m);
             cr_assert_not_null(d);
             cr_assert_eq(ctc_data_set_threads(d, threads > 0 ? threads : 1, NULL, 0), CTC_OK);
-            d->par_grain = 1;
-            d->fwd_order = threads > 0 ? CTC_ORDER_TREE : CTC_ORDER_SEQ;
+            d->opt.par_grain = 1;
+            d->opt.fwd_order = threads > 0 ? CTC_ORDER_TREE : CTC_ORDER_SEQ;
             ctc_kinematics(m, d, q, v);
             ctc_handles(m, d);
             for (int b = 0; b < 2; b++) {
@@ -546,12 +546,12 @@ Test(gdca_parallel, the_forward_pass_takes_the_tree_on_threads_only_from_the_mea
         cr_assert_eq(ctc_data_set_threads(d, cases[i].threads, NULL, 0), CTC_OK);
         cr_expect_eq(gdca_forward_order_seq(m, d), cases[i].seq, "n = %d %s, %d threads",
                      cases[i].n, cases[i].spatial ? "spatial" : "planar", cases[i].threads);
-        d->fwd_order = CTC_ORDER_TREE;
+        d->opt.fwd_order = CTC_ORDER_TREE;
         cr_expect_eq(gdca_forward_order_seq(m, d), 0);
-        d->fwd_order = CTC_ORDER_SEQ;
+        d->opt.fwd_order = CTC_ORDER_SEQ;
         cr_expect_eq(gdca_forward_order_seq(m, d), 1);
         /* a data that uses another's pool goes by the owner's count */
-        d->fwd_order = CTC_ORDER_AUTO;
+        d->opt.fwd_order = CTC_ORDER_AUTO;
         cr_assert_eq(ctc_data_set_threads(d, 1, NULL, 0), CTC_OK);
         cr_assert_eq(ctc_data_set_threads(owner, cases[i].threads, NULL, 0), CTC_OK);
         ctc_data_share_pool(d, owner);
@@ -563,7 +563,7 @@ Test(gdca_parallel, the_forward_pass_takes_the_tree_on_threads_only_from_the_mea
     ctc_model *m = build(&l->c->spec);
     ctc_data *d = ctc_data_new(m);
     cr_assert_not_null(d);
-    d->fwd_order = CTC_ORDER_SEQ;
+    d->opt.fwd_order = CTC_ORDER_SEQ;
     cr_expect_eq(gdca_forward_order_seq(m, d), 0, "a loop model takes the tree");
     ctc_data_free(d);
     ctc_model_free(m);
@@ -604,10 +604,10 @@ Test(gdca_parallel, a_shared_pool_serves_two_data_in_turn)
     for (int i = 0; i < m->nv; i++) f[i] = test_uniform(&rng, -1, 1);
     cr_assert_eq(ctc_data_set_threads(owner, 2, NULL, 0), CTC_OK);
     ctc_data_share_pool(user, owner);
-    user->par_grain = 1;
+    user->opt.par_grain = 1;
     ctc_data *both[3] = {serial, user, owner};
     for (int k = 0; k < 3; k++) {
-        both[k]->fwd_order = CTC_ORDER_TREE;
+        both[k]->opt.fwd_order = CTC_ORDER_TREE;
         ctc_kinematics(m, both[k], q, v);
         ctc_handles(m, both[k]);
     }

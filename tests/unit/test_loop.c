@@ -394,12 +394,12 @@ static void library_inverse(fixture *f, const double *q, const double *v, const 
 {
     ctc_kinematics(f->m, f->d, q, v);
     ctc_handles(f->m, f->d);
-    f->d->inv_full = which == 2;
+    f->d->opt.inv_full = which == 2;
     if (which == 0)
         ctc_gdca_inverse(f->m, f->d, u, out);
     else
         ctc_gdca_inverse_mobility(f->m, f->d, u, out);
-    f->d->inv_full = 0;
+    f->d->opt.inv_full = 0;
     cr_assert_eq(f->d->singular_joint, -1, "%s: iGDCA reports a singular joint %d", f->what,
                  f->d->singular_joint);
 }
@@ -676,9 +676,9 @@ static double forward_error(fixture *f, int steps, uint64_t seed)
     random_state(f, &rng, 0.1, 1, q, v);
     for (int i = 0; i < f->m->nvx; i++) force[i] = test_uniform(&rng, -5, 5);
     cr_assert_eq(loop_oracle_forward(f->o, q, v, force, ao, NULL), 0);
-    f->d->fwd_refine = steps;
+    f->d->opt.fwd_refine = steps;
     library_forward(f, q, v, force, a);
-    f->d->fwd_refine = -1;
+    f->d->opt.fwd_refine = -1;
     return test_rel_err(a, ao, f->m->nvx);
 }
 

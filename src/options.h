@@ -1,0 +1,43 @@
+/*
+ * options.h - how the GDCA passes compute, apart from what they compute on.
+ *
+ * A ctc_options holds the settings of the passes of one ctc_data (data.h d->opt): the forward
+ * pass's assembly order and refinement, the inverse pass's early stop on loops, and the least
+ * work a thread of a split stage takes. They choose among computations that agree to rounding
+ * (the orders, the grain) or trade a little accuracy for time (the refinement, the early stop);
+ * none of them changes the equations solved. Production code keeps the defaults, which the
+ * library picks by rule from the model and the thread count; tests and benchmarks set them to
+ * compare the alternatives on one model. ctc_data_new fills d->opt with ctc_options_default();
+ * change a field between passes, never during one.
+ */
+#ifndef CTC_OPTIONS_H
+#define CTC_OPTIONS_H
+
+/* the forward pass's assembly orders of an open chain (gdca_forward_seq.h) */
+enum {
+    CTC_ORDER_AUTO = 0, /* by rule: the balanced tree with two threads or more from a measured
+                           length on (gdca_forward_order_seq), else the sequential order */
+    CTC_ORDER_TREE = 1, /* the balanced assembly tree (gdca_forward.c) */
+    CTC_ORDER_SEQ = 2   /* the sequential order (gdca_forward_seq.c); loops take the tree */
+};
+
+typedef struct ctc_options {
+    int fwd_order;  /* CTC_ORDER_*: the forward pass's assembly order on an open chain */
+    int fwd_refine; /* most refinement steps of ctc_gdca_forward (gdca_refine.h): -1 = its rule
+                       (CTC_REFINE_MAX_STEPS on stiffly proportioned chains, one on long ones,
+                       else none); >= 0: at most that many */
+    int inv_full;   /* 1: the mobility-form inverse pass of a loop model disassembles every node
+                       (no early stop once every driving force is known); 0 = the early stop */
+    int par_grain;  /* the least items per chunk of a split stage of a pass (one tree height, or
+                       the bodies; gdca_par.h), and no least chain length; 0 = the pass's
+                       measured values */
+} ctc_options;
+
+/* The defaults: every choice by the library's rule. */
+static inline ctc_options ctc_options_default(void)
+{
+    return (ctc_options){.fwd_order = CTC_ORDER_AUTO, .fwd_refine = -1, .inv_full = 0,
+                         .par_grain = 0};
+}
+
+#endif
