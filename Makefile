@@ -16,11 +16,11 @@
 CC ?= cc
 # -O3 without the vectoriser: the library's 3- and 6-vector kernels ran 1.4-1.6x as fast as at
 # -O2 (one CTC evaluation, gcc 12.2), and gcc's vectoriser made them 7-12% slower, here and with
-# -march=native (bench/README.md, "Before that: the sequential order")
+# -march=native (bench/NOTEBOOK.md, "Before that: the sequential order")
 OPT_DEFAULT := -O3 -fno-tree-vectorize
 # make bench builds for this machine: its instruction set (with fused multiply-adds, where it has
 # them) and contraction of a * b + c into them, which gcc leaves off in ISO C mode (-std=c11). A
-# spatial CTC evaluation takes 0.88-0.90 of the time it takes uncontracted (bench/README.md,
+# spatial CTC evaluation takes 0.88-0.90 of the time it takes uncontracted (bench/NOTEBOOK.md,
 # "Latest"). The unit tests pass in either build, and make bench runs them in its own first; the
 # default build stays portable (baseline x86-64 has no FMA).
 OPT_BENCH := $(OPT_DEFAULT) -march=native -ffp-contract=fast -DNDEBUG

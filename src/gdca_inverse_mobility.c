@@ -118,7 +118,7 @@ static inline void inverse_drive(const ctc_model *m, const ctc_data *d, int j, c
 
 /* When the mobility-form inverse pass splits over threads (gdca_par.h): its nodes cost about
  * what the forward pass's do, so it takes the forward pass's measured values (gdca_forward.c;
- * bench/README.md, "Parallel assembly"). */
+ * bench/NOTEBOOK.md, "Parallel assembly"). */
 #define MOBILITY_GRAIN_PLANAR 2
 #define MOBILITY_GRAIN_SPATIAL 2
 #define MOBILITY_MIN_BODIES_PLANAR 512

@@ -5,7 +5,7 @@
  * The forward pass assembles each node's bias terms h13, h23 from the bodies' velocity and
  * gravity terms and the driving forces. In a CTC step the forces nearly balance those terms, so
  * the assembled biases are differences of large numbers and the accelerations lose digits in
- * proportion to the chain's conditioning (bench/README.md, "Accuracy of the same evaluations").
+ * proportion to the chain's conditioning (bench/NOTEBOOK.md, "Accuracy of the same evaluations").
  * The refinement measures how far the result misses the equations of motion with the composite
  * inverse pass, which is accurate to rounding because composite inertias add,
  *     r = f - (M(q) qdd + N(q, v))            (ctc_gdca_inverse of qdd),
@@ -15,7 +15,7 @@
  * took (gdca_forward.c, gdca_forward_seq.c): it reuses the joint factors E and the assembled
  * matrices of the forward pass just made, so it costs vector work only, and the composite inverse
  * at the same state keeps its composite inertias (gdca_inverse.c): a step costs about a third of an
- * unrefined spatial CTC evaluation and less than half of a planar one (bench/README.md, "Hot
+ * unrefined spatial CTC evaluation and less than half of a planar one (bench/NOTEBOOK.md, "Hot
  * path"). The forward operator's relative error on a bias-free right-hand side is many orders
  * smaller than on the cancelling one, so one step brings the accelerations to the accuracy of the
  * forces' residual. A loop model's residual and correction include the closing joint's load and the
@@ -33,7 +33,7 @@
  * adds 30-50% to a CTC evaluation. With extreme proportions a chain of 32 bodies loses all but
  * three digits unrefined (test_hard), one step recovers most of them and a second the rest;
  * masses 1e6 apart along an 8R loop need three (3.4e-3, 3e-5, 2e-7, then 3.4e-10 after each
- * step: bench/README.md, "Closed chains"). Such stiffly proportioned chains get up to
+ * step: bench/NOTEBOOK.md, "Closed chains"). Such stiffly proportioned chains get up to
  * CTC_REFINE_MAX_STEPS steps. A long, evenly proportioned chain gets one: after one step the
  * round trip is already at the articulated-body oracle's own (bench_accuracy, sequential order:
  * random spatial, n = 256: 5.5e-9 against ABA's 5.5e-9; the coil, n = 4096: 9.1e-5 against

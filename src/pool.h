@@ -20,7 +20,7 @@
  * after its run is over cannot claim a chunk of the next one; it touches the job only after a
  * successful claim, while the caller is still waiting for that chunk. On a machine shared with
  * other programs this matters: a barrier that every thread must reach costs a whole time slice
- * whenever one of them is descheduled (bench/README.md, "Parallel assembly").
+ * whenever one of them is descheduled (bench/NOTEBOOK.md, "Parallel assembly").
  *
  * Waiting (for a chunk's dependencies, for the end of a run, and in an idle worker for the next
  * run) can go in three phases: a busy spin with the CPU's pause hint up to spin_ns, then spinning
@@ -46,7 +46,7 @@
 #define CTC_MAX_THREADS 64
 
 /* Default waiting phases, ns: pause-spin until CTC_POOL_SPIN_NS, then sched_yield, and block
- * after CTC_POOL_BLOCK_NS (bench_parallel measures the choices; bench/README.md). */
+ * after CTC_POOL_BLOCK_NS (bench_parallel measures the choices; bench/NOTEBOOK.md). */
 #ifndef CTC_POOL_SPIN_NS
 #define CTC_POOL_SPIN_NS 5000
 #endif
