@@ -14,15 +14,13 @@
 # EXTRA_LDFLAGS. Builds run one compile per core (NPROC) unless the command line gives -j.
 
 CC ?= cc
-# -O3 without the vectoriser: the library's 3- and 6-vector kernels ran 1.4-1.6x as fast as at
-# -O2 (one CTC evaluation, gcc 12.2), and gcc's vectoriser made them 7-12% slower, here and with
-# -march=native (bench/README.md, "Before that: the sequential order")
+# -O3 without gcc's vectoriser, which slows the library's 3- and 6-vector kernels (they use simd.h
+# where vectors pay): bench/NOTEBOOK.md, "Before that: the sequential order", change 5
 OPT_DEFAULT := -O3 -fno-tree-vectorize
 # make bench builds for this machine: its instruction set (with fused multiply-adds, where it has
-# them) and contraction of a * b + c into them, which gcc leaves off in ISO C mode (-std=c11). A
-# spatial CTC evaluation takes 0.88-0.90 of the time it takes uncontracted (bench/README.md,
-# "Latest"). The unit tests pass in either build, and make bench runs them in its own first; the
-# default build stays portable (baseline x86-64 has no FMA).
+# them) and contraction of a * b + c into them, which gcc leaves off in ISO C mode (-std=c11); the
+# figures: bench/NOTEBOOK.md, "Latest", change 1. The unit tests pass in either build, and make
+# bench runs them in its own first; the default build stays portable (baseline x86-64 has no FMA).
 OPT_BENCH := $(OPT_DEFAULT) -march=native -ffp-contract=fast -DNDEBUG
 OPT ?= $(OPT_DEFAULT)
 BUILD ?= build
@@ -32,9 +30,9 @@ JOBS = $(if $(filter -j% j%,$(MAKEFLAGS)),,-j$(NPROC))
 # The sanitizer pass's compiler. Criterion forks each test's worker from a runner that has other
 # threads (BoxFort's child pump, nanomsg's I/O thread), and the worker allocates before it execs.
 # GCC 12's ASan runtime (libasan 8) takes no lock around fork(), so a worker forked while another
-# thread held an allocator lock waits for it forever: the CI hang of issue 27. LLVM 18 and later
-# lock the allocator and the stack depot around fork (pthread_atfork in the ASan runtime), so the
-# pass is built with Debian's clang-19. The plain pass uses glibc's malloc, which is fork-safe.
+# thread holds an allocator lock can wait for it forever. LLVM 18 and later lock the allocator and
+# the stack depot around fork (pthread_atfork in the ASan runtime), so the pass is built with
+# Debian's clang-19. The plain pass uses glibc's malloc, which is fork-safe.
 SAN_CC ?= clang-19
 
 WARN := -Wall -Wextra -Wshadow -Wstrict-prototypes -Werror

@@ -6,7 +6,7 @@
  *           right-hand side of a CTC simulation (f = iGDCA(q, v, u), qdd = GDCA(q, v, f));
  *   pair  = the oracle's RNEA + ABA on the same state (each does its own kinematics);
  * and, to show where the time goes, each stage of ctc alone and the paper's mobility-form iGDCA.
- * A second table splits ctc per body for the hot-path figures of bench/README.md: kinematics,
+ * A second table splits ctc per body for the hot-path figures of bench/NOTEBOOK.md: kinematics,
  * handles, the composite iGDCA, GDCA forward without refinement (d->opt.fwd_refine = 0) and one
  * refinement step (GDCA forward with d->opt.fwd_refine = 1, less the unrefined pass), with the
  * steps the default makes and ctc with and without refinement, and the unrefined forward pass

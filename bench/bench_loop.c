@@ -36,12 +36,9 @@
  *   projection ctc_loop_assemble (tol 1e-12, at most 20 Newton iterations) from the state with
  *              1e-9 added to every dependent chain coordinate and rate, restored each time.
  * Batches of all timings are interleaved so that machine noise hits them alike; each batch
- * starts one timing further on, and each timing runs untimed for SETTLE_S before it is timed:
- * right after the open chain's evaluations, the closed chain's ran up to 18% slower for their
- * next 5-8 runs (spatial n = 256, whose data is about the size of the L2 cache; the core's
- * clock also dropped a few per cent for about 3 ms after vector-heavy code), which without
- * the settling time showed as a spurious 13% difference between two identical timings. The
- * figures are medians over the batches.
+ * starts one timing further on, and each timing runs untimed for SETTLE_S before it is timed, so
+ * that the caches and the core's clock have settled after the timing before (bench/NOTEBOOK.md,
+ * "Closed chains", "Measuring note"). The figures are medians over the batches.
  *
  * Checks before timing, reported in the second table: the paper's iGDCA gives bitwise the same
  * driving forces with and without its early stop, and every pass's are finite; the library's and

@@ -62,13 +62,13 @@
  * 3. The 64-link chain with stiff PD gains kp = w^2, kv = 2 w (a double closed-loop pole at -w):
  *    at dt = 1 ms, which w makes MuJoCo diverge (stagewise and hold), and on the first w where
  *    stagewise diverges, what ctcsim's adaptive DOPRI5 (and BDF) do, against MuJoCo at smaller
- *    dt. The reference there is DOPRI5 at rtol 1e-10: at 1e-12 it took 456,766 steps in a trial
- *    run (1e-10: about 150,000). Single runs.
+ *    dt. The reference there is DOPRI5 at rtol 1e-10 (about 150,000 steps; 1e-12 takes three
+ *    times as many: bench/NOTEBOOK.md, "A stiff 64-link chain"). Single runs.
  *
- * Every time here is this thread's CPU time (CLOCK_THREAD_CPUTIME_ID), not wall time: on the
- * 2 shared cores this was written on, other work ran at a load average of 3-4, and a wall clock
- * charges its time slices to whichever timing they interrupt - often to more than half of the
- * batches of a case, which medians cannot remove. On an idle machine the two clocks agree.
+ * Every time here is this thread's CPU time (CLOCK_THREAD_CPUTIME_ID), not wall time: on cores
+ * shared with other work a wall clock charges the other work's time slices to whichever timing
+ * they interrupt - often to more than half of the batches of a case, which medians cannot
+ * remove. On an idle machine the two clocks agree.
  *
  * Usage: bench_mujoco [max_n [batches [parts]]]; parts: any of r (right-hand side), s
  * (simulations), d (divergence); default 4096 15 rsd.

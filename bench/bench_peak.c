@@ -1,7 +1,7 @@
 /*
  * bench_peak.c - what one core of this machine can do: its clock, floating-point peak and
  * latency, and memory bandwidth. The yardsticks for the hot-path figures of bench_dynamics
- * (bench/README.md, "Hot path").
+ * (bench/NOTEBOOK.md, "Hot path").
  *
  * Timings (one thread; a multiply-add counts as 2 flops):
  *   clock         a dependent chain of register-to-register integer additions (1 cycle each,

@@ -15,8 +15,7 @@
  *     (for the five-bar: the three independent joints and the two dependent ones), q_ref from
  *     dopri5 at rtol 1e-12, atol 1e-14; the reference's own error is gauged by a run at rtol
  *     1e-11 against it. The five-bar also runs bdf with Baumgarte stabilisation instead of the
- *     projection (bdf projects inside CVODE's steps; before that, projecting
- *     after nearly every step and restarting CVODE at order 1 cost it 1.5-7.7 s a run). Each
+ *     projection (bdf projects inside CVODE's steps: src/sim.c, src/integ_bdf.c). Each
  * configuration runs once untimed (the warm-up, which also gives its error and metrics: the runs
  * are deterministic), then in timed rounds that interleave every configuration of every scene, so
  * machine noise falls on all alike; the wall time is the median over the rounds (ROUNDS,
@@ -40,7 +39,7 @@
  * Prints markdown tables and writes two SVG figures (bench/svgplot.h) into the directory given
  * as the first argument (default build): work_precision.svg (parts 1 and 3) and
  * estimates_vs_error.svg (part 2). "--quick" as an argument: one timed round, part 4 over 100 s,
- * part 3 without kp 1e10 - for trying changes, not for the README.
+ * part 3 without kp 1e10 - for trying changes, not for the notebook's figures.
  */
 #include <math.h>
 #include <stdio.h>

@@ -1,6 +1,6 @@
 /*
  * svgplot.h - small log-log scatter and line plots as standalone SVG files, for the benchmarks'
- * figures (bench/README.md). Header-only (the Makefile builds every C file in bench/ as its own
+ * figures (bench/NOTEBOOK.md). Header-only (the Makefile builds every C file in bench/ as its own
  * program): static inline functions, no state.
  *
  * A figure is a grid of panels; each panel has log10 axes with a grid line at every decade

@@ -44,15 +44,10 @@
 #include "gdca_tree.h"
 
 /* When the forward pass splits over threads (gdca_par.h): the least nodes per chunk of one tree
- * height, and the least chain length. From bench_parallel on 2 threads, idle machine
- * (bench/README.md, "Parallel assembly"): grain 1 did best at every n and 2 within 3% (2 keeps
- * chunks of two nodes for larger thread counts); the split pass alone beat the serial one from
- * n = 256 planar (1.15x) and n = 64 spatial (1.39x), but a CTC evaluation, whose serial
- * kinematics and handles leave the records in the caller's cache, gained only from 512 planar
- * (0.80x at 256, 0.98-1.0x at 512, 1.32x at 1024 with the inverse split too) and 128 spatial
- * (1.10x). Those measurements were open chains; since open chains take the tree on threads only
- * from FORWARD_TREE_MIN_BODIES_* below, the least lengths here act on loop models and on a
- * forced tree order (d->opt.fwd_order). */
+ * height, and the least chain length. Open chains take the tree on threads only from
+ * FORWARD_TREE_MIN_BODIES_* below, so the least lengths here act on loop models and on a forced
+ * tree order (d->opt.fwd_order). Each is where a split CTC evaluation first gains on 2 threads:
+ * bench/NOTEBOOK.md, "Parallel assembly" ("The thresholds"). */
 #define FORWARD_GRAIN_PLANAR 2
 #define FORWARD_GRAIN_SPATIAL 2
 #define FORWARD_MIN_BODIES_PLANAR 512
@@ -60,11 +55,9 @@
 
 /* The least chain length from which an open chain's forward pass takes the balanced tree, split
  * over threads, instead of the sequential order on one thread (gdca_forward_seq.h), when the
- * data has two threads or more. From bench_parallel on 2 threads (bench/README.md, "Parallel
- * assembly", two runs): in a CTC evaluation the split tree beat the sequential order at every n
- * from 4096 planar (1.14x there in both runs; 2048: 1.02-1.04x) and was level or ahead from 1024
- * spatial (1.00-1.06x at 1024, 1.03-1.08x at 2048, 1.10-1.13x at 4096; 512: 0.85-0.89x). More
- * threads would move the crossing down; it is not measured here. */
+ * data has two threads or more: where a CTC evaluation on 2 threads first gains over the
+ * sequential order (bench/NOTEBOOK.md, "Threads against the sequential order" and "Corrections
+ * found in review"). */
 #define FORWARD_TREE_MIN_BODIES_PLANAR 4096
 #define FORWARD_TREE_MIN_BODIES_SPATIAL 1024
 

@@ -29,15 +29,14 @@
  * just formed (h21^L F_i, or h12^R F_{k+1}). Each S_i's record keeps h11, h13 in their slots and
  * K of joint i + 1 in its h22 slot; each B_k's keeps h22, h23 and K of joint k in its h11 slot.
  * The order is the balanced tree's algebra on another binary tree, so the two agree to rounding
- * (and are about equally accurate: bench/README.md); it has no parallel depth to offer, which is
- * why a pass split over threads takes the balanced tree.
+ * (and are about equally accurate: bench/NOTEBOOK.md, "Accuracy: both orders"); it has no
+ * parallel depth to offer, which is why a pass split over threads takes the balanced tree.
  *
  * In spatial form the products that read a matrix by rows run on 6-vectors (gdca_tree.h): those
  * with the symmetric K, h11 and h22 (K P f and the hinge factor's K n for revolute and prismatic
  * joints), those with h12^T, and the base run's downdate. The products with h12 itself (the tip
- * run's downdate and h13, the base run's disassembly) read its columns and stay scalar: a
- * transposed copy of each body's h12, kept by ctc_handles, was tried and cost the handles more
- * than it saved (bench/README.md).
+ * run's downdate and h13, the base run's disassembly) read its columns and stay scalar (a
+ * transposed copy of h12 costs the handles more than it saves: bench/NOTEBOOK.md, "Latest").
  *
  * The refinement's correction (gdca_refine.h) is this pass in a bias-free mode (correct = 1), as
  * in gdca_forward.c: bodies' h13 = h23 = 0, beta = 0, E, K and the records' matrices reused, the

@@ -165,11 +165,8 @@ static inline double *record(const ctc_data *d, int a)
 }
 
 /* When the composite inverse pass splits over threads (gdca_par.h): the least items (bodies,
- * nodes of one tree height) per chunk, and the least chain length. From bench_parallel on 2
- * threads, idle machine (bench/README.md, "Parallel assembly"): planar, grain 16 did best from
- * n = 1024, where the split pass beat the serial one (1.22x; none at 512); spatial, grains 1 to 8
- * were within 3% of each other and the split pass beat the serial one from n = 256 (1.29x; a loss
- * at 128). */
+ * nodes of one tree height) per chunk, and the least chain length from which the split pass beats
+ * the serial one on 2 threads (bench/NOTEBOOK.md, "Parallel assembly", "The thresholds"). */
 #define INVERSE_GRAIN_PLANAR 16
 #define INVERSE_GRAIN_SPATIAL 4
 #define INVERSE_MIN_BODIES_PLANAR 1024

@@ -4,11 +4,11 @@
  *
  * The paper's iGDCA for loops (gdca_inverse_mobility.c) assembles across dependent joints with the
  * projected rule, whose mobilities are differences of large numbers: on loops of hundreds of
- * bodies its forces lose up to 8 digits (bench_loop). This pass gets the same forces from the
- * open chain's composite pass, which is accurate to rounding, plus one small solve at the
- * closing joint. With the closing joint's load F (on its child, the ground or body b, at the
- * tip's point p_t; the tip bears -F), J_k the unit twist of chain coordinate k at p_t and
- * tau = M(q) qdd + N(q, v) of the open chain:
+ * bodies its forces lose up to 8 digits (bench/NOTEBOOK.md, "Closed chains"). This pass gets the
+ * same forces from the open chain's composite pass, which is accurate to rounding, plus one
+ * small solve at the closing joint. With the closing joint's load F (on its child, the ground or
+ * body b, at the tip's point p_t; the tip bears -F), J_k the unit twist of chain coordinate k at
+ * p_t and tau = M(q) qdd + N(q, v) of the open chain:
  *
  *   closure     A_t(qdd) + P_n qdd_n + beta_n = A_b(qdd)    (A_b: the child's acceleration at
  *                                                              p_t, zero on the ground; dim

@@ -1,8 +1,8 @@
 /*
  * gdca_inverse_mobility.c - the paper's iGDCA in its literal mobility form (paper section 4).
  *
- * Kept as the reference implementation of Eq. 26-54 and measured against the composite form
- * (gdca_inverse.c) in the tests and benchmarks. It shares the body records with the forward pass
+ * The reference implementation of Eq. 26-54, compared with the composite form (gdca_inverse.c)
+ * in the tests and benchmarks. It shares the body records with the forward pass
  * (Eq. 42-43), but each assembled mobility of a rigid composite is a small difference of its
  * parts' larger ones (Eq. 34, 38), so its error grows with that ratio: about eps cond(M) on
  * long chains, 2e-10 already on Featherstone's 16-body coil.
@@ -117,8 +117,8 @@ static inline void inverse_drive(const ctc_model *m, const ctc_data *d, int j, c
 }
 
 /* When the mobility-form inverse pass splits over threads (gdca_par.h): its nodes cost about
- * what the forward pass's do, so it takes the forward pass's measured values (gdca_forward.c;
- * bench/README.md, "Parallel assembly"). */
+ * what the forward pass's do, so it takes the forward pass's values (gdca_forward.c;
+ * bench/NOTEBOOK.md, "Parallel assembly"). */
 #define MOBILITY_GRAIN_PLANAR 2
 #define MOBILITY_GRAIN_SPATIAL 2
 #define MOBILITY_MIN_BODIES_PLANAR 512

@@ -5,7 +5,7 @@
  * The forward pass assembles each node's bias terms h13, h23 from the bodies' velocity and
  * gravity terms and the driving forces. In a CTC step the forces nearly balance those terms, so
  * the assembled biases are differences of large numbers and the accelerations lose digits in
- * proportion to the chain's conditioning (bench/README.md, "Accuracy of the same evaluations").
+ * proportion to the chain's conditioning (bench/NOTEBOOK.md, "Hard cases").
  * The refinement measures how far the result misses the equations of motion with the composite
  * inverse pass, which is accurate to rounding because composite inertias add,
  *     r = f - (M(q) qdd + N(q, v))            (ctc_gdca_inverse of qdd),
@@ -14,12 +14,11 @@
  * That correction pass is the forward pass in a bias-free mode, in the order the forward pass
  * took (gdca_forward.c, gdca_forward_seq.c): it reuses the joint factors E and the assembled
  * matrices of the forward pass just made, so it costs vector work only, and the composite inverse
- * at the same state keeps its composite inertias (gdca_inverse.c): a step costs about a third of an
- * unrefined spatial CTC evaluation and less than half of a planar one (bench/README.md, "Hot
- * path"). The forward operator's relative error on a bias-free right-hand side is many orders
- * smaller than on the cancelling one, so one step brings the accelerations to the accuracy of the
- * forces' residual. A loop model's residual and correction include the closing joint's load and the
- * closure (gdca_refine_residual).
+ * at the same state keeps its composite inertias (gdca_inverse.c). The forward operator's
+ * relative error on a bias-free right-hand side is many orders smaller than on the cancelling
+ * one, so one step brings the accelerations to the accuracy of the forces' residual. A loop
+ * model's residual and correction include the closing joint's load and the closure
+ * (gdca_refine_residual).
  */
 #ifndef CTC_GDCA_REFINE_H
 #define CTC_GDCA_REFINE_H
@@ -28,20 +27,13 @@
 
 /* By default (d->opt.fwd_refine < 0) a chain is refined when it has at least CTC_REFINE_MIN_BODIES
  * bodies, or its body masses or inertias span a ratio of CTC_REFINE_MASS_RATIO or more (model.h
- * mass_ratio). Below both, the unrefined round trip GDCA(iGDCA(u)) is within about 1e-9 of u on
- * random planar and spatial chains and on Featherstone's coil (bench_accuracy), while a step
- * adds 30-50% to a CTC evaluation. With extreme proportions a chain of 32 bodies loses all but
- * three digits unrefined (test_hard), one step recovers most of them and a second the rest;
- * masses 1e6 apart along an 8R loop need three (3.4e-3, 3e-5, 2e-7, then 3.4e-10 after each
- * step: bench/README.md, "Closed chains"). Such stiffly proportioned chains get up to
- * CTC_REFINE_MAX_STEPS steps. A long, evenly proportioned chain gets one: after one step the
- * round trip is already at the articulated-body oracle's own (bench_accuracy, sequential order:
- * random spatial, n = 256: 5.5e-9 against ABA's 5.5e-9; the coil, n = 4096: 9.1e-5 against
- * 6.1e-5, from 0.3 unrefined), and further steps only move it within that rounding level while each
- * costs a third to a half of an evaluation. Steps stop once a correction is below
- * CTC_REFINE_CONVERGED of the accelerations (the next one would be smaller by the bias-free pass's
- * own relative error, far below rounding of the result), or shrinks by less than a factor
- * CTC_REFINE_STALL (the residual has reached its rounding level). */
+ * mass_ratio). A stiffly proportioned chain gets up to CTC_REFINE_MAX_STEPS steps (each recovers
+ * digits the literal pass lost: test_hard, test_loop), a long evenly proportioned one gets one
+ * (its round trip is then at the articulated-body oracle's own), a short even one none. Steps
+ * stop once a correction is below CTC_REFINE_CONVERGED of the accelerations (the next would be
+ * smaller by the bias-free pass's own relative error, far below rounding of the result), or
+ * shrinks by less than a factor CTC_REFINE_STALL (the residual has reached its rounding level).
+ * The thresholds and step counts: bench/NOTEBOOK.md, "Hard cases" and "Closed chains". */
 #define CTC_REFINE_MIN_BODIES 64
 #define CTC_REFINE_MASS_RATIO 100.0
 #define CTC_REFINE_MAX_STEPS 3

@@ -23,8 +23,8 @@
  * In spatial form the kernels that the sequential order and the composite inverse spend most of
  * their time in work on 6-vectors and 4-vectors (simd.h): sums of 6 x 6 blocks (gdca_add_sq),
  * products A^T x by A's rows (gdca_tmulv; A x for the symmetric K, h11, h22 and composite
- * inertias), and the sequential order's downdate (gdca_downdate_hinge_t). Without them gcc keeps
- * these in scalar code (its vectoriser, tried, made the whole slower: Makefile). They round
+ * inertias), and the sequential order's downdate (gdca_downdate_hinge_t). Without them these
+ * stay scalar, since the builds turn gcc's vectoriser off (Makefile, OPT_DEFAULT). They round
  * otherwise than the scalar loops, within the products' rounding (test_dense).
  */
 #ifndef CTC_GDCA_TREE_H

@@ -204,8 +204,8 @@ int ctc_bdf_reset(ctc_integrator *it)
     ctc_bdf *b = it->bdf;
 
     /* after the first reset CVODE chooses the starting step itself: it restarts at order 1,
-     * where the step the order-5 history allowed fails the error test again and again (measured:
-     * CV_ERR_FAILURE at the first jump of a stiff forced problem) */
+     * where the step the order-5 history allowed fails the error test again and again
+     * (CV_ERR_FAILURE at the first jump of a stiff forced problem) */
     if (b->reinits++ > 0) b->h_init = 0;
 
     /* fold CVODE's counters (and reset's own evaluation) into the base; ReInit zeroes them */

@@ -36,7 +36,8 @@
  * accepted and the message names it: "stiff: step size below the stability limit, h = ... s at
  * t = ... s ...: use \"method\": \"bdf\"". The counts survive a reset: stiffness belongs to the
  * system. A high-gain CTC run at a tight rtol can be expensive without tripping this test:
- * order reduction on the fast error dynamics keeps h rho well under 3.25 (bench/README.md).
+ * order reduction on the fast error dynamics keeps h rho well under 3.25 (bench/NOTEBOOK.md,
+ * "Stiff gains").
  *
  * Dense output on [t0, t0 + h] with theta = (s - t0) / h, theta1 = 1 - theta:
  *     y(s) = y0 + theta (dy + theta1 (h k1 - dy + theta (dy - h k7 - (h k1 - dy)

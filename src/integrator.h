@@ -19,7 +19,7 @@
  *           invariant inside its steps (ctc_integrator_set_projection).
  *
  * The in-house explicit steppers are used rather than SUNDIALS ARKODE's ERKStep because they
- * cost less per step on the small systems of a chain (bench/README.md has the figures).
+ * cost less per step on the small systems of a chain (bench/NOTEBOOK.md, "Explicit integrators").
  *
  * The right-hand side returns 0 on success; any other value stops the step, is returned by
  * ctc_integrator_step and leaves the integrator's state at the last accepted step.

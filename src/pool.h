@@ -20,22 +20,18 @@
  * after its run is over cannot claim a chunk of the next one; it touches the job only after a
  * successful claim, while the caller is still waiting for that chunk. On a machine shared with
  * other programs this matters: a barrier that every thread must reach costs a whole time slice
- * whenever one of them is descheduled (bench/README.md, "Parallel assembly").
+ * whenever one of them is descheduled (bench/NOTEBOOK.md, "Parallel assembly").
  *
  * Waiting (for a chunk's dependencies, for the end of a run, and in an idle worker for the next
  * run) can go in three phases: a busy spin with the CPU's pause hint up to spin_ns, then spinning
  * with sched_yield up to block_ns, then blocking on a condition variable. The thread that ends a
  * wait (a chunk done, a run started) makes a system call (a broadcast) only when some thread has
  * blocked, so warm threads pay none. The defaults spin for 5 us, about what the chunks of one
- * stage take to finish one after another, and then block without yielding. bench_parallel
- * measured, per stage of two 1 us chunks on 2 threads: 1.12 us for every spinning policy and
- * 1.40 us blocking at once on an idle machine (pthread_barrier_wait: 5.2 us); beside two
- * busy-loop processes, 3.2 us spinning 5 us then blocking, 6.2 us spinning only, 7.7 us blocking
- * at once and 9.8 us yielding at once (a yield or an early block hands the core to the other
- * program, a spin keeps it from the thread being waited for). A pool with more threads than the
- * machine has online CPUs is different: its own threads compete for the cores, so it yields at
- * once and blocks after 100 us (4 threads on 2 cores: 2.7 us per stage, 11.5 us blocking at
- * once, 208 us spinning).
+ * stage take to finish one after another, and then block without yielding: a yield or an early
+ * block hands the core to another program, a long spin keeps it from the thread being waited
+ * for. A pool with more threads than the machine has online CPUs yields at once and blocks after
+ * 100 us, since its own threads compete for the cores. The policies' costs per stage:
+ * bench/NOTEBOOK.md, "Parallel assembly" ("Level barrier", "Oversubscription").
  *
  * A pool belongs to one thread at a time (the one calling ctc_pool_run); it is not reentrant.
  */
@@ -46,7 +42,8 @@
 #define CTC_MAX_THREADS 64
 
 /* Default waiting phases, ns: pause-spin until CTC_POOL_SPIN_NS, then sched_yield, and block
- * after CTC_POOL_BLOCK_NS (bench_parallel measures the choices; bench/README.md). */
+ * after CTC_POOL_BLOCK_NS (bench_parallel measures the choices: bench/NOTEBOOK.md, "Parallel
+ * assembly"). */
 #ifndef CTC_POOL_SPIN_NS
 #define CTC_POOL_SPIN_NS 5000
 #endif

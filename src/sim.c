@@ -34,8 +34,8 @@
  * the closure and, with projection, put back onto it (ctc_loop_assemble): for rk4 and dopri5
  * after the step, restarting the integrator there; for bdf inside the step (sim_project, called
  * by CVODE), because a restart sends CVODE back to order 1 and a short step, whose drift then
- * asks for the next projection: on the five-bar preset that was a projection and a restart
- * after nearly every one of 122,632 steps instead of 785. An evaluation whose boundary solve is
+ * asks for the next projection, and so on after nearly every step (bench/NOTEBOOK.md, "Whole
+ * simulations", "Reading it": BDF on the five-bar). An evaluation whose boundary solve is
  * singular beyond loop_cond_max returns SIM_RHS_SINGULAR, which ends the run as "singular" with the
  * time.
  */

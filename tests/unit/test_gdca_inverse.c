@@ -3,9 +3,9 @@
  * the forward GDCA (round trip).
  *
  * The composite form (ctc_gdca_inverse) must agree with RNEA to 1e-10 relative to the largest
- * driving force on every chain, however long (measured: <= 6e-14 up to the 1024-body coil).
+ * driving force on every chain, however long (it stays within 6e-14 up to the 1024-body coil).
  * The paper's literal mobility form (ctc_gdca_inverse_mobility) subtracts mobilities of rigid
- * composites, so its error grows like eps cond(M) (measured 8e-8 on 257 random rods with
+ * composites, so its error grows like eps cond(M) (8e-8 on 257 random rods with
  * cond(M) = 1.3e9, 2e-10 on the 16-body coil); it is held to max(1e-9, 1e-13 cond(M)). The round
  * trip forward(inverse(u)) = u carries the forward pass's error: max(1e-10, 1e-14 cond(M)).
  */

@@ -689,7 +689,7 @@ static double run_difference(const ctc_sim_result *a, const ctc_sim_result *b, c
 /* Two and three threads record bitwise the same samples. One thread, whose forward pass takes
  * the sequential order at this length, records the same to the forward pass's accuracy on a
  * chain this long: each order's accelerations are off the exact ones by up to about 2e-5 at
- * n = 4096 (the round trip on uniform rods, bench/README.md "Hard cases"), and the runs differ by
+ * n = 4096 (the round trip on uniform rods, bench/NOTEBOOK.md "Hard cases"), and the runs differ by
  * up to 3e-6 of the largest sample (qdot, tau, energy; q by 2e-7). */
 Test(gdca_parallel, a_simulation_on_threads_records_the_same_samples, .timeout = 120)
 {

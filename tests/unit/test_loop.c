@@ -684,7 +684,7 @@ static double forward_error(fixture *f, int steps, uint64_t seed)
 
 /* The forward pass's refinement on loops (gdca_refine.h): the residual carries the closing
  * joint's load and the closure. With masses alternating by 1e4 the literal pass loses digits
- * (measured 2e-7 on the 8R loop, 7e-9 on the five-bar); the default refines (mass ratio >= 100)
+ * (2e-7 on the 8R loop, 7e-9 on the five-bar); the default refines (mass ratio >= 100)
  * and each step gains about two orders (to 5e-14 and 2e-15). On an evenly proportioned loop a
  * forced step changes nothing beyond rounding. */
 Test(loop, the_forward_refinement_of_a_loop_reaches_the_oracle)
