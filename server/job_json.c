@@ -1075,59 +1075,42 @@ static int parse_scene(parser *p, const cJSON *doc)
     return rc;
 }
 
-/* ---- controller ---- */
-
-/* the keys of the gain parameters, as bits of gain_params.given */
-enum {
-    G_KP = 1u << 0,
-    G_KV = 1u << 1,
-    G_KI = 1u << 2,
-    G_ZETA = 1u << 3,
-    G_TAU = 1u << 4,
-    G_POLES = 1u << 5,
-    G_Q = 1u << 6,
-    G_LAMBDA = 1u << 7,
-    G_PAIR_KP = G_KP | G_KV,
-    G_PAIR_ZETA = G_ZETA | G_TAU,
-};
+/* ---- controller ----
+ *
+ * Every kind comes from the table of controller classes (ctrl.h ctc_ctrl_classes): its name is
+ * "controller.type", its parameter keys (ctc_ctrl_param_name) are the ones "controller" and each
+ * "controller.joints" entry accept, its required keys and kp/kv-or-zeta/tau pair are checked
+ * here, and its design turns the parameters into gains. The key lists below are built from the
+ * table, in the order of the CTC_CP_* bits. */
 
 /* The design parameters of one coordinate, as read from "controller" or an override. */
 typedef struct gain_params {
-    unsigned given; /* G_* bits of the keys present */
-    double kp, kv, ki, zeta, tau;
-    double re[3], im[3]; /* poles */
-    double Q[9];         /* row-major */
-    int q_diagonal;      /* Q was given as its diagonal */
-    double lambda;
+    ctc_ctrl_params v; /* v.given: CTC_CP_* bits of the keys present */
+    int q_diagonal;    /* Q was given as its diagonal */
 } gain_params;
 
-static const char *const gains_pd[] = {"kp", "kv", "zeta", "tau", NULL};
-static const char *const gains_pid[] = {"kp", "kv", "ki", "zeta", "tau", NULL};
-static const char *const gains_poles[] = {"poles", NULL};
-static const char *const gains_lqr[] = {"Q", "lambda", NULL};
-static const char *const gains_none[] = {NULL};
-static const char *const gains_all[] = {"kp",    "kv", "ki",     "zeta", "tau",
-                                        "poles", "Q",  "lambda", NULL};
-static const char *const *const gain_keys[] = {[CTC_CTRL_NONE] = gains_none,
-                                               [CTC_CTRL_PD] = gains_pd,
-                                               [CTC_CTRL_PID] = gains_pid,
-                                               [CTC_CTRL_POLES] = gains_poles,
-                                               [CTC_CTRL_LQR] = gains_lqr};
+enum {
+    G_PAIR_KP = CTC_CP_KP | CTC_CP_KV,
+    G_PAIR_ZETA = CTC_CP_ZETA | CTC_CP_TAU,
+    /* the longest key list: "type", every parameter, "joints", "model" and the terminator */
+    KEYS_MAX = CTC_CP_COUNT + 4,
+};
 
-static const char *const ctrl_keys_all[] = {"type",  "kp", "kv",     "ki",     "zeta",  "tau",
-                                            "poles", "Q",  "lambda", "joints", "model", NULL};
-static const char *const ctrl_keys_none[] = {"type", NULL};
-static const char *const ctrl_keys_pd[] = {"type", "kp",     "kv",    "zeta",
-                                           "tau",  "joints", "model", NULL};
-static const char *const ctrl_keys_pid[] = {"type", "kp",     "kv",    "ki", "zeta",
-                                            "tau",  "joints", "model", NULL};
-static const char *const ctrl_keys_poles[] = {"type", "poles", "joints", "model", NULL};
-static const char *const ctrl_keys_lqr[] = {"type", "Q", "lambda", "joints", "model", NULL};
-static const char *const *const ctrl_keys[] = {[CTC_CTRL_NONE] = ctrl_keys_none,
-                                               [CTC_CTRL_PD] = ctrl_keys_pd,
-                                               [CTC_CTRL_PID] = ctrl_keys_pid,
-                                               [CTC_CTRL_POLES] = ctrl_keys_poles,
-                                               [CTC_CTRL_LQR] = ctrl_keys_lqr};
+/* NULL-terminated into out: first (if not NULL), the parameter keys of the bits in params, then
+ * the keys of tail (NULL-terminated; may be NULL) */
+static void param_keys(const char *first, unsigned params, const char *const *tail,
+                       const char *out[KEYS_MAX])
+{
+    int n = 0;
+    if (first != NULL) out[n++] = first;
+    for (int i = 0; i < CTC_CP_COUNT; i++)
+        if (params & (1u << i)) out[n++] = ctc_ctrl_param_name(1u << i);
+    for (int i = 0; tail != NULL && tail[i] != NULL; i++) out[n++] = tail[i];
+    out[n] = NULL;
+}
+
+/* every parameter key any kind takes */
+#define ALL_PARAMS ((1u << CTC_CP_COUNT) - 1u)
 
 /* "poles": three entries, each a real pole or {"re": x, "im": y} */
 static int poles_at(parser *p, const cJSON *v, const char *path, double re[3], double im[3])
@@ -1176,24 +1159,25 @@ static int read_gain_params(parser *p, const cJSON *obj, const char *path, gain_
 {
     char at[PATH_LEN];
     const cJSON *v;
-    if (read_gain(p, obj, path, "kp", G_KP, &g->kp, &g->given) != 0 ||
-        read_gain(p, obj, path, "kv", G_KV, &g->kv, &g->given) != 0 ||
-        read_gain(p, obj, path, "ki", G_KI, &g->ki, &g->given) != 0 ||
-        read_gain(p, obj, path, "zeta", G_ZETA, &g->zeta, &g->given) != 0 ||
-        read_gain(p, obj, path, "tau", G_TAU, &g->tau, &g->given) != 0 ||
-        read_gain(p, obj, path, "lambda", G_LAMBDA, &g->lambda, &g->given) != 0) {
+    ctc_ctrl_params *x = &g->v;
+    if (read_gain(p, obj, path, "kp", CTC_CP_KP, &x->kp, &x->given) != 0 ||
+        read_gain(p, obj, path, "kv", CTC_CP_KV, &x->kv, &x->given) != 0 ||
+        read_gain(p, obj, path, "ki", CTC_CP_KI, &x->ki, &x->given) != 0 ||
+        read_gain(p, obj, path, "zeta", CTC_CP_ZETA, &x->zeta, &x->given) != 0 ||
+        read_gain(p, obj, path, "tau", CTC_CP_TAU, &x->tau, &x->given) != 0 ||
+        read_gain(p, obj, path, "lambda", CTC_CP_LAMBDA, &x->lambda, &x->given) != 0) {
         return -1;
     }
     if ((v = member(obj, "poles")) != NULL) {
-        if (poles_at(p, v, key_path(at, path, "poles"), g->re, g->im) != 0) return -1;
-        g->given |= G_POLES;
+        if (poles_at(p, v, key_path(at, path, "poles"), x->re, x->im) != 0) return -1;
+        x->given |= CTC_CP_POLES;
     }
     if ((v = member(obj, "Q")) != NULL) {
-        if (matrix3_at(p, v, key_path(at, path, "Q"), "diagonal entries", g->Q, &g->q_diagonal) !=
+        if (matrix3_at(p, v, key_path(at, path, "Q"), "diagonal entries", x->Q, &g->q_diagonal) !=
             0) {
             return -1;
         }
-        g->given |= G_Q;
+        x->given |= CTC_CP_Q;
     }
     return 0;
 }
@@ -1204,7 +1188,7 @@ static int check_gain_pair(parser *p, unsigned given, const char *path)
     char at[PATH_LEN];
     if ((given & G_PAIR_KP) && (given & G_PAIR_ZETA)) {
         return error_at(p->err, JOB_INVALID_FIELD,
-                        key_path(at, path, given & G_ZETA ? "zeta" : "tau"),
+                        key_path(at, path, given & CTC_CP_ZETA ? "zeta" : "tau"),
                         "cannot be combined with \"kp\" and \"kv\" (give \"kp\" and \"kv\", or "
                         "\"zeta\" and \"tau\")");
     }
@@ -1215,10 +1199,10 @@ static int check_gain_pair(parser *p, unsigned given, const char *path)
     static const struct {
         unsigned bit, partner;
         const char *key, *partner_key;
-    } pairs[] = {{G_KP, G_KV, "kp", "kv"},
-                 {G_KV, G_KP, "kv", "kp"},
-                 {G_ZETA, G_TAU, "zeta", "tau"},
-                 {G_TAU, G_ZETA, "tau", "zeta"}};
+    } pairs[] = {{CTC_CP_KP, CTC_CP_KV, "kp", "kv"},
+                 {CTC_CP_KV, CTC_CP_KP, "kv", "kp"},
+                 {CTC_CP_ZETA, CTC_CP_TAU, "zeta", "tau"},
+                 {CTC_CP_TAU, CTC_CP_ZETA, "tau", "zeta"}};
     for (int i = 0; i < 4; i++) {
         if ((given & pairs[i].bit) && !(given & pairs[i].partner)) {
             return error_at(p->err, JOB_MISSING_FIELD, key_path(at, path, pairs[i].partner_key),
@@ -1228,93 +1212,66 @@ static int check_gain_pair(parser *p, unsigned given, const char *path)
     return 0;
 }
 
-/* the keys the controller object itself must give for its type */
-static int check_required_gains(parser *p, ctc_ctrl_type type, unsigned given)
+/* the keys the controller object itself must give for its kind: the class's required ones, in
+ * bit order, then its pair */
+static int check_required_gains(parser *p, const ctc_ctrl_class *cls, unsigned given)
 {
-    switch (type) {
-    case CTC_CTRL_PID:
-        if (!(given & G_KI)) {
-            return error_at(p->err, JOB_MISSING_FIELD, "controller.ki", "is required");
+    char at[PATH_LEN];
+    for (int i = 0; i < CTC_CP_COUNT; i++) {
+        unsigned bit = 1u << i;
+        if ((cls->required & bit) && !(given & bit)) {
+            return error_at(p->err, JOB_MISSING_FIELD,
+                            key_path(at, "controller", ctc_ctrl_param_name(bit)), "is required");
         }
-        return check_gain_pair(p, given, "controller");
-    case CTC_CTRL_PD:
-        return check_gain_pair(p, given, "controller");
-    case CTC_CTRL_POLES:
-        if (!(given & G_POLES)) {
-            return error_at(p->err, JOB_MISSING_FIELD, "controller.poles", "is required");
-        }
-        return 0;
-    case CTC_CTRL_LQR:
-        if (!(given & G_Q))
-            return error_at(p->err, JOB_MISSING_FIELD, "controller.Q", "is required");
-        if (!(given & G_LAMBDA)) {
-            return error_at(p->err, JOB_MISSING_FIELD, "controller.lambda", "is required");
-        }
-        return 0;
-    case CTC_CTRL_NONE:
-        break;
     }
-    return 0;
+    return cls->gain_pair ? check_gain_pair(p, given, "controller") : 0;
 }
 
 /* g with the override o applied key by key; a pd/pid pair in o replaces the other pair in g */
 static void merge_gains(gain_params *g, const gain_params *o)
 {
-    if ((o->given & G_PAIR_KP) && !(o->given & G_PAIR_ZETA)) g->given &= ~(unsigned)G_PAIR_ZETA;
-    if ((o->given & G_PAIR_ZETA) && !(o->given & G_PAIR_KP)) g->given &= ~(unsigned)G_PAIR_KP;
-    if (o->given & G_KP) g->kp = o->kp;
-    if (o->given & G_KV) g->kv = o->kv;
-    if (o->given & G_KI) g->ki = o->ki;
-    if (o->given & G_ZETA) g->zeta = o->zeta;
-    if (o->given & G_TAU) g->tau = o->tau;
-    if (o->given & G_POLES) {
-        memcpy(g->re, o->re, sizeof g->re);
-        memcpy(g->im, o->im, sizeof g->im);
+    ctc_ctrl_params *x = &g->v;
+    const ctc_ctrl_params *y = &o->v;
+    if ((y->given & G_PAIR_KP) && !(y->given & G_PAIR_ZETA)) x->given &= ~(unsigned)G_PAIR_ZETA;
+    if ((y->given & G_PAIR_ZETA) && !(y->given & G_PAIR_KP)) x->given &= ~(unsigned)G_PAIR_KP;
+    if (y->given & CTC_CP_KP) x->kp = y->kp;
+    if (y->given & CTC_CP_KV) x->kv = y->kv;
+    if (y->given & CTC_CP_KI) x->ki = y->ki;
+    if (y->given & CTC_CP_ZETA) x->zeta = y->zeta;
+    if (y->given & CTC_CP_TAU) x->tau = y->tau;
+    if (y->given & CTC_CP_POLES) {
+        memcpy(x->re, y->re, sizeof x->re);
+        memcpy(x->im, y->im, sizeof x->im);
     }
-    if (o->given & G_Q) {
-        memcpy(g->Q, o->Q, sizeof g->Q);
+    if (y->given & CTC_CP_Q) {
+        memcpy(x->Q, y->Q, sizeof x->Q);
         g->q_diagonal = o->q_diagonal;
     }
-    if (o->given & G_LAMBDA) g->lambda = o->lambda;
-    g->given |= o->given;
+    if (y->given & CTC_CP_LAMBDA) x->lambda = y->lambda;
+    x->given |= y->given;
 }
 
-/* the gains of g by the library's design functions; their errors at field */
-static int design_gains(parser *p, ctc_ctrl_type type, const gain_params *g, const char *field,
-                        ctc_gains *out)
+/* the gains of g by the class's design; its errors at field */
+static int design_gains(parser *p, const ctc_ctrl_class *cls, const gain_params *g,
+                        const char *field, ctc_gains *out)
 {
     char msg[512];
-    ctc_status st = CTC_OK;
-    double ki = type == CTC_CTRL_PID ? g->ki : 0.0;
-    switch (type) {
-    case CTC_CTRL_PD:
-    case CTC_CTRL_PID:
-        st = (g->given & G_KP) ? ctc_ctrl_pid(g->kp, g->kv, ki, out, msg, sizeof msg)
-                               : ctc_ctrl_zeta_tau(g->zeta, g->tau, ki, out, msg, sizeof msg);
-        break;
-    case CTC_CTRL_POLES:
-        st = ctc_ctrl_poles(g->re, g->im, out, msg, sizeof msg);
-        break;
-    case CTC_CTRL_LQR:
-        st = ctc_ctrl_lqr(g->Q, g->lambda, out, NULL, msg, sizeof msg);
-        break;
-    case CTC_CTRL_NONE:
-        break;
-    }
+    ctc_status st = cls->design != NULL ? cls->design(&g->v, out, msg, sizeof msg) : CTC_OK;
     if (st == CTC_ENOMEM) return out_of_memory(p->err);
     if (st != CTC_OK) return error_at(p->err, JOB_INVALID_FIELD, field, "%s", msg);
     return 0;
 }
 
 /* the keys of g that were given, in canonical order */
-static void put_gain_params(parser *p, cJSON *out, const gain_params *g)
+static void put_gain_params(parser *p, cJSON *out, const gain_params *gp)
 {
-    if (g->given & G_KP) put_number(p, out, "kp", g->kp);
-    if (g->given & G_KV) put_number(p, out, "kv", g->kv);
-    if (g->given & G_ZETA) put_number(p, out, "zeta", g->zeta);
-    if (g->given & G_TAU) put_number(p, out, "tau", g->tau);
-    if (g->given & G_KI) put_number(p, out, "ki", g->ki);
-    if (g->given & G_POLES) {
+    const ctc_ctrl_params *g = &gp->v;
+    if (g->given & CTC_CP_KP) put_number(p, out, "kp", g->kp);
+    if (g->given & CTC_CP_KV) put_number(p, out, "kv", g->kv);
+    if (g->given & CTC_CP_ZETA) put_number(p, out, "zeta", g->zeta);
+    if (g->given & CTC_CP_TAU) put_number(p, out, "tau", g->tau);
+    if (g->given & CTC_CP_KI) put_number(p, out, "ki", g->ki);
+    if (g->given & CTC_CP_POLES) {
         cJSON *poles = put(p, out, "poles", cJSON_CreateArray());
         for (int i = 0; i < 3; i++) {
             if (g->im[i] == 0) {
@@ -1326,8 +1283,8 @@ static void put_gain_params(parser *p, cJSON *out, const gain_params *g)
             put_number(p, pole, "im", g->im[i]);
         }
     }
-    if (g->given & G_Q) put_matrix3(p, out, "Q", g->Q, g->q_diagonal);
-    if (g->given & G_LAMBDA) put_number(p, out, "lambda", g->lambda);
+    if (g->given & CTC_CP_Q) put_matrix3(p, out, "Q", g->Q, gp->q_diagonal);
+    if (g->given & CTC_CP_LAMBDA) put_number(p, out, "lambda", g->lambda);
 }
 
 /* what one entry of a per-coordinate array stands for, in messages */
@@ -1337,11 +1294,14 @@ static const char *coordinate_word(const parser *p)
 }
 
 /* "controller.joints": nind overrides of the shared parameters, one per coordinate */
-static int parse_gain_overrides(parser *p, const cJSON *v, ctc_ctrl_type type,
+static int parse_gain_overrides(parser *p, const cJSON *v, const ctc_ctrl_class *cls,
                                 const gain_params *shared, const char *context, cJSON *out_ctrl)
 {
     job *j = p->j;
     char path[PATH_LEN];
+    const char *mine_keys[KEYS_MAX], *all_keys[KEYS_MAX];
+    param_keys(NULL, cls->params, NULL, mine_keys);
+    param_keys(NULL, ALL_PARAMS, NULL, all_keys);
     if (!cJSON_IsArray(v)) {
         return error_at(p->err, JOB_INVALID_FIELD, "controller.joints",
                         "must be an array of %d objects, one per %s (got %s)", j->nind,
@@ -1359,19 +1319,19 @@ static int parse_gain_overrides(parser *p, const cJSON *v, ctc_ctrl_type type,
         gain_params override = {0};
         index_path(path, "controller.joints", i);
         if (object_at(p, e, path) != 0 ||
-            check_keys(p, e, path, gain_keys[type], gains_all, context) != 0 ||
+            check_keys(p, e, path, mine_keys, all_keys, context) != 0 ||
             read_gain_params(p, e, path, &override) != 0) {
             return -1;
         }
         put_gain_params(p, put(p, out, NULL, cJSON_CreateObject()), &override);
-        if (override.given == 0) continue; /* {} keeps the shared gains */
+        if (override.v.given == 0) continue; /* {} keeps the shared gains */
 
         gain_params mine = *shared;
         merge_gains(&mine, &override);
-        if ((type == CTC_CTRL_PD || type == CTC_CTRL_PID) && check_gain_pair(p, mine.given, path)) {
+        if (cls->gain_pair && check_gain_pair(p, mine.v.given, path) != 0) {
             return -1;
         }
-        if (design_gains(p, type, &mine, path, &j->gains[i]) != 0) return -1;
+        if (design_gains(p, cls, &mine, path, &j->gains[i]) != 0) return -1;
     }
     return 0;
 }
@@ -1404,21 +1364,30 @@ static int parse_ctrl_model(parser *p, const cJSON *ctrl, cJSON *out_ctrl)
 
 static int parse_controller(parser *p, const cJSON *doc)
 {
+    static const char *const shared_keys[] = {"joints", "model", NULL};
     job *j = p->j;
-    const char *names[5];
+    const char *names[CTC_CTRL_NTYPES], *keys[CTC_CTRL_NTYPES][KEYS_MAX], *all_keys[KEYS_MAX];
+    const char *const *keys_by_type[CTC_CTRL_NTYPES];
     int type;
-    for (int t = 0; t < 5; t++) names[t] = ctc_ctrl_type_name((ctc_ctrl_type)t);
+    for (int t = 0; t < CTC_CTRL_NTYPES; t++) {
+        const ctc_ctrl_class *c = ctc_ctrl_classes[t];
+        names[t] = c->name;
+        param_keys("type", c->params, c->law != NULL ? shared_keys : NULL, keys[t]);
+        keys_by_type[t] = keys[t];
+    }
+    param_keys("type", ALL_PARAMS, shared_keys, all_keys);
     const cJSON *v =
         required_member(p, doc, "", "controller", " ({\"type\": \"none\"} for a passive run)");
-    if (v == NULL || typed_object(p, v, "controller", "type", REQUIRED, 0, names, 5,
-                                  "controller type", ctrl_keys, ctrl_keys_all, &type) != 0) {
+    if (v == NULL || typed_object(p, v, "controller", "type", REQUIRED, 0, names, CTC_CTRL_NTYPES,
+                                  "controller type", keys_by_type, all_keys, &type) != 0) {
         return -1;
     }
+    const ctc_ctrl_class *cls = ctc_ctrl_classes[type];
     p->ctrl = j->spec.controller = (ctc_ctrl_type)type;
     j->spec.model_mass_scale = j->spec.model_inertia_scale = 1.0;
     cJSON *out = put(p, p->norm, "controller", cJSON_CreateObject());
     put_string(p, out, "type", names[type]);
-    if (p->ctrl == CTC_CTRL_NONE) return 0;
+    if (cls->law == NULL) return 0; /* passive */
 
     /* computed torque control per coordinate: not for a spherical joint's quaternion */
     if (p->spherical[0] != '\0') {
@@ -1434,10 +1403,10 @@ static int parse_controller(parser *p, const cJSON *doc)
 
     /* the gains the coordinates share, designed once */
     gain_params shared = {0};
-    ctc_gains gains;
+    ctc_gains gains = {0};
     if (read_gain_params(p, v, "controller", &shared) != 0 ||
-        check_required_gains(p, p->ctrl, shared.given) != 0 ||
-        design_gains(p, p->ctrl, &shared, "controller", &gains) != 0) {
+        check_required_gains(p, cls, shared.v.given) != 0 ||
+        design_gains(p, cls, &shared, "controller", &gains) != 0) {
         return -1;
     }
     put_gain_params(p, out, &shared);
@@ -1450,7 +1419,7 @@ static int parse_controller(parser *p, const cJSON *doc)
     const cJSON *joints = member(v, "joints");
     char context[64];
     snprintf(context, sizeof context, "controller type \"%s\"", names[type]);
-    if (joints != NULL && parse_gain_overrides(p, joints, p->ctrl, &shared, context, out) != 0) {
+    if (joints != NULL && parse_gain_overrides(p, joints, cls, &shared, context, out) != 0) {
         return -1;
     }
     return parse_ctrl_model(p, v, out);

@@ -1,6 +1,7 @@
 /*
- * ctrl.h - controller design for computed torque control: PD, PID, pole placement and LQR gains
- * of one joint coordinate (paper section 6 and Appendix B, DESIGN.md section 6).
+ * ctrl.h - controllers for computed torque control: the design of PD, PID, pole placement and LQR
+ * gains of one joint coordinate (paper section 6 and Appendix B, DESIGN.md section 6), and the
+ * controller interface, one class per kind of controller listed in one table (below).
  *
  * Every controller ctcsim offers is a linear state feedback on the coordinate's tracking error
  * state E = (integral of e, e, de/dt), with e = q_d - q:
@@ -33,6 +34,15 @@
 #include <stddef.h>
 
 #include "status.h"
+
+/* The built-in kinds, as indices of ctc_ctrl_classes (ctrl.c). */
+typedef enum ctc_ctrl_type {
+    CTC_CTRL_NONE = 0, /* passive */
+    CTC_CTRL_PD,
+    CTC_CTRL_PID,
+    CTC_CTRL_POLES,
+    CTC_CTRL_LQR,
+} ctc_ctrl_type;
 
 /* The feedback gains of one coordinate: w = ki int(e) + kp e + kv de/dt. */
 typedef struct ctc_gains {
@@ -89,5 +99,100 @@ ctc_status ctc_ctrl_lqr(const double Q[9], double lambda, ctc_gains *out, double
  * rounding level; well separated roots are accurate relative to their own size even when their
  * magnitudes differ by many decades. Gains with a non-finite member give NaN poles. */
 void ctc_ctrl_closed_loop_poles(const ctc_gains *g, double re[3], double im[3]);
+
+/* ---- the controller interface ----
+ *
+ * A kind of controller is one ctc_ctrl_class: its name, the design parameters it takes and how
+ * it turns them into gains, its law, the size of its own state and its metrics hook. Each lives
+ * in its own file (ctrl_pid.c: pd and pid; ctrl_poles.c; ctrl_lqr.c; ctrl.c: none and the linear
+ * law they share) and is one row of ctc_ctrl_classes; the job parser (server/job_json.c) and the
+ * run (sim.h) read everything else from the row. A controller of the caller's own, linear or
+ * not, is a class passed in ctc_sim_spec.ctrl_class without a row.
+ *
+ * The run calls the law once per evaluation of the right-hand side, with every controlled
+ * coordinate at once (ctc_ctrl_eval), and it returns the error feedback w (nind); the commanded
+ * acceleration is then u_i = qdd_d,i + w_i, the input of the inverse dynamics (sim.h). */
+
+/* The design parameters a job can give, as bits of ctc_ctrl_params.given and of a class's
+ * params and required masks. ctc_ctrl_param_name gives each key's name in the job. */
+enum {
+    CTC_CP_KP = 1u << 0,     /* "kp" (s^-2) */
+    CTC_CP_KV = 1u << 1,     /* "kv" (s^-1) */
+    CTC_CP_KI = 1u << 2,     /* "ki" (s^-3) */
+    CTC_CP_ZETA = 1u << 3,   /* "zeta", damping ratio (1) */
+    CTC_CP_TAU = 1u << 4,    /* "tau", time constant (s) */
+    CTC_CP_POLES = 1u << 5,  /* "poles": re[3], im[3] (s^-1) */
+    CTC_CP_Q = 1u << 6,      /* "Q": 3x3 state weight, row-major */
+    CTC_CP_LAMBDA = 1u << 7, /* "lambda": control weight */
+};
+#define CTC_CP_COUNT 8
+
+/* The parameters given for one coordinate; members whose bit is not in `given` are unset. */
+typedef struct ctc_ctrl_params {
+    unsigned given; /* CTC_CP_* bits */
+    double kp, kv, ki, zeta, tau;
+    double re[3], im[3]; /* poles */
+    double Q[9];         /* row-major */
+    double lambda;
+} ctc_ctrl_params;
+
+/* The name of parameter bit CTC_CP_* in jobs ("kp", ..., "lambda"); NULL for any other value. */
+const char *ctc_ctrl_param_name(unsigned bit);
+
+/* What a law reads at one evaluation. Shapes in parentheses; units SI and radians. The run owns
+ * every array; they are valid during the call only. */
+typedef struct ctc_ctrl_eval {
+    double t;               /* s */
+    int nind;               /* controlled coordinates */
+    const double *q, *v;    /* (nq), (nv) the plant's state, quaternions normalised */
+    const double *qi, *vi;  /* (nind) the controlled coordinates' positions and rates */
+    const double *des;      /* (nind x 3) desired position, rate, acceleration per coordinate */
+    const double *xi;       /* (nind) the integral of e = q_d - q per coordinate; NULL when the
+                               class has nstate 0 */
+    const ctc_gains *gains; /* (nind) ctc_sim_spec.gains; NULL when not given */
+    const void *params;     /* ctc_sim_spec.ctrl_params, the caller's own; may be NULL */
+} ctc_ctrl_eval;
+
+typedef struct ctc_ctrl_class {
+    const char *name;  /* the job's "controller.type": lowercase, unique in ctc_ctrl_classes */
+    unsigned params;   /* CTC_CP_* bits the kind accepts (also in "controller.joints" entries) */
+    unsigned required; /* CTC_CP_* bits the shared "controller" object must give (checked in bit
+                          order, each reported missing as "controller.<key>") */
+    int gain_pair;     /* 1: needs exactly one whole pair, "kp" and "kv" or "zeta" and "tau" */
+    int nstate;        /* the controller's state per coordinate: 1 = the integral of e,
+                          integrated by the run (xi), 0 = none; no other size */
+    /* The gains of one coordinate from its parameters (those of `params` that were given, the
+     * required ones always): writes *out only on success; on failure returns CTC_EINVAL (or
+     * CTC_ESINGULAR, CTC_ENOMEM) and a message naming the parameter, as the design functions
+     * above. NULL: the kind takes no gains (none, or a law that reads only `params`). Pure and
+     * thread-safe. */
+    ctc_status (*design)(const ctc_ctrl_params *p, ctc_gains *out, char *err, size_t errlen);
+    /* The law: w (nind, m/s^2 or rad/s^2) from in. Called once per evaluation, from the run's
+     * thread, possibly from several runs at once: it must not write anything but w (keep state in
+     * xi, not in statics or in params). NULL: the passive kind (no driving forces at all). */
+    void (*law)(const ctc_ctrl_eval *in, double *w);
+    /* Metrics hook: for a law that is the linear feedback w = K E of the gains, the closed-loop
+     * matrix Ac (3x3, row-major) of d/dt E = Ac E, E = (int e, e, de), with which the run checks
+     * the error dynamics of an exact model against expm(Ac t) E(0) (sim.h errdyn_dev). Such a
+     * class needs gains, checked for stability, and nstate 1. NULL: no such reference. */
+    void (*closed_loop)(const ctc_gains *g, double a[9]);
+} ctc_ctrl_class;
+
+/* The built-in kinds, indexed by ctc_ctrl_type; the one list that names them. */
+#define CTC_CTRL_NTYPES 5
+extern const ctc_ctrl_class *const ctc_ctrl_classes[CTC_CTRL_NTYPES];
+
+/* The class of a built-in kind; NULL for a value out of range. */
+const ctc_ctrl_class *ctc_ctrl_class_of(ctc_ctrl_type t);
+
+/* The built-in kind named `name` ("pid"), or -1. */
+int ctc_ctrl_type_of(const char *name);
+
+/* The linear state feedback the built-in kinds share:
+ * w_i = ki_i xi_i + kp_i (q_d,i - qi_i) + kv_i (qd_d,i - vi_i), with in->gains (nind). */
+void ctc_ctrl_linear_law(const ctc_ctrl_eval *in, double *w);
+
+/* Its closed-loop matrix: Ac = [[0, 1, 0], [0, 0, 1], [-ki, -kp, -kv]] (ctrl.h's header). */
+void ctc_ctrl_linear_closed_loop(const ctc_gains *g, double a[9]);
 
 #endif

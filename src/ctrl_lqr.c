@@ -413,3 +413,20 @@ ctc_status ctc_ctrl_lqr(const double Q[9], double lambda, ctc_gains *out, double
     out->kv = kv;
     return CTC_OK;
 }
+
+/* ---- the lqr class (ctrl.h) ---- */
+
+static ctc_status design_lqr(const ctc_ctrl_params *p, ctc_gains *out, char *err, size_t errlen)
+{
+    return ctc_ctrl_lqr(p->Q, p->lambda, out, NULL, err, errlen);
+}
+
+const ctc_ctrl_class ctc_ctrl_class_lqr = {
+    .name = "lqr",
+    .params = CTC_CP_Q | CTC_CP_LAMBDA,
+    .required = CTC_CP_Q | CTC_CP_LAMBDA,
+    .nstate = 1,
+    .design = design_lqr,
+    .law = ctc_ctrl_linear_law,
+    .closed_loop = ctc_ctrl_linear_closed_loop,
+};

@@ -218,3 +218,43 @@ void ctc_ctrl_closed_loop_poles(const ctc_gains *g, double re[3], double im[3])
     }
     sort_roots(re, im);
 }
+
+/* ---- the pd and pid classes (ctrl.h): gains from "kp" and "kv" or from "zeta" and "tau" ---- */
+
+static ctc_status design_pd_pid(const ctc_ctrl_params *p, double ki, ctc_gains *out, char *err,
+                                size_t errlen)
+{
+    return (p->given & CTC_CP_KP) ? ctc_ctrl_pid(p->kp, p->kv, ki, out, err, errlen)
+                                  : ctc_ctrl_zeta_tau(p->zeta, p->tau, ki, out, err, errlen);
+}
+
+static ctc_status design_pd(const ctc_ctrl_params *p, ctc_gains *out, char *err, size_t errlen)
+{
+    return design_pd_pid(p, 0.0, out, err, errlen);
+}
+
+static ctc_status design_pid(const ctc_ctrl_params *p, ctc_gains *out, char *err, size_t errlen)
+{
+    return design_pd_pid(p, p->ki, out, err, errlen);
+}
+
+const ctc_ctrl_class ctc_ctrl_class_pd = {
+    .name = "pd",
+    .params = CTC_CP_KP | CTC_CP_KV | CTC_CP_ZETA | CTC_CP_TAU,
+    .gain_pair = 1,
+    .nstate = 1, /* recorded only: ki = 0 */
+    .design = design_pd,
+    .law = ctc_ctrl_linear_law,
+    .closed_loop = ctc_ctrl_linear_closed_loop,
+};
+
+const ctc_ctrl_class ctc_ctrl_class_pid = {
+    .name = "pid",
+    .params = CTC_CP_KP | CTC_CP_KV | CTC_CP_KI | CTC_CP_ZETA | CTC_CP_TAU,
+    .required = CTC_CP_KI,
+    .gain_pair = 1,
+    .nstate = 1,
+    .design = design_pid,
+    .law = ctc_ctrl_linear_law,
+    .closed_loop = ctc_ctrl_linear_closed_loop,
+};

@@ -118,3 +118,20 @@ ctc_status ctc_ctrl_poles(const double re[3], const double im[3], ctc_gains *out
     out->kv = kv;
     return CTC_OK;
 }
+
+/* ---- the poles class (ctrl.h) ---- */
+
+static ctc_status design_poles(const ctc_ctrl_params *p, ctc_gains *out, char *err, size_t errlen)
+{
+    return ctc_ctrl_poles(p->re, p->im, out, err, errlen);
+}
+
+const ctc_ctrl_class ctc_ctrl_class_poles = {
+    .name = "poles",
+    .params = CTC_CP_POLES,
+    .required = CTC_CP_POLES,
+    .nstate = 1,
+    .design = design_poles,
+    .law = ctc_ctrl_linear_law,
+    .closed_loop = ctc_ctrl_linear_closed_loop,
+};

@@ -3,11 +3,14 @@
  * and metrics (paper section 2, DESIGN.md section 6).
  *
  * At each evaluation of the right-hand side, for the state y = (q, v, int e):
- *   e = q_d - q, de = qd_d - v, w = ki int(e) + kp e + kv de, u = qdd_d + w   (per coordinate)
+ *   e = q_d - q, de = qd_d - v, w = law(t, q, v, q_d, int e), u = qdd_d + w   (per coordinate)
  *   f = iGDCA_controller(q, v, u)              driving forces from the controller's model
  *   qdd = GDCA_plant(q, v, f + z(t))           forward dynamics of the plant, disturbance added
  * The controller's model is the plant unless mass or inertia scale factors are given. With
  * controller NONE the run is passive: f = 0 and the plant moves under gravity and z(t) alone.
+ * The law is the controller class's (ctrl.h): for the built-in kinds the linear feedback
+ * w = ki int(e) + kp e + kv de of the designed gains; a class of the caller's own, nonlinear or
+ * not, plugs in through spec.ctrl_class.
  *
  * Units: SI, radians; coordinates are relative joint coordinates (model.h). "Coordinate" means a
  * velocity coordinate (nv of them): one per revolute or prismatic joint, two per cylindrical.
@@ -45,14 +48,6 @@
 #include "status.h"
 #include "traj.h"
 
-typedef enum ctc_ctrl_type {
-    CTC_CTRL_NONE = 0, /* passive */
-    CTC_CTRL_PD,
-    CTC_CTRL_PID,
-    CTC_CTRL_POLES,
-    CTC_CTRL_LQR,
-} ctc_ctrl_type;
-
 /* Output channels, as bits of ctc_sim_spec.channels. Widths: q nq; qdot nv; energy 2 (kinetic,
  * potential); loop 2; all others nind (the controlled coordinates: nv for an open chain). q_des,
  * qd_des, e and w need a controller, loop a loop model. */
@@ -81,11 +76,17 @@ typedef enum ctc_loop_stab {
 } ctc_loop_stab;
 
 typedef struct ctc_sim_spec {
-    ctc_chain_spec chain;       /* the plant */
-    const double *q0;           /* (nq) initial positions; NULL = ctc_model_q_zero */
-    const double *v0;           /* (nv) initial velocities; NULL = 0 */
-    ctc_ctrl_type controller;   /* NONE = passive */
-    const ctc_gains *gains;     /* (nind) designed gains per coordinate (ctrl.h); unused if NONE */
+    ctc_chain_spec chain;             /* the plant */
+    const double *q0;                 /* (nq) initial positions; NULL = ctc_model_q_zero */
+    const double *v0;                 /* (nv) initial velocities; NULL = 0 */
+    ctc_ctrl_type controller;         /* NONE = passive; ignored when ctrl_class is set */
+    const ctc_ctrl_class *ctrl_class; /* NULL = ctc_ctrl_classes[controller]; else a class of the
+                                         caller's own (ctrl.h), which must outlive the run */
+    const void *ctrl_params;    /* passed to the class's law as ctc_ctrl_eval.params; NULL ok */
+    const ctc_gains *gains;     /* (nind) designed gains per coordinate (ctrl.h): required by a
+                                   class with closed_loop (every built-in active kind), optional
+                                   for others (then passed to the law as given); unused if
+                                   passive */
     double model_mass_scale;    /* controller's model: every mass times this (> 0; 1 = exact) */
     double model_inertia_scale; /* controller's model: every inertia about the CoM times this */
     const ctc_traj *traj;       /* (nind) desired trajectory per coordinate; unused if NONE */

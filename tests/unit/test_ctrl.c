@@ -867,3 +867,111 @@ Test(ctrl, lqr_rejects_invalid_input_with_exact_messages)
     }
     cr_assert(g.ki == -7 && g.kp == -7 && g.kv == -7, "out must be untouched on failure");
 }
+
+/* ---- the table of controller classes ---- */
+
+Test(ctrl, every_class_in_the_table_has_a_unique_name_and_its_index)
+{
+    for (int t = 0; t < CTC_CTRL_NTYPES; t++) {
+        const ctc_ctrl_class *c = ctc_ctrl_classes[t];
+        cr_assert_not_null(c, "row %d", t);
+        cr_assert_not_null(c->name, "row %d", t);
+        cr_assert_gt(strlen(c->name), 0, "row %d", t);
+        cr_expect_eq(ctc_ctrl_class_of((ctc_ctrl_type)t), c);
+        cr_expect_eq(ctc_ctrl_type_of(c->name), t, "\"%s\"", c->name);
+        for (int u = 0; u < t; u++)
+            cr_expect_neq(strcmp(ctc_ctrl_classes[u]->name, c->name), 0, "rows %d and %d: \"%s\"",
+                          u, t, c->name);
+        /* a row's masks name only known parameters, and what it requires it accepts */
+        cr_expect_eq(c->params & ~((1u << CTC_CP_COUNT) - 1u), 0u, "\"%s\"", c->name);
+        cr_expect_eq(c->required & ~c->params, 0u, "\"%s\"", c->name);
+        cr_expect(c->nstate == 0 || c->nstate == 1, "\"%s\": nstate %d", c->name, c->nstate);
+        /* an active kind with a closed-loop hook designs its gains and keeps the integral */
+        if (c->closed_loop) cr_expect(c->design && c->law && c->nstate == 1, "\"%s\"", c->name);
+    }
+    /* the names jobs use, in the enum's order */
+    const char *names[] = {"none", "pd", "pid", "poles", "lqr"};
+    for (int t = 0; t < CTC_CTRL_NTYPES; t++) cr_expect_str_eq(ctc_ctrl_classes[t]->name, names[t]);
+    cr_expect_null(ctc_ctrl_class_of((ctc_ctrl_type)CTC_CTRL_NTYPES));
+    cr_expect_eq(ctc_ctrl_type_of("PD"), -1);
+    cr_expect_eq(ctc_ctrl_type_of(NULL), -1);
+    /* none is passive: no law, no gains, no state */
+    const ctc_ctrl_class *none = ctc_ctrl_classes[CTC_CTRL_NONE];
+    cr_expect(!none->law && !none->design && !none->closed_loop && none->nstate == 0);
+}
+
+Test(ctrl, parameter_names_are_the_job_keys_in_bit_order)
+{
+    const char *keys[CTC_CP_COUNT] = {"kp", "kv", "ki", "zeta", "tau", "poles", "Q", "lambda"};
+    for (int i = 0; i < CTC_CP_COUNT; i++) cr_expect_str_eq(ctc_ctrl_param_name(1u << i), keys[i]);
+    cr_expect_null(ctc_ctrl_param_name(0));
+    cr_expect_null(ctc_ctrl_param_name(CTC_CP_KP | CTC_CP_KV));
+    cr_expect_null(ctc_ctrl_param_name(1u << CTC_CP_COUNT));
+}
+
+/* the gains of the class of kind t from p, asserting success */
+static ctc_gains class_design(ctc_ctrl_type t, const ctc_ctrl_params *p)
+{
+    char err[ERRLEN] = "";
+    ctc_gains g = {-1, -1, -1};
+    const ctc_ctrl_class *c = ctc_ctrl_class_of(t);
+    cr_assert(c && c->design);
+    cr_assert_eq(c->design(p, &g, err, sizeof err), CTC_OK, "%s: %s", c->name, err);
+    return g;
+}
+
+Test(ctrl, each_class_designs_the_papers_gains)
+{
+    /* PD and PID (section 7.1): kp 100, kv 20, ki 250; or from zeta and tau (Eq. 92-94) */
+    ctc_ctrl_params p = {
+        .given = CTC_CP_KP | CTC_CP_KV | CTC_CP_KI, .kp = 100, .kv = 20, .ki = 250};
+    ctc_gains g = class_design(CTC_CTRL_PD, &p);
+    cr_expect(g.ki == 0 && g.kp == 100 && g.kv == 20, "pd (%g, %g, %g)", g.ki, g.kp, g.kv);
+    g = class_design(CTC_CTRL_PID, &p);
+    cr_expect(g.ki == 250 && g.kp == 100 && g.kv == 20, "pid (%g, %g, %g)", g.ki, g.kp, g.kv);
+    p = (ctc_ctrl_params){.given = CTC_CP_ZETA | CTC_CP_TAU, .zeta = 1, .tau = 0.1};
+    g = class_design(CTC_CTRL_PD, &p);
+    cr_expect(fabs(g.kp - 100) <= 1e-12 && fabs(g.kv - 20) <= 1e-12, "(%g, %g)", g.kp, g.kv);
+
+    /* poles (-2, -2.1, -2.2): K = (9.24, 13.22, 6.3) (section 7.1) */
+    p = (ctc_ctrl_params){.given = CTC_CP_POLES, .re = {-2, -2.1, -2.2}};
+    g = class_design(CTC_CTRL_POLES, &p);
+    cr_expect_leq(fabs(g.ki - 9.24), 1e-12, "ki = %.17g", g.ki);
+    cr_expect_leq(fabs(g.kp - 13.22), 1e-12, "kp = %.17g", g.kp);
+    cr_expect_leq(fabs(g.kv - 6.3), 1e-12, "kv = %.17g", g.kv);
+
+    /* LQR with Q = I, lambda = 0.01: K = (10, 18.2674, 11.6848) (Appendix B) */
+    p = (ctc_ctrl_params){
+        .given = CTC_CP_Q | CTC_CP_LAMBDA, .Q = {1, 0, 0, 0, 1, 0, 0, 0, 1}, .lambda = 0.01};
+    g = class_design(CTC_CTRL_LQR, &p);
+    cr_expect_leq(fabs(g.ki - 10), 1e-4, "ki = %.17g", g.ki);
+    cr_expect_leq(fabs(g.kp - 18.2674), 1e-4, "kp = %.17g", g.kp);
+    cr_expect_leq(fabs(g.kv - 11.6848), 1e-4, "kv = %.17g", g.kv);
+}
+
+Test(ctrl, a_class_design_rejects_bad_parameters_with_the_design_functions_message)
+{
+    char err[ERRLEN] = "";
+    ctc_gains g = {7, 7, 7};
+    ctc_ctrl_params p = {.given = CTC_CP_KP | CTC_CP_KV | CTC_CP_KI, .kp = 1, .kv = 2, .ki = 5};
+    cr_assert_eq(ctc_ctrl_class_of(CTC_CTRL_PID)->design(&p, &g, err, sizeof err), CTC_EINVAL);
+    cr_expect_str_eq(err, "ki = 5 must be below kv*kp = 2 (Routh-Hurwitz: the closed-loop error "
+                          "dynamics would be unstable)");
+    cr_expect(g.ki == 7 && g.kp == 7 && g.kv == 7, "gains written on failure");
+}
+
+Test(ctrl, the_linear_law_is_the_feedback_of_each_coordinates_gains)
+{
+    const ctc_gains g[2] = {{.ki = 3, .kp = 5, .kv = 7}, {.ki = 0, .kp = 11, .kv = 13}};
+    const double des[6] = {1, 2, 99, -1, 0.5, 99}, qi[2] = {0.25, -2}, vi[2] = {4, 1};
+    const double xi[2] = {0.125, 8};
+    const ctc_ctrl_eval in = {.nind = 2, .qi = qi, .vi = vi, .des = des, .xi = xi, .gains = g};
+    double w[2];
+    ctc_ctrl_linear_law(&in, w);
+    cr_expect_eq(w[0], 3 * 0.125 + 5 * (1 - 0.25) + 7 * (2 - 4.0));
+    cr_expect_eq(w[1], 0 * 8 + 11 * (-1 + 2.0) + 13 * (0.5 - 1));
+    double a[9];
+    ctc_ctrl_linear_closed_loop(&g[0], a);
+    const double ac[9] = {0, 1, 0, 0, 0, 1, -3, -5, -7};
+    for (int i = 0; i < 9; i++) cr_expect_eq(a[i], ac[i], "Ac[%d]", i);
+}

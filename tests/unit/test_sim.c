@@ -649,3 +649,159 @@ Test(sim, bdf_projects_a_loop_without_restarting_at_every_step)
     ctc_sim_result_free(proj);
     ctc_sim_result_free(baum);
 }
+
+/* ---- controllers of the test's own, through the class interface (ctrl.h) ---- */
+
+/* PD/PID written here from the contract: w = ki int(e) + kp e + kv de per coordinate */
+static void own_pd_law(const ctc_ctrl_eval *in, double *w)
+{
+    for (int i = 0; i < in->nind; i++) {
+        const ctc_gains *g = &in->gains[i];
+        const double *d = in->des + 3 * i;
+        w[i] = g->ki * in->xi[i] + g->kp * (d[0] - in->qi[i]) + g->kv * (d[1] - in->vi[i]);
+    }
+}
+
+/* d/dt (int e, e, de) under that law with an exact model, where e'' = -w */
+static void own_pd_closed_loop(const ctc_gains *g, double a[9])
+{
+    const double m[9] = {0, 1, 0, 0, 0, 1, -g->ki, -g->kp, -g->kv};
+    memcpy(a, m, sizeof m);
+}
+
+static const ctc_ctrl_class own_pd = {
+    .name = "own_pd", .nstate = 1, .law = own_pd_law, .closed_loop = own_pd_closed_loop};
+
+static void expect_same_doubles(const double *a, const double *b, size_t n, const char *what)
+{
+    cr_assert((a == NULL) == (b == NULL), "%s: one is missing", what);
+    if (n > 0 && a) cr_expect_eq(memcmp(a, b, n * sizeof *a), 0, "%s differ", what);
+}
+
+Test(sim, a_pd_class_written_here_reproduces_the_builtin_pd_run_bit_for_bit)
+{
+    for (int with_disturbance = 0; with_disturbance < 2; with_disturbance++) {
+        scene *s = triple_pendulum();
+        set_pd(s, 100, 20, 0);
+        if (with_disturbance) set_disturbance(s, 0.2);
+        ctc_sim_result *builtin = run(s);
+        s->spec.ctrl_class = &own_pd;
+        s->spec.controller = CTC_CTRL_NONE; /* ignored once a class is given */
+        ctc_sim_result *own = run(s);
+        cr_assert_eq(own->status, CTC_RUN_DONE, "%s", own->message);
+        cr_assert_eq(own->nsamples, builtin->nsamples);
+        cr_assert_eq(own->channels, builtin->channels);
+        expect_same_doubles(own->t, builtin->t, (size_t)own->nsamples, "t");
+        for (int ch = 0; ch < CTC_NCHANNELS; ch++) {
+            cr_assert_eq(own->width[ch], builtin->width[ch]);
+            expect_same_doubles(own->ch[ch], builtin->ch[ch],
+                                (size_t)own->nsamples * (size_t)own->width[ch],
+                                ctc_channel_name((ctc_channel)ch));
+        }
+        const ctc_sim_metrics *mo = &own->metrics, *mb = &builtin->metrics;
+        expect_same_doubles(mo->e_max, mb->e_max, 3, "e_max");
+        expect_same_doubles(mo->e_rms, mb->e_rms, 3, "e_rms");
+        expect_same_doubles(mo->e_final, mb->e_final, 3, "e_final");
+        cr_expect(mo->steps == mb->steps && mo->rejected == mb->rejected &&
+                  mo->rhs_evals == mb->rhs_evals);
+        cr_expect_eq(memcmp(&mo->err_estimate, &mb->err_estimate, sizeof(double)), 0);
+        /* the metrics hook: the error-dynamics reference exists without a disturbance only */
+        cr_expect_eq(memcmp(&mo->errdyn_dev, &mb->errdyn_dev, sizeof(double)), 0,
+                     "errdyn_dev %g and %g", mo->errdyn_dev, mb->errdyn_dev);
+        cr_expect_eq(isnan(mo->errdyn_dev), with_disturbance);
+        ctc_sim_result_free(builtin);
+        ctc_sim_result_free(own);
+        scene_free(s);
+    }
+}
+
+/* a nonlinear law of the test's own, without gains or state: w = kp e + kv de + c e^3 */
+typedef struct cubic_params {
+    double kp, kv, c;
+} cubic_params;
+
+static void cubic_law(const ctc_ctrl_eval *in, double *w)
+{
+    const cubic_params *p = in->params;
+    for (int i = 0; i < in->nind; i++) {
+        double e = in->des[3 * i] - in->qi[i], de = in->des[3 * i + 1] - in->vi[i];
+        w[i] = p->kp * e + p->kv * de + p->c * e * e * e;
+    }
+}
+
+/* e'' = -(kp e + kv e' + c e^3) from (e0, de0) to t by RK4 with a step of 1e-4 s, the oracle */
+static double cubic_error(const cubic_params *p, double e0, double de0, double t)
+{
+    double x[2] = {e0, de0}, done = 0;
+    while (done < t) {
+        double h = fmin(1e-4, t - done), k[4][2], y[2];
+        for (int s = 0; s < 4; s++) {
+            double f = s == 0 ? 0 : s == 3 ? 1 : 0.5;
+            for (int i = 0; i < 2; i++) y[i] = x[i] + (s ? f * h * k[s - 1][i] : 0);
+            k[s][0] = y[1];
+            k[s][1] = -(p->kp * y[0] + p->kv * y[1] + p->c * y[0] * y[0] * y[0]);
+        }
+        for (int i = 0; i < 2; i++) x[i] += h / 6 * (k[0][i] + 2 * k[1][i] + 2 * k[2][i] + k[3][i]);
+        done += h;
+    }
+    return x[0];
+}
+
+Test(sim, a_nonlinear_controller_plugs_in_and_its_error_obeys_its_own_law)
+{
+    /* exact model, no disturbance: qdd = qdd_d + w, so e'' = -w(e, e') whatever the chain */
+    const cubic_params params = {.kp = 25, .kv = 6, .c = 40};
+    const ctc_ctrl_class cubic = {.name = "cubic", .law = cubic_law};
+    scene *s = triple_pendulum();
+    s->spec.gains = NULL;
+    s->spec.ctrl_class = &cubic;
+    s->spec.ctrl_params = &params;
+    s->spec.duration = 2;
+    s->spec.output_interval = 0.05;
+    ctc_sim_result *r = run(s);
+    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    double dev = 0;
+    for (int i = 0; i < 3; i++) {
+        double d0[3];
+        ctc_traj_eval(&s->traj[i], 0, d0);
+        for (int j = 0; j < r->nsamples; j++) {
+            double ref = cubic_error(&params, d0[0] - s->q0[i], d0[1] - s->v0[i], r->t[j]);
+            dev = fmax(dev, fabs(r->ch[CTC_CH_E][3 * j + i] - ref));
+        }
+    }
+    cr_expect_leq(dev, 1e-6, "|e - e_oracle| = %g", dev);
+    /* the error is large at first (e0 up to 2.6 rad), so the cubic term mattered */
+    cr_expect_gt(r->metrics.e_max[0], 2);
+    /* no closed-loop hook: no linear error-dynamics reference */
+    cr_expect(isnan(r->metrics.errdyn_dev));
+    ctc_sim_result_free(r);
+    scene_free(s);
+}
+
+Test(sim, a_controller_class_is_checked_with_exact_messages)
+{
+    scene *s = triple_pendulum();
+    set_pd(s, 100, 20, 0);
+    char err[256] = "";
+    ctc_sim_result *r = NULL;
+    ctc_ctrl_class bad = own_pd;
+    bad.nstate = 2;
+    s->spec.ctrl_class = &bad;
+    cr_assert_eq(ctc_sim_run(&s->spec, NULL, &r, err, sizeof err), CTC_EINVAL);
+    cr_expect_str_eq(err,
+                     "controller \"own_pd\": state size must be 0 or 1 per coordinate (got 2)");
+    bad = own_pd;
+    bad.nstate = 0;
+    cr_assert_eq(ctc_sim_check(&s->spec, err, sizeof err), CTC_EINVAL);
+    cr_expect_str_eq(err, "controller \"own_pd\": a closed-loop matrix needs a law and the "
+                          "integral state (nstate 1)");
+    bad = own_pd;
+    s->spec.gains = NULL;
+    cr_assert_eq(ctc_sim_check(&s->spec, err, sizeof err), CTC_EINVAL);
+    cr_expect_str_eq(err, "a controller needs gains and a trajectory for every coordinate");
+    bad.name = NULL;
+    cr_assert_eq(ctc_sim_check(&s->spec, err, sizeof err), CTC_EINVAL);
+    cr_expect_str_eq(err, "the controller class has no name");
+    cr_expect_null(r);
+    scene_free(s);
+}
