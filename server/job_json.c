@@ -116,10 +116,11 @@ static const char *const *const ctrl_keys[] = {[CTC_CTRL_NONE] = ctrl_keys_none,
                                                [CTC_CTRL_POLES] = ctrl_keys_poles,
                                                [CTC_CTRL_LQR] = ctrl_keys_lqr};
 
+static const char *const pole_keys[] = {"re", "im", NULL};
+
 /* "poles": three entries, each a real pole or {"re": x, "im": y} */
 static int poles_at(parser *p, const cJSON *v, const char *path, double re[3], double im[3])
 {
-    static const char *const pole_keys[] = {"re", "im", NULL};
     char got[32], at[PATH_LEN];
     if (!cJSON_IsArray(v) || cJSON_GetArraySize(v) != 3) {
         return error_at(p->err, JOB_INVALID_FIELD, path, "must be an array of 3 poles (got %s)",
@@ -364,9 +365,10 @@ static int parse_gain_overrides(parser *p, const cJSON *v, ctc_ctrl_type type,
 }
 
 /* "controller.model": the controller's model of the plant */
+static const char *const model_keys[] = {"mass_scale", "inertia_scale", NULL};
+
 static int parse_ctrl_model(parser *p, const cJSON *ctrl, cJSON *out_ctrl)
 {
-    static const char *const model_keys[] = {"mass_scale", "inertia_scale", NULL};
     const char *keys[2] = {"mass_scale", "inertia_scale"};
     double *scales[2] = {&p->j->spec.model_mass_scale, &p->j->spec.model_inertia_scale};
     const cJSON *v = member(ctrl, "model");
@@ -448,6 +450,38 @@ static int parse_controller(parser *p, const cJSON *doc)
 static const char *const job_keys[] = {"name",        "scene",      "controller", "trajectory",
                                        "disturbance", "integrator", "duration",   "output",
                                        "limits",      "threads",    NULL};
+
+/* ---- the controller's and the document's keys and defaults, as data (job_json.h) ---- */
+
+static const job_format_object doc_objects[] = {
+    FORMAT_KEYS("", NULL, NULL, job_keys),
+    FORMAT_KEYS("controller", "type", NULL, ctrl_keys_all),
+    FORMAT_KEYS("controller", "type", "none", ctrl_keys[CTC_CTRL_NONE]),
+    FORMAT_KEYS("controller", "type", "pd", ctrl_keys[CTC_CTRL_PD]),
+    FORMAT_KEYS("controller", "type", "pid", ctrl_keys[CTC_CTRL_PID]),
+    FORMAT_KEYS("controller", "type", "poles", ctrl_keys[CTC_CTRL_POLES]),
+    FORMAT_KEYS("controller", "type", "lqr", ctrl_keys[CTC_CTRL_LQR]),
+    FORMAT_KEYS("controller.joints[]", NULL, "pd", gain_keys[CTC_CTRL_PD]),
+    FORMAT_KEYS("controller.joints[]", NULL, "pid", gain_keys[CTC_CTRL_PID]),
+    FORMAT_KEYS("controller.joints[]", NULL, "poles", gain_keys[CTC_CTRL_POLES]),
+    FORMAT_KEYS("controller.joints[]", NULL, "lqr", gain_keys[CTC_CTRL_LQR]),
+    FORMAT_KEYS("controller.model", NULL, NULL, model_keys),
+    FORMAT_KEYS("controller.poles[]", NULL, NULL, pole_keys),
+    FORMAT_KEYS("controller.joints[].poles[]", NULL, NULL, pole_keys),
+    FORMAT_END,
+};
+
+static const job_format_default doc_defaults[] = {
+    DEFAULT_JSON("", NULL, "name", "\"" DEFAULT_NAME "\""),
+    DEFAULT_NUMBER("controller.model", NULL, "mass_scale", 1),
+    DEFAULT_NUMBER("controller.model", NULL, "inertia_scale", 1),
+    DEFAULT_END,
+};
+
+const job_format_object *const job_format_objects[] = {doc_objects, job_scene_objects,
+                                                       job_run_objects, NULL};
+const job_format_default *const job_format_defaults[] = {doc_defaults, job_scene_defaults,
+                                                         job_run_defaults, NULL};
 
 /* the whole check of the spec by the library, after the format's own; what it finds wrong with
  * a loop (the mobility, the configuration at q0) is reported at the loop or at q0 */

@@ -188,6 +188,39 @@ typedef struct job {
                           a valid job document. Owned. */
 } job;
 
+/* The format as data: every object the parser reads, with the keys it accepts, and every
+ * default it applies. tests/unit/test_job_format.c checks them against api/job.schema.json,
+ * and against the parser itself (a default row is what the normalised document gets when the key
+ * is left out).
+ *
+ * A path names an object as errors do, with "[]" for any index: "", the document;
+ * "scene.bodies[].joint"; "controller.joints[]". A per-coordinate object ("trajectory",
+ * "disturbance") is listed at its key; the same keys apply to each entry of its array form. */
+typedef struct job_format_object {
+    const char *path;
+    const char *type_key;    /* "type" or "method" for a typed object, else NULL */
+    const char *type;        /* the type these keys are for ("revolute"); for "controller.joints[]"
+                                the controller's; NULL: every type (for a typed object, the keys of
+                                all its types together) */
+    const char *const *keys; /* the keys accepted, NULL-terminated; any other is an error */
+} job_format_object;
+
+typedef struct job_format_default {
+    const char *path; /* the object, as in job_format_object */
+    const char *type; /* the object's type the default applies to, or NULL: every type */
+    const char *key;
+    int n; /* 1: the number x[0]; 3: the vector x; 0: the JSON text json */
+    double x[3];
+    const char *json; /* "\"auto\"", "true", "{\"type\": \"none\"}" */
+} job_format_default;
+
+/* Each part's tables, NULL-terminated lists; each table ends with a row whose path is NULL.
+ * Defaults that depend on the job are not listed: the name of a preset's job (the preset's),
+ * q0 and v0 (the chain's reference configuration and rest), output.interval (0.01 s, or the
+ * duration when shorter: listed as 0.01), output.channels (all that apply). */
+extern const job_format_object *const job_format_objects[];
+extern const job_format_default *const job_format_defaults[];
+
 /* Parses len bytes of JSON text (need not be terminated). Returns 0 and *out (free with
  * job_free), or -1 with *err filled and *out NULL. */
 int job_parse(const char *text, size_t len, job **out, job_error *err);

@@ -31,6 +31,36 @@ _Static_assert(sizeof(((job_error *)0)->field) == PATH_LEN, "paths are written i
 #define DEFAULT_ATOL 1e-10
 #define DEFAULT_MAX_STEPS 10000000.0
 #define DEFAULT_MAX_SPEED 1e6 /* rad/s or m/s */
+#define DEFAULT_GRAVITY                                                                            \
+    {                                                                                              \
+        0, -9.81, 0                                                                                \
+    } /* m/s^2 */
+
+/* rows of the format's tables (job_json.h): an object's keys; a default number, vector or JSON */
+#define FORMAT_KEYS(path, type_key, type, keys)                                                    \
+    {                                                                                              \
+        path, type_key, type, keys                                                                 \
+    }
+#define FORMAT_END                                                                                 \
+    {                                                                                              \
+        NULL, NULL, NULL, NULL                                                                     \
+    }
+#define DEFAULT_NUMBER(path, type, key, x)                                                         \
+    {                                                                                              \
+        path, type, key, 1, {x}, NULL                                                              \
+    }
+#define DEFAULT_VECTOR(path, type, key, ...)                                                       \
+    {                                                                                              \
+        path, type, key, 3, __VA_ARGS__, NULL                                                      \
+    }
+#define DEFAULT_JSON(path, type, key, json)                                                        \
+    {                                                                                              \
+        path, type, key, 0, {0}, json                                                              \
+    }
+#define DEFAULT_END                                                                                \
+    {                                                                                              \
+        NULL, NULL, NULL, 0, {0}, NULL                                                             \
+    }
 
 /* the state of one parse */
 struct parser {
@@ -44,6 +74,10 @@ struct parser {
 };
 
 /* ---- scene (job_scene.c) ---- */
+
+/* the scene's objects and defaults (job_json.h's job_format_objects and job_format_defaults) */
+extern const job_format_object job_scene_objects[];
+extern const job_format_default job_scene_defaults[];
 
 /* "scene" of doc, required: the chain into p->j->spec.chain (bodies, joints, the loop and the
  * independent flags), nq, nv, nind, q0 and v0; checked by ctc_model_build, whose errors are
@@ -62,6 +96,10 @@ const char *loop_error_field(const char *msg);
 const char *coordinate_word(const parser *p);
 
 /* ---- the run (job_run.c) ---- */
+
+/* the run settings' objects and defaults */
+extern const job_format_object job_run_objects[];
+extern const job_format_default job_run_defaults[];
 
 /* "trajectory": required with a controller (p->ctrl), not allowed without; one object for every
  * coordinate or an array of nind. Fills p->j->traj. */

@@ -439,9 +439,10 @@ static int parse_channels(parser *p, const cJSON *output, const char *const *nam
     return 0;
 }
 
+static const char *const output_keys[] = {"interval", "channels", NULL};
+
 int parse_output(parser *p, const cJSON *doc)
 {
-    static const char *const output_keys[] = {"interval", "channels", NULL};
     job *j = p->j;
     ctc_sim_spec *s = &j->spec;
     const cJSON *v = member(doc, "output");
@@ -497,9 +498,10 @@ int parse_output(parser *p, const cJSON *doc)
     return 0;
 }
 
+static const char *const limit_keys[] = {"max_speed", "wall_time", NULL};
+
 int parse_limits(parser *p, const cJSON *doc)
 {
-    static const char *const limit_keys[] = {"max_speed", "wall_time", NULL};
     ctc_sim_spec *s = &p->j->spec;
     const cJSON *v = member(doc, "limits");
     if (v != NULL && (object_at(p, v, "limits") != 0 ||
@@ -537,3 +539,54 @@ int parse_threads(parser *p, const cJSON *doc)
     put_number(p, p->norm, "threads", threads);
     return 0;
 }
+
+/* ---- the run settings' keys and defaults, as data (job_json.h) ---- */
+
+const job_format_object job_run_objects[] = {
+    FORMAT_KEYS("trajectory", "type", NULL, traj_keys_all),
+    FORMAT_KEYS("trajectory", "type", "constant", traj_keys[CTC_TRAJ_CONSTANT]),
+    FORMAT_KEYS("trajectory", "type", "sine", traj_keys[CTC_TRAJ_SINE]),
+    FORMAT_KEYS("trajectory", "type", "cosine", traj_keys[CTC_TRAJ_COSINE]),
+    FORMAT_KEYS("trajectory", "type", "polynomial", traj_keys[CTC_TRAJ_POLYNOMIAL]),
+    FORMAT_KEYS("trajectory", "type", "min_jerk", traj_keys[CTC_TRAJ_MIN_JERK]),
+    FORMAT_KEYS("trajectory", "type", "spline", traj_keys[CTC_TRAJ_SPLINE]),
+    FORMAT_KEYS("disturbance", "type", NULL, disturb_keys_all),
+    FORMAT_KEYS("disturbance", "type", "none", disturb_keys[CTC_DISTURB_NONE]),
+    FORMAT_KEYS("disturbance", "type", "constant", disturb_keys[CTC_DISTURB_CONSTANT]),
+    FORMAT_KEYS("disturbance", "type", "sine", disturb_keys[CTC_DISTURB_SINE]),
+    FORMAT_KEYS("disturbance", "type", "step", disturb_keys[CTC_DISTURB_STEP]),
+    FORMAT_KEYS("integrator", "method", NULL, integ_keys_all),
+    FORMAT_KEYS("integrator", "method", "rk4", integ_keys[CTC_INTEG_RK4]),
+    FORMAT_KEYS("integrator", "method", "dopri5", integ_keys[CTC_INTEG_DOPRI5]),
+    FORMAT_KEYS("integrator", "method", "bdf", integ_keys[CTC_INTEG_BDF]),
+    FORMAT_KEYS("output", NULL, NULL, output_keys),
+    FORMAT_KEYS("limits", NULL, NULL, limit_keys),
+    FORMAT_END,
+};
+
+const job_format_default job_run_defaults[] = {
+    DEFAULT_NUMBER("trajectory", "sine", "phase", 0),
+    DEFAULT_NUMBER("trajectory", "sine", "offset", 0),
+    DEFAULT_NUMBER("trajectory", "cosine", "phase", 0),
+    DEFAULT_NUMBER("trajectory", "cosine", "offset", 0),
+    DEFAULT_JSON("trajectory", "spline", "boundary", "\"clamped\""),
+    DEFAULT_NUMBER("disturbance", "sine", "phase", 0),
+    DEFAULT_NUMBER("disturbance", "sine", "offset", 0),
+    DEFAULT_JSON("integrator", NULL, "method", "\"dopri5\""),
+    DEFAULT_NUMBER("integrator", "rk4", "step", DEFAULT_RK4_STEP),
+    DEFAULT_NUMBER("integrator", "dopri5", "rtol", DEFAULT_RTOL),
+    DEFAULT_NUMBER("integrator", "dopri5", "atol", DEFAULT_ATOL),
+    DEFAULT_NUMBER("integrator", "dopri5", "initial_step", 0),
+    DEFAULT_NUMBER("integrator", "dopri5", "max_step", 0),
+    DEFAULT_NUMBER("integrator", "bdf", "rtol", DEFAULT_RTOL),
+    DEFAULT_NUMBER("integrator", "bdf", "atol", DEFAULT_ATOL),
+    DEFAULT_NUMBER("integrator", "bdf", "initial_step", 0),
+    DEFAULT_NUMBER("integrator", "bdf", "max_step", 0),
+    DEFAULT_NUMBER("integrator", NULL, "max_steps", DEFAULT_MAX_STEPS),
+    DEFAULT_NUMBER("output", NULL, "interval", DEFAULT_INTERVAL),
+    DEFAULT_NUMBER("limits", NULL, "max_speed", DEFAULT_MAX_SPEED),
+    DEFAULT_NUMBER("limits", NULL, "wall_time", 0),
+    DEFAULT_NUMBER("", NULL, "threads", 1),
+    DEFAULT_JSON("", NULL, "disturbance", "{\"type\": \"none\"}"),
+    DEFAULT_END,
+};

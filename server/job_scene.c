@@ -494,7 +494,7 @@ static const char *const scene_keys[] = {"gravity", "form", "bodies", "loop", "q
 
 int parse_scene(parser *p, const cJSON *doc)
 {
-    static const double gravity[3] = {0, -9.81, 0};
+    static const double gravity[3] = DEFAULT_GRAVITY;
     job *j = p->j;
     ctc_chain_spec *chain = &j->spec.chain;
     const cJSON *v = required_member(p, doc, "", "scene", "");
@@ -540,3 +540,47 @@ int parse_scene(parser *p, const cJSON *doc)
     ctc_model_free(m);
     return rc;
 }
+
+/* ---- the scene's keys and defaults, as data (job_json.h) ---- */
+
+const job_format_object job_scene_objects[] = {
+    FORMAT_KEYS("scene", NULL, NULL, scene_keys),
+    FORMAT_KEYS("scene.bodies[]", NULL, NULL, body_keys),
+    FORMAT_KEYS("scene.bodies[].shape", "type", NULL, shape_keys_all),
+    FORMAT_KEYS("scene.bodies[].shape", "type", "rod", shape_keys_rod),
+    FORMAT_KEYS("scene.bodies[].shape", "type", "box", shape_keys_box),
+    FORMAT_KEYS("scene.bodies[].shape", "type", "cylinder", shape_keys_cylinder),
+    FORMAT_KEYS("scene.bodies[].joint", "type", NULL, joint_keys_all),
+    FORMAT_KEYS("scene.bodies[].joint", "type", "revolute", joint_keys[CTC_JOINT_REVOLUTE]),
+    FORMAT_KEYS("scene.bodies[].joint", "type", "prismatic", joint_keys[CTC_JOINT_PRISMATIC]),
+    FORMAT_KEYS("scene.bodies[].joint", "type", "cylindrical", joint_keys[CTC_JOINT_CYLINDRICAL]),
+    FORMAT_KEYS("scene.bodies[].joint", "type", "spherical", joint_keys[CTC_JOINT_SPHERICAL]),
+    FORMAT_KEYS("scene.bodies[].joint", "type", "fixed", joint_keys[CTC_JOINT_FIXED]),
+    FORMAT_KEYS("scene.loop", NULL, NULL, loop_keys),
+    FORMAT_KEYS("scene.loop.joint", "type", NULL, loop_joint_keys_all),
+    FORMAT_KEYS("scene.loop.joint", "type", "revolute", loop_joint_keys[0]),
+    FORMAT_KEYS("scene.loop.joint", "type", "prismatic", loop_joint_keys[1]),
+    FORMAT_KEYS("scene.loop.joint", "type", "spherical", loop_joint_keys[2]),
+    FORMAT_KEYS("scene.loop.stabilization", "method", NULL, stab_keys_all),
+    FORMAT_KEYS("scene.loop.stabilization", "method", "project", stab_keys[CTC_LOOP_PROJECT]),
+    FORMAT_KEYS("scene.loop.stabilization", "method", "baumgarte", stab_keys[CTC_LOOP_BAUMGARTE]),
+    FORMAT_KEYS("scene.loop.stabilization", "method", "none", stab_keys[CTC_LOOP_NONE]),
+    FORMAT_END,
+};
+
+const job_format_default job_scene_defaults[] = {
+    DEFAULT_VECTOR("scene", NULL, "gravity", DEFAULT_GRAVITY),
+    DEFAULT_JSON("scene", NULL, "form", "\"auto\""),
+    DEFAULT_VECTOR("scene.bodies[].shape", "box", "centre", {0, 0, 0}),
+    DEFAULT_VECTOR("scene.bodies[].shape", "cylinder", "centre", {0, 0, 0}),
+    DEFAULT_VECTOR("scene.bodies[].joint", NULL, "location", {0, 0, 0}),
+    DEFAULT_JSON("scene.bodies[].joint", NULL, "independent", "true"),
+    DEFAULT_VECTOR("scene.loop.joint", NULL, "location", {0, 0, 0}),
+    DEFAULT_JSON("scene.loop.joint", NULL, "independent", "false"),
+    DEFAULT_JSON("scene.loop.stabilization", NULL, "method", "\"project\""),
+    DEFAULT_NUMBER("scene.loop.stabilization", "project", "tol", CTC_SIM_DEFAULT_LOOP_TOL),
+    DEFAULT_NUMBER("scene.loop.stabilization", "baumgarte", "alpha", CTC_SIM_DEFAULT_BAUMGARTE),
+    DEFAULT_NUMBER("scene.loop.stabilization", "baumgarte", "beta", CTC_SIM_DEFAULT_BAUMGARTE),
+    DEFAULT_NUMBER("scene.loop", NULL, "cond_max", CTC_SIM_DEFAULT_COND_MAX),
+    DEFAULT_END,
+};
