@@ -3,7 +3,11 @@
  *
  * The command line (`ctcsim run`) and the HTTP service (POST /api/jobs) both turn a JSON document
  * into a runnable ctc_sim_spec here. The JSON Schema in api/job.schema.json describes the same
- * format for users; this comment is the reference. Unknown keys are errors everywhere (a typo
+ * format for users; this comment is the reference. The parser is in parts (job_parse.h):
+ * job_json.c (the entry points below and the controller), job_scene.c (the scene), job_run.c
+ * (trajectory to threads), json_read.c (the typed JSON reader). Its keys and defaults are data
+ * (job_format_objects, job_format_defaults below), checked against the schema and the parser by
+ * tests/unit/test_job_format.c, and the page's form defaults by tests/api/format.test.mjs. Unknown keys are errors everywhere (a typo
  * must not pass silently); every error names the JSON path of the offending value and the
  * reason. Units are SI and radians throughout.
  *
