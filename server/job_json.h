@@ -3,9 +3,14 @@
  *
  * The command line (`ctcsim run`) and the HTTP service (POST /api/jobs) both turn a JSON document
  * into a runnable ctc_sim_spec here. The JSON Schema in api/job.schema.json describes the same
- * format for users; this comment is the reference. Unknown keys are errors everywhere (a typo
- * must not pass silently); every error names the JSON path of the offending value and the
- * reason. Units are SI and radians throughout.
+ * format for users; this comment is the reference. The parser is in parts (job_parse.h):
+ * job_json.c (the entry points below and the controller), job_scene.c (the scene), job_run.c
+ * (trajectory to threads), json_read.c (the typed JSON reader). Its keys and defaults are data
+ * (job_format_object_tables, job_format_defaults below), checked against the schema and the
+ * parser by tests/unit/test_job_format.c, and the page's form defaults by
+ * tests/api/format.test.mjs. Unknown keys are errors everywhere (a typo must not pass silently);
+ * every error names the JSON path of the offending value and the reason. Units are SI and radians
+ * throughout.
  *
  * A job is an object:
  *   "name"        string, optional (1..JOB_MAX_NAME bytes; default "job" or the preset's name)
@@ -187,6 +192,41 @@ typedef struct job {
     cJSON *normalised; /* the job with the preset expanded and every default filled in; itself
                           a valid job document. Owned. */
 } job;
+
+/* The format as data: every object the parser reads, with the keys it accepts, and every
+ * default it applies. tests/unit/test_job_format.c checks them against api/job.schema.json,
+ * and against the parser itself (a default row is what the normalised document gets when the key
+ * is left out).
+ *
+ * A path names an object as errors do, with "[]" for any index: "", the document;
+ * "scene.bodies[].joint"; "controller.joints[]". A per-coordinate object ("trajectory",
+ * "disturbance") is listed at its key; the same keys apply to each entry of its array form. */
+typedef struct job_format_object {
+    const char *path;
+    const char *type_key;    /* "type" or "method" for a typed object, else NULL */
+    const char *type;        /* the type these keys are for ("revolute"); for "controller.joints[]"
+                                the controller's; NULL: every type (for a typed object, the keys of
+                                all its types together) */
+    const char *const *keys; /* the keys accepted, NULL-terminated; any other is an error */
+} job_format_object;
+
+typedef struct job_format_default {
+    const char *path; /* the object, as in job_format_object */
+    const char *type; /* the object's type the default applies to, or NULL: every type */
+    const char *key;
+    int n; /* 1: the number x[0]; 3: the vector x; 0: the JSON text json */
+    double x[3];
+    const char *json; /* "\"auto\"", "true", "{\"type\": \"none\"}" */
+} job_format_default;
+
+/* Each part's tables, NULL-terminated lists; each table ends with a row whose path is NULL. The
+ * objects' list comes from a function, since the controller's rows are made from the class table
+ * (ctrl.h) on the first call (thread-safe).
+ * Defaults that depend on the job are not listed: the name of a preset's job (the preset's),
+ * q0 and v0 (the chain's reference configuration and rest), output.interval (0.01 s, or the
+ * duration when shorter: listed as 0.01), output.channels (all that apply). */
+const job_format_object *const *job_format_object_tables(void);
+extern const job_format_default *const job_format_defaults[];
 
 /* Parses len bytes of JSON text (need not be terminated). Returns 0 and *out (free with
  * job_free), or -1 with *err filled and *out NULL. */

@@ -77,12 +77,12 @@ typedef struct ctc_data {
     double *inv_E;       /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
     double *inv_z;       /* (n x dim)   joint k: X Y' (mobility form) */
     int csize;           /* doubles in one composite record: dim^2 + 2 dim + 3 */
-    double *icomp; /* ((2n - 1) x csize) inverse assemblies in composite form (gdca_inverse.c):
-                      I (dim x dim), w (dim), c (dim), r12 (3) */
+    double *icomp;   /* ((2n - 1) x csize) inverse assemblies in composite form (gdca_inverse.c):
+                        I (dim x dim), w (dim), c (dim), r12 (3) */
     double *icomp_e; /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */
-    double *tload; /* ((2n - 1) x 2 dim) per assembly during a disassembly: F1 and F2
-                      (forward, mobility inverse) or A1 and F2 (composite inverse); the
-                      sequential forward order keeps each joint's load at [dim k] */
+    double *tload;   /* ((2n - 1) x 2 dim) per assembly during a disassembly: F1 and F2
+                        (forward, mobility inverse) or A1 and F2 (composite inverse); the
+                        sequential forward order keeps each joint's load at [dim k] */
 
     /* results */
     double *jnt_load;     /* (njoints x dim) load on body k at joint k from the forward pass,

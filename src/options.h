@@ -36,8 +36,8 @@ typedef struct ctc_options {
 /* The defaults: every choice by the library's rule. */
 static inline ctc_options ctc_options_default(void)
 {
-    return (ctc_options){.fwd_order = CTC_ORDER_AUTO, .fwd_refine = -1, .inv_full = 0,
-                         .par_grain = 0};
+    return (ctc_options){
+        .fwd_order = CTC_ORDER_AUTO, .fwd_refine = -1, .inv_full = 0, .par_grain = 0};
 }
 
 #endif

@@ -16,15 +16,15 @@
 import {el} from "./dom.js";
 
 const NV = {revolute: 1, prismatic: 1, cylindrical: 2, spherical: 3, fixed: 0};
-const CONTROLLERS = {none: {}, pd: {kp: 100, kv: 20}, pid: {kp: 100, kv: 20, ki: 250},
+export const CONTROLLERS = {none: {}, pd: {kp: 100, kv: 20}, pid: {kp: 100, kv: 20, ki: 250},
   poles: {poles: [-2, -2.1, -2.2]}, lqr: {Q: [1, 1, 1], lambda: 0.01}};
-const TRAJECTORIES = {constant: {value: 0}, sine: {amplitude: 0.6, period: 1.5, phase: 0, offset: 0},
+export const TRAJECTORIES = {constant: {value: 0}, sine: {amplitude: 0.6, period: 1.5, phase: 0, offset: 0},
   cosine: {amplitude: 0.6, period: 1.5, phase: 0, offset: 0}, polynomial: {coefficients: [0, 0.1]},
   min_jerk: {from: 0, to: 1, start: 0, end: 1},
   spline: {times: [0, 1, 2], values: [0, 1, 0], boundary: "clamped"}};
-const DISTURBANCES = {none: {}, constant: {value: 0.2}, sine: {amplitude: 0.2, period: 1, phase: 0, offset: 0},
+export const DISTURBANCES = {none: {}, constant: {value: 0.2}, sine: {amplitude: 0.2, period: 1, phase: 0, offset: 0},
   step: {value: 0.2, time: 1}};
-const INTEGRATORS = {dopri5: {rtol: 1e-8, atol: 1e-10}, bdf: {rtol: 1e-8, atol: 1e-10}, rk4: {step: 0.001}};
+export const INTEGRATORS = {dopri5: {rtol: 1e-8, atol: 1e-10}, bdf: {rtol: 1e-8, atol: 1e-10}, rk4: {step: 0.001}};
 const LISTS = new Set(["coefficients", "times", "values"]);
 const HINTS = {kp: "K_p, 1/s²", kv: "K_v, 1/s", ki: "K_i, 1/s³", zeta: "damping ratio ζ", tau: "time constant τ, s",
   period: "s", phase: "rad", amplitude: "rad or m", start: "s", end: "s", time: "s", step: "s",

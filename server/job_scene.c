@@ -1,0 +1,594 @@
+/*
+ * job_scene.c - the job format's "scene" (job_json.h): gravity, the form, the bodies with their
+ * shapes or inertia and their inboard joints, the loop that may close the chain, and the
+ * initial state.
+ *
+ * The bodies are read first, then the loop (it needs their count and sets which coordinates are
+ * controlled: nind), then ctc_model_build checks what only the library can (inertia tensors, the
+ * plane of a planar chain, the loop's closing joint and mobility), and last q0 and v0, whose
+ * sizes come from the built model. A library error about a loop is reported at "scene.loop" or,
+ * when the loop does not close from q0, at "scene.q0" (loop_error_field); anything else the
+ * builder finds at "scene".
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "data.h"
+#include "job_parse.h"
+#include "shapes.h"
+
+#define AXIS_MIN_LENGTH 1e-12 /* as ctc_model_build */
+#define QUAT_UNIT_TOL 1e-6    /* |norm - 1| allowed of a quaternion in q0 */
+
+/* ---- scene ---- */
+
+static const char *const shape_names[] = {"rod", "box", "cylinder"};
+enum { SHAPE_ROD, SHAPE_BOX, SHAPE_CYLINDER };
+static const char *const shape_keys_all[] = {"type",   "end",    "size", "centre",
+                                             "radius", "length", "axis", NULL};
+static const char *const shape_keys_rod[] = {"type", "end", NULL};
+static const char *const shape_keys_box[] = {"type", "size", "centre", NULL};
+static const char *const shape_keys_cylinder[] = {"type", "radius", "length",
+                                                  "axis", "centre", NULL};
+static const char *const *const shape_keys[] = {shape_keys_rod, shape_keys_box,
+                                                shape_keys_cylinder};
+
+/* a body's centre of mass and inertia from its "shape" (body->mass already read) */
+static int parse_shape(parser *p, const cJSON *v, const char *body_path, ctc_body_spec *body,
+                       cJSON *out_body)
+{
+    static const double origin[3] = {0, 0, 0};
+    char path[PATH_LEN], msg[256];
+    int type;
+    json_key_path(path, body_path, "shape");
+    if (json_typed_object(p, v, path, "type", REQUIRED, 0, shape_names, 3, "shape type", shape_keys,
+                          shape_keys_all, &type) != 0) {
+        return -1;
+    }
+    cJSON *out = json_put(p, out_body, "shape", cJSON_CreateObject());
+    json_put_string(p, out, "type", shape_names[type]);
+
+    ctc_status st = CTC_OK;
+    double end[3], size[3], centre[3], axis[3], radius, length;
+    switch (type) {
+    case SHAPE_ROD:
+        if (json_member_vec3(p, v, path, "end", REQUIRED, NULL, end) != 0) return -1;
+        json_put_numbers(p, out, "end", end, 3);
+        st = ctc_shape_rod(body->mass, end, body, msg, sizeof msg);
+        break;
+    case SHAPE_BOX:
+        if (json_member_vec3(p, v, path, "size", REQUIRED, NULL, size) != 0 ||
+            json_member_vec3(p, v, path, "centre", OPTIONAL, origin, centre) != 0) {
+            return -1;
+        }
+        json_put_numbers(p, out, "size", size, 3);
+        json_put_numbers(p, out, "centre", centre, 3);
+        st = ctc_shape_box(body->mass, size, centre, body, msg, sizeof msg);
+        break;
+    case SHAPE_CYLINDER:
+        if (json_member_number(p, v, path, "radius", REQUIRED, 0, &radius) != 0 ||
+            json_member_number(p, v, path, "length", REQUIRED, 0, &length) != 0 ||
+            json_member_vec3(p, v, path, "axis", REQUIRED, NULL, axis) != 0 ||
+            json_member_vec3(p, v, path, "centre", OPTIONAL, origin, centre) != 0) {
+            return -1;
+        }
+        json_put_number(p, out, "radius", radius);
+        json_put_number(p, out, "length", length);
+        json_put_numbers(p, out, "axis", axis, 3);
+        json_put_numbers(p, out, "centre", centre, 3);
+        st = ctc_shape_cylinder(body->mass, radius, length, axis, centre, body, msg, sizeof msg);
+        break;
+    }
+    if (st != CTC_OK) return json_error_at(p->err, JOB_INVALID_FIELD, path, "%s", msg);
+    return 0;
+}
+
+/* "inertia": 3x3 rows, or the principal moments along the body axes (none negative) */
+static int parse_inertia(parser *p, const cJSON *v, const char *path, ctc_body_spec *body,
+                         cJSON *out_body)
+{
+    char at[PATH_LEN];
+    int diagonal;
+    if (json_matrix3_at(p, v, path, "principal moments", body->inertia, &diagonal) != 0) return -1;
+    for (int i = 0; diagonal && i < 3; i++) {
+        if (body->inertia[4 * i] < 0) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, json_index_path(at, path, i),
+                                 "must not be negative (got %g kg m^2)", body->inertia[4 * i]);
+        }
+    }
+    json_put_matrix3(p, out_body, "inertia", body->inertia, diagonal);
+    return 0;
+}
+
+static const char *const joint_keys_all[] = {"type", "axis", "location", "independent", NULL};
+static const char *const joint_keys_fixed[] = {"type", "location", "independent", NULL};
+static const char *const *const joint_keys[] = {[CTC_JOINT_REVOLUTE] = joint_keys_all,
+                                                [CTC_JOINT_PRISMATIC] = joint_keys_all,
+                                                [CTC_JOINT_CYLINDRICAL] = joint_keys_all,
+                                                [CTC_JOINT_SPHERICAL] = joint_keys_fixed,
+                                                [CTC_JOINT_FIXED] = joint_keys_fixed};
+
+/* A joint's "axis" (joint v at path; the type needs one): any length, but not zero and not
+ * overflowing. Written to out. */
+static int parse_axis(parser *p, const cJSON *v, const char *path, double a[3], cJSON *out)
+{
+    char at[PATH_LEN];
+    if (json_member_vec3(p, v, path, "axis", REQUIRED, NULL, a) != 0) return -1;
+    double len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    json_key_path(at, path, "axis");
+    if (!isfinite(len)) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, at, "is too long (its length overflows)");
+    }
+    if (!(len > AXIS_MIN_LENGTH)) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, at,
+                             "must have non-zero length (got [%g, %g, %g])", a[0], a[1], a[2]);
+    }
+    json_put_numbers(p, out, "axis", a, 3);
+    return 0;
+}
+
+/* A joint's "location" (default the origin) and "independent" flag (default def; joint v at
+ * path, owner names it for messages), written to out. The first independent spherical joint is
+ * remembered: a controller cannot drive it. */
+static int parse_joint_rest(parser *p, const cJSON *v, const char *path, const char *owner,
+                            ctc_joint_spec *joint, int def, unsigned char *independent, cJSON *out)
+{
+    static const double origin[3] = {0, 0, 0};
+    char at[PATH_LEN];
+    if (json_member_vec3(p, v, path, "location", OPTIONAL, origin, joint->location) != 0) return -1;
+    json_put_numbers(p, out, "location", joint->location, 3);
+    int flag = def;
+    const cJSON *f = json_member(v, "independent");
+    if (f != NULL && json_bool_at(p, f, json_key_path(at, path, "independent"), &flag) != 0)
+        return -1;
+    *independent = (unsigned char)flag;
+    json_put(p, out, "independent", cJSON_CreateBool(flag));
+    if (flag && joint->type == CTC_JOINT_SPHERICAL && p->spherical[0] == '\0') {
+        snprintf(p->spherical, sizeof p->spherical, "%s", owner);
+    }
+    return 0;
+}
+
+/* body k's inboard joint */
+static int parse_joint(parser *p, const cJSON *body, const char *body_path, int k,
+                       ctc_joint_spec *joint, cJSON *out_body)
+{
+    char path[PATH_LEN];
+    const char *names[5];
+    int type;
+    for (int t = 0; t < 5; t++) names[t] = ctc_joint_type_name((ctc_joint_type)t);
+    const cJSON *v = json_required_member(p, body, body_path, "joint", "");
+    json_key_path(path, body_path, "joint");
+    if (v == NULL || json_typed_object(p, v, path, "type", REQUIRED, 0, names, 5, "joint type",
+                                       joint_keys, joint_keys_all, &type) != 0) {
+        return -1;
+    }
+    joint->type = (ctc_joint_type)type;
+    cJSON *out = json_put(p, out_body, "joint", cJSON_CreateObject());
+    json_put_string(p, out, "type", names[type]);
+    if (joint->type != CTC_JOINT_SPHERICAL && joint->type != CTC_JOINT_FIXED &&
+        parse_axis(p, v, path, joint->axis, out) != 0) {
+        return -1;
+    }
+    return parse_joint_rest(p, v, path, body_path, joint, 1, &p->j->independent[k], out);
+}
+
+static const char *const body_keys[] = {"name", "mass", "com", "inertia", "shape", "joint", NULL};
+
+/* body k: mass, then com and inertia or a shape, then its joint */
+static int parse_body(parser *p, const cJSON *v, int k, cJSON *out_bodies)
+{
+    char path[PATH_LEN], at[PATH_LEN];
+    ctc_body_spec *body = &p->j->bodies[k];
+    json_index_path(path, "scene.bodies", k);
+    if (json_object_at(p, v, path) != 0 || json_check_keys(p, v, path, body_keys, NULL, NULL) != 0)
+        return -1;
+    cJSON *out = json_put(p, out_bodies, NULL, cJSON_CreateObject());
+
+    /* a name, kept only in the document */
+    const cJSON *name = json_member(v, "name");
+    const char *s;
+    if (name != NULL) {
+        if (json_name_at(p, name, json_key_path(at, path, "name"), &s) != 0) return -1;
+        json_put_string(p, out, "name", s);
+    }
+
+    /* mass */
+    if (json_member_number(p, v, path, "mass", REQUIRED, 0, &body->mass) != 0) return -1;
+    if (!(body->mass > 0)) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, "mass"),
+                             "must be positive (got %g kg)", body->mass);
+    }
+    json_put_number(p, out, "mass", body->mass);
+
+    /* centre of mass and inertia, or a shape that gives both */
+    const cJSON *shape = json_member(v, "shape");
+    if (shape != NULL) {
+        static const char *const given[] = {"com", "inertia"};
+        for (int i = 0; i < 2; i++) {
+            if (json_member(v, given[i]) != NULL) {
+                return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, given[i]),
+                                     "not allowed with \"shape\" (the shape gives it)");
+            }
+        }
+        if (parse_shape(p, shape, path, body, out) != 0) return -1;
+    } else {
+        const char *hint = " (or give a \"shape\")";
+        const cJSON *com = json_required_member(p, v, path, "com", hint);
+        if (com == NULL || json_vec3_at(p, com, json_key_path(at, path, "com"), body->com) != 0)
+            return -1;
+        json_put_numbers(p, out, "com", body->com, 3);
+        const cJSON *inertia = json_required_member(p, v, path, "inertia", hint);
+        if (inertia == NULL ||
+            parse_inertia(p, inertia, json_key_path(at, path, "inertia"), body, out) != 0) {
+            return -1;
+        }
+    }
+    return parse_joint(p, v, path, k, &p->j->joints[k], out);
+}
+
+/* "scene.bodies": 1..JOB_MAX_BODIES bodies */
+static int parse_bodies(parser *p, const cJSON *scene, cJSON *out_scene)
+{
+    job *j = p->j;
+    const cJSON *v = json_required_member(p, scene, "scene", "bodies", "");
+    if (v == NULL) return -1;
+    if (!cJSON_IsArray(v)) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "scene.bodies",
+                             "must be an array of bodies (got %s)", json_kind(v));
+    }
+    int n = cJSON_GetArraySize(v);
+    if (n == 0)
+        return json_error_at(p->err, JOB_INVALID_FIELD, "scene.bodies", "must not be empty");
+    if (n > JOB_MAX_BODIES) {
+        return json_error_at(p->err, JOB_LIMIT_EXCEEDED, "scene.bodies",
+                             "has %d bodies; the limit is %d", n, JOB_MAX_BODIES);
+    }
+    j->bodies = json_alloc(p, (size_t)n, sizeof *j->bodies);
+    j->joints = json_alloc(p, (size_t)n, sizeof *j->joints);
+    j->independent = json_alloc(p, (size_t)n + 1, sizeof *j->independent);
+    if (j->bodies == NULL || j->joints == NULL || j->independent == NULL) return -1;
+    j->spec.chain.nbodies = n;
+    j->spec.chain.bodies = j->bodies;
+    j->spec.chain.joints = j->joints;
+
+    cJSON *out = json_put(p, out_scene, "bodies", cJSON_CreateArray());
+    int k = 0;
+    for (const cJSON *b = v->child; b != NULL; b = b->next, k++) {
+        if (parse_body(p, b, k, out) != 0) return -1;
+    }
+    return 0;
+}
+
+/* "scene.q0" (default: the reference configuration) and "scene.v0" (default 0), given m */
+static int parse_initial_state(parser *p, const cJSON *scene, const ctc_model *m, cJSON *out_scene)
+{
+    job *j = p->j;
+    j->q0 = json_alloc(p, (size_t)m->nq, sizeof *j->q0);
+    j->v0 = json_alloc(p, (size_t)m->nv, sizeof *j->v0);
+    if (j->q0 == NULL || j->v0 == NULL) return -1;
+    j->spec.q0 = j->q0;
+    j->spec.v0 = j->v0;
+
+    const cJSON *q0 = json_member(scene, "q0");
+    if (q0 == NULL) {
+        ctc_model_q_zero(m, j->q0);
+    } else if (json_coords_at(p, q0, "scene.q0", m->nq, "position coordinate", j->q0) != 0) {
+        return -1;
+    }
+
+    /* a spherical joint's quaternion must be a rotation */
+    for (int k = 0; k < m->nbodies; k++) {
+        if (m->joints[k].type != CTC_JOINT_SPHERICAL) continue;
+        const double *q = &j->q0[m->jnt_qadr[k]];
+        double norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        if (!(fabs(norm - 1) <= QUAT_UNIT_TOL)) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, "scene.q0",
+                                 "entries %d to %d, the quaternion (w, x, y, z) of "
+                                 "scene.bodies[%d].joint, must have unit length (got %g)",
+                                 m->jnt_qadr[k], m->jnt_qadr[k] + 3, k, norm);
+        }
+    }
+    json_put_numbers(p, out_scene, "q0", j->q0, m->nq);
+
+    const cJSON *v0 = json_member(scene, "v0");
+    if (v0 != NULL && json_coords_at(p, v0, "scene.v0", m->nv, "coordinate", j->v0) != 0) return -1;
+    json_put_numbers(p, out_scene, "v0", j->v0, m->nv);
+    return 0;
+}
+
+/* ---- the loop ---- */
+
+/* the closing joint's types, as the format names them */
+static const ctc_joint_type loop_types[] = {CTC_JOINT_REVOLUTE, CTC_JOINT_PRISMATIC,
+                                            CTC_JOINT_SPHERICAL};
+static const char *const loop_joint_keys_all[] = {"type", "axis", "location", "independent", NULL};
+static const char *const loop_joint_keys_spherical[] = {"type", "location", "independent", NULL};
+static const char *const *const loop_joint_keys[] = {loop_joint_keys_all, loop_joint_keys_all,
+                                                     loop_joint_keys_spherical};
+
+/* "scene.loop.joint": the closing joint, from the tip (body n - 1) to the ground or to body
+ * "scene.loop.body" */
+static int parse_loop_joint(parser *p, const cJSON *loop, cJSON *out_loop)
+{
+    static const char *const path = "scene.loop.joint";
+    job *j = p->j;
+    ctc_joint_spec *joint = &j->loop.joint;
+    const char *names[3];
+    int type;
+    for (int t = 0; t < 3; t++) names[t] = ctc_joint_type_name(loop_types[t]);
+    const cJSON *v = json_required_member(p, loop, "scene.loop", "joint", "");
+    if (v == NULL || json_typed_object(p, v, path, "type", REQUIRED, 0, names, 3, "joint type",
+                                       loop_joint_keys, loop_joint_keys_all, &type) != 0) {
+        return -1;
+    }
+    joint->type = loop_types[type];
+    cJSON *out = json_put(p, out_loop, "joint", cJSON_CreateObject());
+    json_put_string(p, out, "type", names[type]);
+    if (joint->type != CTC_JOINT_SPHERICAL && parse_axis(p, v, path, joint->axis, out) != 0) {
+        return -1;
+    }
+    int n = j->spec.chain.nbodies;
+    return parse_joint_rest(p, v, path, "scene.loop", joint, 0, &j->independent[n], out);
+}
+
+static const char *const stab_keys_all[] = {"method", "tol", "alpha", "beta", NULL};
+static const char *const stab_keys_project[] = {"method", "tol", NULL};
+static const char *const stab_keys_baumgarte[] = {"method", "alpha", "beta", NULL};
+static const char *const stab_keys_none[] = {"method", NULL};
+static const char *const *const stab_keys[] = {[CTC_LOOP_PROJECT] = stab_keys_project,
+                                               [CTC_LOOP_BAUMGARTE] = stab_keys_baumgarte,
+                                               [CTC_LOOP_NONE] = stab_keys_none};
+
+/* "scene.loop.stabilization": how the state is kept on the closure (default project) */
+static int parse_stabilization(parser *p, const cJSON *loop, cJSON *out_loop)
+{
+    static const char *const path = "scene.loop.stabilization";
+    ctc_sim_spec *s = &p->j->spec;
+    const char *names[3];
+    int method;
+    for (int m = 0; m < 3; m++) names[m] = ctc_loop_stab_name((ctc_loop_stab)m);
+    if (json_typed_object(p, json_member(loop, "stabilization"), path, "method", OPTIONAL,
+                          CTC_LOOP_PROJECT, names, 3, "method", stab_keys, stab_keys_all,
+                          &method) != 0) {
+        return -1;
+    }
+    const cJSON *v = json_member(loop, "stabilization");
+    s->loop_stab = (ctc_loop_stab)method;
+    cJSON *out = json_put(p, out_loop, "stabilization", cJSON_CreateObject());
+    json_put_string(p, out, "method", names[method]);
+    switch (s->loop_stab) {
+    case CTC_LOOP_PROJECT:
+        if (json_member_number(p, v, path, "tol", OPTIONAL, CTC_SIM_DEFAULT_LOOP_TOL,
+                               &s->loop_tol) != 0) {
+            return -1;
+        }
+        if (!(s->loop_tol > 0)) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, "scene.loop.stabilization.tol",
+                                 "must be positive (got %g)", s->loop_tol);
+        }
+        json_put_number(p, out, "tol", s->loop_tol);
+        break;
+    case CTC_LOOP_BAUMGARTE: {
+        static const char *const keys[2] = {"alpha", "beta"};
+        char at[PATH_LEN];
+        for (int i = 0; i < 2; i++) {
+            double *x = &s->baumgarte[i];
+            if (json_member_number(p, v, path, keys[i], OPTIONAL, CTC_SIM_DEFAULT_BAUMGARTE, x) !=
+                0)
+                return -1;
+            if (!(*x >= 0)) {
+                return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, keys[i]),
+                                     "must not be negative (got %g 1/s)", *x);
+            }
+        }
+        /* the library reads (0, 0) as its defaults: say "none" for no stabilisation */
+        if (s->baumgarte[0] == 0 && s->baumgarte[1] == 0) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                                 "alpha and beta must not both be 0 (use {\"method\": \"none\"} "
+                                 "for no stabilization)");
+        }
+        json_put_number(p, out, "alpha", s->baumgarte[0]);
+        json_put_number(p, out, "beta", s->baumgarte[1]);
+        break;
+    }
+    case CTC_LOOP_NONE:
+        break;
+    }
+    return 0;
+}
+
+static const char *const loop_keys[] = {"joint",         "anchor",   "body",
+                                        "stabilization", "cond_max", NULL};
+
+/* "scene.loop.body" (optional): the body the loop closes on, a whole number 0..n-2; absent, the
+ * loop closes on the ground */
+static int parse_loop_body(parser *p, const cJSON *loop, cJSON *out_loop)
+{
+    job *j = p->j;
+    int n = j->spec.chain.nbodies;
+    double b;
+    j->loop.on_body = 0;
+    j->loop.body = 0;
+    if (json_member(loop, "body") == NULL) return 0;
+    if (json_member_number(p, loop, "scene.loop", "body", REQUIRED, 0, &b) != 0) return -1;
+    if (!(b >= 0 && b <= n - 2 && b == floor(b))) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "scene.loop.body",
+                             "must be the index of a body before the tip (body %d): a whole number "
+                             "from 0 to %d (got %g)",
+                             n - 1, n - 2, b);
+    }
+    j->loop.on_body = 1;
+    j->loop.body = (int)b;
+    json_put_number(p, out_loop, "body", b);
+    return 0;
+}
+
+/* "scene.loop" (optional): the closing joint, its anchor and the run's loop settings; then the
+ * independent flags: with a loop they say which coordinates are controlled (nind), without one
+ * every joint must be independent */
+static int parse_loop(parser *p, const cJSON *scene, cJSON *out_scene)
+{
+    job *j = p->j;
+    ctc_sim_spec *s = &j->spec;
+    int n = s->chain.nbodies;
+    const cJSON *v = json_member(scene, "loop");
+    if (v == NULL) {
+        for (int k = 0; k < n; k++) {
+            if (j->independent[k]) continue;
+            char body[PATH_LEN], joint[PATH_LEN], at[PATH_LEN];
+            json_index_path(body, "scene.bodies", k);
+            return json_error_at(
+                p->err, JOB_INVALID_FIELD,
+                json_key_path(at, json_key_path(joint, body, "joint"), "independent"),
+                "must be true: an open chain is fully actuated (only a chain closed "
+                "by \"scene.loop\" has dependent joints)");
+        }
+        free(j->independent);
+        j->independent = NULL;
+        j->nind = j->nv;
+        return 0;
+    }
+    if (json_object_at(p, v, "scene.loop") != 0 ||
+        json_check_keys(p, v, "scene.loop", loop_keys, NULL, NULL) != 0) {
+        return -1;
+    }
+    cJSON *out = json_put(p, out_scene, "loop", cJSON_CreateObject());
+    if (parse_loop_joint(p, v, out) != 0 ||
+        json_member_vec3(p, v, "scene.loop", "anchor", REQUIRED, NULL, j->loop.anchor) != 0) {
+        return -1;
+    }
+    json_put_numbers(p, out, "anchor", j->loop.anchor, 3);
+    if (parse_loop_body(p, v, out) != 0 || parse_stabilization(p, v, out) != 0 ||
+        json_member_number(p, v, "scene.loop", "cond_max", OPTIONAL, CTC_SIM_DEFAULT_COND_MAX,
+                           &s->loop_cond_max) != 0) {
+        return -1;
+    }
+    if (!(s->loop_cond_max > 1)) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "scene.loop.cond_max",
+                             "must be greater than 1 (got %g)", s->loop_cond_max);
+    }
+    json_put_number(p, out, "cond_max", s->loop_cond_max);
+    s->chain.loop = &j->loop;
+    s->chain.independent = j->independent;
+
+    /* the controlled coordinates: those of the independent joints, the closing joint's last */
+    j->nind = 0;
+    for (int k = 0; k < n; k++) {
+        if (j->independent[k]) j->nind += ctc_joint_nv(j->joints[k].type);
+    }
+    if (j->independent[n]) j->nind += ctc_joint_nv(j->loop.joint.type);
+    return 0;
+}
+
+/* The field of a library error about the scene of a job with a loop: the loop's settings, or
+ * q0 when the loop does not close from it; "scene" for anything else. */
+const char *loop_error_field(const char *msg)
+{
+    static const char *const loop_words[] = {"loop",     "mobility",         "closing joint",
+                                             "singular", "over-constrained", NULL};
+    if (strncmp(msg, "body ", 5) == 0) return "scene"; /* a body's inertia, even a singular one */
+    if (strstr(msg, "does not close") != NULL) return "scene.q0";
+    for (const char *const *w = loop_words; *w != NULL; w++) {
+        if (strstr(msg, *w) != NULL) return "scene.loop";
+    }
+    return "scene";
+}
+
+static const char *const scene_keys[] = {"gravity", "form", "bodies", "loop", "q0", "v0", NULL};
+
+int parse_scene(parser *p, const cJSON *doc)
+{
+    static const double gravity[3] = DEFAULT_GRAVITY;
+    job *j = p->j;
+    ctc_chain_spec *chain = &j->spec.chain;
+    const cJSON *v = json_required_member(p, doc, "", "scene", "");
+    if (v == NULL || json_object_at(p, v, "scene") != 0 ||
+        json_check_keys(p, v, "scene", scene_keys, NULL, NULL) != 0) {
+        return -1;
+    }
+    cJSON *out = json_put(p, p->norm, "scene", cJSON_CreateObject());
+
+    /* gravity and form */
+    if (json_member_vec3(p, v, "scene", "gravity", OPTIONAL, gravity, chain->gravity) != 0)
+        return -1;
+    json_put_numbers(p, out, "gravity", chain->gravity, 3);
+    const char *forms[3];
+    int form = CTC_FORM_AUTO;
+    for (int f = 0; f < 3; f++) forms[f] = ctc_form_name((ctc_form)f);
+    const cJSON *fv = json_member(v, "form");
+    if (fv != NULL && json_enum_at(p, fv, "scene.form", forms, 3, &form) != 0) return -1;
+    chain->form = (ctc_form)form;
+    json_put_string(p, out, "form", forms[form]);
+
+    /* bodies; at least one coordinate must move */
+    if (parse_bodies(p, v, out) != 0) return -1;
+    for (int k = 0; k < chain->nbodies; k++) {
+        j->nq += ctc_joint_nq(j->joints[k].type);
+        j->nv += ctc_joint_nv(j->joints[k].type);
+    }
+    if (j->nv == 0) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "scene.bodies",
+                             "must have at least one joint that moves (every joint is fixed)");
+    }
+    if (parse_loop(p, v, out) != 0) return -1;
+
+    /* what only the builder checks: inertia tensors, the plane of a planar chain, the loop */
+    ctc_model *m = NULL;
+    char msg[512];
+    ctc_status st = ctc_model_build(chain, &m, msg, sizeof msg);
+    if (st == CTC_ENOMEM) return json_out_of_memory(p->err);
+    if (st != CTC_OK) {
+        const char *field = chain->loop != NULL ? loop_error_field(msg) : "scene";
+        return json_error_at(p->err, JOB_INVALID_FIELD, field, "%s", msg);
+    }
+    int rc = parse_initial_state(p, v, m, out);
+    ctc_model_free(m);
+    return rc;
+}
+
+/* ---- the scene's keys and defaults, as data (job_json.h) ---- */
+
+const job_format_object job_scene_objects[] = {
+    FORMAT_KEYS("scene", NULL, NULL, scene_keys),
+    FORMAT_KEYS("scene.bodies[]", NULL, NULL, body_keys),
+    FORMAT_KEYS("scene.bodies[].shape", "type", NULL, shape_keys_all),
+    FORMAT_KEYS("scene.bodies[].shape", "type", "rod", shape_keys_rod),
+    FORMAT_KEYS("scene.bodies[].shape", "type", "box", shape_keys_box),
+    FORMAT_KEYS("scene.bodies[].shape", "type", "cylinder", shape_keys_cylinder),
+    FORMAT_KEYS("scene.bodies[].joint", "type", NULL, joint_keys_all),
+    FORMAT_KEYS("scene.bodies[].joint", "type", "revolute", joint_keys[CTC_JOINT_REVOLUTE]),
+    FORMAT_KEYS("scene.bodies[].joint", "type", "prismatic", joint_keys[CTC_JOINT_PRISMATIC]),
+    FORMAT_KEYS("scene.bodies[].joint", "type", "cylindrical", joint_keys[CTC_JOINT_CYLINDRICAL]),
+    FORMAT_KEYS("scene.bodies[].joint", "type", "spherical", joint_keys[CTC_JOINT_SPHERICAL]),
+    FORMAT_KEYS("scene.bodies[].joint", "type", "fixed", joint_keys[CTC_JOINT_FIXED]),
+    FORMAT_KEYS("scene.loop", NULL, NULL, loop_keys),
+    FORMAT_KEYS("scene.loop.joint", "type", NULL, loop_joint_keys_all),
+    FORMAT_KEYS("scene.loop.joint", "type", "revolute", loop_joint_keys[0]),
+    FORMAT_KEYS("scene.loop.joint", "type", "prismatic", loop_joint_keys[1]),
+    FORMAT_KEYS("scene.loop.joint", "type", "spherical", loop_joint_keys[2]),
+    FORMAT_KEYS("scene.loop.stabilization", "method", NULL, stab_keys_all),
+    FORMAT_KEYS("scene.loop.stabilization", "method", "project", stab_keys[CTC_LOOP_PROJECT]),
+    FORMAT_KEYS("scene.loop.stabilization", "method", "baumgarte", stab_keys[CTC_LOOP_BAUMGARTE]),
+    FORMAT_KEYS("scene.loop.stabilization", "method", "none", stab_keys[CTC_LOOP_NONE]),
+    FORMAT_END,
+};
+
+const job_format_default job_scene_defaults[] = {
+    DEFAULT_VECTOR("scene", NULL, "gravity", DEFAULT_GRAVITY),
+    DEFAULT_JSON("scene", NULL, "form", "\"auto\""),
+    DEFAULT_VECTOR("scene.bodies[].shape", "box", "centre", {0, 0, 0}),
+    DEFAULT_VECTOR("scene.bodies[].shape", "cylinder", "centre", {0, 0, 0}),
+    DEFAULT_VECTOR("scene.bodies[].joint", NULL, "location", {0, 0, 0}),
+    DEFAULT_JSON("scene.bodies[].joint", NULL, "independent", "true"),
+    DEFAULT_VECTOR("scene.loop.joint", NULL, "location", {0, 0, 0}),
+    DEFAULT_JSON("scene.loop.joint", NULL, "independent", "false"),
+    DEFAULT_JSON("scene.loop.stabilization", NULL, "method", "\"project\""),
+    DEFAULT_NUMBER("scene.loop.stabilization", "project", "tol", CTC_SIM_DEFAULT_LOOP_TOL),
+    DEFAULT_NUMBER("scene.loop.stabilization", "baumgarte", "alpha", CTC_SIM_DEFAULT_BAUMGARTE),
+    DEFAULT_NUMBER("scene.loop.stabilization", "baumgarte", "beta", CTC_SIM_DEFAULT_BAUMGARTE),
+    DEFAULT_NUMBER("scene.loop", NULL, "cond_max", CTC_SIM_DEFAULT_COND_MAX),
+    DEFAULT_END,
+};
