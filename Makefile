@@ -191,6 +191,7 @@ check:
 	@$(MAKE) --no-print-directory $(JOBS) check-build
 	@sh tests/run.sh $(TEST_BIN)
 	@CTCSIM=$(CLI) sh tests/cli/run.sh
+	@CTCSIM=$(CLI) sh tests/cli/readme.sh
 	@CTCSIM=$(CLI) CTCSIM_SERVER=$(SERVER) sh tests/api/run.sh
 	@CTCSIM_SERVER=$(SERVER) WEB_ROOT=$(WEB_OUT) API_DIR=api sh tests/web/run.sh
 
