@@ -49,7 +49,7 @@ endif
 
 # Debian packages the build and the tests need
 DEB_PACKAGES := gcc make libc6-dev libcriterion-dev libcjson-dev liblapacke-dev libsundials-dev \
-	libmicrohttpd-dev libsqlite3-dev chromium clang-19 libclang-rt-19-dev
+	libmicrohttpd-dev libsqlite3-dev sqlite3 chromium clang-19 libclang-rt-19-dev
 # the web page's uPlot and the tests also need node (>= 18) and npm: Debian's nodejs and npm are
 # installed when the machine has none
 BENCH_PACKAGES := wrk curl libmujoco-dev
