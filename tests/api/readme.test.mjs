@@ -2,10 +2,13 @@
  * readme.test.mjs - the README's exercises ("Teaching with ctcsim"), posted to the service as the
  * README's curl commands post them (POST /api/jobs?wait=60 with the same bodies), and the figures
  * the README quotes checked against the jobs' metrics and series. Each figure is also looked up
- * in the README's text (whitespace folded), so that neither can change without the other.
+ * in the README's text (whitespace folded), so that neither can change without the other. The
+ * README's way to give a deleted job's space back (DELETE, then `sqlite3 ctcsim.db 'VACUUM'` with
+ * the service running) is run too.
  */
 import assert from 'node:assert/strict';
-import { readFileSync } from 'node:fs';
+import { spawnSync } from 'node:child_process';
+import { readFileSync, statSync } from 'node:fs';
 import path from 'node:path';
 import test from 'node:test';
 
@@ -95,6 +98,33 @@ test("the passive pendulum's energy drift with dopri5 and with rk4", async () =>
     quoted("(`metrics.energy_drift`: 1e-7 with the preset's `dopri5`, 3e-3 with");
     assert.equal(Math.abs(dopri.metrics.energy_drift).toExponential(0), '1e-7');
     assert.equal(Math.abs(rk4.metrics.energy_drift).toExponential(0), '3e-3');
+});
+
+test("a deleted job's space: kept by the file, given back by VACUUM while the service runs", async (t) => {
+    if (spawnSync('sqlite3', ['-version']).error) {
+        t.skip('no sqlite3 command');
+        return;
+    }
+    quoted("`sqlite3 ctcsim.db 'VACUUM'`");
+    /* the database file's size with the WAL folded into it */
+    const size = () => {
+        const r = spawnSync('sqlite3', [srv.db, 'PRAGMA wal_checkpoint(TRUNCATE);'], { encoding: 'utf8' });
+        assert.equal(r.status, 0, r.stderr);
+        return statSync(srv.db).size;
+    };
+    const big = await run({ preset: 'n_link_pendulum', n: 256 });
+    const before = size();
+    const del = await srv.del(`/api/jobs/${big.id}`);
+    assert.equal(del.status, 204, del.text);
+    assert.equal(size(), before, 'the file shrank on DELETE alone');
+    const vac = spawnSync('sqlite3', [srv.db, 'VACUUM'], { encoding: 'utf8' });
+    assert.equal(vac.status, 0, vac.stderr);
+    const after = size();
+    assert.ok(after < before - 4e6, `VACUUM: ${before} -> ${after} bytes`);
+    /* the service goes on with the vacuumed file */
+    const j = await run({ preset: 'triple_pendulum_pd', duration: 0.5 });
+    const got = await srv.get(`/api/jobs/${j.id}/series?channels=e&format=csv`);
+    assert.equal(got.status, 200, got.text);
 });
 
 test('the server stops', async () => {
