@@ -8,6 +8,9 @@
 #   make test    build and run the unit tests, then again under AddressSanitizer + UBSan
 #                (built with SAN_CC); each test binary has a time limit (tests/run.sh)
 #   make bench   build for this machine, run the unit tests in that build, then the benchmarks
+#   make install install the library (libctcsim.a, include/ctcsim/, ctcsim.pc), the ctcsim and
+#                ctcsim-server programs, and the page and API files (share/ctcsim/) under
+#                PREFIX (/usr/local), staged under DESTDIR when set; make uninstall removes them
 #   make clean   remove build/
 #
 # Overridable: CC, SAN_CC, OPT (optimisation flags), BUILD (output folder), EXTRA_CFLAGS,
@@ -47,7 +50,7 @@ endif
 
 # Debian packages the build and the tests need
 DEB_PACKAGES := gcc make libc6-dev libcriterion-dev libcjson-dev liblapacke-dev libsundials-dev \
-	libmicrohttpd-dev libsqlite3-dev chromium clang-19 libclang-rt-19-dev
+	libmicrohttpd-dev libsqlite3-dev sqlite3 chromium clang-19 libclang-rt-19-dev
 # the web page's uPlot and the tests also need node (>= 18) and npm: Debian's nodejs and npm are
 # installed when the machine has none
 BENCH_PACKAGES := wrk curl libmujoco-dev
@@ -76,7 +79,7 @@ BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
 .PHONY: all deps bench-deps install-packages web run test check check-build check-asan bench clean \
-	FORCE
+	install uninstall FORCE
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -189,6 +192,8 @@ check:
 	@$(MAKE) --no-print-directory $(JOBS) check-build
 	@sh tests/run.sh $(TEST_BIN)
 	@CTCSIM=$(CLI) sh tests/cli/run.sh
+	@CTCSIM=$(CLI) sh tests/cli/readme.sh
+	@MAKE="$(MAKE)" CC="$(CC)" EXAMPLE_FLAGS="$(LDFLAGS)" sh tests/cli/install.sh
 	@CTCSIM=$(CLI) CTCSIM_SERVER=$(SERVER) sh tests/api/run.sh
 	@CTCSIM_SERVER=$(SERVER) WEB_ROOT=$(WEB_OUT) API_DIR=api sh tests/web/run.sh
 
@@ -215,6 +220,44 @@ bench: bench-deps
 	@for b in $(BENCH_SRC:bench/%.c=$(BUILD)/bench-o3/bench/%); do echo "== $$b"; $$b || exit 1; done
 	@echo "== bench/bench_server.sh"
 	@sh bench/bench_server.sh $(BUILD)/bench-o3/ctcsim-server
+
+# make install: what a program of one's own needs to use the library (examples/pendulum.c builds
+# with `pkg-config --cflags --libs ctcsim`), the two programs, and what ctcsim-server serves
+# (--web PREFIX/share/ctcsim/web --api PREFIX/share/ctcsim/api). The public headers are those
+# ctc.h and sim.h reach, with the controllers', trajectories', integrators' and oracle's; they
+# include one another by bare name, so they sit together in include/ctcsim/. The library is
+# static: ctcsim.pc's Libs carry the libraries it links.
+PREFIX ?= /usr/local
+DESTDIR ?=
+VERSION := $(shell sed -n 's/^\#define CTCSIM_VERSION "\(.*\)"/\1/p' server/routes.h)
+PUBLIC_HEADERS := $(addprefix src/,ctc.h ctrl.h data.h disturb.h energy.h gdca.h handles.h \
+	integrator.h kinematics.h loop.h model.h options.h oracle.h pool.h shapes.h sim.h spatial.h \
+	status.h traj.h)
+INSTALL_DIRS := bin lib lib/pkgconfig include/ctcsim share/ctcsim/web share/ctcsim/web/vendor \
+	share/ctcsim/api share/ctcsim/api/examples
+
+install: $(LIB) $(CLI) $(SERVER) web
+	@for d in $(INSTALL_DIRS); do install -d "$(DESTDIR)$(PREFIX)/$$d" || exit 1; done
+	install -m 644 $(LIB) "$(DESTDIR)$(PREFIX)/lib/libctcsim.a"
+	install -m 644 $(PUBLIC_HEADERS) "$(DESTDIR)$(PREFIX)/include/ctcsim/"
+	install -m 755 $(CLI) $(SERVER) "$(DESTDIR)$(PREFIX)/bin/"
+	install -m 644 $(filter-out $(WEB_OUT)/vendor $(WEB_OUT)/.stamp,$(wildcard $(WEB_OUT)/*)) \
+		"$(DESTDIR)$(PREFIX)/share/ctcsim/web/"
+	install -m 644 $(wildcard $(WEB_OUT)/vendor/*) "$(DESTDIR)$(PREFIX)/share/ctcsim/web/vendor/"
+	install -m 644 api/openapi.yaml api/job.schema.json "$(DESTDIR)$(PREFIX)/share/ctcsim/api/"
+	install -m 644 $(wildcard api/examples/*.json) "$(DESTDIR)$(PREFIX)/share/ctcsim/api/examples/"
+	printf '%s\n' 'prefix=$(PREFIX)' 'exec_prefix=$${prefix}' 'libdir=$${exec_prefix}/lib' \
+		'includedir=$${prefix}/include' '' 'Name: ctcsim' \
+		'Description: computed torque control of multibody chains with the GDCA and iGDCA' \
+		'Version: $(VERSION)' 'Cflags: -I$${includedir}' \
+		'Libs: -L$${libdir} -lctcsim $(filter-out -lcjson,$(LDLIBS))' > "$(DESTDIR)$(PREFIX)/lib/pkgconfig/ctcsim.pc"
+
+uninstall:
+	rm -f "$(DESTDIR)$(PREFIX)/lib/libctcsim.a" "$(DESTDIR)$(PREFIX)/lib/pkgconfig/ctcsim.pc" \
+		"$(DESTDIR)$(PREFIX)/bin/ctcsim" "$(DESTDIR)$(PREFIX)/bin/ctcsim-server"
+	rm -f $(PUBLIC_HEADERS:src/%="$(DESTDIR)$(PREFIX)/include/ctcsim/%")
+	rm -rf "$(DESTDIR)$(PREFIX)/share/ctcsim"
+	-rmdir "$(DESTDIR)$(PREFIX)/include/ctcsim" 2>/dev/null
 
 clean:
 	rm -rf $(BUILD)

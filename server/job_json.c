@@ -622,9 +622,32 @@ static int expand_preset(const cJSON *request, cJSON **out, const preset **used,
         }
         return -1;
     }
+    /* the controller type the preset's name speaks of, before the patch may change it */
+    char preset_ctrl[16] = "";
+    const cJSON *ctrl_type = json_member(json_member(doc, "controller"), "type");
+    if (cJSON_IsString(ctrl_type))
+        snprintf(preset_ctrl, sizeof preset_ctrl, "%s", ctrl_type->valuestring);
+
     doc = merge_patch(doc, patch);
     cJSON_Delete(patch);
     if (doc == NULL) return json_out_of_memory(err);
+
+    /* a controller of another type, with no name given: the name says which (presets.h) */
+    ctrl_type = json_member(json_member(doc, "controller"), "type");
+    const cJSON *preset_name = json_member(doc, "name");
+    if (json_member(request, "name") == NULL && cJSON_IsString(ctrl_type) &&
+        cJSON_IsString(preset_name) && strcmp(ctrl_type->valuestring, preset_ctrl) != 0) {
+        char renamed[JOB_MAX_NAME + 1];
+        if (presets_name_for_controller(preset_name->valuestring, preset_ctrl,
+                                        ctrl_type->valuestring, renamed, sizeof renamed) == 0) {
+            cJSON *v = cJSON_CreateString(renamed);
+            if (v == NULL || !cJSON_ReplaceItemInObjectCaseSensitive(doc, "name", v)) {
+                cJSON_Delete(v);
+                cJSON_Delete(doc);
+                return json_out_of_memory(err);
+            }
+        }
+    }
     *out = doc;
     *used = pr;
     return 0;

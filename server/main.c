@@ -61,7 +61,7 @@ typedef enum setting_kind {
 
 typedef struct setting {
     const char *flag;
-    const char *env; /* NULL: a flag only */
+    const char *env; /* its environment variable, read before the flags */
     setting_kind kind;
     size_t offset; /* of the value in server_settings */
     long long min, max;
@@ -94,7 +94,7 @@ static const setting settings[] = {
      "directory of openapi.yaml (served at /api/openapi.yaml)"},
     {"--job-time-limit", "CTCSIM_JOB_TIME_LIMIT", SETTING_SECONDS, AT(job_time_limit), 0, 1000000,
      "SECONDS", "wall time one job may take (0: no limit)"},
-    {"--http-threads", NULL, SETTING_INTEGER, AT(http_threads), 1, 1024, "N",
+    {"--http-threads", "CTCSIM_HTTP_THREADS", SETTING_INTEGER, AT(http_threads), 1, 1024, "N",
      "threads answering HTTP requests"},
 };
 

@@ -802,3 +802,57 @@ const preset *presets_find(const char *name)
     }
     return NULL;
 }
+
+/* ---- names after a controller override ---- */
+
+/* the label a preset's name gives a controller type (job_json.h), or NULL */
+static const char *controller_label(const char *type)
+{
+    static const char *const labels[][2] = {
+        {"none", "passive"},         {"pd", "PD"},   {"pid", "PID"},
+        {"poles", "pole placement"}, {"lqr", "LQR"},
+    };
+    for (size_t i = 0; i < sizeof labels / sizeof labels[0]; i++) {
+        if (strcmp(labels[i][0], type) == 0) return labels[i][1];
+    }
+    return NULL;
+}
+
+/* the first ", LABEL" in name that ends the name or is followed by ' ', ',' or '(', or NULL */
+static const char *find_label(const char *name, const char *label)
+{
+    size_t n = strlen(label);
+    for (const char *p = strstr(name, ", "); p != NULL; p = strstr(p + 1, ", ")) {
+        const char *end = p + 2 + n;
+        if (strncmp(p + 2, label, n) == 0 && (*end == '\0' || strchr(" ,(", *end) != NULL)) {
+            return p;
+        }
+    }
+    return NULL;
+}
+
+int presets_name_for_controller(const char *name, const char *from, const char *to, char *buf,
+                                size_t len)
+{
+    const char *old_label = controller_label(from), *new_label = controller_label(to);
+    if (old_label == NULL || new_label == NULL || len == 0) return -1;
+
+    /* the name with the label replaced (or appended) */
+    char renamed[2 * JOB_MAX_NAME];
+    const char *at = find_label(name, old_label);
+    if (at != NULL) {
+        snprintf(renamed, sizeof renamed, "%.*s, %s%s", (int)(at - name), name, new_label,
+                 at + 2 + strlen(old_label));
+    } else {
+        snprintf(renamed, sizeof renamed, "%s, %s", name, new_label);
+    }
+
+    /* the paper's reference becomes the scene's */
+    const char *ref = strstr(renamed, "(" PAPER);
+    if (ref != NULL) {
+        snprintf(buf, len, "%.*s(scene of %s", (int)(ref - renamed), renamed, ref + 1);
+    } else {
+        snprintf(buf, len, "%s", renamed);
+    }
+    return 0;
+}

@@ -16,6 +16,8 @@
 #ifndef PRESETS_H
 #define PRESETS_H
 
+#include <stddef.h>
+
 #include <cjson/cJSON.h>
 
 #include "job_json.h"
@@ -34,5 +36,18 @@ const preset *presets_list(int *count);
 
 /* The preset of that name, or NULL. */
 const preset *presets_find(const char *name);
+
+/* The name of a job made from a preset whose name is `name` and whose controller type an
+ * override changed from `from` to `to` (job_json.h's controller types: "none", "pd", "pid",
+ * "poles", "lqr"), into buf (len bytes, NUL-terminated, truncated to fit): the preset's
+ * controller label replaced by the new one ("passive", "PD", "PID", "pole placement", "LQR"),
+ * and a reference to the paper ("(Kingsley et al. 2017, ...") made "(scene of Kingsley et al.
+ * 2017, ...", since the paper ran the scene with the preset's controller. So the override
+ * {"preset": "triple_pendulum_pid", "controller": {"type": "lqr", ...}} is named "Triple
+ * pendulum, LQR (scene of Kingsley et al. 2017, sec. 7.1)". A name without the old label gets
+ * ", LABEL" appended. Returns 0, or -1 (buf untouched) when `from` or `to` is no controller
+ * type. */
+int presets_name_for_controller(const char *name, const char *from, const char *to, char *buf,
+                                size_t len);
 
 #endif

@@ -3,7 +3,9 @@
 #   sh tests/node_suite.sh LABEL TIMEOUT DIR [FILE ...]
 # LABEL prefixes the closing line "LABEL: N passed, N failed"; TIMEOUT (s) bounds each file, so a
 # stuck file cannot hang the suite; FILEs (paths, or bare names in DIR) default to DIR/*.test.mjs.
-# Prints one line per file and the failing tests with their diagnostics; exits non-zero on failure.
+# Prints one line per file (passed, failed, and skipped when any: a skipped test is not counted
+# as passed) with each skipped test's reason and the failing tests' diagnostics, then the totals;
+# exits non-zero on failure.
 # Used by tests/api/run.sh and tests/web/run.sh after their own precondition checks.
 set -u
 label=$1 seconds=$2 dir=$3
@@ -26,6 +28,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT INT TERM
 passed=0
 failed=0
+skipped=0
 status=0
 for file in $files; do
     start=$(date +%s)
@@ -34,12 +37,14 @@ for file in $files; do
     rc=$?
     secs=$(($(date +%s) - start))
     # top-level tests only: their result lines start in column 0
-    p=$(grep -c '^ok ' "$tmp/out")
-    f=$(grep -c '^not ok ' "$tmp/out")
+    # a skipped test ("ok N - name # SKIP why") counts as skipped, not as passed
     s=$(grep -c '^ok .*# SKIP' "$tmp/out")
+    p=$(($(grep -c '^ok ' "$tmp/out") - s))
+    f=$(grep -c '^not ok ' "$tmp/out")
     note=""
     [ "$s" -gt 0 ] && note=", $s skipped"
     printf '%-28s %s passed, %s failed%s (%s s)\n' "$(basename "$file")" "$p" "$f" "$note" "$secs"
+    [ "$s" -gt 0 ] && grep '^ok .*# SKIP' "$tmp/out" | sed 's/^/    /'
     if [ "$f" -gt 0 ]; then
         # each failing test with its YAML block ("  ---" ... "  ..."), the first 10 of them
         awk '/^not ok /{n++; on = n <= 10} on{print "    " $0} on && /^  \.\.\.$/{on=0}
@@ -52,8 +57,13 @@ for file in $files; do
     fi
     passed=$((passed + p))
     failed=$((failed + f))
+    skipped=$((skipped + s))
     [ "$rc" -eq 0 ] || status=1
 done
-echo "$label: $passed passed, $failed failed"
+if [ "$skipped" -gt 0 ]; then
+    echo "$label: $passed passed, $failed failed, $skipped skipped"
+else
+    echo "$label: $passed passed, $failed failed"
+fi
 [ "$failed" -eq 0 ] || status=1
 exit $status

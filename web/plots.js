@@ -1,6 +1,6 @@
 /*
  * plots.js - the time plots of one job or of several overlaid (uPlot): joint coordinates q with
- * the desired q_d, tracking error e, driving torques f (channel "tau"), controller output w,
+ * the desired q_d, tracking error e, driving torques tau, controller output w,
  * energy and, for a closed chain, the loop's closure residuals, one div.plot[data-channel] each,
  * with data-points (samples drawn) and data-series (lines drawn, desired ones included).
  *
@@ -31,7 +31,7 @@ const AXIS = {stroke: "#1f2328", font: "13px system-ui, sans-serif",
 export const CHANNELS = [
   {key: "q", title: "Joint coordinates q", axis: "q [rad | m]"},
   {key: "e", title: "Tracking error e = q_d − q", axis: "e [rad | m]"},
-  {key: "tau", title: "Driving torques f (channel tau)", axis: "f [N m | N]"},
+  {key: "tau", title: "Driving torques tau", axis: "tau [N m | N]"},
   {key: "w", title: "Controller output w (commanded acceleration)", axis: "w [rad/s² | m/s²]"},
   {key: "energy", title: "Energy", axis: "energy [J]"},
   {key: "loop", title: "Loop closure residuals (max-norms)", axis: "residual [m | rad, /s]"},
@@ -40,7 +40,7 @@ const LOOP_PARTS = ["position residual", "velocity residual"];
 
 /* The row of q (joint toggle, colour) and the label of row r of a channel of src. */
 function rowOf(key, src, rows, r) {
-  const name = key === "tau" ? "f" : key;
+  const name = key;
   const coords = src.coords;
   if (key !== "q" && src.loop && coords && rows.length === coords.length) {
     return {j: coords[r].row, label: `${name}[${r}] (${coords[r].label})`};

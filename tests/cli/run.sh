@@ -87,7 +87,11 @@ expect_grep "json has metrics" "$tmp/r.json" '"errdyn_dev":'
 expect_grep "json has the columnar series" "$tmp/r.json" '"series":{"t":[0,0.10000000000000001,'
 expect_exit 0 "run from stdin" sh -c "\"$CTCSIM\" run - <\"$tmp/job.json\""
 
-# errors and their exit codes
+# a preset with another controller: the summary names the controller run, not the preset's
+echo '{"preset": "triple_pendulum_pid", "duration": 0.2, "controller": {"type": "lqr", "Q": [1, 1, 1], "lambda": 0.01}}' >"$tmp/lqr.json"
+expect_exit 0 "run a preset with another controller" "$CTCSIM" run "$tmp/lqr.json" -o "$tmp/lqr.csv"
+expect_grep "its summary names the controller" "$tmp/err" "Triple pendulum, LQR (scene of Kingsley et al. 2017, sec. 7.1): done, planar lqr,"
+
 expect_exit 1 "no command" "$CTCSIM"
 expect_exit 1 "unknown command" "$CTCSIM" fly
 expect_exit 1 "bad format" "$CTCSIM" run "$tmp/job.json" --format xml

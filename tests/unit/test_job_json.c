@@ -970,6 +970,63 @@ Test(job_json, the_spec_runs)
 
 /* ---- presets ---- */
 
+Test(job_json, preset_name_names_an_overridden_controller)
+{
+    /* another controller type (its object replaced whole): the name says which, and that the
+       paper ran only the scene */
+    job *j = parse_ok("{'preset':'triple_pendulum_pid','controller':{'type':'lqr','Q':[1,1,1],"
+                      "'lambda':0.01}}");
+    cr_assert_eq(j->spec.controller, CTC_CTRL_LQR);
+    cr_assert_str_eq(j->name, "Triple pendulum, LQR (scene of Kingsley et al. 2017, sec. 7.1)");
+    job_free(j);
+    j = parse_ok("{'preset':'spatial_double_pendulum_pd','controller':{'type':'poles',"
+                 "'poles':[-2,-2.1,-2.2]}}");
+    cr_assert_str_eq(j->name, "Spatial double pendulum, pole placement (scene of Kingsley et al. "
+                              "2017, sec. 7.1; gravity -z)");
+    job_free(j);
+    j = parse_ok("{'preset':'n_link_pendulum','n':5,'controller':{'type':'pid','kp':100,'kv':20,"
+                 "'ki':10}}");
+    cr_assert_str_eq(j->name, "5-link pendulum, PID (scene of Kingsley et al. 2017, sec. 7.3)");
+    job_free(j);
+    j = parse_ok("{'preset':'triple_pendulum_pd','controller':{'type':'none'},'trajectory':null,"
+                 "'disturbance':null}");
+    cr_assert_str_eq(j->name, "Triple pendulum, passive (scene of Kingsley et al. 2017, sec. 7.1)");
+    job_free(j);
+    j = parse_ok("{'preset':'arm_four_bar_pd','controller':{'type':'pid','kp':100,'kv':20,"
+                 "'ki':10}}");
+    cr_assert_str_eq(j->name, "Four-bar linkage on a swinging arm, PID");
+    job_free(j);
+
+    /* the same type with other gains, or a name given, keeps the name */
+    j = parse_ok("{'preset':'triple_pendulum_pd','controller':{'kp':400,'kv':40}}");
+    cr_assert_str_eq(j->name, "Triple pendulum, PD (Kingsley et al. 2017, sec. 7.1)");
+    job_free(j);
+    j = parse_ok(
+        "{'preset':'triple_pendulum_pid','name':'mine','controller':{'type':'pd','kp':1,'kv':2}}");
+    cr_assert_str_eq(j->name, "mine");
+    job_free(j);
+}
+
+Test(job_json, preset_name_for_controller_replaces_the_label_only)
+{
+    char buf[JOB_MAX_NAME + 1];
+    cr_assert_eq(presets_name_for_controller("Triple pendulum, PD (Kingsley et al. 2017, sec. 7.1)",
+                                             "pd", "pid", buf, sizeof buf),
+                 0);
+    cr_assert_str_eq(buf, "Triple pendulum, PID (scene of Kingsley et al. 2017, sec. 7.1)");
+    cr_assert_eq(presets_name_for_controller("Spatial RSSR linkage, passive (gravity -z)", "none",
+                                             "pd", buf, sizeof buf),
+                 0);
+    cr_assert_str_eq(buf, "Spatial RSSR linkage, PD (gravity -z)");
+    cr_assert_eq(presets_name_for_controller("my rods", "pd", "lqr", buf, sizeof buf), 0);
+    cr_assert_str_eq(buf, "my rods, LQR", "no label to replace: appended");
+    cr_assert_eq(presets_name_for_controller("x, PID", "pd", "lqr", buf, sizeof buf), 0);
+    cr_assert_str_eq(buf, "x, PID, LQR", "\", PD\" is not found inside \", PID\"");
+    strcpy(buf, "untouched");
+    cr_assert_eq(presets_name_for_controller("x, PD", "pd", "mpc", buf, sizeof buf), -1);
+    cr_assert_str_eq(buf, "untouched");
+}
+
 Test(job_json, preset_overrides_are_an_rfc7386_merge_patch)
 {
     /* objects merge key by key, null deletes, anything else replaces */

@@ -58,6 +58,10 @@ test('the five-bar: loop residuals, one e per independent coordinate with its jo
         for (const ch of ['e', 'tau', 'w']) assert.equal(by[ch].series, 3, `${ch} data-series`);
         assert.equal(by.loop.series, 2, 'loop: position and velocity residuals');
         assert.deepEqual((await labels(page, 'e')).slice(1), ['e[0] (joint 0)', 'e[1] (joint 1)', 'e[2] (joint 2)']);
+        /* the torques carry the channel's name, as in the CSV, the API and the README */
+        assert.deepEqual((await labels(page, 'tau')).slice(1), ['tau[0] (joint 0)', 'tau[1] (joint 1)', 'tau[2] (joint 2)']);
+        const tauTitle = await page.evaluate(() => document.querySelector('div.plot[data-channel="tau"]')?.closest('figure')?.querySelector('figcaption')?.textContent);
+        assert.equal(tauTitle, 'Driving torques tau');
         assert.deepEqual((await labels(page, 'loop')).slice(1), ['position residual', 'velocity residual']);
         const qLabels = await labels(page, 'q');
         assert.ok(qLabels.includes('q_d[2]') && !qLabels.includes('q_d[3]'), `q legend: ${qLabels}`);
