@@ -156,7 +156,7 @@ static inline void body_record(const ctc_model *m, const ctc_data *d, int k, dou
         ctc_v3_set(c, 0, 0, 0);
         ctc_v3_cross(c + 3, w, wr);
     }
-    gdca_transfer_force(dim, rho, load, rec + CW(dim));
+    ctc_transfer_force(dim, rho, load, rec + CW(dim));
 }
 
 static inline double *record(const ctc_data *d, int a)
@@ -229,11 +229,11 @@ static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const 
         }
         gdca_tmulv(dim, R + CI(dim), e, ie); /* I is symmetric */
         for (int r = 0; r < dim; r++) ie[r] += R[CW(dim) + r];
-        gdca_transfer_force(dim, L + CR(dim), ie, tf);
+        ctc_transfer_force(dim, L + CR(dim), ie, tf);
         for (int r = 0; r < dim; r++) N[CW(dim) + r] = L[CW(dim) + r] + tf[r];
 
         /* c = T(r12^R) e + c^R (r12 = r12^L + r12^R above) */
-        gdca_transfer_motion(dim, R + CR(dim), e, tf);
+        ctc_transfer_motion(dim, R + CR(dim), e, tf);
         for (int r = 0; r < dim; r++) N[CC(dim) + r] = tf[r] + R[CC(dim) + r];
     }
     return -1;
@@ -272,10 +272,10 @@ static inline void inverse_disassemble(const inverse_args *a, int lo, int hi, co
         double *load = d->jnt_load_inv + dim * node->joint, tf[CTC_DENSE_MAX];
         const double *e = d->icomp_e + dim * node->joint;
 
-        gdca_transfer_motion(dim, L + CR(dim), a1, tlR); /* A1^R */
+        ctc_transfer_motion(dim, L + CR(dim), a1, tlR); /* A1^R */
         for (int r = 0; r < dim; r++) tlR[r] += e[r];
         gdca_tmulv(dim, R + CI(dim), tlR, load);
-        gdca_transfer_force(dim, R + CR(dim), f2, tf);
+        ctc_transfer_force(dim, R + CR(dim), f2, tf);
         for (int r = 0; r < dim; r++) {
             load[r] += R[CW(dim) + r] - tf[r];
             tlR[dim + r] = f2[r];
@@ -369,7 +369,7 @@ void gdca_inverse_handle2_accel(const ctc_model *m, const ctc_data *d, int k, do
 {
     const int dim = m->dim;
     const double *rec = record(d, k), *a1 = d->tload + (size_t)k * 2 * dim;
-    gdca_transfer_motion(dim, rec + CR(dim), a1, a);
+    ctc_transfer_motion(dim, rec + CR(dim), a1, a);
     for (int r = 0; r < dim; r++) a[r] += rec[CC(dim) + r];
 }
 

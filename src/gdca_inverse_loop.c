@@ -192,7 +192,7 @@ void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double 
         } else if (k >= m->loop_first) {
             double *lk = d->jnt_load_inv + dim * k, r[3];
             for (int a = 0; a < 3; a++) r[a] = d->loop_pt[a] - d->xpos[3 * k + a];
-            gdca_transfer_force(dim, r, load, s);
+            ctc_transfer_force(dim, r, load, s);
             for (int a = 0; a < dim; a++) lk[a] += s[a];
         }
         const double *P = d->jnt_P + 3 * dim * k;

@@ -26,7 +26,7 @@ static inline double s_at(const gdca_end *e, int dim, int row, int c)
 void gdca_loop_shift_accel(int dim, const double *r, const double *gam, const double *in,
                            double *out)
 {
-    gdca_transfer_motion(dim, r, in, out);
+    ctc_transfer_motion(dim, r, in, out);
     for (int i = 0; i < dim; i++) out[i] += gam[i];
 }
 
@@ -64,7 +64,7 @@ static void root_accel(const gdca_loop_root *p, const double f[3][CTC_DENSE_MAX]
         return;
     }
     double fl2[CTC_DENSE_MAX] = {0};
-    gdca_transfer_force(dim, p->shift, f[2], fl2);
+    ctc_transfer_force(dim, p->shift, f[2], fl2);
     for (int i = 0; i < dim; i++) fl2[i] -= f[1][i];
     record_accel(dim, p->l, p->lb, f[0], fl2, bias, s->al1, s->al2);
     gdca_loop_shift_accel(dim, p->shift, bias ? p->gam : gdca_zero6, s->al2, s->ab);
@@ -183,7 +183,7 @@ void gdca_loop_hand_down(const ctc_model *m, const gdca_loop_sol *s, const doubl
         return;
     }
     double *tl = tload + (size_t)top->left * 2 * dim, *tr = tload + (size_t)top->right * 2 * dim;
-    gdca_transfer_force(dim, shift, s->fn, tl + dim);
+    ctc_transfer_force(dim, shift, s->fn, tl + dim);
     for (int i = 0; i < dim; i++) {
         tl[i] = s->f0[i];
         tl[dim + i] -= s->fj[i];

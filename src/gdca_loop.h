@@ -13,7 +13,7 @@
  *     joint j   L, handle 2 (or the ground) -> R, handle 1
  *     joint n   R, handle 2 -> body b at p2 (or the ground)
  * Body b's acceleration at p2 is its acceleration at p1 shifted rigidly (gdca_loop_shift_accel)
- * plus d->loop_gam; a load at p2 on it is the load shifted to p1 (gdca_transfer_force,
+ * plus d->loop_gam; a load at p2 on it is the load shifted to p1 (ctc_transfer_force,
  * gdca_tree.h). With A1 = h11 F1 + h12 F2 + h13, A2 = h21 F1 + h22 F2 + h23 for each record, each
  * joint asks F = S x + fo,     S^T (A_child - A_parent - a) = -off where for each joint either its
  * acceleration is unknown (a dependent joint, or any joint in the forward pass): S = D (its
@@ -80,7 +80,7 @@ void gdca_loop_hand_down(const ctc_model *m, const gdca_loop_sol *s, const doubl
                          double *tload, double *jnt_load);
 
 /* out = body b's classical acceleration at p2 from the one at p1 (dim): the rigid shift
- * (alpha; a + alpha x r) of gdca_tree.h's gdca_transfer_motion, + gam, r = p2 - p1 (3). out may
+ * (alpha; a + alpha x r) of gdca_tree.h's ctc_transfer_motion, + gam, r = p2 - p1 (3). out may
  * not alias in. */
 void gdca_loop_shift_accel(int dim, const double *r, const double *gam, const double *in,
                            double *out);

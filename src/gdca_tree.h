@@ -44,38 +44,6 @@
 #define H13(dim) (3 * (dim) * (dim))
 #define H23(dim) (3 * (dim) * (dim) + (dim))
 
-/* out = T(r) a: the acceleration (or velocity) a of a rigid body at a point, moved to the point r
-   further on (planar: (w, v); spatial: (w; v), v + w x r); out may not alias a */
-static inline void gdca_transfer_motion(int dim, const double r[3], const double *a, double *out)
-{
-    if (dim == 3) {
-        out[0] = a[0];
-        out[1] = a[1] - r[1] * a[0];
-        out[2] = a[2] + r[0] * a[0];
-    } else {
-        double t[3];
-        ctc_v3_cross(t, a, r);
-        ctc_v3_copy(out, a);
-        ctc_v3_add(out + 3, a + 3, t);
-    }
-}
-
-/* out = T(r)^T f: a load f at the point r further on, as a load at this point (its moment
-   gains r x the force); out may not alias f */
-static inline void gdca_transfer_force(int dim, const double r[3], const double *f, double *out)
-{
-    if (dim == 3) {
-        out[0] = f[0] - r[1] * f[1] + r[0] * f[2];
-        out[1] = f[1];
-        out[2] = f[2];
-    } else {
-        double t[3];
-        ctc_v3_cross(t, r, f + 3);
-        ctc_v3_add(out, f, t);
-        ctc_v3_copy(out + 3, f + 3);
-    }
-}
-
 /* a zero vector: the ground's acceleration, and bias terms left out */
 static const double gdca_zero6[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
 

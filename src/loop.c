@@ -23,7 +23,6 @@
 #include <string.h>
 
 #include "dense.h"
-#include "gdca_tree.h"
 #include "kinematics.h"
 #include "spatial.h"
 
@@ -300,7 +299,7 @@ void ctc_loop_coord_twist(const ctc_model *m, const ctc_data *d, int k, int c, d
 {
     double r[3];
     ctc_v3_sub(r, d->loop_pt, d->xpos + 3 * k);
-    gdca_transfer_motion(m->dim, r, d->jnt_P + 3 * m->dim * k + c * m->dim, tw);
+    ctc_transfer_motion(m->dim, r, d->jnt_P + 3 * m->dim * k + c * m->dim, tw);
 }
 
 /* the loop Jacobian's column of chain coordinate (k, c): g = -D_n^T (unit twist) (nc) */

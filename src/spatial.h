@@ -160,6 +160,39 @@ static inline void ctc_m3_from_quat(double r[9], const double quat[4])
     r[8] = 1 - s * (x * x + y * y);
 }
 
+/* out = T(r) a, in either form (dim 3: planar (w, v_x, v_y); 6: spatial (w; v)): the acceleration
+   (or velocity) a of a rigid body at a point, moved to the point r further on (v + w x r, DESIGN.md
+   section 3); out may not alias a */
+static inline void ctc_transfer_motion(int dim, const double r[3], const double *a, double *out)
+{
+    if (dim == 3) {
+        out[0] = a[0];
+        out[1] = a[1] - r[1] * a[0];
+        out[2] = a[2] + r[0] * a[0];
+    } else {
+        double t[3];
+        ctc_v3_cross(t, a, r);
+        ctc_v3_copy(out, a);
+        ctc_v3_add(out + 3, a + 3, t);
+    }
+}
+
+/* out = T(r)^T f: a load f at the point r further on, as a load at this point (its moment
+   gains r x the force); out may not alias f */
+static inline void ctc_transfer_force(int dim, const double r[3], const double *f, double *out)
+{
+    if (dim == 3) {
+        out[0] = f[0] - r[1] * f[1] + r[0] * f[2];
+        out[1] = f[1];
+        out[2] = f[2];
+    } else {
+        double t[3];
+        ctc_v3_cross(t, r, f + 3);
+        ctc_v3_add(out, f, t);
+        ctc_v3_copy(out + 3, f + 3);
+    }
+}
+
 /* Eigenvalues of the symmetric 3x3 matrix s, ascending (cyclic Jacobi; accurate to rounding). */
 void ctc_sym3_eigenvalues(const double s[9], double eig[3]);
 

@@ -336,3 +336,42 @@ Test(spatial, normals_form_a_right_handed_orthonormal_basis)
         check_normals(a, what);
     }
 }
+
+/* The rigid shift of a twist to a point r further on is v + w x r, and that of a load back from
+ * r adds r x the force to its moment: the two are adjoint (T(r)^T), so the power a load does on a
+ * twist is the same at either point. The planar form is the spatial one restricted to the plane
+ * (w along z; v and the force in x-y). */
+Test(spatial, transfer_of_motion_and_force_are_adjoint_rigid_shifts)
+{
+    uint64_t rng = 12345;
+    for (int trial = 0; trial < 100; trial++) {
+        double r[3], a[6], f[6], ta[6], tf[6], wxr[3];
+        for (int i = 0; i < 3; i++) r[i] = test_uniform(&rng, -2, 2);
+        for (int i = 0; i < 6; i++) a[i] = test_uniform(&rng, -3, 3);
+        for (int i = 0; i < 6; i++) f[i] = test_uniform(&rng, -3, 3);
+        ctc_transfer_motion(6, r, a, ta);
+        ctc_transfer_force(6, r, f, tf);
+        ctc_v3_cross(wxr, a, r);
+        for (int i = 0; i < 3; i++) {
+            cr_assert_eq(ta[i], a[i]);
+            cr_assert_float_eq(ta[3 + i], a[3 + i] + wxr[i], 1e-14);
+        }
+        double p_far = 0, p_near = 0;
+        for (int i = 0; i < 6; i++) p_far += f[i] * ta[i], p_near += tf[i] * a[i];
+        cr_assert_float_eq(p_far, p_near, 1e-12, "power at r %g, moved back %g", p_far, p_near);
+
+        /* planar: (w_z, v_x, v_y) and (tau_z, f_x, f_y), r in the plane */
+        double r2[3] = {r[0], r[1], 0}, a3[3] = {a[2], a[3], a[4]}, f3[3] = {f[2], f[3], f[4]};
+        double a6[6] = {0, 0, a[2], a[3], a[4], 0}, f6[6] = {0, 0, f[2], f[3], f[4], 0};
+        double p3[3], q3[3], p6[6], q6[6];
+        ctc_transfer_motion(3, r2, a3, p3);
+        ctc_transfer_force(3, r2, f3, q3);
+        ctc_transfer_motion(6, r2, a6, p6);
+        ctc_transfer_force(6, r2, f6, q6);
+        const int at[3] = {2, 3, 4};
+        for (int i = 0; i < 3; i++) {
+            cr_assert_float_eq(p3[i], p6[at[i]], 1e-14, "planar motion %d", i);
+            cr_assert_float_eq(q3[i], q6[at[i]], 1e-14, "planar force %d", i);
+        }
+    }
+}
