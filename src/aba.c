@@ -1,14 +1,15 @@
 /*
- * aba.c - forward dynamics of a serial chain by the articulated-body algorithm (Featherstone,
- * Rigid Body Dynamics Algorithms, 2008, section 7.3), in body coordinates.
+ * aba.c - forward dynamics of a tree of bodies by the articulated-body algorithm (Featherstone,
+ * Rigid Body Dynamics Algorithms, 2008, section 7.3, Table 7.1), in body coordinates.
  *
  * Pass 1, outward: v_k, c_k = v_k x (S_k qdot_k) (ctc_oracle_forward_pass), and
  *     I^A_k = I_k,    p^A_k = v_k x* (I_k v_k).
- * Pass 2, inward, k = n-1..0 (parent p = k - 1):
+ * Pass 2, inward, k = n-1..0 (parent p = lambda(k) = m->body_parent[k] < k, so every child is
+ * done before its parent):
  *     U_k = I^A_k S_k,   D_k = S_k^T U_k,   u_k = tau_k - S_k^T p^A_k
  *     I^a = I^A_k - U_k D_k^{-1} U_k^T
  *     p^a = p^A_k + I^a c_k + U_k D_k^{-1} u_k
- *     I^A_p += X_k^T I^a X_k,    p^A_p += X_k^T p^a           (for k > 0)
+ *     I^A_p += X_k^T I^a X_k,    p^A_p += X_k^T p^a           (unless p is the ground)
  * Pass 3, outward, from the ground's a = (0; -g):
  *     a' = X_k a_p + c_k,   qddot_k = D_k^{-1} (u_k - U_k^T a'),   a_k = a' + S_k qddot_k.
  * D_k (at most 3x3) is symmetric positive definite for a chain that can move; it is factored
@@ -71,7 +72,8 @@ void ctc_oracle_aba(const ctc_model *m, ctc_oracle *o, const double *q, const do
             }
         }
         plk_chol_factor(nv, d, dl);
-        if (k == 0) {
+        const int p = m->body_parent[k];
+        if (p < 0) {
             continue;
         }
 
@@ -106,8 +108,8 @@ void ctc_oracle_aba(const ctc_model *m, ctc_oracle *o, const double *q, const do
         }
 
         /* hand both to the parent: I^A_p += X^T I^a X, p^A_p += X^T p^a */
-        double *pp = o->art_bias + 6 * (size_t)(k - 1);
-        plk_congruence_add(x, ia_art, o->art_inertia + 36 * (size_t)(k - 1));
+        double *pp = o->art_bias + 6 * (size_t)p;
+        plk_congruence_add(x, ia_art, o->art_inertia + 36 * (size_t)p);
         plk_mat6t_vec(x, pa_art, tmp);
         for (int i = 0; i < 6; i++) {
             pp[i] += tmp[i];
@@ -123,7 +125,8 @@ void ctc_oracle_aba(const ctc_model *m, ctc_oracle *o, const double *q, const do
         const double *u = o->art_u + 18 * (size_t)k;
         const double *dl = o->art_dchol + 9 * (size_t)k;
         const double *uk = o->art_tau + 3 * (size_t)k;
-        const double *ap = (k == 0) ? ground_acc : o->acc + 6 * (size_t)(k - 1);
+        const int p = m->body_parent[k];
+        const double *ap = (p < 0) ? ground_acc : o->acc + 6 * (size_t)p;
         double *ak = o->acc + 6 * (size_t)k;
         double *qdd = vdot + m->jnt_vadr[k];
         double rhs[3];

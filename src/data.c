@@ -23,6 +23,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->xcom = calloc(n * 3, sizeof(double));
     d->omega = calloc(n * 3, sizeof(double));
     d->xvel = calloc(n * 3, sizeof(double));
+    d->xangle = calloc(n, sizeof(double));
     d->jnt_P = calloc(nj * 3 * dim, sizeof(double));
     d->jnt_D = calloc(nj * dim * dim, sizeof(double));
     d->jnt_beta = calloc(nj * dim, sizeof(double));
@@ -49,7 +50,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
         d->hr == NULL || d->hbody == NULL || d->hfwd == NULL || d->hinv == NULL ||
         d->fwd_E == NULL || d->fwd_z == NULL || d->fwd_res == NULL || d->inv_E == NULL ||
         d->inv_z == NULL || d->icomp == NULL || d->icomp_e == NULL || d->tload == NULL ||
-        d->jnt_load == NULL || d->jnt_load_inv == NULL || d->xbuf == NULL) {
+        d->jnt_load == NULL || d->jnt_load_inv == NULL || d->xbuf == NULL || d->xangle == NULL) {
         ctc_data_free(d);
         return NULL;
     }
@@ -65,6 +66,7 @@ void ctc_data_free(ctc_data *d)
     free(d->xcom);
     free(d->omega);
     free(d->xvel);
+    free(d->xangle);
     free(d->jnt_P);
     free(d->jnt_D);
     free(d->jnt_beta);

@@ -36,7 +36,10 @@ typedef struct ctc_data {
     double *omega; /* (n x 3) angular velocity, rad/s */
     double *xvel;  /* (n x 3) velocity of the frame origin, m/s */
 
-    /* joint k's maps, world (plane) coordinates: A1(body k) = A2(body k-1) + P qdd + beta; the
+    double *xangle; /* (n) planar form: body k's angle about the plane normal, rad: its parent's
+                       plus its signed revolute coordinate */
+
+    /* joint k's maps, world (plane) coordinates: A1(body k) = A2(parent) + P qdd + beta; the
        closing joint of a loop model is k = n (loop.h), with the tip as parent and the ground or
        body b as child. Sized for njoints. */
     double *jnt_P;    /* (njoints x 3 x dim) column c at [(3k + c) dim]; nv columns, orthonormal */

@@ -6,7 +6,10 @@
  * The tree: with r = (n - 1) / 2, the tip run joins body i to the assembly S_{i+1} of the bodies
  * after it, for i = n-2 down to r (S_i = i : S_{i+1}, S_{n-1} = body n-1); the base run joins the
  * assembly B_{k-1} of the ground and bodies 0..k-1 to body k at joint k, for k = 0 up to r - 1
- * (B_k = B_{k-1} : k, B_{-1} = the ground); the root joins B_{r-1} to S_r at joint r. Every S_i
+ * (B_k = B_{k-1} : k, B_{-1} = the ground); the root joins B_{r-1} to S_r at joint r. Both runs
+ * join consecutive bodies, so they hold while every body k's parent is k - 1 (model.h
+ * body_parent: a chain, the one topology ctc_model_build accepts), which each assembly asserts.
+ * Every S_i
  * holds the free tip (its F2 = 0) and every B_k the ground (joint 0 included, no handle 1), so of
  * their handle equations (data.h) only
  *     S_i:  A1 = h11 F1 + h13,        B_k:  A2 = h22 F2 + h23
@@ -44,6 +47,8 @@
  * joint loads, which are added to d->jnt_load).
  */
 #include "gdca_forward_seq.h"
+
+#include <assert.h>
 
 #include "gdca_forward_joint.h"
 
@@ -117,6 +122,7 @@ static inline int seq_tip_assemble(const seq_args *a, int i, const int dim, cons
 {
     ctc_data *d = a->d;
     const int j = i + 1;
+    assert(a->m->body_parent[j] == i);
     const double *left = seq_body(a, i), *right = seq_part(a, j);
     const double *b13l = seq_body_bias(a, i, H13(dim), correct);
     double *out = d->hfwd + (size_t)i * d->hsize, t[CTC_DENSE_MAX];
@@ -138,6 +144,7 @@ static inline int seq_tip_assemble(const seq_args *a, int i, const int dim, cons
 static inline int seq_base_assemble(const seq_args *a, int k, const int dim, const int correct)
 {
     ctc_data *d = a->d;
+    assert(a->m->body_parent[k] == k - 1);
     const double *left = k > 0 ? seq_part(a, k - 1) : NULL, *right = seq_body(a, k);
     const double *b23r = seq_body_bias(a, k, H23(dim), correct);
     double *out = d->hfwd + (size_t)k * d->hsize, t[CTC_DENSE_MAX];

@@ -9,6 +9,8 @@
  */
 #include "handles.h"
 
+#include <assert.h>
+
 #include "spatial.h"
 
 static void planar_block(double *h, const double ri[2], const double rj[2], double ij, double im)
@@ -24,15 +26,25 @@ static void planar_block(double *h, const double ri[2], const double rj[2], doub
     h[8] = ri[0] * rj[0] * ij + im;
 }
 
+/* Body k's handle 2: its child's joint centre (its only child: a body of a chain has at most
+ * one, and two handles), else the closing joint's centre on the tip of a loop model, else the
+ * centre of mass c, where no load acts. */
+static inline const double *handle2(const ctc_model *m, const ctc_data *d, int k, const double *c)
+{
+    const int child = m->body_child[k];
+    assert(child < 0 || m->body_sibling[child] < 0);
+    return child >= 0                           ? d->xpos + 3 * child
+           : m->has_loop && k == m->nbodies - 1 ? d->loop_pt /* the closing joint's parent */
+                                                : c;
+}
+
 static void handles_planar(const ctc_model *m, ctc_data *d)
 {
     const double *g = m->plane_gravity;
     for (int k = 0; k < m->nbodies; k++) {
         const ctc_planar_body *b = &m->planar[k];
         const double *c = d->xcom + 3 * k;
-        const double *next = k + 1 < m->nbodies ? d->xpos + 3 * (k + 1)
-                             : m->has_loop      ? d->loop_pt
-                                                : c;
+        const double *next = handle2(m, d, k, c);
         double *hr = d->hr + 6 * k;
         double r1[2] = {d->xpos[3 * k] - c[0], d->xpos[3 * k + 1] - c[1]};
         double r2[2] = {next[0] - c[0], next[1] - c[1]};
@@ -71,9 +83,7 @@ static void handles_spatial(const ctc_model *m, ctc_data *d)
     for (int k = 0; k < m->nbodies; k++) {
         const ctc_body_spec *body = &m->bodies[k];
         const double *rot = d->xrot + 9 * k, *w = d->omega + 3 * k, *c = d->xcom + 3 * k;
-        const double *next = k + 1 < m->nbodies ? d->xpos + 3 * (k + 1)
-                             : m->has_loop      ? d->loop_pt
-                                                : c;
+        const double *next = handle2(m, d, k, c);
         double *r1 = d->hr + 6 * k, *r2 = d->hr + 6 * k + 3;
         ctc_v3_sub(r1, d->xpos + 3 * k, c);
         ctc_v3_sub(r2, next, c);

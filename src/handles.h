@@ -2,9 +2,10 @@
  * handles.h - the body-level handle equations, computed once per state (paper Eq. 8-13, 42-43).
  *
  * For body k with mass m, centre of mass c, inertia I_c and inverse I_c^-1 (world frame),
- * angular velocity w, handle i at r_i = handle - c (handle 1 = joint k, handle 2 = joint k+1;
- * the tip body's handle 2 is its centre of mass, where no load acts, or in a loop model the
- * closing joint's centre on it, d->loop_pt):
+ * angular velocity w, handle i at r_i = handle - c (handle 1 = joint k, handle 2 = the joint of
+ * its child, m->body_child[k], which is k+1 in a chain, the one topology with two handles a body;
+ * a body without a child has its handle 2 at its centre of mass, where no load acts, or in a loop
+ * model the tip has it at the closing joint's centre on it, d->loop_pt):
  *
  *     A_i = sum_j h_ij F_j + h_i3,     h_ij = T_i M^-1 T_j^T,
  *     h_i3 = T_i M^-1 b + (0; w x (w x r_i)),     b = (-w x I_c w; m g)

@@ -1,8 +1,10 @@
 /*
  * kinematics.c - the kinematics pass (kinematics.h), one loop from base to tip per form.
  *
+ * Each body is placed from its parent p = lambda(k) (model.h body_parent; the ground, at rest at
+ * the origin with the world's axes, for p = -1), which the loop has already visited since p < k.
  * A body's origin velocity is the velocity of the coincident point of its parent plus the
- * relative velocity along a sliding axis: v_k = v_(k-1) + w_(k-1) x (p_k - p_(k-1)) + u qd.
+ * relative velocity along a sliding axis: v_k = v_p + w_p x (x_k - x_p) + u qd.
  */
 #include "kinematics.h"
 
@@ -13,10 +15,16 @@
 
 static void kinematics_planar(const ctc_model *m, ctc_data *d, const double *q, const double *v)
 {
-    double theta = 0, cp = 1, sp = 0, wp = 0; /* the parent's angle, cos, sin, omega */
-    double pp[2] = {0, 0}, vp[2] = {0, 0};    /* the parent's origin and its velocity */
-
     for (int k = 0; k < m->nbodies; k++) {
+        /* the parent's angle, cos, sin, omega, origin and origin velocity (the ground's: zero) */
+        const int par = m->body_parent[k];
+        double theta = 0, cp = 1, sp = 0, wp = 0, pp[2] = {0, 0}, vp[2] = {0, 0};
+        if (par >= 0) {
+            theta = d->xangle[par];
+            cp = d->xrot[9 * par], sp = d->xrot[9 * par + 3], wp = d->omega[3 * par + 2];
+            pp[0] = d->xpos[3 * par], pp[1] = d->xpos[3 * par + 1];
+            vp[0] = d->xvel[3 * par], vp[1] = d->xvel[3 * par + 1];
+        }
         const ctc_planar_body *b = &m->planar[k];
         ctc_joint_type type = m->joints[k].type;
         const double *qk = q + m->jnt_qadr[k], *vk = v + m->jnt_vadr[k];
@@ -60,6 +68,7 @@ static void kinematics_planar(const ctc_model *m, ctc_data *d, const double *q, 
         double c = cos(theta), s = sin(theta);
         double *xp = d->xpos + 3 * k, *xr = d->xrot + 9 * k, *xc = d->xcom + 3 * k;
         double *om = d->omega + 3 * k, *xv = d->xvel + 3 * k;
+        d->xangle[k] = theta;
         ctc_v3_set(xp, p[0], p[1], 0);
         xr[0] = c, xr[1] = -s, xr[2] = 0;
         xr[3] = s, xr[4] = c, xr[5] = 0;
@@ -69,10 +78,6 @@ static void kinematics_planar(const ctc_model *m, ctc_data *d, const double *q, 
         ctc_v3_set(om, 0, 0, w);
         ctc_v3_set(xv, vp[0] - wp * (p[1] - pp[1]) + u[0] * slide,
                    vp[1] + wp * (p[0] - pp[0]) + u[1] * slide, 0);
-
-        cp = c, sp = s, wp = w;
-        pp[0] = p[0], pp[1] = p[1];
-        vp[0] = xv[0], vp[1] = xv[1];
     }
 }
 
@@ -84,10 +89,11 @@ static void kinematics_spatial(const ctc_model *m, ctc_data *d, const double *q,
     for (int k = 0; k < m->nbodies; k++) {
         const ctc_joint_spec *j = &m->joints[k];
         const double *qk = q + m->jnt_qadr[k], *vk = v + m->jnt_vadr[k];
-        const double *rp = k ? d->xrot + 9 * (k - 1) : eye;
-        const double *pp = k ? d->xpos + 3 * (k - 1) : zero;
-        const double *wp = k ? d->omega + 3 * (k - 1) : zero;
-        const double *vp = k ? d->xvel + 3 * (k - 1) : zero;
+        const int par = m->body_parent[k]; /* the ground: at rest, world axes */
+        const double *rp = par >= 0 ? d->xrot + 9 * par : eye;
+        const double *pp = par >= 0 ? d->xpos + 3 * par : zero;
+        const double *wp = par >= 0 ? d->omega + 3 * par : zero;
+        const double *vp = par >= 0 ? d->xvel + 3 * par : zero;
         double *xp = d->xpos + 3 * k, *xr = d->xrot + 9 * k;
         double *om = d->omega + 3 * k, *xv = d->xvel + 3 * k;
         double *P = d->jnt_P + 18 * k, *D = d->jnt_D + 36 * k, *beta = d->jnt_beta + 6 * k;

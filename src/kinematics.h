@@ -1,15 +1,17 @@
 /*
  * kinematics.h - the kinematics pass: poses, velocities and each joint's maps P, D and beta.
  *
- * From base to tip, for the state (q, v), computes each body's frame (origin = handle 1, the
- * centre of joint k), orientation, centre of mass, angular velocity and origin velocity, and each
- * joint's free-motion map P (orthonormal columns), its orthogonal complement D and the
- * velocity-product term beta of the acceleration constraint (paper Eq. 14, DESIGN.md section 4):
+ * From base to tip, each body after its parent p = lambda(k) = m->body_parent[k] (model.h), for
+ * the state (q, v), computes each body's frame (origin = handle 1, the centre of joint k),
+ * orientation, centre of mass, angular velocity and origin velocity, and each joint's free-motion
+ * map P (orthonormal columns), its orthogonal complement D and the velocity-product term beta of
+ * the acceleration constraint (paper Eq. 14, DESIGN.md section 4):
  *
- *     A1(body k) = A2(body k-1) + P qdd_k + beta_k,
+ *     A1(body k) = A2(body p) + P qdd_k + beta_k,
  *
- * where A2(body k-1) is the acceleration of the material point of body k-1 at joint k's centre.
- * With w = omega(k-1) the parent's angular velocity and u the axis in world coordinates:
+ * where A2(body p) is the acceleration of the material point of body p at joint k's centre (the
+ * ground: at rest). With w = omega(p) the parent's angular velocity and u the axis in world
+ * coordinates:
  *     revolute     P = (u; 0)             beta = (w x u qd; 0)
  *     prismatic    P = (0; u)             beta = (0; 2 w x u qd)          (Coriolis)
  *     cylindrical  P = [(u; 0), (0; u)]   beta = (w x u qd0; 2 w x u qd1)

@@ -93,8 +93,9 @@ static void loop_child_of(const ctc_model *m, const ctc_data *d, loop_child *c)
     memcpy(c->v, d->xvel + 3 * b, sizeof c->v);
 }
 
-/* a loop on a body: r = p2 - p1 from the body's handle 2 (joint b+1's centre) to the closing
- * point, and gam = (0; w x (w x r)), the centripetal part of the body's acceleration moved there */
+/* a loop on a body: r = p2 - p1 from the body's handle 2 (its child's joint centre, joint b+1)
+ * to the closing point, and gam = (0; w x (w x r)), the centripetal part of the body's acceleration
+ * moved there */
 static void loop_shift(const ctc_model *m, ctc_data *d)
 {
     memset(d->loop_r, 0, sizeof d->loop_r);
@@ -102,7 +103,7 @@ static void loop_shift(const ctc_model *m, ctc_data *d)
     if (m->loop_body < 0) return;
     const double *w = d->omega + 3 * m->loop_body;
     double t[3], g[3];
-    ctc_v3_sub(d->loop_r, d->loop_pt, d->xpos + 3 * m->loop_first);
+    ctc_v3_sub(d->loop_r, d->loop_pt, d->xpos + 3 * m->body_child[m->loop_body]);
     ctc_v3_cross(t, w, d->loop_r);
     ctc_v3_cross(g, w, t);
     memcpy(d->loop_gam + (m->dim == 3 ? 1 : 3), g, (size_t)(m->dim == 3 ? 2 : 3) * sizeof *g);

@@ -5,13 +5,15 @@
  * positive semidefinite and satisfying the triangle inequality of principal moments, axes of
  * non-zero length), decides the form (planar when every joint moves in one plane and gravity lies
  * in it, DESIGN.md section 3), precomputes what the kinematics and handle passes need per body,
- * and lays out the balanced binary assembly tree of GDCA (paper section 3, Fig. 3): bodies
+ * records the topology (each body's parent, lambda(k), and its children: here a chain, parent
+ * k - 1), and lays out the balanced binary assembly tree of GDCA (paper section 3, Fig. 3): bodies
  * [first, last] split at the middle, depth ceil(log2 n), nodes stored by height so that the nodes
  * of one height are independent of each other. A loop closed on body b splits the root at joint
  * b + 1 instead (at most one level more), so that the loop's bodies form one subtree.
  */
 #include "model.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -308,12 +310,31 @@ static ctc_status setup_planar(ctc_model *m, const double n[3], char *err, size_
     return CTC_OK;
 }
 
+/* The topology from the parent array body_parent (filled by the caller): the children of each
+ * body and of the ground as first-child / next-sibling lists in increasing order (model.h). Walks
+ * the bodies from the tip down, pushing each onto the front of its parent's list. */
+static void build_topology(ctc_model *m)
+{
+    m->ground_child = -1;
+    for (int k = 0; k < m->nbodies; k++) m->body_child[k] = -1;
+    for (int k = m->nbodies - 1; k >= 0; k--) {
+        int p = m->body_parent[k];
+        int *first = p < 0 ? &m->ground_child : &m->body_child[p];
+        m->body_sibling[k] = *first;
+        *first = k;
+    }
+}
+
 /* Builds the subtree of bodies [first, last] into tmp (post-order); returns its assembly index
  * in tmp's numbering (n + position in tmp) or the body index for a leaf. */
 static int build_subtree(ctc_model *m, ctc_tree_node *tmp, int *count, int first, int last, int mid)
 {
     if (first == last) return first;
     if (mid <= first) mid = first + (last - first + 1) / 2; /* the right part starts at mid */
+    /* the assembly tree splits a chain of consecutive bodies: joint mid joins the left part's
+       last body (mid - 1, its handle 2) to the right part's first (mid, its handle 1), which
+       holds only while body mid's parent is mid - 1 (a chain, the one topology accepted) */
+    assert(m->body_parent[mid] == mid - 1);
     int left = build_subtree(m, tmp, count, first, mid - 1, 0);
     int right = build_subtree(m, tmp, count, mid, last, 0);
     int hl = left < m->nbodies ? 0 : tmp[left - m->nbodies].height;
@@ -456,15 +477,21 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
     m->jnt_indep = malloc((size_t)nj);
     m->body_inertia_inv = calloc((size_t)n * 9, sizeof(double));
     m->jnt_perp = calloc((size_t)nj * 6, sizeof(double));
+    m->body_parent = malloc((size_t)n * sizeof(int));
+    m->body_child = malloc((size_t)n * sizeof(int));
+    m->body_sibling = malloc((size_t)n * sizeof(int));
     double *moments = malloc((size_t)n * 3 * sizeof(double));
     if (m->bodies == NULL || m->joints == NULL || m->jnt_qadr == NULL || m->jnt_vadr == NULL ||
         m->jnt_nq == NULL || m->jnt_nv == NULL || m->jnt_indep == NULL ||
-        m->body_inertia_inv == NULL || m->jnt_perp == NULL || moments == NULL) {
+        m->body_inertia_inv == NULL || m->jnt_perp == NULL || m->body_parent == NULL ||
+        m->body_child == NULL || m->body_sibling == NULL || moments == NULL) {
         st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
         goto fail;
     }
     memcpy(m->bodies, spec->bodies, (size_t)n * sizeof *m->bodies);
     memcpy(m->joints, spec->joints, (size_t)n * sizeof *m->joints);
+    for (int k = 0; k < n; k++) m->body_parent[k] = k - 1; /* a chain: the specs give no other */
+    build_topology(m);
     if (m->has_loop) {
         const ctc_loop_spec *lp = spec->loop;
         m->joints[n] = lp->joint;
@@ -625,6 +652,9 @@ void ctc_model_free(ctc_model *m)
     free(m->jnt_nv);
     free(m->body_inertia_inv);
     free(m->jnt_perp);
+    free(m->body_parent);
+    free(m->body_child);
+    free(m->body_sibling);
     free(m->planar);
     free(m->tree);
     free(m->height_start);

@@ -6,8 +6,9 @@
  * (data.h).
  *
  * Conventions (SI units, radians; see DESIGN.md section 2):
- *  - Bodies are numbered 0..n-1 from the base; joint k connects body k-1 (the ground for k = 0) to
- *    body k. Body k's handle 1 is its inboard joint k, handle 2 its outboard joint k+1.
+ *  - Bodies are numbered 0..n-1 from the base; joint k connects body k's parent, body_parent[k]
+ *    (the topology arrays of ctc_model; in a chain body k-1, the ground for k = 0), to body k.
+ *    Body k's handle 1 is its inboard joint k, handle 2 its outboard joint, its child's (k+1).
  *  - Each body has a frame. Its origin is the centre of joint k and, when all joint coordinates
  *    are zero, its axes are parallel to its parent's, hence to the world's. A joint's axis and
  *    location are given in the parent's frame (the world's for joint 0); a body's centre of mass
@@ -159,6 +160,21 @@ typedef struct ctc_model {
     double *body_inertia_inv; /* (n x 9) inverse inertia about the CoM, body frame (spatial) */
     double *jnt_perp;         /* (n x 6) two unit vectors normal to joint k's axis, parent frame */
     ctc_planar_body *planar;  /* (n) form PLANAR, else NULL */
+
+    /* topology: the tree of bodies, Featherstone's lambda(k) (Rigid Body Dynamics Algorithms,
+       2008, sec. 4.1.2). Joint k is body k's inboard joint, from body body_parent[k] (-1: the
+       ground) to body k, so a joint and its child body share an index. Invariants:
+       -1 <= body_parent[k] < k, so a pass over k = 0..n-1 meets every parent before its children
+       and one over k = n-1..0 every child before its parent; the children of a body (and of the
+       ground) are listed in increasing order by body_child and body_sibling. A loop's closing
+       joint is not a tree edge: it appears in none of these arrays (loop_body, loop.h). Every
+       pass finds a parent or a child here. ctc_model_build accepts chains only, where
+       body_parent[k] = k - 1; the balanced assembly tree below, and the handles (a body's handle
+       2 is its one child's joint), rely on that and assert it. */
+    int *body_parent;  /* (n) lambda(k): body k's parent, -1 for the ground */
+    int *body_child;   /* (n) body k's first (lowest-numbered) child, -1 for a leaf */
+    int *body_sibling; /* (n) the next child of body k's parent after k, -1 for the last */
+    int ground_child;  /* the ground's first child (body 0) */
 
     int ntree;           /* n - 1 internal nodes */
     ctc_tree_node *tree; /* (ntree) ordered by height: children before parents, root last */

@@ -2,7 +2,8 @@
  * oracle.c - the oracle's workspace and its joint model (Featherstone, Rigid Body Dynamics
  * Algorithms, 2008, ch. 4: joint transform X_J, motion subspace S and velocity-product term).
  *
- * Joint k joins frame p (its parent body's, or the world's for k = 0) to body k's frame. The
+ * Joint k joins frame p (its parent body's, p = lambda(k) = m->body_parent[k], or the world's for
+ * p = -1) to body k's frame. The
  * child's origin lies at r = location (+ displacement along the axis) in p's coordinates and its
  * axes are rotated by R relative to p's (x_p = R x_child + r), so the motion transform is
  *     X_k = k_X_p = [E 0; -E[r]x E],   E = R^T.
@@ -152,11 +153,12 @@ void ctc_oracle_forward_pass(const ctc_model *m, ctc_oracle *o, const double *q,
             }
         }
 
-        /* v_k = X_k v_{k-1} + vJ (the ground is at rest) */
-        if (k == 0) {
+        /* v_k = X_k v_p + vJ, p = lambda(k) (the ground is at rest) */
+        const int p = m->body_parent[k];
+        if (p < 0) {
             memcpy(vk, vj, sizeof(vj));
         } else {
-            plk_mat6_vec(x, o->vel + 6 * (size_t)(k - 1), vk);
+            plk_mat6_vec(x, o->vel + 6 * (size_t)p, vk);
             for (int i = 0; i < 6; i++) {
                 vk[i] += vj[i];
             }

@@ -12,17 +12,20 @@
  * articulated inertia D = S^T I^A S is positive definite (true for any chain that can move).
  *
  * Conventions are those of model.h: body k's frame has its origin at joint k's centre and is
- * parallel to the world's at q = 0; joint k maps its parent's frame (the world's for k = 0) to
- * body k's frame by a translation to the joint's location followed by the joint's motion.
- * q (nq), v (nv), vdot (nv) and tau (nv) are laid out by m->jnt_qadr / m->jnt_vadr; a spherical
- * joint's 4 coordinates are a quaternion (w, x, y, z), normalised here before use (q itself is
- * not changed), its 3 velocities the child's angular velocity relative to the parent in the
- * child's frame, and its 3 forces the torque vector in the child's frame. Gravity m->gravity is
- * included everywhere, as a fictitious acceleration -g of the ground. SI units throughout.
+ * parallel to the world's at q = 0; joint k maps its parent's frame, lambda(k) =
+ * m->body_parent[k] (the world's for -1), to body k's frame by a translation to the joint's
+ * location followed by the joint's motion. q (nq), v (nv), vdot (nv) and tau (nv) are laid out by
+ * m->jnt_qadr / m->jnt_vadr; a spherical joint's 4 coordinates are a quaternion (w, x, y, z),
+ * normalised here before use (q itself is not changed), its 3 velocities the child's angular
+ * velocity relative to the parent in the child's frame, and its 3 forces the torque vector in the
+ * child's frame. Gravity m->gravity is included everywhere, as a fictitious acceleration -g of the
+ * ground. SI units throughout.
  *
- * Reads only nbodies, nq, nv, gravity, bodies, joints, jnt_qadr, jnt_vadr, jnt_nq and jnt_nv of
- * the model. Thread safety: the model is read-only and may be shared; a workspace belongs to one
- * thread at a time, so give each thread its own. The compute calls allocate nothing.
+ * Reads only nbodies, nq, nv, gravity, bodies, joints, jnt_qadr, jnt_vadr, jnt_nq, jnt_nv and
+ * body_parent of the model, and walks the tree that body_parent describes (a chain is the tree
+ * with parents k - 1), so that it also serves trees. Thread safety: the model is read-only and may
+ * be shared; a workspace belongs to one thread at a time, so give each thread its own. The compute
+ * calls allocate nothing.
  */
 #ifndef CTC_ORACLE_H
 #define CTC_ORACLE_H
@@ -54,12 +57,13 @@ void ctc_oracle_rnea(const ctc_model *m, ctc_oracle *o, const double *q, const d
 void ctc_oracle_aba(const ctc_model *m, ctc_oracle *o, const double *q, const double *v,
                     const double *tau, double *vdot);
 
-/* Joint-space mass matrix M(q) by the composite-rigid-body algorithm (Featherstone 6.2), O(n^2)
- * for a chain: with I^c_i the composite inertia of bodies i..n-1 in body i's frame,
- *     M_ji = S_j^T (i_X_j)^T I^c_i S_i   for j <= i,   M_ij = M_ji^T,
- * so that the kinetic energy is 1/2 v^T M v. Writes M (nv x nv, row-major, symmetric, both
- * triangles filled) for positions q (nq). o must have been made from m. All arrays are the
- * caller's. */
+/* Joint-space mass matrix M(q) by the composite-rigid-body algorithm (Featherstone 6.2), O(n d)
+ * for depth d (O(n^2) for a chain): with I^c_i the composite inertia of i's subtree in body i's
+ * frame,
+ *     M_ji = S_j^T (i_X_j)^T I^c_i S_i   for j an ancestor of i or i,   M_ij = M_ji^T,
+ * every other block zero, so that the kinetic energy is 1/2 v^T M v. Writes M (nv x nv, row-major,
+ * symmetric, both triangles filled) for positions q (nq). o must have been made from m. All arrays
+ * are the caller's. */
 void ctc_oracle_mass_matrix(const ctc_model *m, ctc_oracle *o, const double *q, double *mass);
 
 #endif

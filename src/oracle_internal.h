@@ -3,7 +3,8 @@
  * and crba.c. Not part of the public API (see oracle.h).
  *
  * Per body k the workspace holds, in body k's coordinates (Featherstone's notation):
- *   X_k  = k_X_{k-1}, the 6x6 motion transform from the parent's frame (the world's for k = 0);
+ *   X_k  = k_X_p, the 6x6 motion transform from the parent's frame, p = lambda(k) =
+ *          m->body_parent[k] (the world's for p = -1);
  *   S_k  = the joint's motion subspace (6 x nv_k), constant in the child's frame for every joint
  *          type here, so the joint's own velocity-product term S'_k qdot_k is zero;
  *   v_k  = body velocity, c_k = v_k x (S_k qdot_k) its velocity-product acceleration;
@@ -19,7 +20,7 @@
 struct ctc_oracle {
     int nbodies;
     double *inertia;     /* (n x 36) I_k, spatial inertia about body k's origin, body frame */
-    double *xform;       /* (n x 36) X_k = k_X_{k-1}, row-major */
+    double *xform;       /* (n x 36) X_k = k_X_lambda(k), row-major */
     double *subspace;    /* (n x 18) S_k: column j of joint k is subspace[18 k + 6 j .. +5] */
     double *vel;         /* (n x 6) v_k */
     double *bias;        /* (n x 6) c_k = v_k x (S_k qdot_k) */
@@ -32,14 +33,14 @@ struct ctc_oracle {
     double *art_tau;     /* (n x 3) ABA: u_k = tau_k - S_k^T p^A_k */
 };
 
-/* Joint k's motion transform X (6x6, k_X_{k-1}) and motion subspace S (nv_k columns of 6, layout
- * as in the workspace) at coordinates q (nq; only joint k's are read). */
+/* Joint k's motion transform X (6x6, k_X_lambda(k)) and motion subspace S (nv_k columns of 6,
+ * layout as in the workspace) at coordinates q (nq; only joint k's are read). */
 void ctc_oracle_joint_model(const ctc_model *m, int k, const double *q, double xform[36],
                             double subspace[18]);
 
 /* Forward pass shared by all three algorithms: fills o->xform and o->subspace for every body at
  * q (nq) and, when v (nv) is not NULL, the velocities o->vel and velocity-product terms o->bias:
- *     v_k = X_k v_{k-1} + S_k qdot_k,   c_k = v_k x (S_k qdot_k),   v_{-1} = 0. */
+ *     v_k = X_k v_lambda(k) + S_k qdot_k,   c_k = v_k x (S_k qdot_k),   v_ground = 0. */
 void ctc_oracle_forward_pass(const ctc_model *m, ctc_oracle *o, const double *q, const double *v);
 
 #endif

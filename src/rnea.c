@@ -1,9 +1,10 @@
 /*
- * rnea.c - inverse dynamics of a serial chain by the recursive Newton-Euler algorithm
- * (Featherstone, Rigid Body Dynamics Algorithms, 2008, section 5.3), in body coordinates.
+ * rnea.c - inverse dynamics of a tree of bodies by the recursive Newton-Euler algorithm
+ * (Featherstone, Rigid Body Dynamics Algorithms, 2008, section 5.3, Table 5.1), in body
+ * coordinates.
  *
- * Outward pass, k = 0..n-1 (parent p = k - 1; the ground has v = 0 and a = (0; -g), so gravity
- * needs no term of its own):
+ * Outward pass, k = 0..n-1 (parent p = lambda(k) = m->body_parent[k] < k; the ground, p = -1, has
+ * v = 0 and a = (0; -g), so gravity needs no term of its own):
  *     v_k = X_k v_p + S_k qdot_k
  *     a_k = X_k a_p + S_k qddot_k + v_k x (S_k qdot_k)
  *     f_k = I_k a_k + v_k x* (I_k v_k)          (net force on body k, Newton-Euler)
@@ -32,7 +33,8 @@ void ctc_oracle_rnea(const ctc_model *m, ctc_oracle *o, const double *q, const d
         const double *vk = o->vel + 6 * (size_t)k;
         const double *ck = o->bias + 6 * (size_t)k;
         const double *ik = o->inertia + 36 * (size_t)k;
-        const double *ap = (k == 0) ? ground_acc : o->acc + 6 * (size_t)(k - 1);
+        const int p = m->body_parent[k];
+        const double *ap = (p < 0) ? ground_acc : o->acc + 6 * (size_t)p;
         const double *qdd = vdot + m->jnt_vadr[k];
         double *ak = o->acc + 6 * (size_t)k;
         double *fk = o->force + 6 * (size_t)k;
@@ -75,9 +77,10 @@ void ctc_oracle_rnea(const ctc_model *m, ctc_oracle *o, const double *q, const d
         }
 
         /* f_p += X_k^T f_k */
-        if (k > 0) {
+        const int p = m->body_parent[k];
+        if (p >= 0) {
             double fp[6];
-            double *parent = o->force + 6 * (size_t)(k - 1);
+            double *parent = o->force + 6 * (size_t)p;
             plk_mat6t_vec(x, fk, fp);
             for (int i = 0; i < 6; i++) {
                 parent[i] += fp[i];

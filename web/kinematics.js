@@ -3,11 +3,12 @@
  * spec's bodies and one sample of joint coordinates q.
  *
  * Conventions (README "Conventions"): body k's frame has its origin at its inboard joint k and,
- * at q = 0, is parallel to the world; joint k's location and axis are given in body k-1's frame
- * (the world's for k = 0). Revolute: rotation by q about the axis; prismatic: translation by q
- * along it; cylindrical: (angle, displacement); spherical: unit quaternion (w, x, y, z), four
- * entries of q; fixed: nothing. So R_k = R_{k-1} Rot(axis, angle) and
- * p_k = p_{k-1} + R_{k-1} (location + axis d). Rotations are row-major 3x3 arrays. A closed
+ * at q = 0, is parallel to the world; joint k's location and axis are given in the frame of its
+ * parent p = parent[k] (chainParents; the world's for -1), which comes before it (p < k).
+ * Revolute: rotation by q about the axis; prismatic: translation by q along it; cylindrical:
+ * (angle, displacement); spherical: unit quaternion (w, x, y, z), four entries of q; fixed:
+ * nothing. So R_k = R_p Rot(axis, angle) and p_k = p_p + R_p (location + axis d), walking the
+ * parents as the library does (src/model.h body_parent). Rotations are row-major 3x3 arrays. A closed
  * chain (scene.loop) ends its last body at the closing joint's centre (loop.joint.location, in
  * the last body's frame), which the loop keeps at loop.anchor: in the world, or with loop.body
  * in that body's frame (loopAnchor).
@@ -71,17 +72,28 @@ function tipOf(body) {
   return body.com ? scale(body.com, 2) : [0, 0, 0];
 }
 
-/* The chain's constant part: per body its joint (type, unit axis, location), where its
- * coordinates start in q, and the point its drawn segment ends at (in its own frame): the next
- * joint's centre, or for the last body its tip, or the closing joint's centre of a loop. */
+/* Each body's parent (-1: the ground), as ctc_model_build makes it from a job's scene: the
+ * scene lists a chain, so body k hangs from body k - 1. A loop's closing joint is not an edge. */
+export function chainParents(bodies) {
+  return bodies.map((b, k) => k - 1);
+}
+
+/* The chain's constant part: per body its parent, its joint (type, unit axis, location), where
+ * its coordinates start in q, and the point its drawn segment ends at (in its own frame): its
+ * first child's joint centre, or for a body without children its tip, or on a loop's last body
+ * the closing joint's centre. */
 export function chainLayout(bodies, loop) {
   let qi = 0;
+  const parents = chainParents(bodies);
   const last = loop ? (loop.joint && loop.joint.location) || [0, 0, 0] : null;
+  const child = bodies.map(() => -1); /* each body's first child */
+  for (let k = bodies.length - 1; k >= 0; k--) if (parents[k] >= 0) child[parents[k]] = k;
   return bodies.map((b, k) => {
     const j = b.joint;
-    const link = {type: j.type, axis: j.axis ? unit(j.axis) : [0, 0, 1],
+    const leafEnd = k === bodies.length - 1 && last ? last : tipOf(b);
+    const link = {parent: parents[k], type: j.type, axis: j.axis ? unit(j.axis) : [0, 0, 1],
       loc: j.location || [0, 0, 0], qi,
-      end: k + 1 < bodies.length ? (bodies[k + 1].joint.location || [0, 0, 0]) : last || tipOf(b)};
+      end: child[k] >= 0 ? (bodies[child[k]].joint.location || [0, 0, 0]) : leafEnd};
     qi += NQ[j.type] ?? 0;
     return link;
   });
@@ -90,9 +102,11 @@ export function chainLayout(bodies, loop) {
 /* World positions for one q (a function i -> q[i]): per body its joint origin, the point on
  * the parent where the joint sits (differs for prismatic and cylindrical) and its drawn end. */
 export function chainPose(layout, q) {
-  let R = [1, 0, 0, 0, 1, 0, 0, 0, 1];
-  let p = [0, 0, 0];
-  return layout.map((l) => {
+  const pose = [];
+  for (const l of layout) {
+    const up = l.parent >= 0 ? pose[l.parent] : null; /* the ground: at the origin, world axes */
+    let R = up ? up.rot : [1, 0, 0, 0, 1, 0, 0, 0, 1];
+    const p = up ? up.origin : [0, 0, 0];
     const attach = add(p, mulv(R, l.loc));
     let slide = 0;
     let Rj = null;
@@ -102,9 +116,9 @@ export function chainPose(layout, q) {
     else if (l.type === "spherical") Rj = rotQuat(q(l.qi), q(l.qi + 1), q(l.qi + 2), q(l.qi + 3));
     const origin = add(attach, scale(mulv(R, l.axis), slide));
     if (Rj) R = mul(R, Rj);
-    p = origin;
-    return {attach, origin, end: add(origin, mulv(R, l.end)), rot: R};
-  });
+    pose.push({attach, origin, end: add(origin, mulv(R, l.end)), rot: R});
+  }
+  return pose;
 }
 
 /* The world position of a loop's anchor for a pose of chainPose: fixed in the world, or on the

@@ -19,4 +19,24 @@ static inline ctc_model *build(const ctc_chain_spec *spec)
     return m;
 }
 
+/* Rewires a built model's topology (model.h body_parent, body_child, body_sibling, ground_child)
+ * to the tree given by parent (n, -1 <= parent[k] < k), so that a pass that walks the topology can
+ * be checked on a branched tree before ctc_model_build accepts one. The children lists are
+ * rebuilt here by appending each body to its parent's list, apart from the builder's code. The
+ * joints' locations must already be given in the new parents' frames. Only passes that read
+ * nothing of the chain's layout but the topology arrays may use the result (the oracle, the
+ * kinematics); the handles and the GDCA passes keep asserting a chain. */
+static inline void fixture_set_parents(ctc_model *m, const int *parent)
+{
+    m->ground_child = -1;
+    for (int k = 0; k < m->nbodies; k++) {
+        cr_assert(parent[k] >= -1 && parent[k] < k, "body %d: parent %d", k, parent[k]);
+        m->body_parent[k] = parent[k];
+        m->body_child[k] = m->body_sibling[k] = -1;
+        int *slot = parent[k] < 0 ? &m->ground_child : &m->body_child[parent[k]];
+        while (*slot >= 0) slot = &m->body_sibling[*slot];
+        *slot = k;
+    }
+}
+
 #endif

@@ -6,7 +6,8 @@
  * deterministic random generator; random spatial chains (all five joint types, random axes and
  * locations, masses 0.1-10 kg, full-rank inertias R diag(p) R^T whose principal moments satisfy
  * the triangle inequality) and planar chains of slender rods, both built with ctc_model_build;
- * closed forms (rod pendulum, Lagrangian double pendulum); merging two rigidly joined bodies; and
+ * closed forms (rod pendulum, Lagrangian double pendulum, and from two of them a Y-shaped tree of
+ * rods, the one branched tree here); merging two rigidly joined bodies; and
  * world-frame kinematics with 3x3 rotations (no spatial vectors) that give the kinetic and
  * potential energies, from which the mass matrix (by polarisation of the kinetic energy) and the
  * full inverse dynamics (by Lagrange's equations, central differences) follow.
@@ -403,6 +404,41 @@ static inline void fx_double_pendulum(const double mass[2], const double len[2],
     tau[0] = mm[0] * a[0] + mm[1] * a[1] + h * (2.0 * v[0] * v[1] + v[1] * v[1]) +
              FX_G * ((m1 * lc1 + m2 * l1) * sin(q[0]) + m2 * lc2 * sin(q[0] + q[1]));
     tau[1] = mm[2] * a[0] + mm[3] * a[1] - h * v[0] * v[0] + FX_G * m2 * lc2 * sin(q[0] + q[1]);
+}
+
+/* A Y-shaped tree of three rods (not a chain): rod 0 on a revolute +z joint at the origin, rods 1
+ * and 2 both hung from rod 0's tip on revolute +z joints, gravity (0, -g, 0). The chain spec of
+ * fx_rod_chain with joint 2 moved to rod 0's tip (in rod 0's frame): the model built from it is a
+ * chain, to be rewired with parents FX_Y_PARENTS (model_fixture.h fixture_set_parents). */
+#define FX_Y_PARENTS                                                                               \
+    {                                                                                              \
+        -1, 0, 0                                                                                   \
+    }
+static inline void fx_rod_y(const double mass[3], const double len[3], fx_chain *c)
+{
+    fx_rod_chain(3, mass, len, c);
+    c->joints[2].location[1] = -len[0];
+}
+
+/* The Y tree's mass matrix mm (3x3, row-major) and inverse dynamics tau (3) in closed form. Its
+ * dynamics are linear in the bodies' inertial parameters, so with rod 0 split into two halves of
+ * half its mass (the same centre of mass, half the inertia) the tree is two double pendulums
+ * that share joint 0: (rod 0 / 2, rod 1) on (q0, q1) and (rod 0 / 2, rod 2) on (q0, q2), whose
+ * forces add on joint 0. Joints 1 and 2 lie on different branches: mm[1][2] = mm[2][1] = 0. */
+static inline void fx_y_tree(const double mass[3], const double len[3], const double q[3],
+                             const double v[3], const double a[3], double mm[9], double tau[3])
+{
+    const double ma[2] = {0.5 * mass[0], mass[1]}, la[2] = {len[0], len[1]};
+    const double mb[2] = {0.5 * mass[0], mass[2]}, lb[2] = {len[0], len[2]};
+    const double qa[2] = {q[0], q[1]}, va[2] = {v[0], v[1]}, aa[2] = {a[0], a[1]};
+    const double qb[2] = {q[0], q[2]}, vb[2] = {v[0], v[2]}, ab[2] = {a[0], a[2]};
+    double mma[4], mmb[4], ta[2], tb[2];
+    fx_double_pendulum(ma, la, qa, va, aa, mma, ta);
+    fx_double_pendulum(mb, lb, qb, vb, ab, mmb, tb);
+    mm[0] = mma[0] + mmb[0], mm[1] = mma[1], mm[2] = mmb[1];
+    mm[3] = mma[2], mm[4] = mma[3], mm[5] = 0.0;
+    mm[6] = mmb[2], mm[7] = 0.0, mm[8] = mmb[3];
+    tau[0] = ta[0] + tb[0], tau[1] = ta[1], tau[2] = tb[1];
 }
 
 /* ---- world-frame kinematics and energies (no spatial algebra) ---- */

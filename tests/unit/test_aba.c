@@ -7,6 +7,7 @@
 #include <criterion/criterion.h>
 #include <math.h>
 
+#include "model_fixture.h"
 #include "oracle.h"
 #include "oracle_fixture.h"
 
@@ -242,4 +243,38 @@ Test(aba, fixed_joint_equals_merged_body)
         ctc_model_free(mm);
     }
     cr_log_info("aba fixed vs merged: worst relative difference %.2e (tolerance 1e-11)", worst);
+}
+
+Test(aba, walks_the_parents_on_a_branched_tree)
+{
+    /* qdd = M^{-1} (tau - h(q, v)) on a Y tree made by hand from a chain's model (two rods hung
+       from one), M and h in closed form from two double pendulums sharing joint 0 */
+    const double mass[3] = {1.3, 0.7, 0.9}, len[3] = {1.1, 0.8, 0.6};
+    const int parent[3] = FX_Y_PARENTS;
+    fx_chain c;
+    fx_rod_y(mass, len, &c);
+    ctc_model *m;
+    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+    fixture_set_parents(m, parent);
+    fx_rng rng = {22};
+    double worst = 0.0;
+
+    for (int s = 0; s < 200; s++) {
+        double q[12], v[3], tau[3], a[3], mm[9], bias[3], r[3], want[3];
+        const double zero[3] = {0.0, 0.0, 0.0};
+        fx_random_state(&rng, m, q, v, tau);
+        fx_y_tree(mass, len, q, v, zero, mm, bias);
+        for (int i = 0; i < 3; i++) r[i] = tau[i] - bias[i];
+        cr_assert(fx_cholesky(3, mm), "sample %d: M is not positive definite", s);
+        fx_cholesky_solve(3, mm, r, want);
+        ctc_oracle_aba(m, o, q, v, tau, a);
+        double err = fx_max_abs_diff(3, a, want) / fmax(1.0, fx_max_abs(3, want));
+        worst = fmax(worst, err);
+        cr_assert_leq(err, 1e-12,
+                      "sample %d: qdd = (%.17g, %.17g, %.17g), closed form (%.17g, %.17g, %.17g)",
+                      s, a[0], a[1], a[2], want[0], want[1], want[2]);
+    }
+    cr_log_info("aba Y tree: worst relative error %.2e (tolerance 1e-12)", worst);
+    ctc_oracle_free(o);
+    ctc_model_free(m);
 }

@@ -14,7 +14,9 @@
  *    Rddot R^T, since [w]x^2 is symmetric), the acceleration of body k's origin and that of the
  *    material point of body k-1 that sits at body k's origin at t = 0;
  *  - planar chains forced to spatial form, also rotated into a tilted plane: the planar
- *    quantities read through the model's plane basis (e1, e2, n) as the spatial ones.
+ *    quantities read through the model's plane basis (e1, e2, n) as the spatial ones;
+ *  - a branched tree (a Y, made by hand from a chain's model, model_fixture.h): each body placed
+ *    as on the chain of its path from the ground, so the pass walks the parents.
  * Differences use the five-point stencils with h = 1e-3 (error O(h^4) plus rounding ~1e-9 for
  * second differences); observed errors are ~1e-10 against tolerances of 1e-8 (velocities) and
  * 1e-6 (accelerations), relative to the largest quantity compared. Random chains have 7 bodies;
@@ -28,6 +30,7 @@
 #include "data.h"
 #include "kinematics.h"
 #include "model.h"
+#include "model_fixture.h"
 #include "shapes.h"
 #include "spatial.h"
 
@@ -681,4 +684,87 @@ Test(kinematics, planar_form_in_a_tilted_plane_reads_as_spatial_form)
     check_coverage(0, covers);
     cr_log_info("tilted plane, planar vs spatial form: worst difference %.2e (tolerance 1e-13)",
                 worst);
+}
+
+/* Body t of model a (data da) against body i of model b (data db), and their inboard joints */
+static void expect_same_body(const ctc_model *a, const ctc_data *da, int t, const ctc_model *b,
+                             const ctc_data *db, int i, int sample)
+{
+    const int dim = a->dim;
+    struct {
+        const char *name;
+        const double *x, *y;
+        int len;
+    } f[] = {
+        {"xpos", da->xpos + 3 * t, db->xpos + 3 * i, 3},
+        {"xrot", da->xrot + 9 * t, db->xrot + 9 * i, 9},
+        {"xcom", da->xcom + 3 * t, db->xcom + 3 * i, 3},
+        {"omega", da->omega + 3 * t, db->omega + 3 * i, 3},
+        {"xvel", da->xvel + 3 * t, db->xvel + 3 * i, 3},
+        {"jnt_P", da->jnt_P + 3 * dim * t, db->jnt_P + 3 * dim * i, dim * b->jnt_nv[i]},
+        {"jnt_D", da->jnt_D + dim * dim * t, db->jnt_D + dim * dim * i, dim * dim},
+        {"jnt_beta", da->jnt_beta + dim * t, db->jnt_beta + dim * i, dim},
+    };
+    for (size_t c = 0; c < sizeof f / sizeof f[0]; c++) {
+        for (int e = 0; e < f[c].len; e++) {
+            cr_assert_leq(fabs(f[c].x[e] - f[c].y[e]), 1e-14 * fmax(1.0, fabs(f[c].y[e])),
+                          "sample %d: tree body %d, %s[%d] = %.17g, on its path's chain %.17g",
+                          sample, t, f[c].name, e, f[c].x[e], f[c].y[e]);
+        }
+    }
+}
+
+/* A Y tree (bodies 1 and 2 on body 0) made from the 3-body chain c, against the two chains of
+ * its paths, bodies (0, 1) and (0, 2), in the tree's form and with the same coordinates. */
+static void check_tree_paths(test_chain *c, uint64_t seed)
+{
+    const int parent[3] = {-1, 0, 0};
+    kin_fixture tree = kin_make(&c->spec);
+    fixture_set_parents(tree.m, parent);
+    kin_fixture path[2];
+    for (int p = 0; p < 2; p++) {
+        ctc_body_spec bodies[2] = {c->bodies[0], c->bodies[1 + p]};
+        ctc_joint_spec joints[2] = {c->joints[0], c->joints[1 + p]};
+        ctc_chain_spec spec = c->spec;
+        spec.nbodies = 2, spec.bodies = bodies, spec.joints = joints, spec.form = tree.m->form;
+        path[p] = kin_make(&spec);
+        if (tree.m->form == CTC_FORM_PLANAR) { /* the same plane, so the same coordinates */
+            for (int e = 0; e < 3; e++) {
+                cr_assert_eq(path[p].m->plane_n[e], tree.m->plane_n[e]);
+                cr_assert_eq(path[p].m->plane_e1[e], tree.m->plane_e1[e]);
+            }
+        }
+    }
+    uint64_t rng = seed;
+    for (int s = 0; s < 50; s++) {
+        double q[MAXQ], v[MAXV], qp[MAXQ], vp[MAXV];
+        test_random_state(tree.m, &rng, 2.0, q, v);
+        ctc_kinematics(tree.m, tree.d, q, v);
+        for (int p = 0; p < 2; p++) {
+            const ctc_model *m = tree.m;
+            int iq = 0, iv = 0;
+            for (int k = 0; k <= 1 + p; k += 1 + p) { /* joints 0 and 1 + p */
+                for (int e = 0; e < m->jnt_nq[k]; e++) qp[iq++] = q[m->jnt_qadr[k] + e];
+                for (int e = 0; e < m->jnt_nv[k]; e++) vp[iv++] = v[m->jnt_vadr[k] + e];
+            }
+            ctc_kinematics(path[p].m, path[p].d, qp, vp);
+            expect_same_body(tree.m, tree.d, 0, path[p].m, path[p].d, 0, s);
+            expect_same_body(tree.m, tree.d, 1 + p, path[p].m, path[p].d, 1, s);
+        }
+    }
+    kin_free(&path[0]);
+    kin_free(&path[1]);
+    kin_free(&tree);
+}
+
+Test(kinematics, a_branched_tree_places_each_body_from_its_parent)
+{
+    for (uint64_t seed = 1; seed <= 8; seed++) {
+        test_chain *c = test_chain_random_spatial(3, seed, TEST_ALL_JOINTS);
+        check_tree_paths(c, seed);
+        test_chain_free(c);
+        c = test_chain_random_planar(3, seed, 1, 0);
+        check_tree_paths(c, seed);
+        test_chain_free(c);
+    }
 }

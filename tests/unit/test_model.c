@@ -325,3 +325,81 @@ Test(model, lays_out_a_balanced_tree_ordered_by_height)
         test_chain_free(c);
     }
 }
+
+/* The topology read back as the set of edges child -> parent, each checked against the parent
+ * array, and the children lists against a count made from the parent array alone: every body
+ * appears once, under its own parent, in increasing order. */
+static void check_topology(const ctc_model *m, const int *want_parent)
+{
+    int n = m->nbodies, seen[131] = {0};
+    for (int k = 0; k < n; k++) {
+        cr_assert_eq(m->body_parent[k], want_parent[k], "n=%d body %d", n, k);
+        cr_assert(m->body_parent[k] >= -1 && m->body_parent[k] < k, "n=%d body %d", n, k);
+    }
+    for (int p = -1; p < n; p++) {
+        int last = -1, count = 0, want = 0;
+        for (int k = 0; k < n; k++) want += want_parent[k] == p;
+        for (int c = p < 0 ? m->ground_child : m->body_child[p]; c >= 0; c = m->body_sibling[c]) {
+            cr_assert_eq(m->body_parent[c], p, "n=%d: body %d listed under %d", n, c, p);
+            cr_assert_gt(c, last, "n=%d: children of %d out of order", n, p);
+            last = c;
+            seen[c]++;
+            count++;
+        }
+        cr_assert_eq(count, want, "n=%d: body %d has %d children, listed %d", n, p, want, count);
+    }
+    for (int k = 0; k < n; k++) cr_assert_eq(seen[k], 1, "n=%d body %d", n, k);
+}
+
+Test(model, a_chain_is_the_tree_whose_parents_are_the_previous_bodies)
+{
+    int parent[130];
+    for (int n = 1; n <= 130; n++) {
+        test_chain *c = test_chain_random_spatial(n, 7 + (uint64_t)n, TEST_ALL_JOINTS);
+        ctc_model *m = build(&c->spec);
+        for (int k = 0; k < n; k++) parent[k] = k - 1; /* the oracle: a chain, written out */
+        check_topology(m, parent);
+        cr_assert_eq(m->ground_child, 0);
+        cr_assert_eq(m->body_child[n - 1], -1, "n=%d: the tip is a leaf", n);
+        for (int k = 0; k + 1 < n; k++) {
+            cr_assert_eq(m->body_child[k], k + 1);
+            cr_assert_eq(m->body_sibling[k + 1], -1, "n=%d: a chain has no branches", n);
+        }
+        ctc_model_free(m);
+        test_chain_free(c);
+    }
+}
+
+Test(model, a_loops_closing_joint_is_not_a_tree_edge)
+{
+    /* a planar 5-bar on the ground and a 4-bar closed on body 1 of a 5-body chain: the closing
+       joint (n) joins the tip to the ground or to body 1, yet the tree stays the chain: the tip
+       has no child, body 1 only body 2, the ground only body 0 */
+    for (int on_body = 0; on_body <= 1; on_body++) {
+        test_chain *c = test_chain_rod_pendulum(5, 1.0, 1.0);
+        ctc_loop_spec loop = {0};
+        loop.joint.type = CTC_JOINT_REVOLUTE;
+        ctc_v3_set(loop.joint.axis, 0, 0, 1);
+        ctc_v3_set(loop.joint.location, 0, -1, 0);
+        ctc_v3_set(loop.anchor, 1.0, 0, 0);
+        loop.on_body = on_body;
+        loop.body = 1;
+        unsigned char indep[6] = {1, 1, 1, 0, 0, 0};
+        ctc_chain_spec spec = c->spec;
+        spec.loop = &loop;
+        spec.independent = indep;
+        ctc_model *m = build(&spec);
+        int parent[5] = {-1, 0, 1, 2, 3};
+        cr_assert_eq(m->has_loop, 1);
+        cr_assert_eq(m->njoints, 6);
+        cr_assert_eq(m->loop_body, on_body ? 1 : -1);
+        check_topology(m, parent);
+        cr_assert_eq(m->body_child[4], -1, "the closing joint gives the tip no child");
+        cr_assert_eq(m->ground_child, 0);
+        cr_assert_eq(m->body_sibling[0], -1, "the closing joint gives the ground no second child");
+        cr_assert_eq(m->body_child[1], 2);
+        cr_assert_eq(m->body_sibling[2], -1, "the closing joint gives body 1 no second child");
+        ctc_model_free(m);
+        test_chain_free(c);
+    }
+}

@@ -322,3 +322,35 @@ test('the job view names the job as GET /api/jobs/ID does', async () => {
         assert.ok(body.includes(job.name), `the view does not name the job "${job.name}"`);
     });
 });
+
+test("the page's kinematics walks each body's parent: a chain in closed form, a branch from its parent", async () => {
+    await withView(browser, srv, `#/jobs/${planar.id}`, 'job-kinematics', async (page) => {
+        const r = await page.evaluate(async (id) => {
+            const kin = await import('/kinematics.js');
+            const job = await (await fetch(`/api/jobs/${id}`)).json();
+            const bodies = job.spec.scene.bodies; /* three 1 m rods, revolute about +z */
+            const q = [0.4, -1.1, 2.3];
+            const layout = kin.chainLayout(bodies, null);
+            const chain = kin.chainPose(layout, (i) => q[i]);
+            /* closed form: rod k hangs at the absolute angle th_k = q_0 + ... + q_k */
+            let gap = 0, th = 0, x = 0, y = 0;
+            for (let k = 0; k < 3; k++) {
+                th += q[k];
+                gap = Math.max(gap, Math.hypot(chain[k].origin[0] - x, chain[k].origin[1] - y));
+                x += Math.sin(th), y -= Math.cos(th);
+                gap = Math.max(gap, Math.hypot(chain[k].end[0] - x, chain[k].end[1] - y));
+            }
+            /* a tree by hand: rod 2 on rod 0's tip (joint 2's location is rod 0's end too) */
+            layout[2].parent = 0;
+            const tree = kin.chainPose(layout, (i) => q[i]);
+            const th2 = q[0] + q[2], t0 = tree[0].end;
+            const branch = Math.max(Math.hypot(tree[2].origin[0] - t0[0], tree[2].origin[1] - t0[1]),
+                Math.hypot(tree[2].end[0] - t0[0] - Math.sin(th2), tree[2].end[1] - t0[1] + Math.cos(th2)));
+            return { parents: kin.chainParents(bodies), gap, branch, moved: tree[2].origin[0] - chain[2].origin[0] };
+        }, planar.id);
+        assert.deepEqual(r.parents, [-1, 0, 1]);
+        assert.ok(r.gap < 1e-12, `the chain's poses are ${r.gap} m from the closed form`);
+        assert.ok(r.branch < 1e-12, `rod 2 hung on rod 0 is ${r.branch} m from where it should be`);
+        assert.ok(Math.abs(r.moved) > 0.1, 'the branch was drawn where the chain puts rod 2');
+    });
+});
