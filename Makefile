@@ -39,7 +39,11 @@ JOBS = $(if $(filter -j% j%,$(MAKEFLAGS)),,-j$(NPROC))
 SAN_CC ?= clang-19
 
 WARN := -Wall -Wextra -Wshadow -Wstrict-prototypes -Werror
-CFLAGS := -std=c11 $(WARN) $(OPT) -g -D_POSIX_C_SOURCE=200809L -Isrc $(EXTRA_CFLAGS)
+# src/: the public headers in src/include, the sources by pipeline stage in the other folders
+# (each stage's private headers beside its sources); every folder is on the include path
+SRC_DIRS := $(sort $(dir $(wildcard src/*/*)))
+CFLAGS := -std=c11 $(WARN) $(OPT) -g -D_POSIX_C_SOURCE=200809L $(patsubst %/,-I%,$(SRC_DIRS)) \
+	$(EXTRA_CFLAGS)
 LDFLAGS := $(EXTRA_LDFLAGS)
 LDLIBS := -lcjson -lsundials_cvode -lsundials_nvecserial -lsundials_sunmatrixdense \
 	-lsundials_sunlinsoldense -llapacke -llapack -lblas -lm -pthread
@@ -55,7 +59,7 @@ DEB_PACKAGES := gcc make libc6-dev libcriterion-dev libcjson-dev liblapacke-dev 
 # installed when the machine has none
 BENCH_PACKAGES := wrk curl libmujoco-dev
 
-LIB_SRC := $(wildcard src/*.c)
+LIB_SRC := $(wildcard src/*/*.c)
 LIB_OBJ := $(LIB_SRC:src/%.c=$(BUILD)/obj/%.o)
 LIB := $(BUILD)/libctcsim.a
 # server/: the job format, presets and outputs shared by the command line and the service, and
@@ -224,15 +228,14 @@ bench: bench-deps
 # make install: what a program of one's own needs to use the library (examples/pendulum.c builds
 # with `pkg-config --cflags --libs ctcsim`), the two programs, and what ctcsim-server serves
 # (--web PREFIX/share/ctcsim/web --api PREFIX/share/ctcsim/api). The public headers are those
-# ctc.h and sim.h reach, with the controllers', trajectories', integrators' and oracle's; they
-# include one another by bare name, so they sit together in include/ctcsim/. The library is
+# ctc.h and sim.h reach, with the controllers', trajectories', integrators' and oracle's
+# (src/include); they include one another by bare name, so they sit together in include/ctcsim/.
+# The library is
 # static: ctcsim.pc's Libs carry the libraries it links.
 PREFIX ?= /usr/local
 DESTDIR ?=
 VERSION := $(shell sed -n 's/^\#define CTCSIM_VERSION "\(.*\)"/\1/p' server/routes.h)
-PUBLIC_HEADERS := $(addprefix src/,ctc.h ctrl.h data.h disturb.h energy.h gdca.h handles.h \
-	integrator.h kinematics.h loop.h model.h options.h oracle.h pool.h shapes.h sim.h spatial.h \
-	status.h traj.h)
+PUBLIC_HEADERS := $(wildcard src/include/*.h)
 INSTALL_DIRS := bin lib lib/pkgconfig include/ctcsim share/ctcsim/web share/ctcsim/web/vendor \
 	share/ctcsim/api share/ctcsim/api/examples
 
@@ -255,7 +258,7 @@ install: $(LIB) $(CLI) $(SERVER) web
 uninstall:
 	rm -f "$(DESTDIR)$(PREFIX)/lib/libctcsim.a" "$(DESTDIR)$(PREFIX)/lib/pkgconfig/ctcsim.pc" \
 		"$(DESTDIR)$(PREFIX)/bin/ctcsim" "$(DESTDIR)$(PREFIX)/bin/ctcsim-server"
-	rm -f $(PUBLIC_HEADERS:src/%="$(DESTDIR)$(PREFIX)/include/ctcsim/%")
+	rm -f $(PUBLIC_HEADERS:src/include/%="$(DESTDIR)$(PREFIX)/include/ctcsim/%")
 	rm -rf "$(DESTDIR)$(PREFIX)/share/ctcsim"
 	-rmdir "$(DESTDIR)$(PREFIX)/include/ctcsim" 2>/dev/null
 

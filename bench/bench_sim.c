@@ -9,16 +9,16 @@
  *
  *  1. Work-precision: scenes triple pendulum PID (paper 7.1, 0.2 N m disturbance, 5 s), spatial
  *     double pendulum PID (7.1, 0.2 N m, 5 s), five-bar PD (7.2, closed chain, projection, 10 s),
- *     64-link pendulum PD (7.3, 5 s) and the passive triple pendulum (5 s). Integrators: rk4 at
- *     h = 0.01 ... 0.0005 s, dopri5 and bdf at rtol 1e-4 ... 1e-10, atol = rtol / 100. The error
- *     of a run is max over its samples (every 0.01 s) and all chain coordinates of |q - q_ref|
- *     (for the five-bar: the three independent joints and the two dependent ones), q_ref from
- *     dopri5 at rtol 1e-12, atol 1e-14; the reference's own error is gauged by a run at rtol
- *     1e-11 against it. The five-bar also runs bdf with Baumgarte stabilisation instead of the
- *     projection (bdf projects inside CVODE's steps: src/sim.c, src/integ_bdf.c). Each
- * configuration runs once untimed (the warm-up, which also gives its error and metrics: the runs
- * are deterministic), then in timed rounds that interleave every configuration of every scene, so
- * machine noise falls on all alike; the wall time is the median over the rounds (ROUNDS,
+ *     64-link pendulum PD (7.3, 5 s) and the passive triple pendulum (5 s). Integrators: rk4 at h =
+ *     0.01 ... 0.0005 s, dopri5 and bdf at rtol 1e-4 ... 1e-10, atol = rtol / 100. The error of a
+ *     run is max over its samples (every 0.01 s) and all chain coordinates of |q - q_ref| (for the
+ *     five-bar: the three independent joints and the two dependent ones), q_ref from dopri5 at rtol
+ *     1e-12, atol 1e-14; the reference's own error is gauged by a run at rtol 1e-11 against it. The
+ *     five-bar also runs bdf with Baumgarte stabilisation instead of the projection (bdf projects
+ *     inside CVODE's steps: src/sim/sim_rhs.c, src/integrate/integ_bdf.c). Each configuration runs
+ *     once untimed (the warm-up, which also gives its error and metrics: the runs are
+ *     deterministic), then in timed rounds that interleave every configuration of every scene, so
+ *     machine noise falls on all alike; the wall time is the median over the rounds (ROUNDS,
  *     SLOW_ROUNDS for the 64-link chain). A configuration whose warm-up took over SLOW_RUN_S is
  *     timed by that run alone, and one that needs more than WP_MAX_STEPS steps is stopped there
  *     (the five-bar's bdf at tight tolerances), to keep the whole bench within a few minutes.

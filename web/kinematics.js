@@ -2,16 +2,16 @@
  * kinematics.js - forward kinematics of a job's chain for the animation, from the normalised
  * spec's bodies and one sample of joint coordinates q.
  *
- * Conventions (README "Conventions"): body k's frame has its origin at its inboard joint k and,
- * at q = 0, is parallel to the world; joint k's location and axis are given in the frame of its
- * parent p = parent[k] (chainParents; the world's for -1), which comes before it (p < k).
- * Revolute: rotation by q about the axis; prismatic: translation by q along it; cylindrical:
- * (angle, displacement); spherical: unit quaternion (w, x, y, z), four entries of q; fixed:
- * nothing. So R_k = R_p Rot(axis, angle) and p_k = p_p + R_p (location + axis d), walking the
- * parents as the library does (src/model.h body_parent). Rotations are row-major 3x3 arrays. A closed
- * chain (scene.loop) ends its last body at the closing joint's centre (loop.joint.location, in
- * the last body's frame), which the loop keeps at loop.anchor: in the world, or with loop.body
- * in that body's frame (loopAnchor).
+ * Conventions (README "Conventions"): body k's frame has its origin at its inboard joint k and, at
+ * q = 0, is parallel to the world; joint k's location and axis are given in the frame of its parent
+ * p = parent[k] (chainParents; the world's for -1), which comes before it (p < k). Revolute:
+ * rotation by q about the axis; prismatic: translation by q along it; cylindrical: (angle,
+ * displacement); spherical: unit quaternion (w, x, y, z), four entries of q; fixed: nothing. So R_k
+ * = R_p Rot(axis, angle) and p_k = p_p + R_p (location + axis d), walking the parents as the
+ * library does (src/include/model.h body_parent). Rotations are row-major 3x3 arrays. A closed
+ * chain (scene.loop) ends its last body at the closing joint's centre (loop.joint.location, in the
+ * last body's frame), which the loop keeps at loop.anchor: in the world, or with loop.body in that
+ * body's frame (loopAnchor).
  */
 
 const NQ = {revolute: 1, prismatic: 1, cylindrical: 2, spherical: 4, fixed: 0};

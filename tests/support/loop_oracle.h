@@ -1,7 +1,7 @@
 /*
  * loop_oracle.h - an independent reference for the dynamics of a chain closed by one loop:
  * redundant joint coordinates, the loop's constraint Jacobian and Lagrange multipliers
- * (tests only; nothing here shares code with src/loop.c or the GDCA passes).
+ * (tests only; nothing here shares code with src/model/loop.c or the GDCA passes).
  *
  * The chain is the spec's bodies 0..n-1 on joints 0..n-1 (model.h), closed by the joint n from
  * the tip body n-1 (its parent) to its child, the ground or a body b <= n-2 of the chain (then

@@ -1,8 +1,8 @@
 /*
- * test_aba.c - the oracle's articulated-body forward dynamics (src/aba.c) against closed forms
- * (rod pendulum, slider, Lagrangian double pendulum), as the inverse of recursive Newton-Euler on
- * random spatial chains and planar rod chains, against a dense solve with the CRBA mass matrix,
- * and against merged bodies for fixed joints.
+ * test_aba.c - the oracle's articulated-body forward dynamics (src/reference/aba.c) against closed
+ * forms (rod pendulum, slider, Lagrangian double pendulum), as the inverse of recursive
+ * Newton-Euler on random spatial chains and planar rod chains, against a dense solve with the CRBA
+ * mass matrix, and against merged bodies for fixed joints.
  */
 #include <criterion/criterion.h>
 #include <math.h>

@@ -1,8 +1,8 @@
 /*
- * test_crba.c - the oracle's composite-rigid-body mass matrix (src/crba.c) against the closed-form
- * double pendulum, against columns of recursive Newton-Euler, against the mass matrix that the
- * world-frame kinetic energy gives by polarisation, for symmetry and positive definiteness, and
- * against merged bodies for fixed joints.
+ * test_crba.c - the oracle's composite-rigid-body mass matrix (src/reference/crba.c) against the
+ * closed-form double pendulum, against columns of recursive Newton-Euler, against the mass matrix
+ * that the world-frame kinetic energy gives by polarisation, for symmetry and positive
+ * definiteness, and against merged bodies for fixed joints.
  */
 #include <criterion/criterion.h>
 #include <math.h>

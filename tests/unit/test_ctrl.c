@@ -1,6 +1,6 @@
 /*
- * test_ctrl.c - controller design (src/ctrl_pid.c, ctrl_poles.c, ctrl_lqr.c) against the paper's
- * gains and against oracles that share no code with the library:
+ * test_ctrl.c - controller design (src/control/ctrl_pid.c, ctrl_poles.c, ctrl_lqr.c) against the
+ * paper's gains and against oracles that share no code with the library:
  *  - closed-loop poles: the eigenvalues of the companion matrix (LAPACK dgeev, a QR algorithm,
  *    where the library uses Newton's method and deflation), the backward error |p(root)|, and
  *    round trips through pole placement;

@@ -1,7 +1,7 @@
 /*
- * test_dense.c - the small dense kernels of src/dense.h and the assembly's downdate (gdca_tree.h)
- * against plain products written here, and the Cholesky solve against the systems it was made
- * from.
+ * test_dense.c - the small dense kernels of src/core/dense.h and the assembly's downdate
+ * (gdca_tree.h) against plain products written here, and the Cholesky solve against the systems it
+ * was made from.
  */
 #include <criterion/criterion.h>
 #include <math.h>

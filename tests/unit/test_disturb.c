@@ -1,5 +1,5 @@
 /*
- * test_disturb.c - disturbances (src/disturb.c): each type's value against its closed form
+ * test_disturb.c - disturbances (src/control/disturb.c): each type's value against its closed form
  * written out here, the step's right-continuity at its time, the breakpoint the integrator
  * restarts at, and the exact message of every invalid parameter.
  */

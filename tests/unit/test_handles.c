@@ -1,5 +1,6 @@
 /*
- * test_handles.c - the body handle equations (src/handles.c) against Newton-Euler written out.
+ * test_handles.c - the body handle equations (src/dynamics/handles.c) against Newton-Euler written
+ * out.
  *
  * For each body of random chains, random loads F1 = (tau1; f1) at handle 1 (the body's origin)
  * and F2 at handle 2 (the next body's origin, the CoM for the tip) give the body's motion

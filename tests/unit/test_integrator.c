@@ -1,8 +1,8 @@
 /*
- * test_integrator.c - the three integrators (src/integrator.c, integ_rk4.c, integ_dopri5.c,
- * integ_bdf.c) against closed-form solutions of test equations, convergence orders measured by
- * halving the step, published reference values (Robertson's kinetics), one method against
- * another, and the exact message of every failure.
+ * test_integrator.c - the three integrators (src/integrate/integrator.c, integ_rk4.c,
+ * integ_dopri5.c, integ_bdf.c) against closed-form solutions of test equations, convergence orders
+ * measured by halving the step, published reference values (Robertson's kinetics), one method
+ * against another, and the exact message of every failure.
  *
  * Test equations and their solutions:
  *   oscillator  y0' = y1, y1' = -y0, y(0) = (1, 0):        y = (cos t, -sin t)

@@ -1,5 +1,5 @@
 /*
- * test_kinematics.c - the kinematics pass (src/kinematics.c) against closed forms and finite
+ * test_kinematics.c - the kinematics pass (src/model/kinematics.c) against closed forms and finite
  * differences.
  *
  * Oracles, each written apart from the code under test:

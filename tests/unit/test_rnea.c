@@ -1,7 +1,8 @@
 /*
- * test_rnea.c - the oracle's recursive Newton-Euler inverse dynamics (src/rnea.c) against closed
- * forms (rod pendulum, slider, Lagrangian double pendulum), against Lagrange's equations worked
- * from world-frame energies on random spatial chains, and against merged bodies for fixed joints.
+ * test_rnea.c - the oracle's recursive Newton-Euler inverse dynamics (src/reference/rnea.c) against
+ * closed forms (rod pendulum, slider, Lagrangian double pendulum), against Lagrange's equations
+ * worked from world-frame energies on random spatial chains, and against merged bodies for fixed
+ * joints.
  */
 #include <criterion/criterion.h>
 #include <math.h>

@@ -1,6 +1,6 @@
 /*
- * test_shapes.c - body specs of uniform solids (src/shapes.c) against the textbook formulas, the
- * parallel-axis theorem (a solid cut in two halves must give the same inertia as the two halves
+ * test_shapes.c - body specs of uniform solids (src/model/shapes.c) against the textbook formulas,
+ * the parallel-axis theorem (a solid cut in two halves must give the same inertia as the two halves
  * moved to its centre of mass), and the exact message of every invalid argument.
  */
 #include <criterion/criterion.h>

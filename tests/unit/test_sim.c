@@ -1,6 +1,5 @@
 /*
- * test_sim.c - the CTC simulation loop against closed forms, steady-state theory and
- * conservation laws (sim.h).
+ * test_sim.c - CTC runs against closed forms, steady-state theory and conservation laws (sim.h).
  *
  * The oracles are written here, apart from the code under test: the closed-form solution of
  * e'' + kv e' + kp e = 0, the steady-state offset e_ss = -M(q)^-1 z / kp with M from the

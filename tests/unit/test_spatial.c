@@ -1,8 +1,8 @@
 /*
- * test_spatial.c - the 3-D geometry helpers (src/spatial.h, src/spatial.c): eigenvalues of
- * symmetric 3x3 matrices against known spectra, quaternions against axis-angle rotations and the
- * quaternion product written out here, Rodrigues' formula against its vector form, and the basis
- * of normals to an axis.
+ * test_spatial.c - the 3-D geometry helpers (src/include/spatial.h, src/core/spatial.c):
+ * eigenvalues of symmetric 3x3 matrices against known spectra, quaternions against axis-angle
+ * rotations and the quaternion product written out here, Rodrigues' formula against its vector
+ * form, and the basis of normals to an axis.
  */
 #include <criterion/criterion.h>
 #include <math.h>

@@ -1,5 +1,5 @@
 /*
- * test_traj.c - desired trajectories (src/traj.c) against independent oracles: closed forms
+ * test_traj.c - desired trajectories (src/control/traj.c) against independent oracles: closed forms
  * written out here (sinusoids, power sums, the minimum-jerk quintic), central finite differences
  * of the position and rate the module returns, a second spline construction (second-derivative
  * form solved by dense Gaussian elimination with pivoting), a linear search for the spline's

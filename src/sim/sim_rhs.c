@@ -1,6 +1,6 @@
 /*
- * sim_rhs.c - one evaluation of the computed torque control loop (sim.h, sim_internal.h): the
- * integrator's right-hand side and what a sample needs of it.
+ * sim_rhs.c - the right-hand side of a computed torque control run (sim.h, sim_internal.h): one
+ * evaluation for the integrator, and what a sample needs of it.
  *
  * For the state y = (q (nq), v (nv), xi (nind when the controller has the integral state)) at
  * time t, in order:

@@ -2,7 +2,7 @@
  * data.h - the mutable state of one simulation: kinematics, handle equations and tree scratch.
  *
  * A ctc_data is allocated once from a model (ctc_data_new) and reused for every evaluation, so
- * nothing is allocated in the step loop. One ctc_data belongs to one thread at a time; many may
+ * nothing is allocated while a run steps. One ctc_data belongs to one thread at a time; many may
  * be made from one model. Vectors of motion and force have the model's dim: 3 in planar form
  * (omega_z, v_x, v_y) / (tau_z, f_x, f_y) in the plane's coordinates, 6 in spatial form
  * (angular; linear) in world coordinates (DESIGN.md section 2). Accelerations are classical: the

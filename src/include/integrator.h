@@ -1,7 +1,7 @@
 /*
  * integrator.h - ODE integrators for dy/dt = f(t, y), stepped one step at a time.
  *
- * Three methods behind one interface, so the simulation loop (sim.c) can check for divergence,
+ * Three methods behind one interface, so a run (src/sim/sim.c) can check for divergence,
  * cancellation and progress between steps and sample the solution at its own output times:
  *
  *   rk4     classical fixed-step Runge-Kutta of order 4 (4 evaluations a step). Dense output by

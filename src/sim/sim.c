@@ -2,12 +2,12 @@
  * sim.c - one computed torque control run (sim.h): the recipe. Its stages live in files of
  * their own (sim_internal.h): the checks (sim_check.c), the right-hand side (sim_rhs.c), the
  * samples (sim_record.c) and the metrics (sim_metrics.c); this file sets them up, runs the
- * integrator loop and says why a run stopped.
+ * integrator step by step and says why a run stopped.
  *
  *     check the spec; build the plant (and the controller's model when it is scaled)
  *     set up: scratch, the result sized for every sample, the metrics' references
  *     start: the integrator at the initial state, put onto a loop's closure; sample t = 0
- *     loop, one accepted step at a time, until the last sample:
+ *     step, one accepted step at a time, until the last sample:
  *         step to the next discontinuity (a disturbance's step time, a spline's end), or for rk4
  *         to the next sample time; stop on the integrator's failure, a singular loop or a
  *         diverged state (non-finite, or a speed beyond the bound)
