@@ -44,12 +44,14 @@
 
 #include <math.h>
 #include <pthread.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "job_parse.h"
 #include "json_merge.h"
+#include "json_strict.h"
 #include "presets.h"
 
 /* ---- name ---- */
@@ -680,17 +682,31 @@ int job_parse(const char *text, size_t len, job **out, job_error *err)
     /* cJSON stops at the end of the first value: what follows must be white space */
     const char *end = NULL;
     cJSON *doc = cJSON_ParseWithLengthOpts(text, len, &end, 0);
+    size_t cjson_pos = SIZE_MAX; /* where cJSON failed, or the text after the document */
     if (doc == NULL) {
-        size_t pos = end != NULL ? (size_t)(end - text) : 0;
-        line_column(text, pos, &line, &column);
+        cjson_pos = end != NULL ? (size_t)(end - text) : 0;
+    } else {
+        size_t rest = (size_t)(end - text);
+        while (rest < len && is_json_space(text[rest])) rest++;
+        if (rest < len) cjson_pos = rest;
+    }
+    /* what cJSON takes but RFC 8259 does not ("01", "1.", "\u0000"): the first error wins */
+    size_t strict_pos = SIZE_MAX;
+    const char *why = NULL;
+    if (json_strict_check(text, len, &strict_pos, &why) != 0 && strict_pos < cjson_pos) {
+        cJSON_Delete(doc);
+        line_column(text, strict_pos, &line, &column);
+        return json_error_at(err, JOB_INVALID_JSON, "", "invalid JSON at line %d, column %d: %s",
+                             line, column, why);
+    }
+    if (doc == NULL) {
+        line_column(text, cjson_pos, &line, &column);
         return json_error_at(err, JOB_INVALID_JSON, "", "invalid JSON at line %d, column %d", line,
                              column);
     }
-    size_t rest = (size_t)(end - text);
-    while (rest < len && is_json_space(text[rest])) rest++;
-    if (rest < len) {
+    if (cjson_pos != SIZE_MAX) {
         cJSON_Delete(doc);
-        line_column(text, rest, &line, &column);
+        line_column(text, cjson_pos, &line, &column);
         return json_error_at(
             err, JOB_INVALID_JSON, "",
             "invalid JSON at line %d, column %d: text after the end of the document", line, column);
