@@ -25,6 +25,11 @@
  * so a symlink that leads out is refused; directories serve their index.html; only known file
  * extensions are served. Every refusal is a plain 404, so probing learns nothing.
  *
+ * Connections are bounded (http_config): libmicrohttpd closes one silent for idle_timeout s, and
+ * closes at accept a connection past max_connections in all or past max_per_ip from one address
+ * (its per-address count is the daemon's, across the pool's threads). A client trickling header
+ * bytes is not silent: the per-address limit is what bounds it.
+ *
  * Handlers run on libmicrohttpd's pool threads, each of which serves many connections, so a
  * handler must not block. One that must wait (POST /api/jobs?wait) defers its reply (http_defer):
  * the connection is suspended, a detached thread of ours runs the waiting part and resumes it,
@@ -58,8 +63,10 @@
 #define HTTP_MAX_PARAMS 4
 /* bytes per connection for headers and the read buffer */
 #define HTTP_MEMORY_LIMIT (128 * 1024)
-/* s a keep-alive connection may stay silent */
-#define HTTP_IDLE_TIMEOUT 120
+/* the defaults of http_config's connection limits (http.h) */
+#define HTTP_IDLE_TIMEOUT 30
+#define HTTP_MAX_CONNECTIONS 1000
+#define HTTP_MAX_PER_IP 64
 /* bytes of an over-long chunked body read and dropped beyond the limit before the connection is
    closed */
 #define HTTP_DROP_MARGIN (1024 * 1024)
@@ -764,6 +771,11 @@ int http_start(const http_config *config, http_server **out, char *err, size_t e
     if (!s->web_root) goto no_memory;
     if (config->token && config->token[0] && !(s->token = strdup(config->token))) goto no_memory;
 
+    unsigned idle_timeout = config->idle_timeout ? config->idle_timeout : HTTP_IDLE_TIMEOUT;
+    unsigned max_connections =
+        config->max_connections ? config->max_connections : HTTP_MAX_CONNECTIONS;
+    unsigned max_per_ip = config->max_per_ip ? config->max_per_ip : HTTP_MAX_PER_IP;
+
     /* the logger first, so that libmicrohttpd's checks of the other options use it too */
     // clang-format off
     s->daemon = MHD_start_daemon(
@@ -772,7 +784,9 @@ int http_start(const http_config *config, http_server **out, char *err, size_t e
         MHD_OPTION_SOCK_ADDR, addr,
         MHD_OPTION_THREAD_POOL_SIZE, (unsigned)(config->threads > 1 ? config->threads : 0),
         MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)HTTP_MEMORY_LIMIT,
-        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)HTTP_IDLE_TIMEOUT,
+        MHD_OPTION_CONNECTION_TIMEOUT, idle_timeout,
+        MHD_OPTION_CONNECTION_LIMIT, max_connections,
+        MHD_OPTION_PER_IP_CONNECTION_LIMIT, max_per_ip,
         MHD_OPTION_URI_LOG_CALLBACK, on_uri, s,
         MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
         MHD_OPTION_END);

@@ -49,6 +49,9 @@ typedef struct server_settings {
     const char *api;
     double job_time_limit; /* s, 0 = none */
     long long http_threads;
+    long long idle_timeout;    /* s */
+    long long max_connections; /* open at once */
+    long long max_per_ip;      /* open at once from one address */
 } server_settings;
 
 typedef enum setting_kind {
@@ -96,6 +99,12 @@ static const setting settings[] = {
      "SECONDS", "wall time one job may take (0: no limit)"},
     {"--http-threads", "CTCSIM_HTTP_THREADS", SETTING_INTEGER, AT(http_threads), 1, 1024, "N",
      "threads answering HTTP requests"},
+    {"--idle-timeout", "CTCSIM_IDLE_TIMEOUT", SETTING_INTEGER, AT(idle_timeout), 1, 86400,
+     "SECONDS", "a connection silent this long is closed"},
+    {"--max-connections", "CTCSIM_MAX_CONNECTIONS", SETTING_INTEGER, AT(max_connections), 1, 100000,
+     "N", "connections open at once; more are closed when they open"},
+    {"--max-connections-per-ip", "CTCSIM_MAX_CONNECTIONS_PER_IP", SETTING_INTEGER, AT(max_per_ip),
+     1, 100000, "N", "connections open at once from one client address; more are closed"},
 };
 
 #define NSETTINGS (sizeof settings / sizeof settings[0])
@@ -283,6 +292,9 @@ int main(int argc, char **argv)
         .api = "api",
         .job_time_limit = 600,
         .http_threads = 4,
+        .idle_timeout = 30,
+        .max_connections = 1000,
+        .max_per_ip = 64,
     };
     int rc = read_settings(argc, argv, &cfg);
     if (rc != 0) return rc > 0 ? 0 : EXIT_BAD_SETTING;
@@ -331,6 +343,9 @@ int main(int argc, char **argv)
                       .max_body = (size_t)cfg.max_body,
                       .web_root = cfg.web,
                       .token = cfg.token,
+                      .idle_timeout = (unsigned)cfg.idle_timeout,
+                      .max_connections = (unsigned)cfg.max_connections,
+                      .max_per_ip = (unsigned)cfg.max_per_ip,
                       .routes = routes_table,
                       .ctx = &ctx};
     http_server *http = NULL;
