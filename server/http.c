@@ -7,7 +7,8 @@
  * the completion callback, whatever happened in between (libmicrohttpd calls the completion
  * callback for every request that reached the access handler, and only for those). The URI
  * callback before it only looks at the raw, still percent-encoded path for "%00". The first call
- * decides everything the headers can decide - the route (404, 405 with Allow), the token (401)
+ * decides everything the headers can decide - the Host (400 without one in HTTP/1.1, 421 for a
+ * host not allowed), the route (404, 405 with Allow), the token (401)
  * and a declared Content-Length over the limit (413) - and answers at once without reading the
  * body. Otherwise the body is collected into one growing buffer; a chunked body that passes the
  * limit is read on and dropped (libmicrohttpd 0.9.75 refuses a response queued half-way through
@@ -82,6 +83,8 @@ struct http_server {
     size_t max_body;
     char *web_root; /* copies, owned */
     char *token;    /* NULL = none */
+    char *hosts;    /* the allowed Host names, each followed by a NUL, then an empty one */
+    int any_host;   /* no Host check (bound to every address, or "*" allowed) */
     pthread_mutex_t log_lock;
     char last_log[256];   /* libmicrohttpd's last message (start-up errors), under log_lock */
     atomic_int in_flight; /* requests being answered (http_exchange.answering) */
@@ -265,6 +268,55 @@ static int token_ok(const char *header, const char *token)
         diff |= (unsigned char)token[i] ^ g;
     }
     return diff == 0;
+}
+
+/* Fills s->hosts from the comma-separated list (NULL or "": the default for the bind address,
+ * http.h). Names are kept as given, an IPv6 literal in brackets. Returns 0, or -1 out of memory. */
+static int hosts_init(http_server *s, const char *list, const char *bind)
+{
+    char dflt[INET6_ADDRSTRLEN + 64];
+    if (!list || !*list) {
+        if (strcmp(bind, "0.0.0.0") == 0 || strcmp(bind, "::") == 0) s->any_host = 1;
+        int v6 = strchr(bind, ':') != NULL;
+        snprintf(dflt, sizeof dflt, "%s%s%s,localhost,127.0.0.1,[::1]", v6 ? "[" : "", bind,
+                 v6 ? "]" : "");
+        list = dflt;
+    }
+    size_t n = strlen(list);
+    s->hosts = malloc(2 * n + 4); /* brackets may be added around each name */
+    if (!s->hosts) return -1;
+    char *out = s->hosts;
+    for (const char *p = list; *p;) {
+        size_t len = strcspn(p, ",");
+        const char *name = p;
+        p += len + (p[len] == ',');
+        while (len > 0 && (*name == ' ' || *name == '\t')) name++, len--;
+        while (len > 0 && (name[len - 1] == ' ' || name[len - 1] == '\t')) len--;
+        if (len == 0) continue;
+        if (len == 1 && name[0] == '*') s->any_host = 1;
+        int bracket = name[0] != '[' && memchr(name, ':', len) != NULL; /* a bare IPv6 literal */
+        if (bracket) *out++ = '[';
+        memcpy(out, name, len);
+        out += len;
+        if (bracket) *out++ = ']';
+        *out++ = 0;
+    }
+    *out = 0;
+    return 0;
+}
+
+/* Whether the Host header names an allowed host: its name, the port stripped ("[::1]:8080" is
+ * "[::1]"), compared without regard to case with each allowed name. */
+static int host_ok(const http_server *s, const char *host)
+{
+    if (s->any_host) return 1;
+    size_t len =
+        host[0] == '[' ? strcspn(host, "]") + (strchr(host, ']') != NULL) : strcspn(host, ":");
+    if (len > 0 && host[len - 1] == '.' && host[0] != '[') len--; /* "localhost." */
+    for (const char *h = s->hosts; *h; h += strlen(h) + 1) {
+        if (strlen(h) == len && strncasecmp(h, host, len) == 0) return 1;
+    }
+    return 0;
 }
 
 /* ---- static files ---- */
@@ -477,8 +529,21 @@ static enum MHD_Result send_reply(struct MHD_Connection *conn, const char *path,
 /* What the headers decide on the first call: a route and its captures, or an early reply
  * (status != 0 in rep). */
 static void first_call(http_server *s, http_exchange *x, struct MHD_Connection *conn,
-                       const char *path, const char *method, http_reply *rep)
+                       const char *path, const char *method, const char *version, http_reply *rep)
 {
+    /* the Host: HTTP/1.1 needs one (RFC 9112 section 3.2); it must be ours, or a page of
+       another site whose name resolves here (DNS rebinding) could drive the service */
+    const char *host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_HOST);
+    if (!host && strcmp(version, MHD_HTTP_VERSION_1_0) != 0) {
+        http_reply_error(rep, 400, "MISSING_HOST", "", "an %s request needs a Host header",
+                         version);
+        return;
+    }
+    if (host && !host_ok(s, host)) {
+        http_reply_error(rep, 421, "HOST_NOT_ALLOWED", "",
+                         "this server does not answer for host \"%.100s\" (--allowed-hosts)", host);
+        return;
+    }
     if (x->encoded_nul) {
         http_reply_error(rep, 404, "NOT_FOUND", "", "no such path (it holds an encoded NUL)");
         return;
@@ -657,7 +722,6 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
                                   const char *method, const char *version, const char *upload_data,
                                   size_t *upload_data_size, void **con_cls)
 {
-    (void)version;
     http_server *s = cls;
     http_exchange *x = *con_cls;
     http_reply rep = {.fd = -1};
@@ -672,7 +736,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         }
         x->encoded_nul = encoded_nul;
         x->rep.fd = -1;
-        first_call(s, x, conn, url, method, &rep);
+        first_call(s, x, conn, url, method, version, &rep);
         if (!rep.status && !rep.body) return MHD_YES;
         begin_answer(s, x);
         return send_reply(conn, url, &rep);
@@ -770,6 +834,7 @@ int http_start(const http_config *config, http_server **out, char *err, size_t e
     s->web_root = strdup(config->web_root ? config->web_root : "web");
     if (!s->web_root) goto no_memory;
     if (config->token && config->token[0] && !(s->token = strdup(config->token))) goto no_memory;
+    if (hosts_init(s, config->allowed_hosts, bind) != 0) goto no_memory;
 
     unsigned idle_timeout = config->idle_timeout ? config->idle_timeout : HTTP_IDLE_TIMEOUT;
     unsigned max_connections =
@@ -842,5 +907,6 @@ void http_stop(http_server *s)
     pthread_cond_destroy(&s->defer_done);
     free(s->web_root);
     free(s->token);
+    free(s->hosts);
     free(s);
 }

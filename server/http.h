@@ -57,6 +57,12 @@ typedef struct http_config {
     size_t max_body;      /* bytes; larger bodies get 413 */
     const char *web_root; /* directory of the static files (web/) */
     const char *token;    /* NULL/"" = none; else POST and DELETE need "Bearer TOKEN" */
+    /* the names the Host header may give (its port stripped), comma-separated: a request naming
+       another host is answered 421 HOST_NOT_ALLOWED, an HTTP/1.1 request without Host 400
+       MISSING_HOST. "*" allows any. NULL or "": the bind address (an IPv6 one in brackets),
+       localhost, 127.0.0.1 and [::1], or any host when bound to 0.0.0.0 or ::. Compared without
+       regard to case; a bare IPv6 literal is taken as in brackets. */
+    const char *allowed_hosts;
     /* connection limits against clients that hold connections open (slowloris); 0 = the
        default in brackets */
     unsigned idle_timeout;    /* s a connection may stay silent before it is closed [30] */

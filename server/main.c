@@ -43,8 +43,9 @@ typedef struct server_settings {
     long long workers;
     long long job_threads; /* the most threads one job's dynamics may use */
     long long max_queue;
-    long long max_body; /* bytes */
-    const char *token;  /* NULL = none */
+    long long max_body;        /* bytes */
+    const char *token;         /* NULL = none */
+    const char *allowed_hosts; /* comma-separated; NULL = the default (http.h) */
     const char *web;
     const char *api;
     double job_time_limit; /* s, 0 = none */
@@ -91,6 +92,8 @@ static const setting settings[] = {
      "largest request body (suffix K or M for KiB, MiB)"},
     {"--token", "CTCSIM_TOKEN", SETTING_TEXT, AT(token), 0, 0, "TOKEN",
      "when set, POST and DELETE need \"Authorization: Bearer TOKEN\""},
+    {"--allowed-hosts", "CTCSIM_ALLOWED_HOSTS", SETTING_TEXT, AT(allowed_hosts), 0, 0, "HOSTS",
+     "names the Host header may give, comma-separated (* any); others: 421"},
     {"--web", "CTCSIM_WEB", SETTING_TEXT, AT(web), 0, 0, "DIR",
      "web root: the page as `make web` assembles it"},
     {"--api", "CTCSIM_API", SETTING_TEXT, AT(api), 0, 0, "DIR",
@@ -147,13 +150,16 @@ static void print_help(const server_settings *def)
            "\n");
     for (size_t i = 0; i < NSETTINGS; i++) {
         const setting *st = &settings[i];
-        char flag[64], def_text[64];
+        char flag[64], def_text[96];
         snprintf(flag, sizeof flag, "%s %s", st->flag, st->arg);
         default_text(st, def, def_text, sizeof def_text);
         if (st->offset == AT(workers) || st->offset == AT(job_threads)) { /* from the machine */
             const long long x = *(const long long *)(const void *)((const char *)def + st->offset);
             snprintf(def_text, sizeof def_text, "the online cores, %lld here", x);
         }
+        if (st->offset == AT(allowed_hosts))
+            snprintf(def_text, sizeof def_text,
+                     "the bind address, localhost, 127.0.0.1, [::1]; any when bound to 0.0.0.0");
         printf("  %-26s %s\n  %-26s (default %s%s%s)\n", flag, st->help, "", def_text,
                st->env ? "; " : "", st->env ? st->env : "");
     }
@@ -343,6 +349,7 @@ int main(int argc, char **argv)
                       .max_body = (size_t)cfg.max_body,
                       .web_root = cfg.web,
                       .token = cfg.token,
+                      .allowed_hosts = cfg.allowed_hosts,
                       .idle_timeout = (unsigned)cfg.idle_timeout,
                       .max_connections = (unsigned)cfg.max_connections,
                       .max_per_ip = (unsigned)cfg.max_per_ip,

@@ -2,9 +2,11 @@
  * hostile.test.mjs - the service against requests made to stall or fool it (issue 25): a preset
  * request of 100k keys is answered at once (the merge is linear, not quadratic); one address cannot
  * hold more connections than --max-connections-per-ip, and silent ones are closed after
- * --idle-timeout.
+ * --idle-timeout; a Host the server does not answer for is refused (DNS rebinding), and an
+ * HTTP/1.1 request without Host too.
  */
 import assert from 'node:assert/strict';
+import http from 'node:http';
 import net from 'node:net';
 import test from 'node:test';
 
@@ -34,11 +36,6 @@ test('a preset request with 100k keys is answered in well under 5 s (linear merg
     assert.ok(ms < 5000, `answered in ${ms} ms`);
     const h = await srv.get('/api/health');
     assert.equal(h.status, 200);
-});
-
-test('the server stops cleanly', async () => {
-    const r = await srv.stop();
-    assert.equal(r.code, 0, srv.output());
 });
 
 /* ---- connection limits (defect 3, slowloris) ---- */
@@ -81,4 +78,75 @@ test('per-IP limit and idle timeout: the 5th idle connection is closed, the 4 ti
         const r = await lim.stop();
         assert.equal(r.code, 0, lim.output());
     }
+});
+
+/* ---- the Host check (defect 13, DNS rebinding) ---- */
+
+/* GET path with the given Host header, or none at all (host null). Resolves {status, json}. */
+function getWithHost(port, path, host) {
+    return new Promise((resolve, reject) => {
+        const headers = host === null ? {} : { host };
+        const req = http.request({ host: '127.0.0.1', port, path, headers, setHost: false, agent: false }, (res) => {
+            const chunks = [];
+            res.on('data', (c) => chunks.push(c));
+            res.on('end', () => {
+                const text = Buffer.concat(chunks).toString('utf8');
+                let json;
+                try {
+                    json = JSON.parse(text);
+                } catch {
+                    json = undefined;
+                }
+                resolve({ status: res.statusCode, json, text });
+            });
+        });
+        req.on('error', reject);
+        req.end();
+    });
+}
+
+test('Host: the default allows the bind address, localhost, 127.0.0.1 and [::1] only', async () => {
+    const p = srv.port;
+    for (const host of [`127.0.0.1:${p}`, '127.0.0.1', `localhost:${p}`, 'LocalHost', 'localhost.', `[::1]:${p}`]) {
+        const r = await getWithHost(p, '/api/health', host);
+        assert.equal(r.status, 200, `Host: ${host}: ${r.text}`);
+    }
+    for (const host of [`evil.example:${p}`, 'evil.example', 'localhost.evil.example', '127.0.0.2', `[::2]:${p}`, 'localhostx']) {
+        const r = await getWithHost(p, '/api/health', host);
+        assert.equal(r.status, 421, `Host: ${host}: ${r.text}`);
+        assert.equal(r.json.error.code, 'HOST_NOT_ALLOWED');
+        assert.equal(r.json.error.field, '');
+        assert.match(r.json.error.message, /^this server does not answer for host ".*" \(--allowed-hosts\)$/);
+    }
+    /* a page fetched from the rebinding host gets nothing either, nor may it post */
+    const page = await getWithHost(p, '/', 'evil.example');
+    assert.equal(page.status, 421);
+});
+
+test('Host: an HTTP/1.1 request without one is 400 MISSING_HOST', async () => {
+    const r = await getWithHost(srv.port, '/api/health', null);
+    assert.equal(r.status, 400, r.text);
+    assert.deepEqual(r.json.error, { code: 'MISSING_HOST', message: 'an HTTP/1.1 request needs a Host header', field: '' });
+});
+
+test('--allowed-hosts replaces the default (names trimmed, bare IPv6 bracketed); * allows any', async () => {
+    const named = await startServer({ workers: 1, args: ['--allowed-hosts', ' ctcsim.example , 127.0.0.1,::1'] });
+    try {
+        assert.equal((await getWithHost(named.port, '/api/health', `ctcsim.example:${named.port}`)).status, 200);
+        assert.equal((await getWithHost(named.port, '/api/health', `[::1]:${named.port}`)).status, 200);
+        assert.equal((await getWithHost(named.port, '/api/health', `localhost:${named.port}`)).status, 421);
+    } finally {
+        await named.stop();
+    }
+    const any = await startServer({ workers: 1, args: ['--allowed-hosts', '*'] });
+    try {
+        assert.equal((await getWithHost(any.port, '/api/health', 'evil.example')).status, 200);
+    } finally {
+        await any.stop();
+    }
+});
+
+test('the server stops cleanly', async () => {
+    const r = await srv.stop();
+    assert.equal(r.code, 0, srv.output());
 });
