@@ -45,6 +45,7 @@ typedef struct server_settings {
     long long max_queue;
     long long max_body;        /* bytes */
     const char *token;         /* NULL = none */
+    const char *token_file;    /* the token's file, NULL = none */
     const char *allowed_hosts; /* comma-separated; NULL = the default (http.h) */
     const char *web;
     const char *api;
@@ -91,7 +92,10 @@ static const setting settings[] = {
     {"--max-body", "CTCSIM_MAX_BODY", SETTING_BYTES, AT(max_body), 1024, 1LL << 30, "BYTES",
      "largest request body (suffix K or M for KiB, MiB)"},
     {"--token", "CTCSIM_TOKEN", SETTING_TEXT, AT(token), 0, 0, "TOKEN",
-     "when set, POST and DELETE need \"Authorization: Bearer TOKEN\""},
+     "when set, POST and DELETE need \"Authorization: Bearer TOKEN\" (a flag shows in ps: "
+     "prefer the variable or --token-file)"},
+    {"--token-file", "CTCSIM_TOKEN_FILE", SETTING_TEXT, AT(token_file), 0, 0, "FILE",
+     "read the token from FILE, once at start (one line; keep it mode 600)"},
     {"--allowed-hosts", "CTCSIM_ALLOWED_HOSTS", SETTING_TEXT, AT(allowed_hosts), 0, 0, "HOSTS",
      "names the Host header may give, comma-separated (* any); others: 421"},
     {"--web", "CTCSIM_WEB", SETTING_TEXT, AT(web), 0, 0, "DIR",
@@ -273,6 +277,56 @@ static int read_settings(int argc, char **argv, server_settings *out)
     return 0;
 }
 
+/* The token of --token-file: the file's one line, its line end stripped, into a static buffer
+ * (it lives as long as the process). 0, or -1 after printing why: unreadable, empty, too long,
+ * more than one line, or given with --token as well. A file others may read is used with a
+ * warning. */
+static int read_token_file(server_settings *cfg)
+{
+    static char token[4097];
+    const char *path = cfg->token_file;
+    if (cfg->token) {
+        fprintf(stderr, "ctcsim-server: give the token once: --token or --token-file, not both\n");
+        return -1;
+    }
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        fprintf(stderr, "ctcsim-server: --token-file %s: %s\n", path, strerror(errno));
+        return -1;
+    }
+    struct stat st;
+    if (fstat(fileno(f), &st) == 0 && (st.st_mode & (S_IRGRP | S_IROTH)))
+        fprintf(stderr,
+                "ctcsim-server: warning: --token-file %s can be read by other users (chmod 600 "
+                "it)\n",
+                path);
+    size_t n = fread(token, 1, sizeof token, f);
+    int failed = ferror(f);
+    fclose(f);
+    if (failed) {
+        fprintf(stderr, "ctcsim-server: --token-file %s: cannot read it\n", path);
+        return -1;
+    }
+    if (n == sizeof token) {
+        fprintf(stderr, "ctcsim-server: --token-file %s: longer than %zu bytes\n", path,
+                sizeof token - 1);
+        return -1;
+    }
+    if (n > 0 && token[n - 1] == '\n') n--;
+    if (n > 0 && token[n - 1] == '\r') n--;
+    token[n] = 0;
+    if (n == 0) {
+        fprintf(stderr, "ctcsim-server: --token-file %s is empty\n", path);
+        return -1;
+    }
+    if (strlen(token) != n || strpbrk(token, "\r\n")) {
+        fprintf(stderr, "ctcsim-server: --token-file %s must hold one line of text\n", path);
+        return -1;
+    }
+    cfg->token = token;
+    return 0;
+}
+
 /* "ctcsim-server: DB: why", naming the database once (the store's messages may name it) */
 static void database_error(const char *db, const char *err)
 {
@@ -304,6 +358,7 @@ int main(int argc, char **argv)
     };
     int rc = read_settings(argc, argv, &cfg);
     if (rc != 0) return rc > 0 ? 0 : EXIT_BAD_SETTING;
+    if (cfg.token_file && cfg.token_file[0] && read_token_file(&cfg) != 0) return EXIT_BAD_SETTING;
 
     /* signals: SIGINT and SIGTERM for sigwait below, in every thread started from here on */
     sigset_t stop_signals;

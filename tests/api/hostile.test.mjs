@@ -3,14 +3,18 @@
  * request of 100k keys is answered at once (the merge is linear, not quadratic); one address cannot
  * hold more connections than --max-connections-per-ip, and silent ones are closed after
  * --idle-timeout; a Host the server does not answer for is refused (DNS rebinding), and an
- * HTTP/1.1 request without Host too.
+ * HTTP/1.1 request without Host too; the token can come from a file (--token-file) rather than a
+ * flag that ps shows.
  */
 import assert from 'node:assert/strict';
+import { spawnSync } from 'node:child_process';
+import { chmodSync, writeFileSync } from 'node:fs';
 import http from 'node:http';
 import net from 'node:net';
+import path from 'node:path';
 import test from 'node:test';
 
-import { sleep, startServer } from './lib.mjs';
+import { SERVER, sleep, startServer, tempDir } from './lib.mjs';
 
 let srv;
 
@@ -143,6 +147,64 @@ test('--allowed-hosts replaces the default (names trimmed, bare IPv6 bracketed);
         assert.equal((await getWithHost(any.port, '/api/health', 'evil.example')).status, 200);
     } finally {
         await any.stop();
+    }
+});
+
+/* ---- the token from a file (defect 14: a --token flag shows in ps) ---- */
+
+test('--token-file: the file\'s line is the token, its line end stripped', async () => {
+    const dir = tempDir();
+    const file = path.join(dir, 'token');
+    writeFileSync(file, 's3cret\r\n', { mode: 0o600 });
+    const t = await startServer({ workers: 1, args: ['--token-file', file] });
+    try {
+        const job = { preset: 'triple_pendulum_pd', duration: 0.1 };
+        assert.equal((await t.post('/api/validate', job)).status, 401);
+        assert.equal((await t.post('/api/validate', job, { authorization: 'Bearer s3cre' })).status, 401);
+        assert.equal((await t.post('/api/validate', job, { authorization: 'Bearer s3cret' })).status, 200);
+        assert.doesNotMatch(t.output(), /warning/);
+    } finally {
+        await t.stop();
+    }
+});
+
+test('--token-file and CTCSIM_TOKEN_FILE: empty, missing, two lines or with --token stop the start', () => {
+    const dir = tempDir();
+    const empty = path.join(dir, 'empty');
+    writeFileSync(empty, '\n', { mode: 0o600 });
+    const twoLines = path.join(dir, 'two');
+    writeFileSync(twoLines, 'a\nb\n', { mode: 0o600 });
+    const ok = path.join(dir, 'ok');
+    writeFileSync(ok, 'x\n', { mode: 0o600 });
+    const db = ['--db', path.join(dir, 'jobs.db'), '--port', '0'];
+    const cases = [
+        { args: ['--token-file', empty], stderr: `ctcsim-server: --token-file ${empty} is empty\n` },
+        { args: [], env: { CTCSIM_TOKEN_FILE: empty }, stderr: `ctcsim-server: --token-file ${empty} is empty\n` },
+        { args: ['--token-file', path.join(dir, 'none')], stderr: `ctcsim-server: --token-file ${path.join(dir, 'none')}: No such file or directory\n` },
+        { args: ['--token-file', twoLines], stderr: `ctcsim-server: --token-file ${twoLines} must hold one line of text\n` },
+        { args: ['--token-file', ok, '--token', 'y'], stderr: 'ctcsim-server: give the token once: --token or --token-file, not both\n' },
+    ];
+    for (const c of cases) {
+        const env = { ...process.env, ...(c.env || {}) };
+        for (const k of Object.keys(process.env)) if (k.startsWith('CTCSIM') && !(c.env && k in c.env)) delete env[k];
+        const r = spawnSync(SERVER, [...db, ...c.args], { encoding: 'utf8', env, timeout: 10000 });
+        assert.equal(r.status, 2, `${c.args.join(' ')}: exit ${r.status}, ${r.stderr}`);
+        assert.equal(r.stderr, c.stderr);
+    }
+});
+
+test('--token-file: a file other users may read is used, with a warning', async () => {
+    const dir = tempDir();
+    const file = path.join(dir, 'token');
+    writeFileSync(file, 'open\n');
+    chmodSync(file, 0o644);
+    const t = await startServer({ workers: 1, args: ['--token-file', file] });
+    try {
+        assert.match(t.output(), new RegExp(`warning: --token-file ${file} can be read by other users \\(chmod 600 it\\)`));
+        const job = { preset: 'triple_pendulum_pd', duration: 0.1 };
+        assert.equal((await t.post('/api/validate', job, { authorization: 'Bearer open' })).status, 200);
+    } finally {
+        await t.stop();
     }
 });
 
