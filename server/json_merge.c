@@ -2,15 +2,15 @@
  * json_merge.c - RFC 7386 merge patch (json_merge.h) in linear time.
  *
  * cJSON keeps an object's members in a linked list, and cJSON_GetObjectItem scans it, so looking
- * each of a patch's N keys up in a target that grows to N keys costs N^2/2 comparisons (a
- * 1.3 MB preset request of 100k keys took 69 s). Here each target object the patch reaches gets
- * a key index first: an open-addressing table (linear probing, power-of-two size at least 3/2 of
- * the keys it may hold) of the members' 64-bit FNV-1a hashes and pointers. A string comparison is
- * made only where two hashes are equal, so a lookup costs one comparison when the key is there and
- * almost never one when it is not. Members are detached by pointer (O(1), cJSON keeps the list's
- * tail in its head's prev) and appended at the tail, which is where RFC 7386 section 2's
- * pseudocode and the earlier scan put them. The table holds the target's keys and those the patch
- * adds, so it never grows; a deleted key leaves a tombstone, and a merged key takes its old slot.
+ * each of a patch's N keys up in a target that grows to N keys would cost N^2/2 comparisons.
+ * Here each target object the patch reaches gets a key index first: an open-addressing table
+ * (linear probing, power-of-two size at least 3/2 of the keys it may hold) of the members' 64-bit
+ * FNV-1a hashes and pointers. A string comparison is made only where two hashes are equal, so a
+ * lookup costs one comparison when the key is there and almost never one when it is not. Members
+ * are detached by pointer (O(1), cJSON keeps the list's tail in its head's prev) and appended at
+ * the tail, where RFC 7386 section 2's pseudocode puts them. The table holds the target's keys
+ * and those the patch adds, so it never grows; a deleted key leaves a tombstone, and a merged key
+ * takes its old slot.
  */
 #include "json_merge.h"
 
