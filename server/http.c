@@ -7,7 +7,8 @@
  * the completion callback, whatever happened in between (libmicrohttpd calls the completion
  * callback for every request that reached the access handler, and only for those). The URI
  * callback before it only looks at the raw, still percent-encoded path for "%00". The first call
- * decides everything the headers can decide - the route (404, 405 with Allow), the token (401)
+ * decides everything the headers can decide - the Host (400 without one in HTTP/1.1, 421 for a
+ * host not allowed), the route (404, 405 with Allow), the token (401)
  * and a declared Content-Length over the limit (413) - and answers at once without reading the
  * body. Otherwise the body is collected into one growing buffer; a chunked body that passes the
  * limit is read on and dropped (libmicrohttpd 0.9.75 refuses a response queued half-way through
@@ -24,6 +25,11 @@
  * segment starting with "."; it is resolved with realpath and must stay below realpath(web root),
  * so a symlink that leads out is refused; directories serve their index.html; only known file
  * extensions are served. Every refusal is a plain 404, so probing learns nothing.
+ *
+ * Connections are bounded (http_config): libmicrohttpd closes one silent for idle_timeout s, and
+ * closes at accept a connection past max_connections in all or past max_per_ip from one address
+ * (its per-address count is the daemon's, across the pool's threads). A client trickling header
+ * bytes is not silent: the per-address limit is what bounds it.
  *
  * Handlers run on libmicrohttpd's pool threads, each of which serves many connections, so a
  * handler must not block. One that must wait (POST /api/jobs?wait) defers its reply (http_defer):
@@ -58,8 +64,10 @@
 #define HTTP_MAX_PARAMS 4
 /* bytes per connection for headers and the read buffer */
 #define HTTP_MEMORY_LIMIT (128 * 1024)
-/* s a keep-alive connection may stay silent */
-#define HTTP_IDLE_TIMEOUT 120
+/* the defaults of http_config's connection limits (http.h) */
+#define HTTP_IDLE_TIMEOUT 30
+#define HTTP_MAX_CONNECTIONS 1000
+#define HTTP_MAX_PER_IP 64
 /* bytes of an over-long chunked body read and dropped beyond the limit before the connection is
    closed */
 #define HTTP_DROP_MARGIN (1024 * 1024)
@@ -75,6 +83,8 @@ struct http_server {
     size_t max_body;
     char *web_root; /* copies, owned */
     char *token;    /* NULL = none */
+    char *hosts;    /* the allowed Host names, each followed by a NUL, then an empty one */
+    int any_host;   /* no Host check (bound to every address, or "*" allowed) */
     pthread_mutex_t log_lock;
     char last_log[256];   /* libmicrohttpd's last message (start-up errors), under log_lock */
     atomic_int in_flight; /* requests being answered (http_exchange.answering) */
@@ -258,6 +268,55 @@ static int token_ok(const char *header, const char *token)
         diff |= (unsigned char)token[i] ^ g;
     }
     return diff == 0;
+}
+
+/* Fills s->hosts from the comma-separated list (NULL or "": the default for the bind address,
+ * http.h). Names are kept as given, an IPv6 literal in brackets. Returns 0, or -1 out of memory. */
+static int hosts_init(http_server *s, const char *list, const char *bind)
+{
+    char dflt[INET6_ADDRSTRLEN + 64];
+    if (!list || !*list) {
+        if (strcmp(bind, "0.0.0.0") == 0 || strcmp(bind, "::") == 0) s->any_host = 1;
+        int v6 = strchr(bind, ':') != NULL;
+        snprintf(dflt, sizeof dflt, "%s%s%s,localhost,127.0.0.1,[::1]", v6 ? "[" : "", bind,
+                 v6 ? "]" : "");
+        list = dflt;
+    }
+    size_t n = strlen(list);
+    s->hosts = malloc(2 * n + 4); /* brackets may be added around each name */
+    if (!s->hosts) return -1;
+    char *out = s->hosts;
+    for (const char *p = list; *p;) {
+        size_t len = strcspn(p, ",");
+        const char *name = p;
+        p += len + (p[len] == ',');
+        while (len > 0 && (*name == ' ' || *name == '\t')) name++, len--;
+        while (len > 0 && (name[len - 1] == ' ' || name[len - 1] == '\t')) len--;
+        if (len == 0) continue;
+        if (len == 1 && name[0] == '*') s->any_host = 1;
+        int bracket = name[0] != '[' && memchr(name, ':', len) != NULL; /* a bare IPv6 literal */
+        if (bracket) *out++ = '[';
+        memcpy(out, name, len);
+        out += len;
+        if (bracket) *out++ = ']';
+        *out++ = 0;
+    }
+    *out = 0;
+    return 0;
+}
+
+/* Whether the Host header names an allowed host: its name, the port stripped ("[::1]:8080" is
+ * "[::1]"), compared without regard to case with each allowed name. */
+static int host_ok(const http_server *s, const char *host)
+{
+    if (s->any_host) return 1;
+    size_t len =
+        host[0] == '[' ? strcspn(host, "]") + (strchr(host, ']') != NULL) : strcspn(host, ":");
+    if (len > 0 && host[len - 1] == '.' && host[0] != '[') len--; /* "localhost." */
+    for (const char *h = s->hosts; *h; h += strlen(h) + 1) {
+        if (strlen(h) == len && strncasecmp(h, host, len) == 0) return 1;
+    }
+    return 0;
 }
 
 /* ---- static files ---- */
@@ -470,8 +529,21 @@ static enum MHD_Result send_reply(struct MHD_Connection *conn, const char *path,
 /* What the headers decide on the first call: a route and its captures, or an early reply
  * (status != 0 in rep). */
 static void first_call(http_server *s, http_exchange *x, struct MHD_Connection *conn,
-                       const char *path, const char *method, http_reply *rep)
+                       const char *path, const char *method, const char *version, http_reply *rep)
 {
+    /* the Host: HTTP/1.1 needs one (RFC 9112 section 3.2); it must be ours, or a page of
+       another site whose name resolves here (DNS rebinding) could drive the service */
+    const char *host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_HOST);
+    if (!host && strcmp(version, MHD_HTTP_VERSION_1_0) != 0) {
+        http_reply_error(rep, 400, "MISSING_HOST", "", "an %s request needs a Host header",
+                         version);
+        return;
+    }
+    if (host && !host_ok(s, host)) {
+        http_reply_error(rep, 421, "HOST_NOT_ALLOWED", "",
+                         "this server does not answer for host \"%.100s\" (--allowed-hosts)", host);
+        return;
+    }
     if (x->encoded_nul) {
         http_reply_error(rep, 404, "NOT_FOUND", "", "no such path (it holds an encoded NUL)");
         return;
@@ -650,7 +722,6 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
                                   const char *method, const char *version, const char *upload_data,
                                   size_t *upload_data_size, void **con_cls)
 {
-    (void)version;
     http_server *s = cls;
     http_exchange *x = *con_cls;
     http_reply rep = {.fd = -1};
@@ -665,7 +736,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         }
         x->encoded_nul = encoded_nul;
         x->rep.fd = -1;
-        first_call(s, x, conn, url, method, &rep);
+        first_call(s, x, conn, url, method, version, &rep);
         if (!rep.status && !rep.body) return MHD_YES;
         begin_answer(s, x);
         return send_reply(conn, url, &rep);
@@ -763,6 +834,12 @@ int http_start(const http_config *config, http_server **out, char *err, size_t e
     s->web_root = strdup(config->web_root ? config->web_root : "web");
     if (!s->web_root) goto no_memory;
     if (config->token && config->token[0] && !(s->token = strdup(config->token))) goto no_memory;
+    if (hosts_init(s, config->allowed_hosts, bind) != 0) goto no_memory;
+
+    unsigned idle_timeout = config->idle_timeout ? config->idle_timeout : HTTP_IDLE_TIMEOUT;
+    unsigned max_connections =
+        config->max_connections ? config->max_connections : HTTP_MAX_CONNECTIONS;
+    unsigned max_per_ip = config->max_per_ip ? config->max_per_ip : HTTP_MAX_PER_IP;
 
     /* the logger first, so that libmicrohttpd's checks of the other options use it too */
     // clang-format off
@@ -772,7 +849,9 @@ int http_start(const http_config *config, http_server **out, char *err, size_t e
         MHD_OPTION_SOCK_ADDR, addr,
         MHD_OPTION_THREAD_POOL_SIZE, (unsigned)(config->threads > 1 ? config->threads : 0),
         MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)HTTP_MEMORY_LIMIT,
-        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)HTTP_IDLE_TIMEOUT,
+        MHD_OPTION_CONNECTION_TIMEOUT, idle_timeout,
+        MHD_OPTION_CONNECTION_LIMIT, max_connections,
+        MHD_OPTION_PER_IP_CONNECTION_LIMIT, max_per_ip,
         MHD_OPTION_URI_LOG_CALLBACK, on_uri, s,
         MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
         MHD_OPTION_END);
@@ -828,5 +907,6 @@ void http_stop(http_server *s)
     pthread_cond_destroy(&s->defer_done);
     free(s->web_root);
     free(s->token);
+    free(s->hosts);
     free(s);
 }

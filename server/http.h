@@ -51,12 +51,24 @@ typedef struct http_route {
 } http_route;
 
 typedef struct http_config {
-    const char *bind;         /* address to listen on, e.g. "127.0.0.1" or "0.0.0.0" */
-    int port;                 /* 1..65535 (0 = any free port; see http_port) */
-    int threads;              /* libmicrohttpd thread pool size, >= 1 */
-    size_t max_body;          /* bytes; larger bodies get 413 */
-    const char *web_root;     /* directory of the static files (web/) */
-    const char *token;        /* NULL/"" = none; else POST and DELETE need "Bearer TOKEN" */
+    const char *bind;     /* address to listen on, e.g. "127.0.0.1" or "0.0.0.0" */
+    int port;             /* 1..65535 (0 = any free port; see http_port) */
+    int threads;          /* libmicrohttpd thread pool size, >= 1 */
+    size_t max_body;      /* bytes; larger bodies get 413 */
+    const char *web_root; /* directory of the static files (web/) */
+    const char *token;    /* NULL/"" = none; else POST and DELETE need "Bearer TOKEN" */
+    /* the names the Host header may give (its port stripped), comma-separated: a request naming
+       another host is answered 421 HOST_NOT_ALLOWED, an HTTP/1.1 request without Host 400
+       MISSING_HOST. "*" allows any. NULL or "": the bind address (an IPv6 one in brackets),
+       localhost, 127.0.0.1 and [::1], or any host when bound to 0.0.0.0 or ::. Compared without
+       regard to case; a bare IPv6 literal is taken as in brackets. */
+    const char *allowed_hosts;
+    /* connection limits against clients that hold connections open (slowloris); 0 = the
+       default in brackets */
+    unsigned idle_timeout;    /* s a connection may stay silent before it is closed [30] */
+    unsigned max_connections; /* connections open at once; more are closed at accept [1000] */
+    unsigned max_per_ip;      /* connections open at once from one address; more are closed at
+                                 accept [64] */
     const http_route *routes; /* terminated by a route with method NULL */
     void *ctx;                /* passed to every handler */
 } http_config;

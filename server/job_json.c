@@ -31,7 +31,8 @@
  *
  * A preset request {"preset": NAME, ...} is expanded first: the preset builds its document from
  * the request's parameters, and the request's other keys are applied to it as an RFC 7386 merge
- * patch. The result is then parsed like any job.
+ * patch (json_merge.h, linear in the size of the request). The result is then parsed like any
+ * job.
  *
  * The parser is in parts (job_parse.h): the generic reader json_read.c, the scene
  * job_scene.c, the run settings job_run.c; this file holds the controller and the entry points.
@@ -43,11 +44,14 @@
 
 #include <math.h>
 #include <pthread.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "job_parse.h"
+#include "json_merge.h"
+#include "json_strict.h"
 #include "presets.h"
 
 /* ---- name ---- */
@@ -530,49 +534,6 @@ static int parse_job(const cJSON *doc, const char *default_name, job **out, job_
 
 /* ---- presets ---- */
 
-/* a patch object that names another "type" or "method" than its target's starts afresh: the
- * old type's keys (a PID's ki, dopri5's rtol) do not carry over to the new one */
-static int changes_kind(const cJSON *target, const cJSON *patch)
-{
-    static const char *const keys[] = {"type", "method"};
-    for (int i = 0; i < 2; i++) {
-        const cJSON *a = cJSON_GetObjectItemCaseSensitive(target, keys[i]);
-        const cJSON *b = cJSON_GetObjectItemCaseSensitive(patch, keys[i]);
-        if (cJSON_IsString(a) && cJSON_IsString(b) && strcmp(a->valuestring, b->valuestring) != 0)
-            return 1;
-    }
-    return 0;
-}
-
-/* RFC 7386 merge patch: returns target (consumed) with patch applied, or NULL out of memory.
- * One refinement: an object whose "type" or "method" the patch changes is replaced whole. */
-static cJSON *merge_patch(cJSON *target, const cJSON *patch)
-{
-    if (!cJSON_IsObject(patch) || (cJSON_IsObject(target) && changes_kind(target, patch))) {
-        cJSON_Delete(target);
-        return cJSON_Duplicate(patch, 1);
-    }
-    if (!cJSON_IsObject(target)) {
-        cJSON_Delete(target);
-        target = cJSON_CreateObject();
-        if (target == NULL) return NULL;
-    }
-    for (const cJSON *m = patch->child; m != NULL; m = m->next) {
-        cJSON *old = cJSON_DetachItemFromObjectCaseSensitive(target, m->string);
-        if (cJSON_IsNull(m)) {
-            cJSON_Delete(old); /* null removes the key */
-            continue;
-        }
-        cJSON *merged = merge_patch(old, m);
-        if (merged == NULL || !cJSON_AddItemToObject(target, m->string, merged)) {
-            cJSON_Delete(merged);
-            cJSON_Delete(target);
-            return NULL;
-        }
-    }
-    return target;
-}
-
 /* the names of the presets, comma-separated, into buf */
 static void list_presets(char *buf, size_t len)
 {
@@ -628,7 +589,7 @@ static int expand_preset(const cJSON *request, cJSON **out, const preset **used,
     if (cJSON_IsString(ctrl_type))
         snprintf(preset_ctrl, sizeof preset_ctrl, "%s", ctrl_type->valuestring);
 
-    doc = merge_patch(doc, patch);
+    doc = json_merge_patch(doc, patch, NULL);
     cJSON_Delete(patch);
     if (doc == NULL) return json_out_of_memory(err);
 
@@ -721,17 +682,31 @@ int job_parse(const char *text, size_t len, job **out, job_error *err)
     /* cJSON stops at the end of the first value: what follows must be white space */
     const char *end = NULL;
     cJSON *doc = cJSON_ParseWithLengthOpts(text, len, &end, 0);
+    size_t cjson_pos = SIZE_MAX; /* where cJSON failed, or the text after the document */
     if (doc == NULL) {
-        size_t pos = end != NULL ? (size_t)(end - text) : 0;
-        line_column(text, pos, &line, &column);
+        cjson_pos = end != NULL ? (size_t)(end - text) : 0;
+    } else {
+        size_t rest = (size_t)(end - text);
+        while (rest < len && is_json_space(text[rest])) rest++;
+        if (rest < len) cjson_pos = rest;
+    }
+    /* what cJSON takes but RFC 8259 does not ("01", "1.", "\u0000"): the first error wins */
+    size_t strict_pos = SIZE_MAX;
+    const char *why = NULL;
+    if (json_strict_check(text, len, &strict_pos, &why) != 0 && strict_pos < cjson_pos) {
+        cJSON_Delete(doc);
+        line_column(text, strict_pos, &line, &column);
+        return json_error_at(err, JOB_INVALID_JSON, "", "invalid JSON at line %d, column %d: %s",
+                             line, column, why);
+    }
+    if (doc == NULL) {
+        line_column(text, cjson_pos, &line, &column);
         return json_error_at(err, JOB_INVALID_JSON, "", "invalid JSON at line %d, column %d", line,
                              column);
     }
-    size_t rest = (size_t)(end - text);
-    while (rest < len && is_json_space(text[rest])) rest++;
-    if (rest < len) {
+    if (cjson_pos != SIZE_MAX) {
         cJSON_Delete(doc);
-        line_column(text, rest, &line, &column);
+        line_column(text, cjson_pos, &line, &column);
         return json_error_at(
             err, JOB_INVALID_JSON, "",
             "invalid JSON at line %d, column %d: text after the end of the document", line, column);

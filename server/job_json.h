@@ -229,7 +229,11 @@ const job_format_object *const *job_format_object_tables(void);
 extern const job_format_default *const job_format_defaults[];
 
 /* Parses len bytes of JSON text (need not be terminated). Returns 0 and *out (free with
- * job_free), or -1 with *err filled and *out NULL. */
+ * job_free), or -1 with *err filled and *out NULL. Text that is not RFC 8259 JSON is
+ * JOB_INVALID_JSON, field "", "invalid JSON at line L, column C" (1-based, columns in bytes) at its
+ * first error, followed by ": REASON" where one is known: the numbers and strings cJSON would
+ * take leniently ("01", "1.", "\u0000", a raw control character in a string; json_strict.h), or
+ * "text after the end of the document". */
 int job_parse(const char *text, size_t len, job **out, job_error *err);
 
 /* The same from a parsed document (not modified, not kept). */

@@ -43,12 +43,17 @@ typedef struct server_settings {
     long long workers;
     long long job_threads; /* the most threads one job's dynamics may use */
     long long max_queue;
-    long long max_body; /* bytes */
-    const char *token;  /* NULL = none */
+    long long max_body;        /* bytes */
+    const char *token;         /* NULL = none */
+    const char *token_file;    /* the token's file, NULL = none */
+    const char *allowed_hosts; /* comma-separated; NULL = the default (http.h) */
     const char *web;
     const char *api;
     double job_time_limit; /* s, 0 = none */
     long long http_threads;
+    long long idle_timeout;    /* s */
+    long long max_connections; /* open at once */
+    long long max_per_ip;      /* open at once from one address */
 } server_settings;
 
 typedef enum setting_kind {
@@ -87,7 +92,12 @@ static const setting settings[] = {
     {"--max-body", "CTCSIM_MAX_BODY", SETTING_BYTES, AT(max_body), 1024, 1LL << 30, "BYTES",
      "largest request body (suffix K or M for KiB, MiB)"},
     {"--token", "CTCSIM_TOKEN", SETTING_TEXT, AT(token), 0, 0, "TOKEN",
-     "when set, POST and DELETE need \"Authorization: Bearer TOKEN\""},
+     "when set, POST and DELETE need \"Authorization: Bearer TOKEN\" (a flag shows in ps: "
+     "prefer the variable or --token-file)"},
+    {"--token-file", "CTCSIM_TOKEN_FILE", SETTING_TEXT, AT(token_file), 0, 0, "FILE",
+     "read the token from FILE, once at start (one line; keep it mode 600)"},
+    {"--allowed-hosts", "CTCSIM_ALLOWED_HOSTS", SETTING_TEXT, AT(allowed_hosts), 0, 0, "HOSTS",
+     "names the Host header may give, comma-separated (* any); others: 421"},
     {"--web", "CTCSIM_WEB", SETTING_TEXT, AT(web), 0, 0, "DIR",
      "web root: the page as `make web` assembles it"},
     {"--api", "CTCSIM_API", SETTING_TEXT, AT(api), 0, 0, "DIR",
@@ -96,6 +106,12 @@ static const setting settings[] = {
      "SECONDS", "wall time one job may take (0: no limit)"},
     {"--http-threads", "CTCSIM_HTTP_THREADS", SETTING_INTEGER, AT(http_threads), 1, 1024, "N",
      "threads answering HTTP requests"},
+    {"--idle-timeout", "CTCSIM_IDLE_TIMEOUT", SETTING_INTEGER, AT(idle_timeout), 1, 86400,
+     "SECONDS", "a connection silent this long is closed"},
+    {"--max-connections", "CTCSIM_MAX_CONNECTIONS", SETTING_INTEGER, AT(max_connections), 1, 100000,
+     "N", "connections open at once; more are closed when they open"},
+    {"--max-connections-per-ip", "CTCSIM_MAX_CONNECTIONS_PER_IP", SETTING_INTEGER, AT(max_per_ip),
+     1, 100000, "N", "connections open at once from one client address; more are closed"},
 };
 
 #define NSETTINGS (sizeof settings / sizeof settings[0])
@@ -138,13 +154,16 @@ static void print_help(const server_settings *def)
            "\n");
     for (size_t i = 0; i < NSETTINGS; i++) {
         const setting *st = &settings[i];
-        char flag[64], def_text[64];
+        char flag[64], def_text[96];
         snprintf(flag, sizeof flag, "%s %s", st->flag, st->arg);
         default_text(st, def, def_text, sizeof def_text);
         if (st->offset == AT(workers) || st->offset == AT(job_threads)) { /* from the machine */
             const long long x = *(const long long *)(const void *)((const char *)def + st->offset);
             snprintf(def_text, sizeof def_text, "the online cores, %lld here", x);
         }
+        if (st->offset == AT(allowed_hosts))
+            snprintf(def_text, sizeof def_text,
+                     "the bind address, localhost, 127.0.0.1, [::1]; any when bound to 0.0.0.0");
         printf("  %-26s %s\n  %-26s (default %s%s%s)\n", flag, st->help, "", def_text,
                st->env ? "; " : "", st->env ? st->env : "");
     }
@@ -258,6 +277,56 @@ static int read_settings(int argc, char **argv, server_settings *out)
     return 0;
 }
 
+/* The token of --token-file: the file's one line, its line end stripped, into a static buffer
+ * (it lives as long as the process). 0, or -1 after printing why: unreadable, empty, too long,
+ * more than one line, or given with --token as well. A file others may read is used with a
+ * warning. */
+static int read_token_file(server_settings *cfg)
+{
+    static char token[4097];
+    const char *path = cfg->token_file;
+    if (cfg->token) {
+        fprintf(stderr, "ctcsim-server: give the token once: --token or --token-file, not both\n");
+        return -1;
+    }
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        fprintf(stderr, "ctcsim-server: --token-file %s: %s\n", path, strerror(errno));
+        return -1;
+    }
+    struct stat st;
+    if (fstat(fileno(f), &st) == 0 && (st.st_mode & (S_IRGRP | S_IROTH)))
+        fprintf(stderr,
+                "ctcsim-server: warning: --token-file %s can be read by other users (chmod 600 "
+                "it)\n",
+                path);
+    size_t n = fread(token, 1, sizeof token, f);
+    int failed = ferror(f);
+    fclose(f);
+    if (failed) {
+        fprintf(stderr, "ctcsim-server: --token-file %s: cannot read it\n", path);
+        return -1;
+    }
+    if (n == sizeof token) {
+        fprintf(stderr, "ctcsim-server: --token-file %s: longer than %zu bytes\n", path,
+                sizeof token - 1);
+        return -1;
+    }
+    if (n > 0 && token[n - 1] == '\n') n--;
+    if (n > 0 && token[n - 1] == '\r') n--;
+    token[n] = 0;
+    if (n == 0) {
+        fprintf(stderr, "ctcsim-server: --token-file %s is empty\n", path);
+        return -1;
+    }
+    if (strlen(token) != n || strpbrk(token, "\r\n")) {
+        fprintf(stderr, "ctcsim-server: --token-file %s must hold one line of text\n", path);
+        return -1;
+    }
+    cfg->token = token;
+    return 0;
+}
+
 /* "ctcsim-server: DB: why", naming the database once (the store's messages may name it) */
 static void database_error(const char *db, const char *err)
 {
@@ -283,9 +352,13 @@ int main(int argc, char **argv)
         .api = "api",
         .job_time_limit = 600,
         .http_threads = 4,
+        .idle_timeout = 30,
+        .max_connections = 1000,
+        .max_per_ip = 64,
     };
     int rc = read_settings(argc, argv, &cfg);
     if (rc != 0) return rc > 0 ? 0 : EXIT_BAD_SETTING;
+    if (cfg.token_file && cfg.token_file[0] && read_token_file(&cfg) != 0) return EXIT_BAD_SETTING;
 
     /* signals: SIGINT and SIGTERM for sigwait below, in every thread started from here on */
     sigset_t stop_signals;
@@ -331,6 +404,10 @@ int main(int argc, char **argv)
                       .max_body = (size_t)cfg.max_body,
                       .web_root = cfg.web,
                       .token = cfg.token,
+                      .allowed_hosts = cfg.allowed_hosts,
+                      .idle_timeout = (unsigned)cfg.idle_timeout,
+                      .max_connections = (unsigned)cfg.max_connections,
+                      .max_per_ip = (unsigned)cfg.max_per_ip,
                       .routes = routes_table,
                       .ctx = &ctx};
     http_server *http = NULL;

@@ -52,6 +52,10 @@ const CASES = [
     { name: 'malformed: trailing comma on line 3', body: '{\n  "duration": 1,\n  "scene": [1, 2,]\n}', status: 400, code: 'INVALID_JSON', field: '', message: 'invalid JSON at line 3, column 18' },
     { name: 'text after the document', body: '{} x', status: 400, code: 'INVALID_JSON', field: '', message: 'invalid JSON at line 1, column 4: text after the end of the document' },
     { name: 'bare NaN is not JSON', body: '{"preset": "triple_pendulum_pd", "duration": NaN}', status: 400, code: 'INVALID_JSON', field: '', message: /^invalid JSON at line 1, column \d+/ },
+    /* RFC 8259 where cJSON is lenient (issue 25, defect 10) */
+    { name: 'number with a leading zero', body: '{"preset":"triple_pendulum_pid","duration":01}', status: 400, code: 'INVALID_JSON', field: '', message: 'invalid JSON at line 1, column 44: a number must not have a leading zero' },
+    { name: 'number ending in a decimal point', body: '{"preset":"triple_pendulum_pd","duration":1.}', status: 400, code: 'INVALID_JSON', field: '', message: 'invalid JSON at line 1, column 43: a decimal point must be followed by a digit' },
+    { name: '\\u0000 in a string', body: '{"preset":"triple_pendulum_pd","name":"a\\u0000b"}', status: 400, code: 'INVALID_JSON', field: '', message: 'invalid JSON at line 1, column 41: a string must not hold \\u0000' },
     { name: 'JSON array body', body: '[1, 2]', status: 400, code: 'INVALID_FIELD', field: '', message: 'the job must be a JSON object (got an array)' },
     { name: 'JSON number body', body: '42', status: 400, code: 'INVALID_FIELD', field: '', message: 'the job must be a JSON object (got a number)' },
     { name: 'JSON string body', body: '"job"', status: 400, code: 'INVALID_FIELD', field: '', message: /^the job must be a JSON object \(got a string\)$/ },

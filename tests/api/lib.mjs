@@ -113,11 +113,12 @@ function parseBody(text) {
     }
 }
 
-/* One request with fetch. opts: json (sent as application/json), body (sent as it is), headers.
- * Resolves {status, headers (lower-case names), text, json (undefined if not JSON)}. */
+/* One request with fetch. opts: json (sent as application/json), body (sent as it is), headers,
+ * signal (an AbortSignal, e.g. AbortSignal.timeout(ms), to bound the wait). Resolves {status, headers (lower-case names), text, json (undefined if not JSON)}. */
 export async function request(base, method, urlPath, opts = {}) {
     const headers = { ...(opts.headers || {}) };
     const init = { method, headers };
+    if (opts.signal) init.signal = opts.signal;
     if (opts.json !== undefined) {
         init.body = JSON.stringify(opts.json);
         if (!Object.keys(headers).some((h) => h.toLowerCase() === 'content-type')) {

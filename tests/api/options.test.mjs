@@ -37,7 +37,7 @@ function options() {
 
 /* options whose value "many" is not valid (numbers and addresses; the text ones take anything) */
 const CHECKED = new Set(['--bind', '--port', '--workers', '--job-threads', '--max-queue', '--max-body',
-    '--job-time-limit', '--http-threads']);
+    '--job-time-limit', '--http-threads', '--idle-timeout', '--max-connections', '--max-connections-per-ip']);
 
 test('every option of --help has its environment variable, --http-threads too', () => {
     const opts = options();
