@@ -17,14 +17,7 @@ PREFIX=/usr/local
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 root=$tmp/root
-passed=0
-failed=0
-
-pass() { passed=$((passed + 1)); }
-fail() {
-    failed=$((failed + 1))
-    echo "FAIL: $1"
-}
+. "$(dirname "$0")/lib.sh"
 
 if timeout -k 5 600 "$MAKE" --no-print-directory install DESTDIR="$root" >"$tmp/install.log" 2>&1; then
     pass
@@ -79,5 +72,4 @@ timeout -k 5 120 "$MAKE" --no-print-directory uninstall DESTDIR="$root" >"$tmp/u
 left=$(find "$root" -type f | sed "s|^$root||")
 [ -z "$left" ] && pass || fail "make uninstall left: $left"
 
-echo "install: $passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish install

@@ -18,14 +18,7 @@ root=$(pwd)
 case "$CTCSIM" in /*) cli=$CTCSIM ;; *) cli=$root/$CTCSIM ;; esac
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-passed=0
-failed=0
-
-pass() { passed=$((passed + 1)); }
-fail() {
-    failed=$((failed + 1))
-    echo "FAIL: $1"
-}
+. "$(dirname "$0")/lib.sh"
 
 # the section's fenced blocks: $tmp/blocks/NN.sh (```sh) and $tmp/blocks/NN.txt (``` plain)
 mkdir -p "$tmp/blocks" "$tmp/work/build"
@@ -107,5 +100,4 @@ for block in "$tmp/blocks"/*; do
     esac
 done
 
-echo "readme: $passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish readme

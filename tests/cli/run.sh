@@ -6,14 +6,7 @@ set -u
 CTCSIM=${CTCSIM:-build/ctcsim}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-passed=0
-failed=0
-
-pass() { passed=$((passed + 1)); }
-fail() {
-    failed=$((failed + 1))
-    echo "FAIL: $1"
-}
+. "$(dirname "$0")/lib.sh"
 
 # expect_exit CODE NAME COMMAND...: runs the command, stdout to $tmp/out, stderr to $tmp/err,
 # stopped after CLI_TIME_LIMIT seconds (default 120; each takes well under a second)
@@ -156,5 +149,4 @@ for example in api/examples/*.json; do
     expect_exit 0 "validate $example" "$CTCSIM" validate "$example"
 done
 
-echo "cli: $passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish cli
