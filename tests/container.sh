@@ -12,7 +12,11 @@
 # /proc, /sys and /dev mounts cannot leak to the host and vanish with it on every exit path; they
 # are also unmounted explicitly. The unpacked root is kept after the run for inspection and
 # removed at the start of the next one. The container shares the host's network: the service
-# is started on a free port.
+# is started on a free port. It starts with an empty environment but for the proxy variables,
+# and with the host's local CA certificates (/usr/local/share/ca-certificates/*.crt) where the
+# image keeps them, so that, behind a TLS-inspecting proxy, it is a machine whose system store
+# holds the proxy's CA (they enter the store when the install-first line installs
+# ca-certificates): whatever else npm needs to trust the registry must come from the Makefile.
 #
 # From the environment:
 #   CONTAINER_MIRROR   Debian mirror for debootstrap (default http://deb.debian.org/debian)
@@ -74,7 +78,8 @@ phase() {  # phase NAME COMMAND: runs it, logs to /root/NAME.log, prints the tim
     return \$rc
 }
 phase install-first '$install_first' || exit 1
-phase clone 'git clone -q /ctcsim.bundle ctcsim && git -C ctcsim checkout -q $commit' || exit 1
+phase clone 'git clone -q /ctcsim.bundle ctcsim && git -C ctcsim -c advice.detachedHead=false checkout -q $commit' ||
+    exit 1
 cd ctcsim
 # make run: in the background, until /api/health answers 200 (bash's /dev/tcp: curl comes with
 # make test), then stopped with SIGINT as Ctrl-C would
@@ -110,6 +115,16 @@ grep -E '^(== |[A-Za-z ]+: )?[0-9]+ passed, [0-9]+ failed|skipped' /root/make-te
 exit \$fail
 EOF
 
+# the proxy settings, if any, are the only variables passed in
+proxy_vars=()
+proxy_env=()
+for v in http_proxy https_proxy no_proxy HTTP_PROXY HTTPS_PROXY NO_PROXY; do
+    if [ -n "${!v:-}" ]; then
+        proxy_vars+=("$v=${!v}")
+        proxy_env+=(-e "$v=${!v}")
+    fi
+done
+
 rc=0
 runtime=${CONTAINER_RUNTIME:-}
 if [ -z "$runtime" ]; then
@@ -125,8 +140,13 @@ if [ "$runtime" = docker ]; then
     t=$(now)
     timeout 600 docker pull -q debian:bookworm
     echo "== [base] docker pull debian:bookworm: $(($(now) - t)) s"
+    cas=()
+    for c in /usr/local/share/ca-certificates/*.crt; do
+        [ -f "$c" ] && cas+=(-v "$c:/usr/local/share/ca-certificates/$(basename "$c"):ro")
+    done
     docker run --rm --network host -v "$work/ctcsim.bundle:/ctcsim.bundle:ro" \
-        -v "$steps:/steps.sh:ro" debian:bookworm bash /steps.sh || rc=$?
+        -v "$steps:/steps.sh:ro" "${cas[@]}" "${proxy_env[@]}" debian:bookworm bash /steps.sh ||
+        rc=$?
 else
     if [ "$(id -u)" != 0 ]; then
         echo "no Docker daemon answers, and debootstrap + chroot needs root" >&2
@@ -162,6 +182,10 @@ else
     cp /etc/resolv.conf "$root/etc/resolv.conf"
     cp "$work/ctcsim.bundle" "$root/ctcsim.bundle"
     cp "$steps" "$root/steps.sh"
+    mkdir -p "$root/usr/local/share/ca-certificates"
+    for c in /usr/local/share/ca-certificates/*.crt; do
+        [ -f "$c" ] && cp "$c" "$root/usr/local/share/ca-certificates/"
+    done
     echo "== [base] a pristine root from $(basename "$base"): $(($(now) - t)) s"
 
     # processes still running in the root when it ends (a server left behind): stopped by id
@@ -183,8 +207,9 @@ else
         mount --bind /dev "$root/dev"
         mount --bind /dev/pts "$root/dev/pts"
         mount -t tmpfs -o mode=1777 shm "$root/dev/shm"
-        chroot "$root" /bin/bash /steps.sh
-    ' _ "$root" || rc=$?
+        shift
+        chroot "$root" /usr/bin/env -i "$@" /bin/bash /steps.sh
+    ' _ "$root" "${proxy_vars[@]}" || rc=$?
     stop_leftovers
     trap - EXIT INT TERM
     if grep -q " $root/" /proc/mounts; then
