@@ -78,7 +78,7 @@ phase() {  # phase NAME COMMAND: runs it, logs to /root/NAME.log, prints the tim
     return \$rc
 }
 phase install-first '$install_first' || exit 1
-phase clone 'git clone -q /ctcsim.bundle ctcsim && git -C ctcsim -c advice.detachedHead=false checkout -q $commit' ||
+phase clone 'git -c advice.detachedHead=false clone -q /ctcsim.bundle ctcsim && git -C ctcsim checkout -q $commit' ||
     exit 1
 cd ctcsim
 # make run: in the background, until /api/health answers 200 (bash's /dev/tcp: curl comes with
@@ -159,7 +159,9 @@ else
         grep " $root/" /proc/mounts >&2
         exit 1
     fi
+    t=$(now)
     rm -rf "$root"
+    echo "== [base] the previous root removed: $(($(now) - t)) s"
     base=$work/bookworm-minbase.tar
     if [ ! -f "$base" ] || [ "${CONTAINER_REBASE:-}" = 1 ]; then
         command -v debootstrap >/dev/null 2>&1 || {
