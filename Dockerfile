@@ -14,8 +14,9 @@
 # ---------------------------------------------------------------------------- build
 FROM debian:bookworm AS build
 
-# the Makefile's DEB_PACKAGES without chromium and Criterion (tests only); Debian's own node and
-# npm are enough for npm ci (node >= 18); ca-certificates so npm can check the registry's TLS
+# the Makefile's RUN_PACKAGES (what make run installs; the test stack is left out) and Debian's
+# own node and npm, enough for npm ci (node >= 18); ca-certificates so npm can check the
+# registry's TLS
 RUN apt-get update \
  && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
       gcc make libc6-dev libcjson-dev liblapacke-dev libsundials-dev libmicrohttpd-dev \
