@@ -8,14 +8,15 @@
 # -e CTCSIM_WORKERS=4 or -e CTCSIM_TOKEN=secret. The command line is in the image too:
 # docker run --rm ctcsim ctcsim presets.
 #
-# Whoever changes the build steps or the libraries the programs link re-runs
-# ../shared/tools/docker-check.sh --path /api/health . (README, "Run in Docker").
+# Whoever changes the build steps or the libraries the programs link builds the image again and
+# checks that it serves /api/health (README, "Run in Docker").
 
 # ---------------------------------------------------------------------------- build
 FROM debian:bookworm AS build
 
-# the Makefile's DEB_PACKAGES without chromium and Criterion (tests only); Debian's own node and
-# npm are enough for npm ci (node >= 18); ca-certificates so npm can check the registry's TLS
+# the Makefile's RUN_PACKAGES (what make run installs; the test stack is left out) and Debian's
+# own node and npm, enough for npm ci (node >= 18); ca-certificates so npm can check the
+# registry's TLS
 RUN apt-get update \
  && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
       gcc make libc6-dev libcjson-dev liblapacke-dev libsundials-dev libmicrohttpd-dev \

@@ -1,12 +1,17 @@
 # ctcsim - build, test and benchmark.
 #
-#   make deps    install missing Debian packages (as root), or print the apt-get line to run
+#   make deps-run  install the Debian packages that building and running the service and its
+#                page need (as root), or print the command to run as root
+#   make deps    the same for everything make test needs (deps-run plus the test stack)
 #   make         build the library, the ctcsim command line and the ctcsim-server service
 #   make web     assemble the page into build/web (web/ plus uPlot from npm ci)
-#   make run     install what is missing (as root), build, and start the service on
-#                127.0.0.1:8080 with its database in ./ctcsim.db (RUN_ARGS adds flags)
-#   make test    build and run the unit tests, then again under AddressSanitizer + UBSan
+#   make run     deps-run, uPlot from npm, build, and start the service on 127.0.0.1:8080 with
+#                its database in ./ctcsim.db (RUN_ARGS adds flags)
+#   make test    deps and both npm installs first (the network steps, so that they fail fast),
+#                then build and run the unit tests, then again under AddressSanitizer + UBSan
 #                (built with SAN_CC); each test binary has a time limit (tests/run.sh)
+#   make test-container  the README's commands, literally, in a pristine Debian bookworm
+#                (tests/container.sh; as root; slow, not part of make test)
 #   make bench   build for this machine, run the unit tests in that build, then the benchmarks
 #   make install install the library (libctcsim.a, include/ctcsim/, ctcsim.pc), the ctcsim and
 #                ctcsim-server programs, and the page and API files (share/ctcsim/) under
@@ -52,11 +57,21 @@ CFLAGS += -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-rec
 LDFLAGS += -fsanitize=address,undefined
 endif
 
-# Debian packages the build and the tests need
-DEB_PACKAGES := gcc make libc6-dev libcriterion-dev libcjson-dev liblapacke-dev libsundials-dev \
-	libmicrohttpd-dev libsqlite3-dev sqlite3 chromium clang-19 libclang-rt-19-dev
-# the web page's uPlot and the tests also need node (>= 18) and npm: Debian's nodejs and npm are
-# installed when the machine has none
+# Debian packages that building and running the service and its page need (ca-certificates: npm
+# checks the registry's certificate against them); and those the tests add: Criterion, clang-19
+# and its sanitizer runtime (the ASan + UBSan pass), Chromium (the browser tests), the sqlite3
+# command (the crash test's integrity check), curl and jq (the README's service examples). Both
+# sets also need node (>= 18) and npm for uPlot and playwright-core: Debian's nodejs and npm are
+# installed when the machine has no node.
+RUN_PACKAGES := gcc make libc6-dev libcjson-dev liblapacke-dev libsundials-dev libmicrohttpd-dev \
+	libsqlite3-dev ca-certificates
+TEST_PACKAGES := libcriterion-dev clang-19 libclang-rt-19-dev chromium sqlite3 curl jq
+DEB_PACKAGES := $(RUN_PACKAGES) $(TEST_PACKAGES)
+# npm trusts the system's CA bundle too (a TLS-inspecting proxy whose CA is in the system store),
+# unless NODE_EXTRA_CA_CERTS is set already
+SYSTEM_CA := /etc/ssl/certs/ca-certificates.crt
+NPM_CI = $(if $(NODE_EXTRA_CA_CERTS),,$(if $(wildcard $(SYSTEM_CA)),NODE_EXTRA_CA_CERTS=$(SYSTEM_CA))) \
+	npm ci --no-audit --no-fund --loglevel=error
 BENCH_PACKAGES := wrk curl libmujoco-dev
 
 LIB_SRC := $(wildcard src/*/*.c)
@@ -82,8 +97,8 @@ SUPPORT_OBJ := $(SUPPORT_SRC:tests/support/%.c=$(BUILD)/obj/support/%.o)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all deps bench-deps install-packages web run test check check-build check-asan bench clean \
-	install uninstall FORCE
+.PHONY: all deps deps-run bench-deps install-packages npm-deps web run test test-container check \
+	check-build check-asan bench clean install uninstall FORCE
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -141,10 +156,13 @@ $(BUILD)/bench/%: bench/%.c $(SUPPORT_OBJ) $(APP_LIB) $(LIB) $(FLAGS_STAMP)
 	$(CC) $(CFLAGS) -Itests/support -Iserver -MMD -MP $< $(SUPPORT_OBJ) $(APP_LIB) $(LIB) -o $@ \
 		$(LDFLAGS) $(BENCH_LDLIBS) $(SERVER_LDLIBS) $(LDLIBS)
 
-# installs what is missing: apt-get as root (updating the package lists first when there are
-# none, or when a package is not found), otherwise prints the command to run and fails
+# install what is missing: apt-get as root (updating the package lists first when there are
+# none, or when a package is not found), otherwise print the command to run as root and fail
 deps:
 	@$(MAKE) --no-print-directory install-packages PACKAGES="$(DEB_PACKAGES)" CHECK_NODE=1
+
+deps-run:
+	@$(MAKE) --no-print-directory install-packages PACKAGES="$(RUN_PACKAGES)" CHECK_NODE=1
 
 # the benchmarks also need wrk and curl (bench/bench_server.sh) and MuJoCo (bench_mujoco)
 bench-deps: deps
@@ -162,8 +180,14 @@ install-packages:
 	fi; \
 	[ -z "$$missing" ] && exit 0; \
 	if [ "$$(id -u)" != 0 ]; then \
+		cmd="apt-get update && apt-get install -y --no-install-recommends$$missing"; \
 		echo "ctcsim needs these Debian packages:$$missing"; \
-		echo "install them with: sudo apt-get install -y$$missing"; \
+		echo "install them as root:"; \
+		echo "    $$cmd"; \
+		echo "for example with su (root's password):"; \
+		echo "    su -c '$$cmd'"; \
+		echo "or, where sudo is installed and allows you:"; \
+		echo "    sudo sh -c '$$cmd'"; \
 		exit 1; \
 	fi; \
 	export DEBIAN_FRONTEND=noninteractive; \
@@ -176,7 +200,7 @@ web: $(WEB_OUT)/.stamp
 $(WEB_NPM)/node_modules/.package-lock.json: web/package.json web/package-lock.json
 	@mkdir -p $(WEB_NPM)
 	cp web/package.json web/package-lock.json $(WEB_NPM)/
-	cd $(WEB_NPM) && npm ci --no-audit --no-fund --loglevel=error
+	cd $(WEB_NPM) && $(NPM_CI)
 
 $(WEB_OUT)/.stamp: $(WEB_SRC) $(WEB_NPM)/node_modules/.package-lock.json
 	@rm -rf $(WEB_OUT) && mkdir -p $(WEB_OUT)/vendor
@@ -186,7 +210,7 @@ $(WEB_OUT)/.stamp: $(WEB_SRC) $(WEB_NPM)/node_modules/.package-lock.json
 	@touch $@
 
 tests/web/node_modules/.package-lock.json: tests/web/package.json tests/web/package-lock.json
-	cd tests/web && npm ci --no-audit --no-fund --loglevel=error
+	cd tests/web && $(NPM_CI)
 
 # builds everything the suite needs, in parallel, then runs it as built in $(BUILD)
 CHECK_DEPS := $(TEST_BIN) $(CLI) $(SERVER) web tests/web/node_modules/.package-lock.json
@@ -204,12 +228,18 @@ check:
 check-asan:
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan SANITIZE=1 OPT=-O1 CC=$(SAN_CC) check
 
+# the network steps (both npm installs) before the long builds, so that they fail fast
+NPM_STAMPS := $(WEB_NPM)/node_modules/.package-lock.json tests/web/node_modules/.package-lock.json
+npm-deps: $(NPM_STAMPS)
+
 test: deps
+	@$(MAKE) --no-print-directory npm-deps
 	@$(MAKE) --no-print-directory check
 	@echo "== again under AddressSanitizer + UndefinedBehaviorSanitizer"
 	@$(MAKE) --no-print-directory check-asan
 
-run: deps
+run: deps-run
+	@$(MAKE) --no-print-directory $(WEB_NPM)/node_modules/.package-lock.json
 	@$(MAKE) --no-print-directory $(JOBS) $(SERVER) web
 	$(SERVER) --web $(WEB_OUT) $(RUN_ARGS)
 
@@ -230,8 +260,7 @@ bench: bench-deps
 # (--web PREFIX/share/ctcsim/web --api PREFIX/share/ctcsim/api). The public headers are those
 # ctc.h and sim.h reach, with the controllers', trajectories', integrators' and oracle's
 # (src/include); they include one another by bare name, so they sit together in include/ctcsim/.
-# The library is
-# static: ctcsim.pc's Libs carry the libraries it links.
+# The library is static: ctcsim.pc's Libs carry the libraries it links.
 PREFIX ?= /usr/local
 DESTDIR ?=
 VERSION := $(shell sed -n 's/^\#define CTCSIM_VERSION "\(.*\)"/\1/p' server/routes.h)
@@ -261,6 +290,12 @@ uninstall:
 	rm -f $(PUBLIC_HEADERS:src/include/%="$(DESTDIR)$(PREFIX)/include/ctcsim/%")
 	rm -rf "$(DESTDIR)$(PREFIX)/share/ctcsim"
 	-rmdir "$(DESTDIR)$(PREFIX)/include/ctcsim" 2>/dev/null
+
+# a pristine bookworm (Docker where a daemon answers, else debootstrap + chroot under
+# build/container, as root), a fresh clone of HEAD, the README's "install first" line, make run
+# (started, /api/health, stopped) and make test; prints each phase's time and what it installed
+test-container:
+	bash tests/container.sh
 
 clean:
 	rm -rf $(BUILD)

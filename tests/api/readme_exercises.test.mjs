@@ -1,6 +1,6 @@
 /*
- * readme.test.mjs - the README's exercises ("Teaching with ctcsim"), posted to the service as the
- * README's curl commands post them (POST /api/jobs?wait=60 with the same bodies), and the figures
+ * readme_exercises.test.mjs - the README's exercises ("Teaching with ctcsim"), posted to the
+ * service as the README's curl commands post them (POST /api/jobs?wait=60 with the same bodies), and the figures
  * the README quotes checked against the jobs' metrics and series. Each figure is also looked up
  * in the README's text (whitespace folded), so that neither can change without the other. The
  * README's way to give a deleted job's space back (DELETE, then `sqlite3 ctcsim.db 'VACUUM'` with
