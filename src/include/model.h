@@ -84,7 +84,8 @@ typedef enum ctc_joint_type {
  * drives an `undriven` kind) and units (sim.c: linear_mask), and the job format
  * (server/job_scene.c: the type names, each type's keys, the loop's types, "axis" required or not
  * allowed; server/job_json.c: the joints a controller cannot drive). The web page keeps its own
- * copies of nq and nv (web/jobform.js, web/kinematics.js, web/series.js).
+ * copy of nq and nv (web/joints.js), which tests/api/joints.test.mjs checks against `ctcsim
+ * validate`.
  *
  * The motion itself is physics and stays a switch on the type in the functions that compute it.
  * A new kind is its enum value, its row, and its case in each of:
@@ -100,7 +101,10 @@ typedef enum ctc_joint_type {
  *       coordinates and constraint)
  *   server/job_scene.c: parse_initial_state if its q0 has a constraint of its own (the
  *       spherical joint's unit quaternion)
- *   web/kinematics.js: chainPose (the page's animation), and its nq and nv in the page's copies
+ *   api/job.schema.json: the joint's "type" enum and "axis" rule, and the loop's if it is
+ *       `loop_closing` (tests/unit/test_job_format.c checks them against the rows); the format's
+ *       comment in server/job_json.h
+ *   web/kinematics.js: chainPose (the page's animation), and its row in web/joints.js
  * Optional fast paths: src/dynamics/gdca_tree.h gdca_joint_factor_typed, gdca_hinge_u,
  * gdca_factor_apply_typed, gdca_mul_E_typed (any other kind takes the generic kernels).
  * Tests: tests/unit/test_joint.c checks every row against the oracle and the builder; add the
