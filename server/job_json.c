@@ -388,17 +388,22 @@ static int parse_controller(parser *p, const cJSON *doc)
     json_put_string(p, out, "type", names[type]);
     if (cls->law == NULL) return 0; /* passive */
 
-    /* computed torque control per coordinate: not for a spherical joint's quaternion */
-    if (p->spherical[0] != '\0') {
-        const char *allowed = j->spec.chain.loop != NULL
-                                  ? "a spherical joint in a loop must be dependent, or the run "
-                                    "passive (controller \"none\")"
-                                  : "spherical joints are allowed only with controller \"none\"";
-        return json_error_at(
-            p->err, JOB_INVALID_FIELD, "controller.type",
-            "\"%s\" cannot drive the spherical joint of %s (its quaternion error is "
-            "not a per-coordinate error); %s",
-            names[type], p->spherical, allowed);
+    /* computed torque control per coordinate: not for a joint whose error has no per-coordinate
+       form (the spherical joint's quaternion) */
+    if (p->undriven[0] != '\0') {
+        const char *kind = ctc_joint_type_name(p->undriven_type);
+        char allowed[160];
+        if (j->spec.chain.loop != NULL)
+            snprintf(allowed, sizeof allowed,
+                     "a %s joint in a loop must be dependent, or the run passive (controller "
+                     "\"none\")",
+                     kind);
+        else
+            snprintf(allowed, sizeof allowed, "%s joints are allowed only with controller \"none\"",
+                     kind);
+        return json_error_at(p->err, JOB_INVALID_FIELD, "controller.type",
+                             "\"%s\" cannot drive the %s joint of %s (%s); %s", names[type], kind,
+                             p->undriven, ctc_joint_classes[p->undriven_type].undriven, allowed);
     }
 
     /* the gains the coordinates share, designed once */
@@ -484,9 +489,11 @@ static const job_format_default doc_defaults[] = {
 
 const job_format_object *const *job_format_object_tables(void)
 {
-    static const job_format_object *const tables[] = {doc_objects, ctrl_format.rows,
-                                                      job_scene_objects, job_run_objects, NULL};
+    static const job_format_object *const tables[] = {doc_objects,       ctrl_format.rows,
+                                                      job_scene_objects, job_scene_joint_objects,
+                                                      job_run_objects,   NULL};
     pthread_once(&ctrl_format_once, build_ctrl_format);
+    job_scene_joint_format();
     return tables;
 }
 

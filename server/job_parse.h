@@ -64,13 +64,15 @@ _Static_assert(sizeof(((job_error *)0)->field) == PATH_LEN, "paths are written i
 
 /* the state of one parse */
 struct parser {
-    job *j;                   /* the job being filled */
-    job_error *err;           /* the first error */
-    cJSON *norm;              /* the normalised document being written (j->normalised) */
-    int oom;                  /* an allocation for the normalised document failed */
-    char spherical[PATH_LEN]; /* the first independent spherical joint's owner
-                                 ("scene.bodies[1]", "scene.loop"), or "" */
-    ctc_ctrl_type ctrl;       /* the controller's type, once read */
+    job *j;                       /* the job being filled */
+    job_error *err;               /* the first error */
+    cJSON *norm;                  /* the normalised document being written (j->normalised) */
+    int oom;                      /* an allocation for the normalised document failed */
+    char undriven[PATH_LEN];      /* the first independent joint no controller drives (a kind
+                                     whose row says why it is `undriven`, model.h): its owner
+                                     ("scene.bodies[1]", "scene.loop"), or "" */
+    ctc_joint_type undriven_type; /* and its type */
+    ctc_ctrl_type ctrl;           /* the controller's type, once read */
 };
 
 /* ---- scene (job_scene.c) ---- */
@@ -79,6 +81,12 @@ struct parser {
  */
 extern const job_format_object job_scene_objects[];
 extern const job_format_default job_scene_defaults[];
+
+/* The joints' objects ("scene.bodies[].joint", "scene.loop.joint": every type's keys together,
+ * then each type's), made from the joint table (model.h) by job_scene_joint_format, which must
+ * have been called first (once is enough; thread-safe). */
+extern job_format_object job_scene_joint_objects[];
+void job_scene_joint_format(void);
 
 /* "scene" of doc, required: the chain into p->j->spec.chain (bodies, joints, the loop and the
  * independent flags), nq, nv, nind, q0 and v0; checked by ctc_model_build, whose errors are

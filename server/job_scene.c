@@ -8,9 +8,10 @@
  * plane of a planar chain, the loop's closing joint and mobility), and last q0 and v0, whose
  * sizes come from the built model. A library error about a loop is reported at "scene.loop" or,
  * when the loop does not close from q0, at "scene.q0" (loop_error_field); anything else the
- * builder finds at "scene".
+ * builder finds at "scene". The joints' type names and keys come from the joint table (model.h).
  */
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -102,13 +103,70 @@ static int parse_inertia(parser *p, const cJSON *v, const char *path, ctc_body_s
     return 0;
 }
 
-static const char *const joint_keys_all[] = {"type", "axis", "location", "independent", NULL};
-static const char *const joint_keys_fixed[] = {"type", "location", "independent", NULL};
-static const char *const *const joint_keys[] = {[CTC_JOINT_REVOLUTE] = joint_keys_all,
-                                                [CTC_JOINT_PRISMATIC] = joint_keys_all,
-                                                [CTC_JOINT_CYLINDRICAL] = joint_keys_all,
-                                                [CTC_JOINT_SPHERICAL] = joint_keys_fixed,
-                                                [CTC_JOINT_FIXED] = joint_keys_fixed};
+/* The joints' type names and keys, made from the joint table (model.h) once, by joint_format:
+ * a joint of type t takes "type", "axis" when the row needs_axis, "location" and "independent";
+ * a loop's closing joint is one of the loop_closing kinds, listed in table order. The rows of the
+ * format's tables (job_scene_joint_objects) follow from the same lists. */
+#define JOINT_KEYS_MAX 5
+static struct {
+    const char *names[CTC_JOINT_NTYPES]; /* by ctc_joint_type */
+    const char *keys[CTC_JOINT_NTYPES][JOINT_KEYS_MAX];
+    const char *const *by_type[CTC_JOINT_NTYPES];
+    const char *all[JOINT_KEYS_MAX]; /* the keys of every type together */
+    int nloop;                       /* the closing joint's kinds: */
+    ctc_joint_type loop_types[CTC_JOINT_NTYPES];
+    const char *loop_names[CTC_JOINT_NTYPES];
+    const char *const *loop_by_type[CTC_JOINT_NTYPES];
+    const char *loop_all[JOINT_KEYS_MAX];
+} jf;
+static pthread_once_t joint_format_once = PTHREAD_ONCE_INIT;
+job_format_object job_scene_joint_objects[2 * CTC_JOINT_NTYPES + 3];
+
+/* keys of a joint (with an axis or not) into out, NULL-terminated */
+static void joint_keys_of(int axis, const char **out)
+{
+    int n = 0;
+    out[n++] = "type";
+    if (axis) out[n++] = "axis";
+    out[n++] = "location";
+    out[n++] = "independent";
+    out[n] = NULL;
+}
+
+static void build_joint_format(void)
+{
+    int any_axis = 0, loop_axis = 0, r = 0;
+    for (int t = 0; t < CTC_JOINT_NTYPES; t++) {
+        const ctc_joint_class *c = &ctc_joint_classes[t];
+        jf.names[t] = c->name;
+        joint_keys_of(c->needs_axis, jf.keys[t]);
+        jf.by_type[t] = jf.keys[t];
+        any_axis |= c->needs_axis;
+        if (!c->loop_closing) continue;
+        jf.loop_types[jf.nloop] = (ctc_joint_type)t;
+        jf.loop_names[jf.nloop] = c->name;
+        jf.loop_by_type[jf.nloop++] = jf.keys[t];
+        loop_axis |= c->needs_axis;
+    }
+    joint_keys_of(any_axis, jf.all);
+    joint_keys_of(loop_axis, jf.loop_all);
+
+    job_format_object *rows = job_scene_joint_objects;
+    rows[r++] = (job_format_object)FORMAT_KEYS("scene.bodies[].joint", "type", NULL, jf.all);
+    for (int t = 0; t < CTC_JOINT_NTYPES; t++)
+        rows[r++] = (job_format_object)FORMAT_KEYS("scene.bodies[].joint", "type", jf.names[t],
+                                                   jf.by_type[t]);
+    rows[r++] = (job_format_object)FORMAT_KEYS("scene.loop.joint", "type", NULL, jf.loop_all);
+    for (int i = 0; i < jf.nloop; i++)
+        rows[r++] = (job_format_object)FORMAT_KEYS("scene.loop.joint", "type", jf.loop_names[i],
+                                                   jf.loop_by_type[i]);
+    rows[r] = (job_format_object)FORMAT_END;
+}
+
+void job_scene_joint_format(void)
+{
+    pthread_once(&joint_format_once, build_joint_format);
+}
 
 /* A joint's "axis" (joint v at path; the type needs one): any length, but not zero and not
  * overflowing. Written to out. */
@@ -130,8 +188,8 @@ static int parse_axis(parser *p, const cJSON *v, const char *path, double a[3], 
 }
 
 /* A joint's "location" (default the origin) and "independent" flag (default def; joint v at
- * path, owner names it for messages), written to out. The first independent spherical joint is
- * remembered: a controller cannot drive it. */
+ * path, owner names it for messages), written to out. The first independent joint of a kind
+ * no controller drives (`undriven`, model.h) is remembered: a controller cannot drive it. */
 static int parse_joint_rest(parser *p, const cJSON *v, const char *path, const char *owner,
                             ctc_joint_spec *joint, int def, unsigned char *independent, cJSON *out)
 {
@@ -145,8 +203,9 @@ static int parse_joint_rest(parser *p, const cJSON *v, const char *path, const c
         return -1;
     *independent = (unsigned char)flag;
     json_put(p, out, "independent", cJSON_CreateBool(flag));
-    if (flag && joint->type == CTC_JOINT_SPHERICAL && p->spherical[0] == '\0') {
-        snprintf(p->spherical, sizeof p->spherical, "%s", owner);
+    if (flag && ctc_joint_classes[joint->type].undriven != NULL && p->undriven[0] == '\0') {
+        snprintf(p->undriven, sizeof p->undriven, "%s", owner);
+        p->undriven_type = joint->type;
     }
     return 0;
 }
@@ -156,20 +215,18 @@ static int parse_joint(parser *p, const cJSON *body, const char *body_path, int 
                        ctc_joint_spec *joint, cJSON *out_body)
 {
     char path[PATH_LEN];
-    const char *names[5];
     int type;
-    for (int t = 0; t < 5; t++) names[t] = ctc_joint_type_name((ctc_joint_type)t);
+    job_scene_joint_format();
     const cJSON *v = json_required_member(p, body, body_path, "joint", "");
     json_key_path(path, body_path, "joint");
-    if (v == NULL || json_typed_object(p, v, path, "type", REQUIRED, 0, names, 5, "joint type",
-                                       joint_keys, joint_keys_all, &type) != 0) {
+    if (v == NULL || json_typed_object(p, v, path, "type", REQUIRED, 0, jf.names, CTC_JOINT_NTYPES,
+                                       "joint type", jf.by_type, jf.all, &type) != 0) {
         return -1;
     }
     joint->type = (ctc_joint_type)type;
     cJSON *out = json_put(p, out_body, "joint", cJSON_CreateObject());
-    json_put_string(p, out, "type", names[type]);
-    if (joint->type != CTC_JOINT_SPHERICAL && joint->type != CTC_JOINT_FIXED &&
-        parse_axis(p, v, path, joint->axis, out) != 0) {
+    json_put_string(p, out, "type", jf.names[type]);
+    if (ctc_joint_classes[type].needs_axis && parse_axis(p, v, path, joint->axis, out) != 0) {
         return -1;
     }
     return parse_joint_rest(p, v, path, body_path, joint, 1, &p->j->independent[k], out);
@@ -301,14 +358,6 @@ static int parse_initial_state(parser *p, const cJSON *scene, const ctc_model *m
 
 /* ---- the loop ---- */
 
-/* the closing joint's types, as the format names them */
-static const ctc_joint_type loop_types[] = {CTC_JOINT_REVOLUTE, CTC_JOINT_PRISMATIC,
-                                            CTC_JOINT_SPHERICAL};
-static const char *const loop_joint_keys_all[] = {"type", "axis", "location", "independent", NULL};
-static const char *const loop_joint_keys_spherical[] = {"type", "location", "independent", NULL};
-static const char *const *const loop_joint_keys[] = {loop_joint_keys_all, loop_joint_keys_all,
-                                                     loop_joint_keys_spherical};
-
 /* "scene.loop.joint": the closing joint, from the tip (body n - 1) to the ground or to body
  * "scene.loop.body" */
 static int parse_loop_joint(parser *p, const cJSON *loop, cJSON *out_loop)
@@ -316,18 +365,18 @@ static int parse_loop_joint(parser *p, const cJSON *loop, cJSON *out_loop)
     static const char *const path = "scene.loop.joint";
     job *j = p->j;
     ctc_joint_spec *joint = &j->loop.joint;
-    const char *names[3];
     int type;
-    for (int t = 0; t < 3; t++) names[t] = ctc_joint_type_name(loop_types[t]);
+    job_scene_joint_format();
     const cJSON *v = json_required_member(p, loop, "scene.loop", "joint", "");
-    if (v == NULL || json_typed_object(p, v, path, "type", REQUIRED, 0, names, 3, "joint type",
-                                       loop_joint_keys, loop_joint_keys_all, &type) != 0) {
+    if (v == NULL || json_typed_object(p, v, path, "type", REQUIRED, 0, jf.loop_names, jf.nloop,
+                                       "joint type", jf.loop_by_type, jf.loop_all, &type) != 0) {
         return -1;
     }
-    joint->type = loop_types[type];
+    joint->type = jf.loop_types[type];
     cJSON *out = json_put(p, out_loop, "joint", cJSON_CreateObject());
-    json_put_string(p, out, "type", names[type]);
-    if (joint->type != CTC_JOINT_SPHERICAL && parse_axis(p, v, path, joint->axis, out) != 0) {
+    json_put_string(p, out, "type", jf.loop_names[type]);
+    if (ctc_joint_classes[joint->type].needs_axis &&
+        parse_axis(p, v, path, joint->axis, out) != 0) {
         return -1;
     }
     int n = j->spec.chain.nbodies;
@@ -558,17 +607,7 @@ const job_format_object job_scene_objects[] = {
     FORMAT_KEYS("scene.bodies[].shape", "type", "rod", shape_keys_rod),
     FORMAT_KEYS("scene.bodies[].shape", "type", "box", shape_keys_box),
     FORMAT_KEYS("scene.bodies[].shape", "type", "cylinder", shape_keys_cylinder),
-    FORMAT_KEYS("scene.bodies[].joint", "type", NULL, joint_keys_all),
-    FORMAT_KEYS("scene.bodies[].joint", "type", "revolute", joint_keys[CTC_JOINT_REVOLUTE]),
-    FORMAT_KEYS("scene.bodies[].joint", "type", "prismatic", joint_keys[CTC_JOINT_PRISMATIC]),
-    FORMAT_KEYS("scene.bodies[].joint", "type", "cylindrical", joint_keys[CTC_JOINT_CYLINDRICAL]),
-    FORMAT_KEYS("scene.bodies[].joint", "type", "spherical", joint_keys[CTC_JOINT_SPHERICAL]),
-    FORMAT_KEYS("scene.bodies[].joint", "type", "fixed", joint_keys[CTC_JOINT_FIXED]),
     FORMAT_KEYS("scene.loop", NULL, NULL, loop_keys),
-    FORMAT_KEYS("scene.loop.joint", "type", NULL, loop_joint_keys_all),
-    FORMAT_KEYS("scene.loop.joint", "type", "revolute", loop_joint_keys[0]),
-    FORMAT_KEYS("scene.loop.joint", "type", "prismatic", loop_joint_keys[1]),
-    FORMAT_KEYS("scene.loop.joint", "type", "spherical", loop_joint_keys[2]),
     FORMAT_KEYS("scene.loop.stabilization", "method", NULL, stab_keys_all),
     FORMAT_KEYS("scene.loop.stabilization", "method", "project", stab_keys[CTC_LOOP_PROJECT]),
     FORMAT_KEYS("scene.loop.stabilization", "method", "baumgarte", stab_keys[CTC_LOOP_BAUMGARTE]),

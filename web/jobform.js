@@ -14,8 +14,8 @@
  * the independent ones of a closed chain (scene.loop), the closing joint's last.
  */
 import {el} from "./dom.js";
+import {JOINT_NV as NV} from "./joints.js";
 
-const NV = {revolute: 1, prismatic: 1, cylindrical: 2, spherical: 3, fixed: 0};
 export const CONTROLLERS = {none: {}, pd: {kp: 100, kv: 20}, pid: {kp: 100, kv: 20, ki: 250},
   poles: {poles: [-2, -2.1, -2.2]}, lqr: {Q: [1, 1, 1], lambda: 0.01}};
 export const TRAJECTORIES = {constant: {value: 0}, sine: {amplitude: 0.6, period: 1.5, phase: 0, offset: 0},

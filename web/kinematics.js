@@ -13,8 +13,7 @@
  * last body's frame), which the loop keeps at loop.anchor: in the world, or with loop.body in that
  * body's frame (loopAnchor).
  */
-
-const NQ = {revolute: 1, prismatic: 1, cylindrical: 2, spherical: 4, fixed: 0};
+import {JOINT_NQ as NQ} from "./joints.js";
 
 const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 const norm = (a) => Math.hypot(a[0], a[1], a[2]);

@@ -14,11 +14,10 @@
  */
 import {getSeries} from "./api.js";
 import {decimation} from "./plots.js";
+import {JOINT_NQ as NQ, JOINT_NV as NV} from "./joints.js";
 
 export const MAX_PLOTTED = 24;
 const WANTED = ["q", "q_des", "e", "tau", "w", "energy", "loop"];
-const NV = {revolute: 1, prismatic: 1, cylindrical: 2, spherical: 3, fixed: 0};
-const NQ = {revolute: 1, prismatic: 1, cylindrical: 2, spherical: 4, fixed: 0};
 
 /* The controlled coordinates of a job: [{joint, coordinate, row, label}] in column order.
  * coordinate: the index in qdot (a closing joint's from nv on); row: the plotted row it goes

@@ -63,6 +63,7 @@
 #define CTC_JOINT_MAX_NV 3 /* spherical */
 #define CTC_JOINT_MAX_NQ 4 /* spherical (quaternion) */
 
+/* The built-in kinds of joint, as indices of ctc_joint_classes (joint.c). */
 typedef enum ctc_joint_type {
     CTC_JOINT_REVOLUTE,
     CTC_JOINT_PRISMATIC,
@@ -70,6 +71,69 @@ typedef enum ctc_joint_type {
     CTC_JOINT_SPHERICAL,
     CTC_JOINT_FIXED,
 } ctc_joint_type;
+
+#define CTC_JOINT_NTYPES 5
+
+/* ---- the table of joint kinds ----
+ *
+ * A kind of joint is one ctc_joint_class, one row of ctc_joint_classes (src/model/joint.c) at the
+ * index of its ctc_joint_type. Everything that only sorts or counts joints reads the row: the
+ * coordinate counts (ctc_joint_nq, ctc_joint_nv, hence jnt_qadr, jnt_vadr), the names
+ * (ctc_joint_type_name, ctc_joint_type_of), the builder's checks (model.c: a known type, the
+ * axis, planar or not, the loop's closing joint), the run's checks (sim_check.c: no controller
+ * drives an `undriven` kind) and units (sim.c: linear_mask), and the job format
+ * (server/job_scene.c: the type names, each type's keys, the loop's types, "axis" required or not
+ * allowed; server/job_json.c: the joints a controller cannot drive). The web page keeps its own
+ * copy of nq and nv (web/joints.js), which tests/api/joints.test.mjs checks against `ctcsim
+ * validate`.
+ *
+ * The motion itself is physics and stays a switch on the type in the functions that compute it.
+ * A new kind is its enum value, its row, and its case in each of:
+ *   src/model/kinematics.c: kinematics_spatial (the joint's rotation, translation, motion map P,
+ *       complement D and velocity product beta, DESIGN.md section 4); kinematics_planar too if
+ *       it is `planar`
+ *   src/reference/oracle.c: ctc_oracle_joint_model (the independent oracle's transform and
+ *       motion subspace, Featherstone's Table 4.1)
+ *   src/model/model.c: chain_is_planar, plane_normal, setup_planar if it is `planar` (how its
+ *       axis must lie in the plane and what it does there); ctc_model_q_zero, ctc_model_q_add,
+ *       ctc_model_q_rate, ctc_model_q_normalize if its q is not a vector (nq != nv)
+ *   src/model/loop.c: loop_planar, loop_spatial if it is `loop_closing` (the closing joint's
+ *       coordinates and constraint)
+ *   server/job_scene.c: parse_initial_state if its q0 has a constraint of its own (the
+ *       spherical joint's unit quaternion)
+ *   api/job.schema.json: the joint's "type" enum and "axis" rule, and the loop's if it is
+ *       `loop_closing` (tests/unit/test_job_format.c checks them against the rows); the format's
+ *       comment in server/job_json.h
+ *   web/kinematics.js: chainPose (the page's animation), and its row in web/joints.js
+ * Optional fast paths: src/dynamics/gdca_tree.h gdca_joint_factor_typed, gdca_hinge_u,
+ * gdca_factor_apply_typed, gdca_mul_E_typed (any other kind takes the generic kernels).
+ * Tests: tests/unit/test_joint.c checks every row against the oracle and the builder; add the
+ * kind to the random chains of tests/support/chains.c (test_chain_random_spatial draws every type
+ * in TEST_ALL_JOINTS), which the kinematics, oracle and GDCA tests run on. */
+typedef struct ctc_joint_class {
+    const char *name;     /* "revolute": its name in jobs, results and messages */
+    int nq;               /* position coordinates, <= CTC_JOINT_MAX_NQ */
+    int nv;               /* velocity coordinates = generalised forces, <= CTC_JOINT_MAX_NV */
+    int needs_axis;       /* 1: ctc_joint_spec.axis is required (non-zero, normalised by the
+                             builder) and a job must give "axis"; 0: the axis is ignored (zeroed
+                             by the builder) and a job must not give one */
+    int planar;           /* 1: may appear in a planar chain (model.c: chain_is_planar) */
+    int loop_closing;     /* 1: may be a loop's closing joint (ctc_loop_spec) */
+    const char *undriven; /* NULL: a controller may drive it (its tracking error is per
+                             coordinate); else why none can, for messages ("its quaternion error
+                             is not a per-coordinate error"): passive runs only, or a loop's
+                             dependent joint */
+    unsigned linear_mask; /* bit i: velocity coordinate i is a translation (m, m/s, N); clear:
+                             a rotation (rad, rad/s, N m) */
+} ctc_joint_class;
+
+extern const ctc_joint_class ctc_joint_classes[CTC_JOINT_NTYPES];
+
+/* The row of type t, or NULL when t is not a ctc_joint_type. */
+const ctc_joint_class *ctc_joint_class_of(ctc_joint_type t);
+
+/* The type named name ("revolute", ...), or -1 for none (NULL included). */
+int ctc_joint_type_of(const char *name);
 
 /* Which algebra the dynamics use. */
 typedef enum ctc_form {
@@ -216,11 +280,13 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
 /* Frees a model; NULL is allowed. No ctc_data made from it may be used afterwards. */
 void ctc_model_free(ctc_model *m);
 
-/* Number of position / velocity coordinates of a joint type. */
+/* Number of position / velocity coordinates of a joint type (its row's nq, nv; 0 for an unknown
+ * type). */
 int ctc_joint_nq(ctc_joint_type t);
 int ctc_joint_nv(ctc_joint_type t);
 
-/* Name of a joint type ("revolute", ...) and of a form ("planar", "spatial", "auto"). */
+/* Name of a joint type (its row's, "unknown" for an unknown type) and of a form ("planar",
+ * "spatial", "auto"). */
 const char *ctc_joint_type_name(ctc_joint_type t);
 const char *ctc_form_name(ctc_form f);
 

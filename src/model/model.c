@@ -15,6 +15,7 @@
 
 #include <assert.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -23,44 +24,6 @@
 /* relative tolerance under which a principal moment counts as zero, and axes as (anti)parallel */
 #define INERTIA_ZERO_REL 1e-12
 #define AXIS_ALIGN_TOL 1e-12
-
-int ctc_joint_nq(ctc_joint_type t)
-{
-    switch (t) {
-    case CTC_JOINT_REVOLUTE:
-    case CTC_JOINT_PRISMATIC:
-        return 1;
-    case CTC_JOINT_CYLINDRICAL:
-        return 2;
-    case CTC_JOINT_SPHERICAL:
-        return 4;
-    case CTC_JOINT_FIXED:
-        return 0;
-    }
-    return 0;
-}
-
-int ctc_joint_nv(ctc_joint_type t)
-{
-    return t == CTC_JOINT_SPHERICAL ? 3 : ctc_joint_nq(t);
-}
-
-const char *ctc_joint_type_name(ctc_joint_type t)
-{
-    switch (t) {
-    case CTC_JOINT_REVOLUTE:
-        return "revolute";
-    case CTC_JOINT_PRISMATIC:
-        return "prismatic";
-    case CTC_JOINT_CYLINDRICAL:
-        return "cylindrical";
-    case CTC_JOINT_SPHERICAL:
-        return "spherical";
-    case CTC_JOINT_FIXED:
-        return "fixed";
-    }
-    return "unknown";
-}
 
 const char *ctc_form_name(ctc_form f)
 {
@@ -86,14 +49,20 @@ static int all_finite(const double *x, int n, int *bad)
     return 1;
 }
 
-static int is_joint_type(int t)
+/* The kinds that may close a loop, as a list for a message: "revolute, prismatic or
+ * spherical". */
+static void loop_closing_names(char *out, size_t len)
 {
-    return t >= CTC_JOINT_REVOLUTE && t <= CTC_JOINT_FIXED;
-}
-
-static int joint_has_axis(ctc_joint_type t)
-{
-    return t == CTC_JOINT_REVOLUTE || t == CTC_JOINT_PRISMATIC || t == CTC_JOINT_CYLINDRICAL;
+    int count = 0, seen = 0;
+    for (int t = 0; t < CTC_JOINT_NTYPES; t++) count += ctc_joint_classes[t].loop_closing;
+    out[0] = '\0';
+    for (int t = 0; t < CTC_JOINT_NTYPES; t++) {
+        if (!ctc_joint_classes[t].loop_closing) continue;
+        size_t used = strlen(out);
+        const char *sep = seen == 0 ? "" : seen == count - 1 ? " or " : ", ";
+        snprintf(out + used, len - used, "%s%s", sep, ctc_joint_classes[t].name);
+        seen++;
+    }
 }
 
 /* Checks one body's numbers; writes its principal moments (ascending) into eig. */
@@ -156,14 +125,15 @@ static ctc_status check_body(const ctc_body_spec *b, int k, double eig[3], char 
 static ctc_status check_joint(const ctc_joint_spec *j, int k, char *err, size_t errlen)
 {
     int bad;
-    if (!is_joint_type((int)j->type)) {
+    const ctc_joint_class *c = ctc_joint_class_of(j->type);
+    if (c == NULL) {
         return ctc_fail(CTC_EINVAL, err, errlen, "joint %d: unknown joint type %d", k,
                         (int)j->type);
     }
     if (!all_finite(j->location, 3, &bad)) {
         return ctc_fail(CTC_EINVAL, err, errlen, "joint %d: location[%d] is not finite", k, bad);
     }
-    if (joint_has_axis(j->type)) {
+    if (c->needs_axis) {
         if (!all_finite(j->axis, 3, &bad)) {
             return ctc_fail(CTC_EINVAL, err, errlen, "joint %d: axis[%d] is not finite", k, bad);
         }
@@ -222,29 +192,25 @@ static int chain_is_planar(const ctc_model *m, const double n[3], char *why, siz
     for (int k = 0; k < m->njoints; k++) {
         const ctc_joint_spec *j = &m->joints[k];
         double c[3];
-        switch (j->type) {
-        case CTC_JOINT_REVOLUTE:
+        if (!ctc_joint_classes[j->type].planar) {
+            ctc_fail(CTC_EINVAL, why, whylen, "joint %d: a %s joint moves out of any plane", k,
+                     ctc_joint_type_name(j->type));
+            return 0;
+        }
+        /* how each planar kind's axis lies in the plane */
+        if (j->type == CTC_JOINT_REVOLUTE) {
             ctc_v3_cross(c, j->axis, n);
             if (ctc_v3_norm(c) > AXIS_ALIGN_TOL) {
                 ctc_fail(CTC_EINVAL, why, whylen,
                          "joint %d: revolute axis is not normal to the plane of motion", k);
                 return 0;
             }
-            break;
-        case CTC_JOINT_PRISMATIC:
+        } else if (j->type == CTC_JOINT_PRISMATIC) {
             if (fabs(ctc_v3_dot(j->axis, n)) > AXIS_ALIGN_TOL) {
                 ctc_fail(CTC_EINVAL, why, whylen,
                          "joint %d: prismatic axis is not in the plane of motion", k);
                 return 0;
             }
-            break;
-        case CTC_JOINT_CYLINDRICAL:
-        case CTC_JOINT_SPHERICAL:
-            ctc_fail(CTC_EINVAL, why, whylen, "joint %d: a %s joint moves out of any plane", k,
-                     ctc_joint_type_name(j->type));
-            return 0;
-        case CTC_JOINT_FIXED:
-            break;
         }
     }
     if (fabs(ctc_v3_dot(m->gravity, n)) > AXIS_ALIGN_TOL * ctc_v3_norm(m->gravity)) {
@@ -495,13 +461,12 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
     if (m->has_loop) {
         const ctc_loop_spec *lp = spec->loop;
         m->joints[n] = lp->joint;
-        if (lp->joint.type != CTC_JOINT_REVOLUTE && lp->joint.type != CTC_JOINT_PRISMATIC &&
-            lp->joint.type != CTC_JOINT_SPHERICAL) {
-            st = ctc_fail(CTC_EINVAL, err, errlen,
-                          "loop: the closing joint must be revolute, prismatic or spherical "
-                          "(got %s)",
-                          is_joint_type((int)lp->joint.type) ? ctc_joint_type_name(lp->joint.type)
-                                                             : "an unknown type");
+        const ctc_joint_class *lc = ctc_joint_class_of(lp->joint.type);
+        if (lc == NULL || !lc->loop_closing) {
+            char kinds[128];
+            loop_closing_names(kinds, sizeof kinds);
+            st = ctc_fail(CTC_EINVAL, err, errlen, "loop: the closing joint must be %s (got %s)",
+                          kinds, lc ? lc->name : "an unknown type");
             goto fail;
         }
         if (!all_finite(lp->anchor, 3, &bad)) {
@@ -559,7 +524,7 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
             }
         }
         ctc_joint_spec *j = &m->joints[k];
-        if (joint_has_axis(j->type)) {
+        if (ctc_joint_classes[j->type].needs_axis) {
             ctc_v3_scale(j->axis, j->axis, 1.0 / ctc_v3_norm(j->axis));
             ctc_v3_normals(j->axis, &m->jnt_perp[6 * k], &m->jnt_perp[6 * k + 3]);
         } else {

@@ -118,8 +118,8 @@ static int diverged(const sim_ctx *c, double t, const double *y, double bound, c
     for (int i = 0; i < c->nv; i++) {
         if (fabs(v[i]) <= bound) continue;
         int k = joint_of(c->plant, i);
-        int lin = c->plant->joints[k].type == CTC_JOINT_PRISMATIC ||
-                  (c->plant->joints[k].type == CTC_JOINT_CYLINDRICAL && i > c->plant->jnt_vadr[k]);
+        unsigned mask = ctc_joint_classes[c->plant->joints[k].type].linear_mask;
+        int lin = (mask >> (i - c->plant->jnt_vadr[k])) & 1u;
         r->metrics.diverged_joint = k;
         snprintf(r->message, sizeof r->message,
                  "t = %.6g s: joint %d speed %.3g %s exceeds the bound %g", t, k, fabs(v[i]),
@@ -203,8 +203,8 @@ static ctc_status setup_context(sim_ctx *c, char *err, size_t errlen)
     c->nx = c->active && c->cls->nstate ? c->nind : 0;
     c->ny = c->nq + c->nv + c->nx;
     c->cond_max = spec->loop_cond_max > 0 ? spec->loop_cond_max : CTC_SIM_DEFAULT_COND_MAX;
-    for (int k = 0; k < plant->nbodies; k++)
-        c->has_quat |= plant->joints[k].type == CTC_JOINT_SPHERICAL;
+    for (int k = 0; k < plant->nbodies; k++) /* a q that is not a vector: renormalised */
+        c->has_quat |= plant->jnt_nq[k] != plant->jnt_nv[k];
     if (c->active && !(spec->model_mass_scale == 1 && spec->model_inertia_scale == 1)) {
         ctc_status st = build_controller_model(spec, &c->ctrl_model, err, errlen);
         if (st != CTC_OK) return st;

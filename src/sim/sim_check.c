@@ -126,11 +126,12 @@ ctc_status sim_check_with_model(const ctc_sim_spec *s, const ctc_model *m, char 
         return ctc_fail(CTC_EINVAL, err, errlen, "channel \"loop\" needs a loop in the scene");
     if (active) {
         for (int k = 0; k < m->njoints; k++)
-            if (m->joints[k].type == CTC_JOINT_SPHERICAL && m->jnt_indep[k])
+            if (ctc_joint_classes[m->joints[k].type].undriven != NULL && m->jnt_indep[k])
                 return ctc_fail(CTC_EINVAL, err, errlen,
-                                "joint %d: spherical joints are allowed in passive runs only "
+                                "joint %d: %s joints are allowed in passive runs only "
                                 "(controller \"none\")%s",
-                                k, m->has_loop ? ", or as dependent joints of a loop" : "");
+                                k, ctc_joint_type_name(m->joints[k].type),
+                                m->has_loop ? ", or as dependent joints of a loop" : "");
         if (m->nind == 0)
             return ctc_fail(CTC_EINVAL, err, errlen,
                             "a controller needs at least one independent coordinate");
