@@ -399,11 +399,10 @@ static ctc_status setup_independent(ctc_model *m, char *err, size_t errlen)
     return CTC_OK;
 }
 
-ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *err, size_t errlen)
+/* the spec's own checks, before anything is allocated */
+static ctc_status check_chain_spec(const ctc_chain_spec *spec, char *err, size_t errlen)
 {
-    ctc_status st;
     int bad;
-    *out = NULL;
     if (spec == NULL) return ctc_fail(CTC_EINVAL, err, errlen, "chain: no spec given");
     int n = spec->nbodies;
     if (n < 1 || n > CTC_MAX_BODIES) {
@@ -421,14 +420,20 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
         spec->form != CTC_FORM_SPATIAL) {
         return ctc_fail(CTC_EINVAL, err, errlen, "chain: unknown form %d", (int)spec->form);
     }
-
     if (spec->loop && n < 2) {
         return ctc_fail(CTC_EINVAL, err, errlen, "loop: a loop needs at least 2 bodies (got %d)",
                         n);
     }
+    return CTC_OK;
+}
 
+/* a model with its arrays allocated for n bodies (and the closing joint), the specs' bodies and
+   joints copied in; NULL when out of memory */
+static ctc_model *model_alloc(const ctc_chain_spec *spec)
+{
+    const int n = spec->nbodies;
     ctc_model *m = calloc(1, sizeof *m);
-    if (m == NULL) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    if (m == NULL) return NULL;
     m->nbodies = n;
     m->loop_body = -1;
     m->has_loop = spec->loop != NULL;
@@ -446,74 +451,86 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
     m->body_parent = malloc((size_t)n * sizeof(int));
     m->body_child = malloc((size_t)n * sizeof(int));
     m->body_sibling = malloc((size_t)n * sizeof(int));
-    double *moments = malloc((size_t)n * 3 * sizeof(double));
     if (m->bodies == NULL || m->joints == NULL || m->jnt_qadr == NULL || m->jnt_vadr == NULL ||
         m->jnt_nq == NULL || m->jnt_nv == NULL || m->jnt_indep == NULL ||
         m->body_inertia_inv == NULL || m->jnt_perp == NULL || m->body_parent == NULL ||
-        m->body_child == NULL || m->body_sibling == NULL || moments == NULL) {
-        st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
-        goto fail;
+        m->body_child == NULL || m->body_sibling == NULL) {
+        ctc_model_free(m);
+        return NULL;
     }
     memcpy(m->bodies, spec->bodies, (size_t)n * sizeof *m->bodies);
     memcpy(m->joints, spec->joints, (size_t)n * sizeof *m->joints);
-    for (int k = 0; k < n; k++) m->body_parent[k] = k - 1; /* a chain: the specs give no other */
-    build_topology(m);
-    if (m->has_loop) {
-        const ctc_loop_spec *lp = spec->loop;
-        m->joints[n] = lp->joint;
-        const ctc_joint_class *lc = ctc_joint_class_of(lp->joint.type);
-        if (lc == NULL || !lc->loop_closing) {
-            char kinds[128];
-            loop_closing_names(kinds, sizeof kinds);
-            st = ctc_fail(CTC_EINVAL, err, errlen, "loop: the closing joint must be %s (got %s)",
-                          kinds, lc ? lc->name : "an unknown type");
-            goto fail;
-        }
-        if (!all_finite(lp->anchor, 3, &bad)) {
-            st = ctc_fail(CTC_EINVAL, err, errlen, "loop: anchor[%d] is not finite", bad);
-            goto fail;
-        }
-        ctc_v3_copy(m->loop_anchor, lp->anchor);
-        if (lp->on_body) {
-            if (lp->body < 0 || lp->body > n - 2) {
-                st = ctc_fail(CTC_EINVAL, err, errlen,
-                              "loop: the body the loop closes on must be one of bodies 0..%d "
-                              "(before the tip, body %d) (got %d)",
-                              n - 2, n - 1, lp->body);
-                goto fail;
-            }
-            m->loop_body = lp->body;
-        }
-        m->loop_first = m->loop_body + 1;
+    return m;
+}
+
+/* the closing joint of a loop model: its kind, anchor and the body it closes on */
+static ctc_status setup_loop(ctc_model *m, const ctc_loop_spec *lp, char *err, size_t errlen)
+{
+    const int n = m->nbodies;
+    int bad;
+    m->joints[n] = lp->joint;
+    const ctc_joint_class *lc = ctc_joint_class_of(lp->joint.type);
+    if (lc == NULL || !lc->loop_closing) {
+        char kinds[128];
+        loop_closing_names(kinds, sizeof kinds);
+        return ctc_fail(CTC_EINVAL, err, errlen, "loop: the closing joint must be %s (got %s)",
+                        kinds, lc ? lc->name : "an unknown type");
     }
+    if (!all_finite(lp->anchor, 3, &bad)) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "loop: anchor[%d] is not finite", bad);
+    }
+    ctc_v3_copy(m->loop_anchor, lp->anchor);
+    if (lp->on_body) {
+        if (lp->body < 0 || lp->body > n - 2) {
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "loop: the body the loop closes on must be one of bodies 0..%d "
+                            "(before the tip, body %d) (got %d)",
+                            n - 2, n - 1, lp->body);
+        }
+        m->loop_body = lp->body;
+    }
+    m->loop_first = m->loop_body + 1;
+    return CTC_OK;
+}
+
+/* which joints are independent (driven): all of an open chain's; on a loop, every joint outside
+   it unless every joint is dependent (a passive run) */
+static ctc_status setup_actuation(ctc_model *m, const unsigned char *independent, char *err,
+                                  size_t errlen)
+{
     int any_indep = 0;
-    for (int k = 0; k < nj; k++) {
-        m->jnt_indep[k] = spec->independent ? spec->independent[k] != 0 : 1;
+    for (int k = 0; k < m->njoints; k++) {
+        m->jnt_indep[k] = independent ? independent[k] != 0 : 1;
         any_indep |= m->jnt_indep[k];
         if (!m->has_loop && !m->jnt_indep[k]) {
-            st = ctc_fail(CTC_EINVAL, err, errlen,
-                          "joint %d: an open chain is fully actuated: every joint is "
-                          "independent",
-                          k);
-            goto fail;
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "joint %d: an open chain is fully actuated: every joint is "
+                            "independent",
+                            k);
         }
     }
     for (int k = 0; any_indep && m->has_loop && k < m->loop_first; k++) {
         if (!m->jnt_indep[k]) {
-            st = ctc_fail(CTC_EINVAL, err, errlen,
-                          "loop: joint %d is outside the loop (which closes on body %d), so "
-                          "nothing determines its motion: mark it independent (or every joint "
-                          "dependent, for a passive run)",
-                          k, m->loop_body);
-            goto fail;
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "loop: joint %d is outside the loop (which closes on body %d), so "
+                            "nothing determines its motion: mark it independent (or every joint "
+                            "dependent, for a passive run)",
+                            k, m->loop_body);
         }
     }
+    return CTC_OK;
+}
 
-    /* validate each body and joint; count coordinates; normalise axes */
-    for (int k = 0; k < nj; k++) {
-        if ((st = check_joint(&m->joints[k], k, err, errlen)) != CTC_OK) goto fail;
+/* validates each body and joint, makes inertias exactly symmetric, normalises axes and counts the
+   coordinates; moments (n x 3) gets each body's principal moments, ascending */
+static ctc_status setup_bodies_and_joints(ctc_model *m, double *moments, char *err, size_t errlen)
+{
+    const int n = m->nbodies;
+    ctc_status st;
+    for (int k = 0; k < m->njoints; k++) {
+        if ((st = check_joint(&m->joints[k], k, err, errlen)) != CTC_OK) return st;
         if (k < n && (st = check_body(&m->bodies[k], k, &moments[3 * k], err, errlen)) != CTC_OK) {
-            goto fail;
+            return st;
         }
         if (k < n) {
             double *in = m->bodies[k].inertia; /* symmetric to 1e-9: make it exact */
@@ -539,61 +556,90 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
             m->nv += m->jnt_nv[k];
         }
     }
+    return CTC_OK;
+}
 
-    /* the spread of masses and inertias over the chain (gdca_refine.h decides on it) */
+/* the spread of masses and inertias over the chain (gdca_refine.h decides on it) */
+static void setup_mass_ratio(ctc_model *m)
+{
     double mlo = INFINITY, mhi = 0, tlo = INFINITY, thi = 0;
-    for (int k = 0; k < n; k++) {
+    for (int k = 0; k < m->nbodies; k++) {
         const ctc_body_spec *b = &m->bodies[k];
         double tr = b->inertia[0] + b->inertia[4] + b->inertia[8];
         mlo = fmin(mlo, b->mass), mhi = fmax(mhi, b->mass);
         if (tr > 0) tlo = fmin(tlo, tr), thi = fmax(thi, tr);
     }
     m->mass_ratio = fmax(mhi / mlo, thi > 0 ? thi / tlo : 1.0);
+}
 
-    /* choose the form: model only what the scene needs */
+/* spatial form: every body's 6x6 inertia must be invertible; its rotational block's inverse */
+static ctc_status setup_spatial(ctc_model *m, const double *moments, char *err, size_t errlen)
+{
+    for (int k = 0; k < m->nbodies; k++) {
+        const double *e = &moments[3 * k];
+        if (e[0] <= INERTIA_ZERO_REL * e[2]) {
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "body %d: 6x6 inertia is singular (a principal moment is %g kg m^2); "
+                            "a body without inertia about an axis, such as a slender rod, is "
+                            "allowed only in a planar scene",
+                            k, e[0]);
+        }
+        /* inverse by cofactors; well conditioned enough after the check above */
+        const double *a = m->bodies[k].inertia;
+        double *inv = &m->body_inertia_inv[9 * k];
+        double c00 = a[4] * a[8] - a[5] * a[7], c01 = a[5] * a[6] - a[3] * a[8],
+               c02 = a[3] * a[7] - a[4] * a[6];
+        double det = a[0] * c00 + a[1] * c01 + a[2] * c02;
+        inv[0] = c00 / det;
+        inv[1] = (a[2] * a[7] - a[1] * a[8]) / det;
+        inv[2] = (a[1] * a[5] - a[2] * a[4]) / det;
+        inv[3] = c01 / det;
+        inv[4] = (a[0] * a[8] - a[2] * a[6]) / det;
+        inv[5] = (a[2] * a[3] - a[0] * a[5]) / det;
+        inv[6] = c02 / det;
+        inv[7] = (a[1] * a[6] - a[0] * a[7]) / det;
+        inv[8] = (a[0] * a[4] - a[1] * a[3]) / det;
+    }
+    return CTC_OK;
+}
+
+/* the form: planar when the chain moves in one plane with gravity in it (and the spec allows),
+   else spatial; model only what the scene needs */
+static ctc_status setup_form(ctc_model *m, ctc_form requested, const double *moments, char *err,
+                             size_t errlen)
+{
     double normal[3];
     char why[160] = "";
     plane_normal(m, normal);
     int planar = chain_is_planar(m, normal, why, sizeof why);
-    if (spec->form == CTC_FORM_PLANAR && !planar) {
-        st = ctc_fail(CTC_EINVAL, err, errlen, "chain: planar form requested but %s", why);
+    if (requested == CTC_FORM_PLANAR && !planar) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "chain: planar form requested but %s", why);
+    }
+    m->form = (planar && requested != CTC_FORM_SPATIAL) ? CTC_FORM_PLANAR : CTC_FORM_SPATIAL;
+    m->dim = m->form == CTC_FORM_PLANAR ? 3 : 6;
+    if (m->form == CTC_FORM_PLANAR) return setup_planar(m, normal, err, errlen);
+    return setup_spatial(m, moments, err, errlen);
+}
+
+ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *err, size_t errlen)
+{
+    ctc_status st;
+    *out = NULL;
+    if ((st = check_chain_spec(spec, err, errlen)) != CTC_OK) return st;
+    const int n = spec->nbodies;
+    ctc_model *m = model_alloc(spec);
+    double *moments = malloc((size_t)n * 3 * sizeof(double));
+    if (m == NULL || moments == NULL) {
+        st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
         goto fail;
     }
-    m->form = (planar && spec->form != CTC_FORM_SPATIAL) ? CTC_FORM_PLANAR : CTC_FORM_SPATIAL;
-    m->dim = m->form == CTC_FORM_PLANAR ? 3 : 6;
-
-    if (m->form == CTC_FORM_PLANAR) {
-        if ((st = setup_planar(m, normal, err, errlen)) != CTC_OK) goto fail;
-    } else {
-        /* spatial: every body's 6x6 inertia must be invertible */
-        for (int k = 0; k < n; k++) {
-            const double *e = &moments[3 * k];
-            if (e[0] <= INERTIA_ZERO_REL * e[2]) {
-                st = ctc_fail(CTC_EINVAL, err, errlen,
-                              "body %d: 6x6 inertia is singular (a principal moment is %g kg m^2); "
-                              "a body without inertia about an axis, such as a slender rod, is "
-                              "allowed only in a planar scene",
-                              k, e[0]);
-                goto fail;
-            }
-            /* inverse by cofactors; well conditioned enough after the check above */
-            const double *a = m->bodies[k].inertia;
-            double *inv = &m->body_inertia_inv[9 * k];
-            double c00 = a[4] * a[8] - a[5] * a[7], c01 = a[5] * a[6] - a[3] * a[8],
-                   c02 = a[3] * a[7] - a[4] * a[6];
-            double det = a[0] * c00 + a[1] * c01 + a[2] * c02;
-            inv[0] = c00 / det;
-            inv[1] = (a[2] * a[7] - a[1] * a[8]) / det;
-            inv[2] = (a[1] * a[5] - a[2] * a[4]) / det;
-            inv[3] = c01 / det;
-            inv[4] = (a[0] * a[8] - a[2] * a[6]) / det;
-            inv[5] = (a[2] * a[3] - a[0] * a[5]) / det;
-            inv[6] = c02 / det;
-            inv[7] = (a[1] * a[6] - a[0] * a[7]) / det;
-            inv[8] = (a[0] * a[4] - a[1] * a[3]) / det;
-        }
-    }
-
+    for (int k = 0; k < n; k++) m->body_parent[k] = k - 1; /* a chain: the specs give no other */
+    build_topology(m);
+    if (m->has_loop && (st = setup_loop(m, spec->loop, err, errlen)) != CTC_OK) goto fail;
+    if ((st = setup_actuation(m, spec->independent, err, errlen)) != CTC_OK) goto fail;
+    if ((st = setup_bodies_and_joints(m, moments, err, errlen)) != CTC_OK) goto fail;
+    setup_mass_ratio(m);
+    if ((st = setup_form(m, spec->form, moments, err, errlen)) != CTC_OK) goto fail;
     if ((st = build_tree(m, err, errlen)) != CTC_OK) goto fail;
     if ((st = setup_independent(m, err, errlen)) != CTC_OK) goto fail;
     free(moments);
