@@ -70,8 +70,9 @@ DEB_PACKAGES := $(RUN_PACKAGES) $(TEST_PACKAGES)
 # npm trusts the system's CA bundle too (a TLS-inspecting proxy whose CA is in the system store),
 # unless NODE_EXTRA_CA_CERTS is set already
 SYSTEM_CA := /etc/ssl/certs/ca-certificates.crt
-NPM_CI = $(if $(NODE_EXTRA_CA_CERTS),,$(if $(wildcard $(SYSTEM_CA)),NODE_EXTRA_CA_CERTS=$(SYSTEM_CA))) \
-	npm ci --no-audit --no-fund --loglevel=error
+NPM_CA = $(if $(NODE_EXTRA_CA_CERTS),,\
+	$(if $(wildcard $(SYSTEM_CA)),NODE_EXTRA_CA_CERTS=$(SYSTEM_CA)))
+NPM_CI = $(NPM_CA) npm ci --no-audit --no-fund --loglevel=error
 BENCH_PACKAGES := wrk curl libmujoco-dev
 
 LIB_SRC := $(wildcard src/*/*.c)
@@ -282,7 +283,8 @@ install: $(LIB) $(CLI) $(SERVER) web
 		'includedir=$${prefix}/include' '' 'Name: ctcsim' \
 		'Description: computed torque control of multibody chains with the GDCA and iGDCA' \
 		'Version: $(VERSION)' 'Cflags: -I$${includedir}' \
-		'Libs: -L$${libdir} -lctcsim $(filter-out -lcjson,$(LDLIBS))' > "$(DESTDIR)$(PREFIX)/lib/pkgconfig/ctcsim.pc"
+		'Libs: -L$${libdir} -lctcsim $(filter-out -lcjson,$(LDLIBS))' \
+		> "$(DESTDIR)$(PREFIX)/lib/pkgconfig/ctcsim.pc"
 
 uninstall:
 	rm -f "$(DESTDIR)$(PREFIX)/lib/libctcsim.a" "$(DESTDIR)$(PREFIX)/lib/pkgconfig/ctcsim.pc" \
@@ -300,4 +302,5 @@ test-container:
 clean:
 	rm -rf $(BUILD)
 
--include $(LIB_OBJ:.o=.d) $(APP_OBJ:.o=.d) $(MAINS:server/%.c=$(BUILD)/obj/server/%.d) $(SUPPORT_OBJ:.o=.d) $(TEST_BIN:=.d) $(BENCH_BIN:=.d)
+-include $(LIB_OBJ:.o=.d) $(APP_OBJ:.o=.d) $(MAINS:server/%.c=$(BUILD)/obj/server/%.d) \
+	$(SUPPORT_OBJ:.o=.d) $(TEST_BIN:=.d) $(BENCH_BIN:=.d)
