@@ -98,8 +98,12 @@
  *   "integrator"  optional, default {"method": "dopri5", "rtol": 1e-8, "atol": 1e-10}:
  *       {"method": "rk4", "step": h}      (default step 1e-3 s; the step is shortened so that it
  *                                          divides the output interval)
- *       {"method": "dopri5"|"bdf", "rtol": r, "atol": a, "initial_step": 0, "max_step": 0}
- *       any method: "max_steps" (a whole number, default 10000000; 0 = no limit)
+ *       {"method": "dopri5"|"bdf", "rtol": r, "atol": a, "initial_step": 0, "max_step": 0,
+ *        "min_step": 0}                  (a step the error control cuts below min_step stops the
+ *                                          job: "step size ... fell below min_step"; 0 = none)
+ *       any method: "max_steps" (a whole number, default 10000000; 0 = no limit); rk4's
+ *       duration / step must not exceed it (nor JOB_MAX_FIXED_STEPS when it is 0), or the job
+ *       is refused with INVALID_FIELD at "integrator.step"
  *   "duration"    s, required, 0 < duration <= JOB_MAX_DURATION
  *   "output"      optional: {"interval": dt, 0 < dt <= duration (default 0.01 s, or the duration
  *                 when shorter), "channels": ["q", "qdot", "q_des", "qdot_des", "e", "tau", "w",
@@ -153,6 +157,7 @@
 #define JOB_MAX_SAMPLES 200000  /* output samples */
 #define JOB_MAX_VALUES 20000000 /* samples x values per sample over the recorded channels */
 #define JOB_MAX_NAME 200        /* bytes */
+#define JOB_MAX_FIXED_STEPS 1e9 /* rk4 steps (duration / step) when max_steps is 0 */
 
 /* Error codes, stable for clients (the service returns them as error.code). */
 typedef enum job_error_code {

@@ -296,11 +296,11 @@ int parse_disturbance(parser *p, const cJSON *doc)
 
 /* ---- integrator, duration, output, limits ---- */
 
-static const char *const integ_keys_all[] = {"method",       "step",     "rtol",      "atol",
-                                             "initial_step", "max_step", "max_steps", NULL};
+static const char *const integ_keys_all[] = {"method",   "step",     "rtol",      "atol", "initial_step",
+                                             "max_step", "min_step", "max_steps", NULL};
 static const char *const integ_keys_fixed[] = {"method", "step", "max_steps", NULL};
-static const char *const integ_keys_adaptive[] = {"method",   "rtol",      "atol", "initial_step",
-                                                  "max_step", "max_steps", NULL};
+static const char *const integ_keys_adaptive[] = {"method",   "rtol",     "atol",     "initial_step",
+                                                  "max_step", "min_step", "max_steps", NULL};
 static const char *const *const integ_keys[] = {[CTC_INTEG_RK4] = integ_keys_fixed,
                                                 [CTC_INTEG_DOPRI5] = integ_keys_adaptive,
                                                 [CTC_INTEG_BDF] = integ_keys_adaptive};
@@ -331,13 +331,15 @@ int parse_integrator(parser *p, const cJSON *doc)
         if (json_member_number(p, v, "integrator", "rtol", OPTIONAL, DEFAULT_RTOL, &s->rtol) != 0 ||
             json_member_number(p, v, "integrator", "atol", OPTIONAL, DEFAULT_ATOL, &s->atol) != 0 ||
             json_member_number(p, v, "integrator", "initial_step", OPTIONAL, 0, &s->initial_step) ||
-            json_member_number(p, v, "integrator", "max_step", OPTIONAL, 0, &s->max_step) != 0) {
+            json_member_number(p, v, "integrator", "max_step", OPTIONAL, 0, &s->max_step) != 0 ||
+            json_member_number(p, v, "integrator", "min_step", OPTIONAL, 0, &s->min_step) != 0) {
             return -1;
         }
         json_put_number(p, out, "rtol", s->rtol);
         json_put_number(p, out, "atol", s->atol);
         json_put_number(p, out, "initial_step", s->initial_step);
         json_put_number(p, out, "max_step", s->max_step);
+        json_put_number(p, out, "min_step", s->min_step);
     }
 
     /* a whole number of steps; 0 = no limit */
@@ -373,6 +375,21 @@ int parse_duration(parser *p, const cJSON *doc)
                              "must be at most %g s (got %g s)", JOB_MAX_DURATION, *d);
     }
     json_put_number(p, p->norm, "duration", *d);
+
+    /* rk4's work is known before it runs: duration / step steps, within max_steps (or
+     * JOB_MAX_FIXED_STEPS where max_steps is 0, no limit) */
+    const ctc_integ_spec *s = &p->j->spec.integrator;
+    if (s->method == CTC_INTEG_RK4) {
+        const double steps = ceil(*d / s->step);
+        const double bound = s->max_steps > 0 ? (double)s->max_steps : JOB_MAX_FIXED_STEPS;
+        if (!(steps <= bound)) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, "integrator.step",
+                                 "duration / step = %.3g steps exceeds %s (%.0f): use a larger "
+                                 "step (got %g s for %g s)",
+                                 steps, s->max_steps > 0 ? "integrator.max_steps" : "the bound",
+                                 bound, s->step, *d);
+        }
+    }
     return 0;
 }
 
@@ -587,10 +604,12 @@ const job_format_default job_run_defaults[] = {
     DEFAULT_NUMBER("integrator", "dopri5", "atol", DEFAULT_ATOL),
     DEFAULT_NUMBER("integrator", "dopri5", "initial_step", 0),
     DEFAULT_NUMBER("integrator", "dopri5", "max_step", 0),
+    DEFAULT_NUMBER("integrator", "dopri5", "min_step", 0),
     DEFAULT_NUMBER("integrator", "bdf", "rtol", DEFAULT_RTOL),
     DEFAULT_NUMBER("integrator", "bdf", "atol", DEFAULT_ATOL),
     DEFAULT_NUMBER("integrator", "bdf", "initial_step", 0),
     DEFAULT_NUMBER("integrator", "bdf", "max_step", 0),
+    DEFAULT_NUMBER("integrator", "bdf", "min_step", 0),
     DEFAULT_NUMBER("integrator", NULL, "max_steps", DEFAULT_MAX_STEPS),
     DEFAULT_NUMBER("output", NULL, "interval", DEFAULT_INTERVAL),
     DEFAULT_NUMBER("limits", NULL, "max_speed", DEFAULT_MAX_SPEED),

@@ -55,6 +55,9 @@ typedef struct ctc_integ_spec {
     double rtol, atol;   /* dopri5, bdf: relative and absolute tolerance, > 0 */
     double initial_step; /* dopri5, bdf: first step (s); 0 = chosen automatically */
     double max_step;     /* dopri5, bdf: largest step (s); 0 = unbounded */
+    double min_step;     /* dopri5, bdf: smallest step (s) the error control may take before
+                            ctc_integrator_step fails ("step size ... below min_step"); 0 = only
+                            the round-off limit. A step cut short to land on tstop is exempt */
     long max_steps;      /* any: ctc_integrator_step fails after this many steps; 0 = no limit */
 } ctc_integ_spec;
 
@@ -72,8 +75,8 @@ typedef struct ctc_integ_stats {
 typedef struct ctc_integrator ctc_integrator;
 
 /* Checks spec: the method's own fields must be finite and positive (e.g. "step must be
- * positive and finite (got 0 s)", "rtol must be in (0, 1) (got 2)"), max_step >= 0 and
- * max_steps >= 0. */
+ * positive and finite (got 0 s)", "rtol must be in (0, 1) (got 2)"), max_step >= 0,
+ * min_step >= 0 and finite and, with max_step > 0, min_step <= max_step, and max_steps >= 0. */
 ctc_status ctc_integ_check(const ctc_integ_spec *spec, char *err, size_t errlen);
 
 /* Makes an integrator for an n-dimensional system (n >= 1). The spec is copied. On success

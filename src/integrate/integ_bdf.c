@@ -181,6 +181,13 @@ ctc_status ctc_bdf_new(ctc_integrator *it, char *err, size_t errlen)
                             b->msg);
         }
     }
+    if (it->spec.min_step > 0) {
+        flag = CVodeSetMinStep(b->cvode, it->spec.min_step);
+        if (flag != CV_SUCCESS) {
+            return ctc_fail(CTC_EINVAL, err, errlen, "bdf: CVodeSetMinStep failed (%d): %s", flag,
+                            b->msg);
+        }
+    }
     b->h_init = it->spec.initial_step;
     if (it->spec.max_step > 0 && b->h_init > it->spec.max_step) b->h_init = it->spec.max_step;
     return CTC_OK;
@@ -240,6 +247,9 @@ int ctc_bdf_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
     if (h_next != 0 && ctc_integ_below_roundoff(h_next, t)) {
         return ctc_integ_fail_roundoff(h_next, t, err, errlen);
     }
+    if (h_next != 0 && h_next < it->spec.min_step && h_next < tstop - t) {
+        return ctc_integ_fail_min_step(h_next, t, it->spec.min_step, err, errlen);
+    }
 
     /* one internal step, stopping at tstop */
     b->rhs_rc = 0;
@@ -255,6 +265,16 @@ int ctc_bdf_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
         ctc_fail(CTC_EINVAL, err, errlen, "projection failed (returned %d) at t = %.10g s",
                  b->proj_rc, b->proj_t);
         return b->proj_rc;
+    }
+    if (flag < 0 && it->spec.min_step > 0) {
+        /* CVODE holds its steps at min_step and fails where the error or the Newton iteration
+         * needs smaller ones: the step floor's message */
+        double h_fail = 0;
+        CVodeGetCurrentStep(b->cvode, &h_fail);
+        if ((flag == CV_ERR_FAILURE || flag == CV_CONV_FAILURE) &&
+            fabs(h_fail) <= it->spec.min_step * (1 + 1e-12)) {
+            return ctc_integ_fail_min_step(fabs(h_fail), t, it->spec.min_step, err, errlen);
+        }
     }
     if (flag < 0) {
         ctc_fail(CTC_EINVAL, err, errlen, "CVODE failed (flag %d) at t = %.10g s: %s", flag, t,

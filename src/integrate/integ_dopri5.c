@@ -168,6 +168,10 @@ int ctc_dopri5_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
             it->h = h;
             return ctc_integ_fail_roundoff(h, t, err, errlen);
         }
+        if (h < it->spec.min_step && h < tstop - t) {
+            it->h = h;
+            return ctc_integ_fail_min_step(h, t, it->spec.min_step, err, errlen);
+        }
         hs = ctc_integ_clip_step(t, tstop, h, hmax, &lands);
         const double t_new = lands ? tstop : t + hs;
 

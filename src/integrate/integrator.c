@@ -57,6 +57,15 @@ ctc_status ctc_integ_check(const ctc_integ_spec *spec, char *err, size_t errlen)
             return ctc_fail(CTC_EINVAL, err, errlen, "max_step must be >= 0 (got %g s)",
                             spec->max_step);
         }
+        if (!isfinite(spec->min_step) || !(spec->min_step >= 0)) {
+            return ctc_fail(CTC_EINVAL, err, errlen, "min_step must be >= 0 and finite (got %g s)",
+                            spec->min_step);
+        }
+        if (spec->max_step > 0 && spec->min_step > spec->max_step) {
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "min_step must not exceed max_step (got %g s > %g s)", spec->min_step,
+                            spec->max_step);
+        }
         break;
     default:
         return ctc_fail(CTC_EINVAL, err, errlen, "unknown integration method %d",
@@ -259,6 +268,15 @@ int ctc_integ_fail_roundoff(double h, double t, char *err, size_t errlen)
 {
     ctc_fail(CTC_EINVAL, err, errlen,
              "step size %.3g s at t = %.10g s fell below the round-off limit", h, t);
+    return -1;
+}
+
+int ctc_integ_fail_min_step(double h, double t, double min_step, char *err, size_t errlen)
+{
+    ctc_fail(CTC_EINVAL, err, errlen,
+             "step size %.3g s at t = %.10g s fell below min_step (%g s): the problem needs a "
+             "smaller step, looser tolerances or \"method\": \"bdf\"",
+             h, t, min_step);
     return -1;
 }
 

@@ -80,6 +80,10 @@ double ctc_integ_clip_step(double t, double tstop, double h, double hmax, int *l
 /* Fills err with the round-off message and returns -1 (ctc_integrator_step's method failure). */
 int ctc_integ_fail_roundoff(double h, double t, char *err, size_t errlen);
 
+/* Fills err with the message for a step h wanted at time t below the spec's min_step and
+ * returns -1 (ctc_integrator_step's method failure). */
+int ctc_integ_fail_min_step(double h, double t, double min_step, char *err, size_t errlen);
+
 /* Fills err with the message for an rhs that returned rc at time t and returns rc. */
 int ctc_integ_fail_rhs(int rc, double t, char *err, size_t errlen);
 

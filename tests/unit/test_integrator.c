@@ -899,6 +899,56 @@ Test(integrator, dopri5_stops_at_the_pole_of_the_riccati_equation)
     ctc_integrator_free(it);
 }
 
+Test(integrator, adaptive_methods_stop_where_the_step_falls_below_min_step)
+{
+    /* y = 1 / (1 - t): near the pole the error control wants h ~ (1 - t) times a constant, so a
+     * floor of 1e-4 s stops both methods a little before t = 1, at a step they wanted below it
+     * and long before the round-off limit */
+    for (int m = 0; m < 2; m++) {
+        char err[ERRLEN] = "", want[ERRLEN];
+        double y0 = 1, h, t;
+        problem p = problem_default();
+        ctc_integ_spec spec = adaptive_spec(m == 0 ? CTC_INTEG_DOPRI5 : CTC_INTEG_BDF, 1e-6, 1e-6);
+        spec.min_step = 1e-4;
+        ctc_integrator *it = make(&spec, 1, riccati, &p);
+        cr_assert_eq(ctc_integrator_reset(it, 0, &y0), 0);
+        int rc = 0;
+        while (rc == 0) rc = ctc_integrator_step(it, 2.0, err, sizeof err);
+        cr_assert_eq(rc, -1, "%s: %s", ctc_integ_method_name(spec.method), err);
+        cr_assert_eq(sscanf(err, "step size %lg s at t = %lg s", &h, &t), 2, "message: %s", err);
+        snprintf(want, sizeof want,
+                 "step size %.3g s at t = %.10g s fell below min_step (0.0001 s): the problem "
+                 "needs a smaller step, looser tolerances or \"method\": \"bdf\"",
+                 h, t);
+        cr_assert_str_eq(err, want);
+        cr_assert_leq(h, 1e-4 * (1 + 1e-12), "h = %g", h);
+        cr_assert(t > 0.99 && t < 1, "%s stopped at t = %.17g", ctc_integ_method_name(spec.method),
+                  t);
+        cr_assert_geq(ctc_integrator_stats(it)->h_last, 1e-4 * (1 - 1e-12), "%s h_last %g", ctc_integ_method_name(spec.method), ctc_integrator_stats(it)->h_last);
+        ctc_integrator_free(it);
+    }
+}
+
+Test(integrator, min_step_spares_the_step_cut_short_to_land_on_tstop)
+{
+    /* a smooth oscillator with a floor of 0.01 s: the last step to tstop = 1.0005 s is shorter
+     * than the floor and still taken */
+    const double y0[2] = {1, 0};
+    for (int m = 0; m < 2; m++) {
+        char err[ERRLEN] = "";
+        problem p = problem_default();
+        ctc_integ_spec spec = adaptive_spec(m == 0 ? CTC_INTEG_DOPRI5 : CTC_INTEG_BDF, 1e-3, 1e-3);
+        spec.min_step = 0.01;
+        ctc_integrator *it = make(&spec, 2, oscillator, &p);
+        cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
+        while (ctc_integrator_time(it) < 1.0005) {
+            cr_assert_eq(ctc_integrator_step(it, 1.0005, err, sizeof err), 0, "%s", err);
+        }
+        cr_assert(ctc_integrator_time(it) == 1.0005);
+        ctc_integrator_free(it);
+    }
+}
+
 Test(integrator, dopri5_gives_up_on_a_non_finite_solution)
 {
     /* the rhs returns NaN for every t > 0: each attempt is cut to a fifth; the 10th fails */
@@ -1019,6 +1069,16 @@ Test(integrator, check_rejects_each_bad_field_with_its_message)
         expect_check(&s, "max_step must be >= 0 (got -1 s)");
         s.max_step = NAN;
         expect_check(&s, "max_step must be >= 0 (got nan s)");
+        s.max_step = 0;
+        s.min_step = -1;
+        expect_check(&s, "min_step must be >= 0 and finite (got -1 s)");
+        s.min_step = INFINITY;
+        expect_check(&s, "min_step must be >= 0 and finite (got inf s)");
+        s.min_step = 0.2;
+        s.max_step = 0.1;
+        expect_check(&s, "min_step must not exceed max_step (got 0.2 s > 0.1 s)");
+        s.min_step = 0;
+        s.max_step = 0;
         s = adaptive_spec(method, 1e-6, 1e-6);
         s.max_steps = -5;
         expect_check(&s, "max_steps must be >= 0 (got -5)");

@@ -421,6 +421,27 @@ static const bad_job bad_jobs[] = {
     {"fractional max_steps", PASSIVE_JOB(",'integrator':{'max_steps':1.5}"), NULL,
      JOB_INVALID_FIELD, "integrator.max_steps",
      "must be a whole number from 0 (no limit) to 2^53 (got 1.5)"},
+    {"rk4 step of 1e-300", PASSIVE_JOB(",'integrator':{'method':'rk4','step':1e-300}"), NULL,
+     JOB_INVALID_FIELD, "integrator.step",
+     "duration / step = 1e+300 steps exceeds integrator.max_steps (10000000): use a larger step "
+     "(got 1e-300 s for 1 s)"},
+    {"rk4 one step over max_steps",
+     PASSIVE_JOB(",'integrator':{'method':'rk4','step':0.01,'max_steps':99}"), NULL,
+     JOB_INVALID_FIELD, "integrator.step",
+     "duration / step = 100 steps exceeds integrator.max_steps (99): use a larger step (got "
+     "0.01 s for 1 s)"},
+    {"rk4 step of 1e-12 without max_steps",
+     PASSIVE_JOB(",'integrator':{'method':'rk4','step':1e-12,'max_steps':0}"), NULL,
+     JOB_INVALID_FIELD, "integrator.step",
+     "duration / step = 1e+12 steps exceeds the bound (1000000000): use a larger step (got "
+     "1e-12 s for 1 s)"},
+    {"negative min_step", PASSIVE_JOB(",'integrator':{'min_step':-1}"), NULL, JOB_INVALID_FIELD,
+     "integrator", "min_step must be >= 0 and finite (got -1 s)"},
+    {"min_step over max_step",
+     PASSIVE_JOB(",'integrator':{'method':'bdf','min_step':0.1,'max_step':0.01}"), NULL,
+     JOB_INVALID_FIELD, "integrator", "min_step must not exceed max_step (got 0.1 s > 0.01 s)"},
+    {"min_step for rk4", PASSIVE_JOB(",'integrator':{'method':'rk4','min_step':0.1}"), NULL,
+     JOB_UNKNOWN_FIELD, "integrator.min_step", "key \"min_step\" does not apply to method \"rk4\""},
 
     /* duration, output, limits */
     {"zero duration", "{" SCENE2 "," PASSIVE ",'duration':0}", NULL, JOB_INVALID_FIELD, "duration",
@@ -1157,7 +1178,8 @@ static void expect_same_job(const job *a, const job *b)
     const ctc_integ_spec *m = &s->integrator, *n = &t->integrator;
     cr_assert(m->method == n->method && m->step == n->step && m->rtol == n->rtol &&
               m->atol == n->atol && m->initial_step == n->initial_step &&
-              m->max_step == n->max_step && m->max_steps == n->max_steps);
+              m->max_step == n->max_step && m->min_step == n->min_step &&
+              m->max_steps == n->max_steps);
     cr_assert_eq(s->duration, t->duration);
     cr_assert_eq(s->output_interval, t->output_interval);
     cr_assert_eq(s->channels, t->channels);
@@ -1264,7 +1286,7 @@ Test(job_json, normalised_keys_come_in_canonical_order)
         "'independent':true}}],"
         "'q0':[0],'v0':[1]},'controller':{'type':'none'},'disturbance':{'type':'none'},"
         "'integrator':{'method':'dopri5','rtol':1e-08,'atol':1e-10,'initial_step':0,'max_step':0,"
-        "'max_steps':10000000},'duration':1,'output':{'interval':0.01,'channels':['q','qdot']},"
+        "'min_step':0,'max_steps':10000000},'duration':1,'output':{'interval':0.01,'channels':['q','qdot']},"
         "'limits':{'max_speed':1000000,'wall_time':0},'threads':1}");
     cr_assert_str_eq(text, want);
     free(text);
