@@ -23,6 +23,11 @@
  * increase and are never reused, even after the newest job is deleted (a client's old URL never
  * names a new job).
  *
+ * Counts. Version 2 adds job_counts, one row per status kept exact by triggers on jobs in the
+ * transaction of each insert, delete and status change, whoever writes (the workers, the HTTP
+ * threads, another process): store_count reads its six rows, in time independent of the number
+ * of jobs (GET /api/health runs it on every call).
+ *
  * Series. store_finish writes one series row per recorded channel, "t" (width 1) first, with the
  * samples as nsamples x width float64, row-major, little-endian: the result's own arrays are
  * bound as blobs with no copy, which needs a little-endian host with IEEE 754 doubles (checked
@@ -93,6 +98,23 @@ static const char *const migrations[STORE_SCHEMA_VERSION] = {
     "  data BLOB NOT NULL,"
     "  PRIMARY KEY (job_id, channel));"
     "PRAGMA user_version = 1;",
+    /* 1 -> 2: the number of jobs in each status, kept by triggers in the transaction of every
+     * insert, delete and status change, so that counting (health) reads six rows, not the table */
+    "CREATE TABLE job_counts ("
+    "  status TEXT PRIMARY KEY,"
+    "  n INTEGER NOT NULL CHECK (n >= 0)) WITHOUT ROWID;"
+    "INSERT INTO job_counts (status, n) VALUES ('queued', 0), ('running', 0), ('done', 0),"
+    "  ('failed', 0), ('diverged', 0), ('cancelled', 0);"
+    "UPDATE job_counts SET n = (SELECT count(*) FROM jobs WHERE jobs.status = job_counts.status);"
+    "CREATE TRIGGER job_counts_insert AFTER INSERT ON jobs BEGIN"
+    "  UPDATE job_counts SET n = n + 1 WHERE status = NEW.status; END;"
+    "CREATE TRIGGER job_counts_delete AFTER DELETE ON jobs BEGIN"
+    "  UPDATE job_counts SET n = n - 1 WHERE status = OLD.status; END;"
+    "CREATE TRIGGER job_counts_update AFTER UPDATE OF status ON jobs"
+    "  WHEN OLD.status <> NEW.status BEGIN"
+    "  UPDATE job_counts SET n = n - 1 WHERE status = OLD.status;"
+    "  UPDATE job_counts SET n = n + 1 WHERE status = NEW.status; END;"
+    "PRAGMA user_version = 2;",
 };
 
 /* the statements of a connection, prepared once at open */
@@ -157,12 +179,13 @@ static const char *const stmt_sql[ST_NSTMT] = {
     [ST_SERIES_GET] = "SELECT s.channel, s.width, s.nsamples, s.data, j.nv "
                       "FROM series AS s JOIN jobs AS j ON j.id = s.job_id WHERE s.job_id = ?1",
     [ST_DELETE] = "DELETE FROM jobs WHERE id = ?1",
-    [ST_COUNT] = "SELECT status, count(*) FROM jobs GROUP BY status",
+    [ST_COUNT] = "SELECT status, n FROM job_counts",
 };
 
 struct store {
     sqlite3 *db;
     sqlite3_stmt *stmt[ST_NSTMT];
+    long count_vm_steps; /* SQLite VM steps of the last store_count */
 };
 
 static const char *const status_names[STORE_NSTATUS] = {
@@ -1105,6 +1128,12 @@ int store_count(store *s, long counts[STORE_NSTATUS], char *err, size_t errlen)
     }
     rc = 0;
 done:
+    s->count_vm_steps = sqlite3_stmt_status(q, SQLITE_STMTSTATUS_VM_STEP, 1);
     release(q);
     return rc;
+}
+
+long store_count_vm_steps(const store *s)
+{
+    return s->count_vm_steps;
 }

@@ -221,7 +221,7 @@ static void assert_same_series(const ctc_sim_result *a, const ctc_sim_result *b)
 
 /* ---- opening and the schema ---- */
 
-Test(store, open_creates_schema_version_1_in_wal_mode)
+Test(store, open_creates_the_current_schema_in_wal_mode)
 {
     char path[256], mode[32];
     long counts[STORE_NSTATUS];
@@ -417,13 +417,102 @@ Test(store, refuses_a_file_that_is_not_sqlite)
     cr_assert_str_eq(back, text);
 }
 
+/* ---- counting ---- */
+
+/* store_count against the oracle: count(*) over the table for each status, on a raw connection */
+static void assert_counts_match_the_table(store *s, const char *path)
+{
+    long counts[STORE_NSTATUS];
+    char err[512] = "";
+    cr_assert_eq(store_count(s, counts, err, sizeof err), 0, "%s", err);
+    sqlite3 *db = raw_open(path);
+    sqlite3_stmt *q = NULL;
+    cr_assert_eq(sqlite3_prepare_v2(db, "SELECT count(*) FROM jobs WHERE status = ?1", -1, &q,
+                                    NULL),
+                 SQLITE_OK);
+    for (int st = 0; st < STORE_NSTATUS; st++) {
+        sqlite3_bind_text(q, 1, store_status_name((store_status)st), -1, SQLITE_STATIC);
+        cr_assert_eq(sqlite3_step(q), SQLITE_ROW);
+        cr_assert_eq(counts[st], sqlite3_column_int64(q, 0), "%s: %ld, the table has %lld",
+                     store_status_name((store_status)st), counts[st],
+                     (long long)sqlite3_column_int64(q, 0));
+        sqlite3_reset(q);
+    }
+    sqlite3_finalize(q);
+    sqlite3_close(db);
+}
+
+Test(store, counting_5000_jobs_reads_the_counts_not_the_table)
+{
+    /* 5,000 jobs written by another connection in all six statuses: the counts stay exact
+     * through inserts, status changes and deletes, and store_count's work (SQLite VM steps)
+     * does not grow with the table (a scan takes several steps a row, > 5,000 here) */
+    char path[256], err[512] = "";
+    path_of(path, sizeof path, "ctcsim.db");
+    store *s = open_ok(path);
+    raw_exec(path, "BEGIN;"
+                   "WITH RECURSIVE k(i) AS (SELECT 0 UNION ALL SELECT i + 1 FROM k WHERE i < 4999)"
+                   "INSERT INTO jobs (name, status, created, nbodies, nv, controller, spec)"
+                   "  SELECT 'j' || i, CASE i % 6 WHEN 0 THEN 'queued' WHEN 1 THEN 'running'"
+                   "    WHEN 2 THEN 'done' WHEN 3 THEN 'failed' WHEN 4 THEN 'diverged'"
+                   "    ELSE 'cancelled' END, 0, 1, 1, 'none', '{}' FROM k;"
+                   "COMMIT;");
+    assert_counts_match_the_table(s, path);
+    long small = store_count_vm_steps(s);
+    cr_assert_gt(small, 0);
+    cr_assert_lt(small, 200, "store_count took %ld VM steps over 5,000 jobs", small);
+
+    raw_exec(path, "UPDATE jobs SET status = 'done' WHERE status = 'running' AND id % 2 = 0;"
+                   "UPDATE jobs SET name = 'renamed' WHERE status = 'queued';"
+                   "DELETE FROM jobs WHERE status = 'failed' AND id % 3 = 0;");
+    int64_t id = insert_job(s, "one more");
+    cr_assert_eq(store_start(s, id, err, sizeof err), 0, "%s", err);
+    assert_counts_match_the_table(s, path);
+    cr_assert_eq(store_count_vm_steps(s), small, "the same six rows, the same work");
+    store_close(s);
+}
+
+Test(store, a_version_1_database_is_migrated_with_its_counts)
+{
+    /* a version 1 file (jobs and series, no job_counts) with jobs in it: open adds the counts,
+     * taken from the table once, and keeps them after */
+    char path[256], err[512] = "";
+    path_of(path, sizeof path, "ctcsim.db");
+    raw_exec(path,
+             "CREATE TABLE jobs (id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT NOT NULL,"
+             "  preset TEXT, status TEXT NOT NULL DEFAULT 'queued' CHECK (status IN ('queued',"
+             "  'running', 'done', 'failed', 'diverged', 'cancelled')),"
+             "  progress REAL NOT NULL DEFAULT 0, created REAL NOT NULL,"
+             "  started REAL NOT NULL DEFAULT 0, finished REAL NOT NULL DEFAULT 0,"
+             "  nbodies INTEGER NOT NULL, nv INTEGER NOT NULL, controller TEXT NOT NULL,"
+             "  spec TEXT NOT NULL, metrics TEXT, message TEXT, e_max REAL, wall_s REAL);"
+             "CREATE INDEX jobs_by_status ON jobs (status);"
+             "CREATE TABLE series (job_id INTEGER NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,"
+             "  channel TEXT NOT NULL, width INTEGER NOT NULL CHECK (width > 0),"
+             "  nsamples INTEGER NOT NULL CHECK (nsamples >= 0), data BLOB NOT NULL,"
+             "  PRIMARY KEY (job_id, channel));"
+             "INSERT INTO jobs (name, status, created, nbodies, nv, controller, spec) VALUES"
+             "  ('a', 'done', 0, 1, 1, 'none', '{}'), ('b', 'done', 0, 1, 1, 'none', '{}'),"
+             "  ('c', 'queued', 0, 1, 1, 'none', '{}'), ('d', 'failed', 0, 1, 1, 'none', '{}');"
+             "PRAGMA user_version = 1;");
+    store *s = open_ok(path);
+    cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), 2);
+    long counts[STORE_NSTATUS];
+    cr_assert_eq(store_count(s, counts, err, sizeof err), 0, "%s", err);
+    cr_assert(counts[STORE_DONE] == 2 && counts[STORE_QUEUED] == 1 && counts[STORE_FAILED] == 1 &&
+              counts[STORE_RUNNING] == 0);
+    finished_job(s, "e", STORE_DIVERGED, NULL);
+    assert_counts_match_the_table(s, path);
+    store_close(s);
+}
+
 Test(store, refuses_a_newer_schema)
 {
     char path[256];
     path_of(path, sizeof path, "ctcsim.db");
     raw_exec(path, "CREATE TABLE jobs (id INTEGER PRIMARY KEY, future TEXT); "
                    "PRAGMA user_version = 7;");
-    assert_open_fails(path, "database %s has schema version 7, newer than this ctcsim (1): "
+    assert_open_fails(path, "database %s has schema version 7, newer than this ctcsim (2): "
                             "upgrade ctcsim");
     cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), 7);
 }
