@@ -34,8 +34,10 @@
  * Handlers run on libmicrohttpd's pool threads, each of which serves many connections, so a
  * handler must not block. One that must wait (POST /api/jobs?wait) defers its reply (http_defer):
  * the connection is suspended, a detached thread of ours runs the waiting part and resumes it,
- * and the access handler, called again, sends the reply. At most HTTP_MAX_DEFERRED such threads
- * exist at once; http_stop waits for them before libmicrohttpd stops.
+ * and the access handler, called again, sends the reply. At most max_deferred such replies
+ * (http_config, default HTTP_MAX_DEFERRED) wait at once: http_defer reserves a place under
+ * defer_lock and refuses past the limit, so the handler answers at once and no HTTP thread ever
+ * blocks. http_stop waits for the deferring threads before libmicrohttpd stops.
  */
 /* realpath is an X/Open function */
 #define _XOPEN_SOURCE 700
@@ -73,7 +75,7 @@
 #define HTTP_DROP_MARGIN (1024 * 1024)
 /* s http_stop waits for the requests in flight */
 #define HTTP_STOP_GRACE 5.0
-/* deferred replies (http_defer) waiting at once at most; more run in the handler's thread */
+/* deferred replies (http_defer) waiting at once at most, by default; past them it refuses */
 #define HTTP_MAX_DEFERRED 256
 
 struct http_server {
@@ -90,7 +92,8 @@ struct http_server {
     atomic_int in_flight; /* requests being answered (http_exchange.answering) */
     pthread_mutex_t defer_lock;
     pthread_cond_t defer_done; /* signalled when deferred falls */
-    int deferred;              /* deferred replies under way, under defer_lock */
+    unsigned deferred;         /* deferred replies under way or reserved, under defer_lock */
+    unsigned max_deferred;     /* the most at once (http_config.max_deferred) */
     int stopping;              /* http_stop has begun, under defer_lock */
 };
 
@@ -651,15 +654,23 @@ static int collect(http_server *s, http_exchange *x, const char *data, size_t n)
 
 /* ---- deferred replies ---- */
 
-void http_defer(http_reply *rep, void (*fn)(http_reply *rep, void *arg), void *arg)
+int http_defer(http_reply *rep, void (*fn)(http_reply *rep, void *arg), void *arg)
 {
+    (void)rep;
     http_exchange *x = running_exchange;
-    if (!x || x->defer_fn) {
-        fn(rep, arg); /* not inside a handler (or twice): no deferring, but fn still runs */
-        return;
+    if (!x || x->defer_fn) return -1; /* not inside a handler, or twice */
+    http_server *s = x->server;
+    int rc = -1;
+    pthread_mutex_lock(&s->defer_lock);
+    if (!s->stopping && s->deferred < s->max_deferred) {
+        s->deferred++; /* the place is held from here; run_deferred or on_request gives it back */
+        rc = 0;
     }
+    pthread_mutex_unlock(&s->defer_lock);
+    if (rc != 0) return -1;
     x->defer_fn = fn;
     x->defer_arg = arg;
+    return 0;
 }
 
 /* The deferring thread: runs defer_fn, then resumes the connection, whose next call to the
@@ -678,14 +689,15 @@ static void *run_deferred(void *arg)
     return NULL;
 }
 
-/* Suspends the connection and starts the deferring thread; 0, or -1 when it cannot (then the
- * caller runs defer_fn itself). rep moves into the exchange. */
+/* Suspends the connection and starts the deferring thread, in the place http_defer reserved; 0,
+ * or -1 when it cannot (then the caller runs defer_fn itself and gives the place back). rep
+ * moves into the exchange. */
 static int start_deferred(http_server *s, http_exchange *x, struct MHD_Connection *conn,
                           http_reply *rep)
 {
     pthread_mutex_lock(&s->defer_lock);
     int rc = -1;
-    if (!s->stopping && s->deferred < HTTP_MAX_DEFERRED) {
+    if (!s->stopping) {
         x->rep = *rep;
         x->conn = conn;
         x->server = s;
@@ -697,7 +709,6 @@ static int start_deferred(http_server *s, http_exchange *x, struct MHD_Connectio
                suspension comes first */
             if (pthread_create(&thread, &attr, run_deferred, x) == 0) {
                 MHD_suspend_connection(conn);
-                s->deferred++;
                 rc = 0;
             } else {
                 x->rep = (http_reply){.fd = -1}; /* rep stays the caller's */
@@ -777,6 +788,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
     };
     memcpy(req.params, x->params, sizeof req.params);
     if (x->route) {
+        x->server = s;
         running_exchange = x;
         x->route->handler(&req, &rep, s->ctx);
         running_exchange = NULL;
@@ -787,6 +799,10 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         if (start_deferred(s, x, conn, &rep) == 0) return MHD_YES;
         x->defer_fn(&rep, x->defer_arg); /* no thread for it: here, then */
         x->defer_fn = NULL;
+        pthread_mutex_lock(&s->defer_lock);
+        s->deferred--;
+        pthread_cond_broadcast(&s->defer_done);
+        pthread_mutex_unlock(&s->defer_lock);
     }
     return send_reply(conn, url, &rep);
 }
@@ -840,6 +856,7 @@ int http_start(const http_config *config, http_server **out, char *err, size_t e
     unsigned max_connections =
         config->max_connections ? config->max_connections : HTTP_MAX_CONNECTIONS;
     unsigned max_per_ip = config->max_per_ip ? config->max_per_ip : HTTP_MAX_PER_IP;
+    s->max_deferred = config->max_deferred ? config->max_deferred : HTTP_MAX_DEFERRED;
 
     /* the logger first, so that libmicrohttpd's checks of the other options use it too */
     // clang-format off

@@ -69,6 +69,8 @@ typedef struct http_config {
     unsigned max_connections; /* connections open at once; more are closed at accept [1000] */
     unsigned max_per_ip;      /* connections open at once from one address; more are closed at
                                  accept [64] */
+    unsigned max_deferred;    /* replies waiting at once off the HTTP threads (http_defer);
+                                 past them http_defer refuses [256] */
     const http_route *routes; /* terminated by a route with method NULL */
     void *ctx;                /* passed to every handler */
 } http_config;
@@ -101,13 +103,15 @@ void http_reply_buffer(http_reply *rep, int status, const char *content_type, ch
                        size_t len);
 
 /* For a handler that must wait (POST /api/jobs?wait): finishes the reply off libmicrohttpd's
- * threads, so that a waiting client holds up no other connection. The handler calls http_defer
- * once and returns without replying; the connection is suspended, and fn(rep, arg) is called once
- * on a thread of the HTTP layer, where it may block; it fills rep (which may already hold a
- * Location) and owns arg. Then the reply is sent. fn must return promptly once the server is
- * stopping: http_stop waits for it. When no thread can be had, fn runs at once in the handler's
- * thread. */
-void http_defer(http_reply *rep, void (*fn)(http_reply *rep, void *arg), void *arg);
+ * threads, so that a waiting client holds up no other connection. Returns 0 when it took a place
+ * among the config's max_deferred: the handler returns without replying; the connection is
+ * suspended, and fn(rep, arg) is called once on a thread of the HTTP layer, where it may block;
+ * it fills rep (which may already hold a Location) and owns arg. Then the reply is sent. (Should
+ * no thread be had, fn runs in the handler's thread.) fn must return promptly once the server is
+ * stopping: http_stop waits for it. Returns -1, without calling fn, when all places are taken,
+ * the server is stopping, or it is called outside a handler or twice: the handler still owns arg
+ * and must reply itself, at once. */
+int http_defer(http_reply *rep, void (*fn)(http_reply *rep, void *arg), void *arg);
 
 /* Serves a file below config->web_root for a GET of path ("/" -> index.html): rejects "..",
  * encoded traversal and symlinks that leave the root (404), sets the content type by extension.

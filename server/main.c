@@ -54,6 +54,7 @@ typedef struct server_settings {
     long long idle_timeout;    /* s */
     long long max_connections; /* open at once */
     long long max_per_ip;      /* open at once from one address */
+    long long max_waiters;     /* POST /api/jobs?wait clients waiting at once */
 } server_settings;
 
 typedef enum setting_kind {
@@ -112,6 +113,8 @@ static const setting settings[] = {
      "N", "connections open at once; more are closed when they open"},
     {"--max-connections-per-ip", "CTCSIM_MAX_CONNECTIONS_PER_IP", SETTING_INTEGER, AT(max_per_ip),
      1, 100000, "N", "connections open at once from one client address; more are closed"},
+    {"--max-waiters", "CTCSIM_MAX_WAITERS", SETTING_INTEGER, AT(max_waiters), 1, 100000, "N",
+     "POST /api/jobs?wait clients waiting at once; more get 202 at once"},
 };
 
 #define NSETTINGS (sizeof settings / sizeof settings[0])
@@ -355,6 +358,7 @@ int main(int argc, char **argv)
         .idle_timeout = 30,
         .max_connections = 1000,
         .max_per_ip = 64,
+        .max_waiters = 256,
     };
     int rc = read_settings(argc, argv, &cfg);
     if (rc != 0) return rc > 0 ? 0 : EXIT_BAD_SETTING;
@@ -408,6 +412,7 @@ int main(int argc, char **argv)
                       .idle_timeout = (unsigned)cfg.idle_timeout,
                       .max_connections = (unsigned)cfg.max_connections,
                       .max_per_ip = (unsigned)cfg.max_per_ip,
+                      .max_deferred = (unsigned)cfg.max_waiters,
                       .routes = routes_table,
                       .ctx = &ctx};
     http_server *http = NULL;

@@ -14,7 +14,9 @@
  * thread of the HTTP layer waits in short slices of jobq_wait, so the HTTP thread goes on serving
  * its other connections and a shutdown is held up by a waiting client for one slice at most; that
  * thread opens a store connection of its own, closed when it ends. (Should even the few bytes of
- * the wait's state not be had, the job is answered at once, 202, as without ?wait.)
+ * the wait's state not be had, the job is answered at once, 202, as without ?wait.) At most
+ * --max-waiters clients wait at once; past them a ?wait is answered at once too, 202 with the
+ * job's current row, so a flood of waiters never blocks an HTTP thread.
  *
  * Job rows are built from store_job in one place (job_row), so lists, single jobs and the replies
  * of POST and DELETE show the same fields.
@@ -410,10 +412,10 @@ static void post_jobs(const http_request *req, http_reply *rep, void *arg)
 
     /* ?wait: answered from a thread that may block, so this one serves others meanwhile */
     job_wait *w = wait > 0 ? malloc(sizeof *w) : NULL;
-    if (w) {
-        *w = (job_wait){.ctx = ctx, .id = id, .wait = wait};
-        http_defer(rep, finish_wait, w);
-    } else {
+    if (w) *w = (job_wait){.ctx = ctx, .id = id, .wait = wait};
+    if (!w || http_defer(rep, finish_wait, w) != 0) {
+        /* no wait, or every waiting place taken (--max-waiters): 202 with the job as it is */
+        free(w);
         reply_new_job(rep, ctx, id, 0);
     }
 done:
