@@ -29,6 +29,7 @@
 #include <string.h>
 
 #include "model.h"
+#include "model_fixture.h"
 #include "oracle.h"
 
 #define FX_MAX_BODIES 64
@@ -418,6 +419,17 @@ static inline void fx_rod_y(const double mass[3], const double len[3], fx_chain 
 {
     fx_rod_chain(3, mass, len, c);
     c->joints[2].location[1] = -len[0];
+}
+
+/* The Y tree's model, rewired to FX_Y_PARENTS, in *m and its oracle (free both) */
+static inline ctc_oracle *fx_make_y_tree(const double mass[3], const double len[3], ctc_model **m)
+{
+    static const int parent[3] = FX_Y_PARENTS;
+    fx_chain c;
+    fx_rod_y(mass, len, &c);
+    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, m);
+    fixture_set_parents(*m, parent);
+    return o;
 }
 
 /* The Y tree's mass matrix mm (3x3, row-major) and inverse dynamics tau (3) in closed form. Its

@@ -250,12 +250,8 @@ Test(aba, walks_the_parents_on_a_branched_tree)
     /* qdd = M^{-1} (tau - h(q, v)) on a Y tree made by hand from a chain's model (two rods hung
        from one), M and h in closed form from two double pendulums sharing joint 0 */
     const double mass[3] = {1.3, 0.7, 0.9}, len[3] = {1.1, 0.8, 0.6};
-    const int parent[3] = FX_Y_PARENTS;
-    fx_chain c;
-    fx_rod_y(mass, len, &c);
     ctc_model *m;
-    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
-    fixture_set_parents(m, parent);
+    ctc_oracle *o = fx_make_y_tree(mass, len, &m);
     fx_rng rng = {22};
     double worst = 0.0;
 

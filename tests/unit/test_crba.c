@@ -206,12 +206,8 @@ Test(crba, walks_the_parents_on_a_branched_tree)
        j = lambda(j) up the tree: M matches the closed form of two double pendulums sharing
        joint 0, and the two branches' joints do not couple, M_12 = M_21 = 0 exactly */
     const double mass[3] = {1.3, 0.7, 0.9}, len[3] = {1.1, 0.8, 0.6};
-    const int parent[3] = FX_Y_PARENTS;
-    fx_chain c;
-    fx_rod_y(mass, len, &c);
     ctc_model *m;
-    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
-    fixture_set_parents(m, parent);
+    ctc_oracle *o = fx_make_y_tree(mass, len, &m);
     fx_rng rng = {23};
     double worst = 0.0;
 
