@@ -104,6 +104,47 @@ static void param_keys(const char *first, unsigned params, const char *const *ta
 /* every parameter key any kind takes */
 #define ALL_PARAMS ((1u << CTC_CP_COUNT) - 1u)
 
+/* The controller's keys, made once from the class table (ctrl.h ctc_ctrl_classes) and read by
+ * parse_controller and parse_gain_overrides, and, as the same arrays, by the format's tables
+ * (job_format_object_tables): "controller" with the keys of every kind together and per kind,
+ * and "controller.joints[]" entries per kind that has a law. */
+static struct {
+    const char *names[CTC_CTRL_NTYPES];
+    const char *all[KEYS_MAX];
+    const char *by_type[CTC_CTRL_NTYPES][KEYS_MAX];
+    const char *const *by_type_list[CTC_CTRL_NTYPES];
+    const char *joint_all[KEYS_MAX];
+    const char *joint[CTC_CTRL_NTYPES][KEYS_MAX];
+    job_format_object rows[2 * CTC_CTRL_NTYPES + 2];
+} ctrl_format;
+static pthread_once_t ctrl_format_once = PTHREAD_ONCE_INIT;
+
+static void build_ctrl_format(void)
+{
+    static const char *const shared_keys[] = {"joints", "model", NULL};
+    int n = 0;
+    param_keys("type", ALL_PARAMS, shared_keys, ctrl_format.all);
+    param_keys(NULL, ALL_PARAMS, NULL, ctrl_format.joint_all);
+    ctrl_format.rows[n++] =
+        (job_format_object)FORMAT_KEYS("controller", "type", NULL, ctrl_format.all);
+    for (int t = 0; t < CTC_CTRL_NTYPES; t++) {
+        const ctc_ctrl_class *c = ctc_ctrl_classes[t];
+        ctrl_format.names[t] = c->name;
+        param_keys("type", c->params, c->law != NULL ? shared_keys : NULL, ctrl_format.by_type[t]);
+        ctrl_format.by_type_list[t] = ctrl_format.by_type[t];
+        param_keys(NULL, c->params, NULL, ctrl_format.joint[t]);
+        ctrl_format.rows[n++] =
+            (job_format_object)FORMAT_KEYS("controller", "type", c->name, ctrl_format.by_type[t]);
+    }
+    for (int t = 0; t < CTC_CTRL_NTYPES; t++) {
+        const ctc_ctrl_class *c = ctc_ctrl_classes[t];
+        if (c->law == NULL) continue;
+        ctrl_format.rows[n++] = (job_format_object)FORMAT_KEYS("controller.joints[]", NULL, c->name,
+                                                               ctrl_format.joint[t]);
+    }
+    ctrl_format.rows[n] = (job_format_object)FORMAT_END;
+}
+
 /* the keys of a complex pole, and of the controller's model */
 static const char *const pole_keys[] = {"re", "im", NULL};
 static const char *const model_keys[] = {"mass_scale", "inertia_scale", NULL};
@@ -297,9 +338,8 @@ static int parse_gain_overrides(parser *p, const cJSON *v, const ctc_ctrl_class 
 {
     job *j = p->j;
     char path[PATH_LEN];
-    const char *mine_keys[KEYS_MAX], *all_keys[KEYS_MAX];
-    param_keys(NULL, cls->params, NULL, mine_keys);
-    param_keys(NULL, ALL_PARAMS, NULL, all_keys);
+    const char *const *mine_keys = ctrl_format.joint[p->ctrl];
+    const char *const *all_keys = ctrl_format.joint_all;
     if (!cJSON_IsArray(v)) {
         return json_error_at(p->err, JOB_INVALID_FIELD, "controller.joints",
                              "must be an array of %d objects, one per %s (got %s)", j->nind,
@@ -362,23 +402,15 @@ static int parse_ctrl_model(parser *p, const cJSON *ctrl, cJSON *out_ctrl)
 
 static int parse_controller(parser *p, const cJSON *doc)
 {
-    static const char *const shared_keys[] = {"joints", "model", NULL};
     job *j = p->j;
-    const char *names[CTC_CTRL_NTYPES], *keys[CTC_CTRL_NTYPES][KEYS_MAX], *all_keys[KEYS_MAX];
-    const char *const *keys_by_type[CTC_CTRL_NTYPES];
+    const char *const *names = ctrl_format.names;
     int type;
-    for (int t = 0; t < CTC_CTRL_NTYPES; t++) {
-        const ctc_ctrl_class *c = ctc_ctrl_classes[t];
-        names[t] = c->name;
-        param_keys("type", c->params, c->law != NULL ? shared_keys : NULL, keys[t]);
-        keys_by_type[t] = keys[t];
-    }
-    param_keys("type", ALL_PARAMS, shared_keys, all_keys);
+    pthread_once(&ctrl_format_once, build_ctrl_format);
     const cJSON *v =
         json_required_member(p, doc, "", "controller", " ({\"type\": \"none\"} for a passive run)");
-    if (v == NULL ||
-        json_typed_object(p, v, "controller", "type", REQUIRED, 0, names, CTC_CTRL_NTYPES,
-                          "controller type", keys_by_type, all_keys, &type) != 0) {
+    if (v == NULL || json_typed_object(p, v, "controller", "type", REQUIRED, 0, names,
+                                       CTC_CTRL_NTYPES, "controller type", ctrl_format.by_type_list,
+                                       ctrl_format.all, &type) != 0) {
         return -1;
     }
     const ctc_ctrl_class *cls = ctc_ctrl_classes[type];
@@ -445,40 +477,6 @@ static const job_format_object doc_objects[] = {
     FORMAT_KEYS("controller.joints[].poles[]", NULL, NULL, pole_keys),
     FORMAT_END,
 };
-
-/* The controller's objects come from the class table (ctrl.h), as parse_controller reads them:
- * "controller" with the keys of every kind together, then per kind, and "controller.joints[]"
- * per kind that has a law. Built once, by job_format_object_tables. */
-static struct {
-    const char *all[KEYS_MAX];
-    const char *by_type[CTC_CTRL_NTYPES][KEYS_MAX];
-    const char *joint[CTC_CTRL_NTYPES][KEYS_MAX];
-    job_format_object rows[2 * CTC_CTRL_NTYPES + 2];
-} ctrl_format;
-static pthread_once_t ctrl_format_once = PTHREAD_ONCE_INIT;
-
-static void build_ctrl_format(void)
-{
-    static const char *const shared_keys[] = {"joints", "model", NULL};
-    int n = 0;
-    param_keys("type", ALL_PARAMS, shared_keys, ctrl_format.all);
-    ctrl_format.rows[n++] =
-        (job_format_object)FORMAT_KEYS("controller", "type", NULL, ctrl_format.all);
-    for (int t = 0; t < CTC_CTRL_NTYPES; t++) {
-        const ctc_ctrl_class *c = ctc_ctrl_classes[t];
-        param_keys("type", c->params, c->law != NULL ? shared_keys : NULL, ctrl_format.by_type[t]);
-        ctrl_format.rows[n++] =
-            (job_format_object)FORMAT_KEYS("controller", "type", c->name, ctrl_format.by_type[t]);
-    }
-    for (int t = 0; t < CTC_CTRL_NTYPES; t++) {
-        const ctc_ctrl_class *c = ctc_ctrl_classes[t];
-        if (c->law == NULL) continue;
-        param_keys(NULL, c->params, NULL, ctrl_format.joint[t]);
-        ctrl_format.rows[n++] = (job_format_object)FORMAT_KEYS("controller.joints[]", NULL, c->name,
-                                                               ctrl_format.joint[t]);
-    }
-    ctrl_format.rows[n] = (job_format_object)FORMAT_END;
-}
 
 static const job_format_default doc_defaults[] = {
     DEFAULT_JSON("", NULL, "name", "\"" DEFAULT_NAME "\""),
