@@ -7,12 +7,13 @@
  * the completion callback, whatever happened in between (libmicrohttpd calls the completion
  * callback for every request that reached the access handler, and only for those). The URI
  * callback before it only looks at the raw, still percent-encoded path for "%00". The first call
- * decides everything the headers can decide - the Host (400 without one in HTTP/1.1, 421 for a
- * host not allowed), the route (404, 405 with Allow), the token (401)
- * and a declared Content-Length over the limit (413) - and answers at once without reading the
- * body. Otherwise the body is collected into one growing buffer; a chunked body that passes the
- * limit is read on and dropped (libmicrohttpd 0.9.75 refuses a response queued half-way through
- * an upload), then answered 413, and a client that keeps sending far beyond the limit is
+ * decides everything the headers can decide - the body's framing (400 BAD_FRAMING for two
+ * lengths or codings, 501 for a coding other than chunked; these close the connection), the Host
+ * (400 without one in HTTP/1.1, 421 for a host not allowed), the route (404, 405 with Allow), the
+ * token (401) and a declared Content-Length over the limit (413) - and answers at once without
+ * reading the body. Otherwise the body is collected into one growing buffer; a chunked body that
+ * passes the limit is read on and dropped (libmicrohttpd 0.9.75 refuses a response queued half-way
+ * through an upload), then answered 413, and a client that keeps sending far beyond the limit is
  * disconnected. The last call runs the handler, which fills an http_reply; the reply becomes a
  * libmicrohttpd response from its buffer or its file descriptor, with the headers every reply
  * carries. http_stop stops accepting, then gives the requests being answered a few seconds to
@@ -521,6 +522,8 @@ static enum MHD_Result send_reply(struct MHD_Connection *conn, const char *path,
         snprintf(secs, sizeof secs, "%d", rep->retry_after);
         ok &= MHD_add_response_header(res, MHD_HTTP_HEADER_RETRY_AFTER, secs) == MHD_YES;
     }
+    if (rep->close)
+        ok &= MHD_add_response_header(res, MHD_HTTP_HEADER_CONNECTION, "close") == MHD_YES;
     if (status == 401)
         ok &= MHD_add_response_header(res, MHD_HTTP_HEADER_WWW_AUTHENTICATE,
                                       "Bearer realm=\"ctcsim\"") == MHD_YES;
@@ -529,11 +532,84 @@ static enum MHD_Result send_reply(struct MHD_Connection *conn, const char *path,
     return queued;
 }
 
+/* The headers that frame a request's body, as the client sent them. */
+typedef struct framing {
+    int lengths;          /* Content-Length headers */
+    int encodings;        /* Transfer-Encoding headers */
+    const char *length;   /* the first Content-Length's value */
+    const char *encoding; /* the first Transfer-Encoding's value */
+} framing;
+
+static enum MHD_Result count_framing(void *cls, enum MHD_ValueKind kind, const char *key,
+                                     const char *value)
+{
+    (void)kind;
+    framing *f = cls;
+    if (strcasecmp(key, MHD_HTTP_HEADER_CONTENT_LENGTH) == 0 && f->lengths++ == 0)
+        f->length = value ? value : "";
+    if (strcasecmp(key, MHD_HTTP_HEADER_TRANSFER_ENCODING) == 0 && f->encodings++ == 0)
+        f->encoding = value ? value : "";
+    return MHD_YES;
+}
+
+/* Refuses a request whose body framing is ambiguous or unsupported (RFC 9112 sections 6.1-6.3):
+ * more than one Content-Length, more than one Transfer-Encoding, both together, a
+ * Content-Length that is not all digits (400 BAD_FRAMING), or a transfer coding other than
+ * "chunked" (501 UNSUPPORTED_TRANSFER_ENCODING). The reply closes the connection: the bytes
+ * after such headers cannot be trusted to start the next request (request smuggling).
+ *
+ * What libmicrohttpd 0.9.75 does itself, measured on the wire: it keeps every header line and
+ * reads the body by the first Content-Length, so duplicates and Content-Length with chunked
+ * reach this check; it answers a Content-Length that is not a plain decimal number (a sign,
+ * a letter, trailing blanks) 400, and one past 2^64 413, before the access handler runs, with a
+ * body of HTML and its status line and headers written twice - this layer cannot mend that
+ * (libmicrohttpd 0.9.76 and later do not do it); a Transfer-Encoding other than chunked it takes
+ * as a body of unknown length that never ends, so without this check the request waits for the
+ * idle timeout; it answers an HTTP/1.1 request without Host with no reply of its own (first_call
+ * answers it 400 MISSING_HOST). Returns 1 after filling rep, else 0. */
+static int framing_refused(struct MHD_Connection *conn, http_reply *rep)
+{
+    framing f = {0};
+    MHD_get_connection_values(conn, MHD_HEADER_KIND, count_framing, &f);
+    char why[128] = "";
+    const char *field = MHD_HTTP_HEADER_CONTENT_LENGTH;
+    if (f.lengths > 1) {
+        snprintf(why, sizeof why, "the request has %d Content-Length headers; one is allowed",
+                 f.lengths);
+    } else if (f.encodings > 1) {
+        field = MHD_HTTP_HEADER_TRANSFER_ENCODING;
+        snprintf(why, sizeof why, "the request has %d Transfer-Encoding headers; one is allowed",
+                 f.encodings);
+    } else if (f.lengths && f.encodings) {
+        field = MHD_HTTP_HEADER_TRANSFER_ENCODING;
+        snprintf(why, sizeof why,
+                 "the request has both Content-Length and Transfer-Encoding; send one of them");
+    } else if (f.lengths && (!f.length[0] || strspn(f.length, "0123456789") != strlen(f.length))) {
+        snprintf(why, sizeof why, "Content-Length must be a decimal number of bytes");
+    }
+    if (why[0]) {
+        http_reply_error(rep, 400, "BAD_FRAMING", field, "%s", why);
+        rep->close = 1;
+        return 1;
+    }
+    if (f.encodings && strcasecmp(f.encoding, "chunked") != 0) {
+        http_reply_error(
+            rep, 501, "UNSUPPORTED_TRANSFER_ENCODING", MHD_HTTP_HEADER_TRANSFER_ENCODING,
+            "Transfer-Encoding \"%.100s\" is not supported (only chunked is)", f.encoding);
+        rep->close = 1;
+        return 1;
+    }
+    return 0;
+}
+
 /* What the headers decide on the first call: a route and its captures, or an early reply
  * (status != 0 in rep). */
 static void first_call(http_server *s, http_exchange *x, struct MHD_Connection *conn,
                        const char *path, const char *method, const char *version, http_reply *rep)
 {
+    /* the body's framing, before anything else is believed */
+    if (framing_refused(conn, rep)) return;
+
     /* the Host: HTTP/1.1 needs one (RFC 9112 section 3.2); it must be ours, or a page of
        another site whose name resolves here (DNS rebinding) could drive the service */
     const char *host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_HOST);

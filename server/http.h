@@ -37,7 +37,8 @@ typedef struct http_reply {
     const char *content_type;
     char location[128]; /* Location header, "" = none */
     char allow[64];     /* Allow header (405), "" = none */
-    int retry_after;    /* Retry-After seconds (503), 0 = none */
+    int retry_after;    /* Retry-After seconds (503, 429), 0 = none */
+    int close;          /* 1: "Connection: close", the connection ends after this reply */
     int fd;             /* static file to send instead of body (>= 0), -1 = none */
     uint64_t fd_size;
 } http_reply;

@@ -9,12 +9,14 @@
  * (field "" when none) with these statuses and codes:
  *   400 INVALID_JSON, MISSING_FIELD, UNKNOWN_FIELD, INVALID_FIELD, LIMIT_EXCEEDED (job_json.h),
  *       INVALID_ID, INVALID_QUERY (field = the query parameter), MISSING_HOST (an HTTP/1.1
- *       request without Host)
+ *       request without Host), BAD_FRAMING (field = the header: two Content-Length or
+ *       Transfer-Encoding headers, both, or a Content-Length not a number; http.c)
  *   401 UNAUTHORIZED (with --token: POST and DELETE need "Authorization: Bearer TOKEN")
  *   404 NOT_FOUND (route, job or file), UNKNOWN_PRESET (400 inside a job body, 404 as a path)
  *   405 METHOD_NOT_ALLOWED (with Allow)   409 NOT_FINISHED (series of an unfinished job)
  *   413 BODY_TOO_LARGE   415 UNSUPPORTED_MEDIA_TYPE
  *   421 HOST_NOT_ALLOWED (the Host header names a host not in --allowed-hosts; http.h)
+ *   501 UNSUPPORTED_TRANSFER_ENCODING (a Transfer-Encoding other than chunked)
  *   503 QUEUE_FULL (with Retry-After), NO_MEMORY, DATABASE_ERROR, SHUTTING_DOWN
  *
  * A job row (lists and single jobs):
