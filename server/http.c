@@ -64,6 +64,8 @@
 
 #include <microhttpd.h>
 
+#include "client_count.h"
+
 #define HTTP_MAX_PARAMS 4
 /* bytes per connection for headers and the read buffer */
 #define HTTP_MEMORY_LIMIT (128 * 1024)
@@ -92,10 +94,12 @@ struct http_server {
     char last_log[256];   /* libmicrohttpd's last message (start-up errors), under log_lock */
     atomic_int in_flight; /* requests being answered (http_exchange.answering) */
     pthread_mutex_t defer_lock;
-    pthread_cond_t defer_done; /* signalled when deferred falls */
-    unsigned deferred;         /* deferred replies under way or reserved, under defer_lock */
-    unsigned max_deferred;     /* the most at once (http_config.max_deferred) */
-    int stopping;              /* http_stop has begun, under defer_lock */
+    pthread_cond_t defer_done;        /* signalled when deferred falls */
+    unsigned deferred;                /* deferred replies under way or reserved, under defer_lock */
+    unsigned max_deferred;            /* the most at once (http_config.max_deferred) */
+    client_count *deferred_by_client; /* deferred replies per client address */
+    unsigned max_deferred_per_client; /* the most per client (0 = no limit) */
+    int stopping;                     /* http_stop has begun, under defer_lock */
 };
 
 /* One request, from its first callback to its completion. */
@@ -116,6 +120,8 @@ typedef struct http_exchange {
     void *defer_arg;
     http_reply rep;              /* filled by defer_fn on the deferring thread */
     int resumed;                 /* defer_fn is done, under defer_lock */
+    int client_counted;          /* holds a place in deferred_by_client */
+    char client[CLIENT_KEY_MAX]; /* the peer's numeric address */
     struct MHD_Connection *conn; /* suspended */
     http_server *server;
 } http_exchange;
@@ -215,6 +221,26 @@ const char *http_query(const http_request *req, const char *key)
 const char *http_header(const http_request *req, const char *name)
 {
     return MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND, name);
+}
+
+/* The connection's peer as a numeric address, "unknown" when libmicrohttpd cannot say. */
+static void client_address(struct MHD_Connection *conn, char *buf, size_t len)
+{
+    const union MHD_ConnectionInfo *info =
+        MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+    const struct sockaddr *sa = info ? info->client_addr : NULL;
+    const void *addr = NULL;
+    if (sa && sa->sa_family == AF_INET)
+        addr = &((const struct sockaddr_in *)(const void *)sa)->sin_addr;
+    if (sa && sa->sa_family == AF_INET6)
+        addr = &((const struct sockaddr_in6 *)(const void *)sa)->sin6_addr;
+    if (!addr || !inet_ntop(sa->sa_family, addr, buf, (socklen_t)len))
+        snprintf(buf, len, "unknown");
+}
+
+void http_client(const http_request *req, char *buf, size_t len)
+{
+    client_address(req->conn, buf, len);
 }
 
 /* Whether path matches pattern; the "{...}" segments are copied into buf (at least
@@ -739,14 +765,30 @@ int http_defer(http_reply *rep, void (*fn)(http_reply *rep, void *arg), void *ar
     int rc = -1;
     pthread_mutex_lock(&s->defer_lock);
     if (!s->stopping && s->deferred < s->max_deferred) {
-        s->deferred++; /* the place is held from here; run_deferred or on_request gives it back */
-        rc = 0;
+        /* the places are held from here; defer_release gives them back */
+        int taken = client_count_take(s->deferred_by_client, x->client, s->max_deferred_per_client);
+        if (taken == 0) {
+            s->deferred++;
+            x->client_counted = 1;
+            rc = 0;
+        } else if (taken == 1) {
+            rc = -2;
+        }
     }
     pthread_mutex_unlock(&s->defer_lock);
-    if (rc != 0) return -1;
+    if (rc != 0) return rc;
     x->defer_fn = fn;
     x->defer_arg = arg;
     return 0;
+}
+
+/* Gives back the places http_defer took for x; under defer_lock. */
+static void defer_release(http_server *s, http_exchange *x)
+{
+    s->deferred--;
+    if (x->client_counted) client_count_give(s->deferred_by_client, x->client);
+    x->client_counted = 0;
+    pthread_cond_broadcast(&s->defer_done);
 }
 
 /* The deferring thread: runs defer_fn, then resumes the connection, whose next call to the
@@ -758,9 +800,8 @@ static void *run_deferred(void *arg)
     x->defer_fn(&x->rep, x->defer_arg);
     pthread_mutex_lock(&s->defer_lock);
     x->resumed = 1;
+    defer_release(s, x);
     MHD_resume_connection(x->conn); /* x may be gone once the lock is released */
-    s->deferred--;
-    pthread_cond_broadcast(&s->defer_done);
     pthread_mutex_unlock(&s->defer_lock);
     return NULL;
 }
@@ -823,6 +864,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         }
         x->encoded_nul = encoded_nul;
         x->rep.fd = -1;
+        client_address(conn, x->client, sizeof x->client);
         first_call(s, x, conn, url, method, version, &rep);
         if (!rep.status && !rep.body) return MHD_YES;
         begin_answer(s, x);
@@ -876,8 +918,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
         x->defer_fn(&rep, x->defer_arg); /* no thread for it: here, then */
         x->defer_fn = NULL;
         pthread_mutex_lock(&s->defer_lock);
-        s->deferred--;
-        pthread_cond_broadcast(&s->defer_done);
+        defer_release(s, x);
         pthread_mutex_unlock(&s->defer_lock);
     }
     return send_reply(conn, url, &rep);
@@ -933,6 +974,8 @@ int http_start(const http_config *config, http_server **out, char *err, size_t e
         config->max_connections ? config->max_connections : HTTP_MAX_CONNECTIONS;
     unsigned max_per_ip = config->max_per_ip ? config->max_per_ip : HTTP_MAX_PER_IP;
     s->max_deferred = config->max_deferred ? config->max_deferred : HTTP_MAX_DEFERRED;
+    s->max_deferred_per_client = config->max_deferred_per_client;
+    if (!(s->deferred_by_client = client_count_new())) goto no_memory;
 
     /* the logger first, so that libmicrohttpd's checks of the other options use it too */
     // clang-format off
@@ -1001,5 +1044,6 @@ void http_stop(http_server *s)
     free(s->web_root);
     free(s->token);
     free(s->hosts);
+    client_count_free(s->deferred_by_client);
     free(s);
 }

@@ -72,8 +72,10 @@ typedef struct http_config {
                                  accept [64] */
     unsigned max_deferred;    /* replies waiting at once off the HTTP threads (http_defer);
                                  past them http_defer refuses [256] */
-    const http_route *routes; /* terminated by a route with method NULL */
-    void *ctx;                /* passed to every handler */
+    unsigned max_deferred_per_client; /* of which from one client address at once; past them
+                                         http_defer refuses [0: no limit of its own] */
+    const http_route *routes;         /* terminated by a route with method NULL */
+    void *ctx;                        /* passed to every handler */
 } http_config;
 
 /* Starts listening. Returns 0, or -1 with a message (address in use, bad bind address). */
@@ -90,6 +92,10 @@ const char *http_query(const http_request *req, const char *key);
 
 /* A request header, or NULL. */
 const char *http_header(const http_request *req, const char *name);
+
+/* The client's numeric address (the connection's peer, "127.0.0.1", "::1"; "unknown" when it
+ * cannot be had) into buf of len bytes (INET6_ADDRSTRLEN is enough). */
+void http_client(const http_request *req, char *buf, size_t len);
 
 /* Replies: JSON (takes ownership of json and deletes it), raw text with a content type (copied),
  * and the error object {"error": {"code", "message", "field"}} (field may be NULL or ""). */
@@ -110,7 +116,8 @@ void http_reply_buffer(http_reply *rep, int status, const char *content_type, ch
  * it fills rep (which may already hold a Location) and owns arg. Then the reply is sent. (Should
  * no thread be had, fn runs in the handler's thread.) fn must return promptly once the server is
  * stopping: http_stop waits for it. Returns -1, without calling fn, when all places are taken,
- * the server is stopping, or it is called outside a handler or twice: the handler still owns arg
+ * the server is stopping, or it is called outside a handler or twice, and -2 when the request's
+ * client address holds max_deferred_per_client places already: then the handler still owns arg
  * and must reply itself, at once. */
 int http_defer(http_reply *rep, void (*fn)(http_reply *rep, void *arg), void *arg);
 

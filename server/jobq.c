@@ -300,6 +300,7 @@ static void *worker_main(void *arg)
         pthread_mutex_unlock(&q->lock);
 
         worker_outcome outcome = run_job(w, id);
+        if (q->config.left) q->config.left(q->config.left_arg, id);
 
         /* the slot is free again; jobq_wait may be waiting for this job */
         pthread_mutex_lock(&q->lock);
@@ -482,6 +483,7 @@ int jobq_cancel(jobq *q, int64_t id)
         rc = 2;
     }
     pthread_mutex_unlock(&q->lock);
+    if (rc == 1 && q->config.left) q->config.left(q->config.left_arg, id);
     return rc;
 }
 

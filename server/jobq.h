@@ -30,6 +30,11 @@ typedef struct jobq_config {
     int workers;           /* >= 1 */
     int max_queue;         /* >= 1: jobs waiting (not running) at most */
     double job_time_limit; /* s of wall time per job; 0 = none */
+    /* called with each job that leaves the queue and the workers (finished, cancelled while
+       queued, or put back at shutdown), on the thread that removed it and outside the queue's
+       lock; NULL = none. It must not call back into the queue. */
+    void (*left)(void *arg, int64_t id);
+    void *left_arg;
 } jobq_config;
 
 typedef struct jobq_stats {

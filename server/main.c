@@ -51,10 +51,12 @@ typedef struct server_settings {
     const char *api;
     double job_time_limit; /* s, 0 = none */
     long long http_threads;
-    long long idle_timeout;    /* s */
-    long long max_connections; /* open at once */
-    long long max_per_ip;      /* open at once from one address */
-    long long max_waiters;     /* POST /api/jobs?wait clients waiting at once */
+    long long idle_timeout;           /* s */
+    long long max_connections;        /* open at once */
+    long long max_per_ip;             /* open at once from one address */
+    long long max_waiters;            /* POST /api/jobs?wait clients waiting at once */
+    long long max_waiters_per_client; /* of which from one client address */
+    long long max_jobs_per_client;    /* queued and running jobs of one client address */
 } server_settings;
 
 typedef enum setting_kind {
@@ -115,6 +117,12 @@ static const setting settings[] = {
      1, 100000, "N", "connections open at once from one client address; more are closed"},
     {"--max-waiters", "CTCSIM_MAX_WAITERS", SETTING_INTEGER, AT(max_waiters), 1, 100000, "N",
      "POST /api/jobs?wait clients waiting at once; more get 202 at once"},
+    {"--max-waiters-per-client", "CTCSIM_MAX_WAITERS_PER_CLIENT", SETTING_INTEGER,
+     AT(max_waiters_per_client), 1, 100000, "N",
+     "of those, waiting at once from one client address; more get 202 at once"},
+    {"--max-jobs-per-client", "CTCSIM_MAX_JOBS_PER_CLIENT", SETTING_INTEGER,
+     AT(max_jobs_per_client), 1, 1000000, "N",
+     "jobs queued or running at once from one client address; more are refused with 429"},
 };
 
 #define NSETTINGS (sizeof settings / sizeof settings[0])
@@ -359,6 +367,8 @@ int main(int argc, char **argv)
         .max_connections = 1000,
         .max_per_ip = 64,
         .max_waiters = 256,
+        .max_waiters_per_client = 16,
+        .max_jobs_per_client = 64,
     };
     int rc = read_settings(argc, argv, &cfg);
     if (rc != 0) return rc > 0 ? 0 : EXIT_BAD_SETTING;
@@ -387,21 +397,30 @@ int main(int argc, char **argv)
                 "ctcsim-server: warning: web root %s is not a directory (pages answer 404)\n",
                 cfg.web);
 
-    /* the workers, then the HTTP daemon */
+    /* the workers, then the HTTP daemon; a job leaving the workers frees its client's place */
+    routes_ctx ctx = {.db_path = cfg.db,
+                      .api_dir = cfg.api,
+                      .max_wait = MAX_WAIT,
+                      .job_threads = (int)cfg.job_threads,
+                      .jobs_by_client = client_count_new(),
+                      .max_jobs_per_client = (unsigned)cfg.max_jobs_per_client};
+    if (!ctx.jobs_by_client) {
+        fprintf(stderr, "ctcsim-server: out of memory\n");
+        return EXIT_DATABASE;
+    }
     jobq_config qc = {.db_path = cfg.db,
                       .workers = (int)cfg.workers,
                       .max_queue = (int)cfg.max_queue,
-                      .job_time_limit = cfg.job_time_limit};
+                      .job_time_limit = cfg.job_time_limit,
+                      .left = routes_job_left,
+                      .left_arg = &ctx};
     jobq *queue = NULL;
     if (jobq_start(&qc, &queue, err, sizeof err) != 0) {
         database_error(cfg.db, err);
+        client_count_free(ctx.jobs_by_client);
         return EXIT_DATABASE;
     }
-    routes_ctx ctx = {.queue = queue,
-                      .db_path = cfg.db,
-                      .api_dir = cfg.api,
-                      .max_wait = MAX_WAIT,
-                      .job_threads = (int)cfg.job_threads};
+    ctx.queue = queue;
     http_config hc = {.bind = cfg.bind,
                       .port = (int)cfg.port,
                       .threads = (int)cfg.http_threads,
@@ -413,12 +432,14 @@ int main(int argc, char **argv)
                       .max_connections = (unsigned)cfg.max_connections,
                       .max_per_ip = (unsigned)cfg.max_per_ip,
                       .max_deferred = (unsigned)cfg.max_waiters,
+                      .max_deferred_per_client = (unsigned)cfg.max_waiters_per_client,
                       .routes = routes_table,
                       .ctx = &ctx};
     http_server *http = NULL;
     if (http_start(&hc, &http, err, sizeof err) != 0) {
         fprintf(stderr, "ctcsim-server: %s\n", err);
         jobq_stop(queue);
+        client_count_free(ctx.jobs_by_client);
         return EXIT_LISTEN;
     }
     int v6 = strchr(cfg.bind, ':') != NULL;
@@ -436,6 +457,7 @@ int main(int argc, char **argv)
     atomic_store(&ctx.stopping, 1);
     http_stop(http);
     jobq_stop(queue);
+    client_count_free(ctx.jobs_by_client);
     fprintf(stderr, "ctcsim-server: stopped\n");
     return 0;
 }

@@ -38,6 +38,7 @@
 
 #include <microhttpd.h>
 
+#include "client_count.h"
 #include "job_json.h"
 #include "presets.h"
 #include "result_out.h"
@@ -375,7 +376,25 @@ static void post_jobs(const http_request *req, http_reply *rep, void *arg)
     if (!j) return;
     char *spec = NULL;
     store *s = NULL;
+    int reserved = 0;
 
+    /* the client's place among its jobs, held from here (reserved) until the job has its id */
+    char client[CLIENT_KEY_MAX];
+    http_client(req, client, sizeof client);
+    int held = client_count_take(ctx->jobs_by_client, client, ctx->max_jobs_per_client);
+    if (held != 0) {
+        if (held == 1) {
+            rep->retry_after = ROUTES_RETRY_AFTER;
+            http_reply_error(rep, 429, "TOO_MANY_JOBS", "",
+                             "this client (%s) has %u jobs queued or running, the most one client "
+                             "may have (--max-jobs-per-client); try again once one has finished",
+                             client, ctx->max_jobs_per_client);
+        } else {
+            http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
+        }
+        goto done;
+    }
+    reserved = 1;
     if (jobq_space(ctx->queue) <= 0) {
         rep->retry_after = ROUTES_RETRY_AFTER;
         http_reply_error(rep, 503, "QUEUE_FULL", "",
@@ -395,9 +414,17 @@ static void post_jobs(const http_request *req, http_reply *rep, void *arg)
         database_failed(rep, "storing the job", err);
         goto done;
     }
-    int rc = jobq_submit(ctx->queue, id);
+    /* the reserved place becomes the job's, given back when it leaves the workers
+       (routes_job_left); before it is queued, since it may leave at once */
+    int rc = client_count_take_id(ctx->jobs_by_client, client, id, 0) == 0 ? 0 : -1;
+    client_count_give(ctx->jobs_by_client, client);
+    reserved = 0;
+    if (rc == 0 && (rc = jobq_submit(ctx->queue, id)) != 0)
+        client_count_give_id(ctx->jobs_by_client, id);
     if (rc != 0) {
-        const char *why = rc == 1 ? "the queue was full" : "the server was shutting down";
+        const char *why = rc == 1   ? "the queue was full"
+                          : rc == 2 ? "the server was shutting down"
+                                    : "out of memory";
         if (store_finish(s, id, STORE_CANCELLED, why, NULL, NULL, err, sizeof err) != 0 ||
             store_delete(s, id, err, sizeof err) < 0)
             fprintf(stderr, "ctcsim-server: database: withdrawing job %" PRId64 ": %s\n", id, err);
@@ -405,8 +432,10 @@ static void post_jobs(const http_request *req, http_reply *rep, void *arg)
         if (rc == 1)
             http_reply_error(rep, 503, "QUEUE_FULL", "",
                              "the queue is full; try again in a few seconds");
-        else
+        else if (rc == 2)
             http_reply_error(rep, 503, "SHUTTING_DOWN", "", "the server is shutting down");
+        else
+            http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
         goto done;
     }
 
@@ -419,8 +448,15 @@ static void post_jobs(const http_request *req, http_reply *rep, void *arg)
         reply_new_job(rep, ctx, id, 0);
     }
 done:
+    if (reserved) client_count_give(ctx->jobs_by_client, client);
     free(spec);
     job_free(j);
+}
+
+void routes_job_left(void *arg, int64_t id)
+{
+    routes_ctx *ctx = arg;
+    client_count_give_id(ctx->jobs_by_client, id);
 }
 
 /* ---- GET /api/jobs ---- */

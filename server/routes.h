@@ -16,6 +16,8 @@
  *   405 METHOD_NOT_ALLOWED (with Allow)   409 NOT_FINISHED (series of an unfinished job)
  *   413 BODY_TOO_LARGE   415 UNSUPPORTED_MEDIA_TYPE
  *   421 HOST_NOT_ALLOWED (the Host header names a host not in --allowed-hosts; http.h)
+ *   429 TOO_MANY_JOBS (with Retry-After: the client's address has --max-jobs-per-client jobs
+ *       queued or running; the loopback address counts like any other)
  *   501 UNSUPPORTED_TRANSFER_ENCODING (a Transfer-Encoding other than chunked)
  *   503 QUEUE_FULL (with Retry-After), NO_MEMORY, DATABASE_ERROR, SHUTTING_DOWN
  *
@@ -58,7 +60,9 @@
 #define ROUTES_H
 
 #include <stdatomic.h>
+#include <stdint.h>
 
+#include "client_count.h"
 #include "http.h"
 #include "jobq.h"
 
@@ -67,16 +71,22 @@
 /* What the handlers share; one for the whole server. */
 typedef struct routes_ctx {
     jobq *queue;
-    const char *db_path; /* each HTTP thread opens its own connection on first use; it is
-                            closed when the thread exits (a pthread key destructor) */
-    const char *api_dir; /* directory holding openapi.yaml */
-    double max_wait;     /* s, the largest ?wait= accepted (300) */
-    int job_threads;     /* the most "threads" a job may ask for (--job-threads) */
-    atomic_int stopping; /* set at shutdown (read by the HTTP threads, hence atomic): POST
-                            /api/jobs answers 503 SHUTTING_DOWN */
+    const char *db_path;          /* each HTTP thread opens its own connection on first use; it is
+                                     closed when the thread exits (a pthread key destructor) */
+    const char *api_dir;          /* directory holding openapi.yaml */
+    double max_wait;              /* s, the largest ?wait= accepted (300) */
+    int job_threads;              /* the most "threads" a job may ask for (--job-threads) */
+    client_count *jobs_by_client; /* each client address's queued and running jobs */
+    unsigned max_jobs_per_client; /* past them POST /api/jobs answers 429 (0 = no limit) */
+    atomic_int stopping;          /* set at shutdown (read by the HTTP threads, hence atomic): POST
+                                     /api/jobs answers 503 SHUTTING_DOWN */
 } routes_ctx;
 
 /* The route table, terminated by {NULL}. Handlers expect a routes_ctx as their ctx. */
 extern const http_route routes_table[];
+
+/* The queue's `left` hook (jobq_config): the job's place among its client's jobs is free again.
+ * arg is the routes_ctx. */
+void routes_job_left(void *arg, int64_t id);
 
 #endif

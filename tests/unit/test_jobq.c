@@ -681,3 +681,44 @@ Test(jobq, start_refuses_a_bad_config_with_a_message)
     cr_assert_str_eq(err, want);
     cr_assert_null(q);
 }
+
+/* What the `left` hook saw: each job id, in order, under a lock of its own. */
+typedef struct left_log {
+    pthread_mutex_t lock;
+    int64_t ids[16];
+    int n;
+} left_log;
+
+static void log_left(void *arg, int64_t id)
+{
+    left_log *log = arg;
+    pthread_mutex_lock(&log->lock);
+    if (log->n < 16) log->ids[log->n] = id;
+    log->n++;
+    pthread_mutex_unlock(&log->lock);
+}
+
+Test(jobq, left_is_called_once_for_each_job_that_leaves_finished_or_cancelled)
+{
+    left_log log = {.lock = PTHREAD_MUTEX_INITIALIZER};
+    jobq_config cfg = {
+        .db_path = db_path, .workers = 1, .max_queue = 4, .left = log_left, .left_arg = &log};
+    jobq *q = NULL;
+    char err[256] = "";
+    cr_assert_eq(jobq_start(&cfg, &q, err, sizeof err), 0, "jobq_start: %s", err);
+    int64_t running = submit_job(q, LONG_JOB);
+    await_busy(q);
+    int64_t queued = submit_job(q, SHORT_JOB);
+    int64_t after = submit_job(q, SHORT_JOB);
+    cr_assert_eq(jobq_cancel(q, queued), 1);
+    cr_assert_eq(log.n, 1, "a job cancelled in the queue leaves at once");
+    cr_assert_eq(log.ids[0], queued);
+    cr_assert_eq(jobq_cancel(q, queued), 0);
+    cr_assert_eq(jobq_cancel(q, running), 2);
+    cr_assert_eq(jobq_wait(q, after, WAIT_S), 0);
+    jobq_stop(q);
+    /* the running job left when its worker stopped it, then the last one when it finished */
+    cr_assert_eq(log.n, 3, "left was called %d times", log.n);
+    cr_assert_eq(log.ids[1], running);
+    cr_assert_eq(log.ids[2], after);
+}
