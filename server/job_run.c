@@ -296,11 +296,11 @@ int parse_disturbance(parser *p, const cJSON *doc)
 
 /* ---- integrator, duration, output, limits ---- */
 
-static const char *const integ_keys_all[] = {"method",   "step",     "rtol",      "atol", "initial_step",
-                                             "max_step", "min_step", "max_steps", NULL};
+static const char *const integ_keys_all[] = {
+    "method", "step", "rtol", "atol", "initial_step", "max_step", "min_step", "max_steps", NULL};
 static const char *const integ_keys_fixed[] = {"method", "step", "max_steps", NULL};
-static const char *const integ_keys_adaptive[] = {"method",   "rtol",     "atol",     "initial_step",
-                                                  "max_step", "min_step", "max_steps", NULL};
+static const char *const integ_keys_adaptive[] = {
+    "method", "rtol", "atol", "initial_step", "max_step", "min_step", "max_steps", NULL};
 static const char *const *const integ_keys[] = {[CTC_INTEG_RK4] = integ_keys_fixed,
                                                 [CTC_INTEG_DOPRI5] = integ_keys_adaptive,
                                                 [CTC_INTEG_BDF] = integ_keys_adaptive};
@@ -377,7 +377,10 @@ int parse_duration(parser *p, const cJSON *doc)
     json_put_number(p, p->norm, "duration", *d);
 
     /* rk4's work is known before it runs: duration / step steps, within max_steps (or
-     * JOB_MAX_FIXED_STEPS where max_steps is 0, no limit) */
+     * JOB_MAX_FIXED_STEPS where max_steps is 0, no limit), each step costing about the same per
+     * body, so that steps x bodies must be within JOB_MAX_WORK. (The adaptive methods' step count
+     * depends on the motion: max_steps, min_step and the server's time limit bound them as they
+     * run.) */
     const ctc_integ_spec *s = &p->j->spec.integrator;
     if (s->method == CTC_INTEG_RK4) {
         const double steps = ceil(*d / s->step);
@@ -388,6 +391,14 @@ int parse_duration(parser *p, const cJSON *doc)
                                  "step (got %g s for %g s)",
                                  steps, s->max_steps > 0 ? "integrator.max_steps" : "the bound",
                                  bound, s->step, *d);
+        }
+        const int nbodies = p->j->spec.chain.nbodies;
+        if (steps * nbodies > JOB_MAX_WORK) {
+            return json_error_at(p->err, JOB_LIMIT_EXCEEDED, "integrator.step",
+                                 "%.3g steps x %d bodies = %.3g body-steps exceeds the bound on a "
+                                 "job's work (%.0e): use a larger step, a shorter duration or "
+                                 "fewer bodies (got %g s for %g s)",
+                                 steps, nbodies, steps * nbodies, JOB_MAX_WORK, s->step, *d);
         }
     }
     return 0;

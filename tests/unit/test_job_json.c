@@ -435,6 +435,11 @@ static const bad_job bad_jobs[] = {
      JOB_INVALID_FIELD, "integrator.step",
      "duration / step = 1e+12 steps exceeds the bound (1000000000): use a larger step (got "
      "1e-12 s for 1 s)"},
+    {"rk4 work over the bound",
+     PASSIVE_JOB(",'integrator':{'method':'rk4','step':1e-9,'max_steps':1e9}"), NULL,
+     JOB_LIMIT_EXCEEDED, "integrator.step",
+     "1e+09 steps x 2 bodies = 2e+09 body-steps exceeds the bound on a job's work (1e+09): use a "
+     "larger step, a shorter duration or fewer bodies (got 1e-09 s for 1 s)"},
     {"negative min_step", PASSIVE_JOB(",'integrator':{'min_step':-1}"), NULL, JOB_INVALID_FIELD,
      "integrator", "min_step must be >= 0 and finite (got -1 s)"},
     {"min_step over max_step",
@@ -662,6 +667,21 @@ Test(job_json, names_are_limited_to_JOB_MAX_NAME_bytes)
     cr_assert_str_eq(err.message, "must be at most 200 bytes long (got 201)");
     free(ok);
     free(long_name);
+}
+
+Test(job_json, rk4_work_is_bounded_by_steps_times_bodies)
+{
+    /* 4e8 steps x 2 bodies = 8e8 body-steps pass; 6e8 x 2 = 1.2e9 are refused (the message is
+       in the table of bad jobs): the bound counts bodies, not steps alone */
+    job *j = parse_ok(PASSIVE_JOB(",'integrator':{'method':'rk4','step':2.5e-9,'max_steps':1e9}"));
+    cr_assert_eq(j->spec.chain.nbodies, 2);
+    job_free(j);
+    char *text = json(PASSIVE_JOB(",'integrator':{'method':'rk4','step':1.6e-9,'max_steps':1e9}"));
+    job_error err;
+    cr_assert_eq(job_parse(text, strlen(text), &j, &err), -1);
+    cr_assert_eq(err.code, JOB_LIMIT_EXCEEDED);
+    cr_assert_str_eq(err.field, "integrator.step");
+    free(text);
 }
 
 Test(job_json, reads_exactly_len_bytes_of_unterminated_text)
@@ -1286,7 +1306,8 @@ Test(job_json, normalised_keys_come_in_canonical_order)
         "'independent':true}}],"
         "'q0':[0],'v0':[1]},'controller':{'type':'none'},'disturbance':{'type':'none'},"
         "'integrator':{'method':'dopri5','rtol':1e-08,'atol':1e-10,'initial_step':0,'max_step':0,"
-        "'min_step':0,'max_steps':10000000},'duration':1,'output':{'interval':0.01,'channels':['q','qdot']},"
+        "'min_step':0,'max_steps':10000000},'duration':1,'output':{'interval':0.01,'channels':['q',"
+        "'qdot']},"
         "'limits':{'max_speed':1000000,'wall_time':0},'threads':1}");
     cr_assert_str_eq(text, want);
     free(text);
