@@ -8,6 +8,15 @@
  * it when libmicrohttpd ends the thread; a connection that reports an error is closed at once, so
  * the next request opens a fresh one.
  *
+ * A POST body of more than ROUTES_INLINE_BODY bytes (64 KiB; a job's parse costs about 0.1 s per
+ * MB) is parsed off the HTTP threads (run_post): the handler copies it and defers the whole POST
+ * (http_defer), which then waits there too for ?wait; it takes one of the --max-waiters places
+ * and of the client's --max-waiters-per-client, and past them is answered at once, 503 BUSY or
+ * 429 TOO_MANY_REQUESTS, so an HTTP thread parses at most 64 KiB for a request. Each client
+ * address may have --max-jobs-per-client jobs queued or running (client_count.h; its place taken
+ * before the job is stored and given back by the queue's `left` hook), past which 429
+ * TOO_MANY_JOBS.
+ *
  * A new job is validated in full (job_parse runs ctc_sim_check) before it is stored, stored before
  * it is queued, and answered 202 only once it is both: a job that cannot be queued is recorded
  * cancelled and deleted again, and the client gets 503. ?wait defers the reply (http_defer): a
@@ -49,6 +58,8 @@
 #define ROUTES_EVERY_MAX 1000000
 #define ROUTES_RETRY_AFTER 5   /* s, with 503 QUEUE_FULL and SHUTTING_DOWN */
 #define ROUTES_WAIT_SLICE 0.25 /* s of one jobq_wait while a client waits */
+/* bytes of a POST body parsed on the HTTP thread; larger ones are parsed off it (run_post) */
+#define ROUTES_INLINE_BODY (64 * 1024)
 
 /* ---- the thread's store connection ---- */
 
@@ -165,11 +176,11 @@ static int body_is_json(const http_request *req, http_reply *rep)
 
 /* Parses the body as a job that this server accepts; NULL after replying the parser's error, or
    400 INVALID_FIELD when it asks for more threads than the server allows. */
-static job *body_job(const http_request *req, http_reply *rep, const routes_ctx *ctx)
+static job *body_job(const char *body, size_t len, http_reply *rep, const routes_ctx *ctx)
 {
     job *j = NULL;
     job_error e = {0};
-    if (job_parse(req->body, req->body_len, &j, &e) == 0) {
+    if (job_parse(body, len, &j, &e) == 0) {
         if (j->spec.threads <= ctx->job_threads) return j;
         http_reply_error(rep, 400, "INVALID_FIELD", "threads",
                          "must be at most %d on this server (its --job-threads; got %d)",
@@ -361,26 +372,81 @@ static void finish_wait(http_reply *rep, void *arg)
     free(w);
 }
 
-static void post_jobs(const http_request *req, http_reply *rep, void *arg)
+/* A POST whose body is parsed off the HTTP threads (http_defer): what the deferred part needs,
+ * the body copied (a request's strings last for the handler's call only). */
+typedef struct deferred_post {
+    const routes_ctx *ctx;
+    char client[CLIENT_KEY_MAX];
+    char *body;
+    size_t len;
+    double wait; /* s, POST /api/jobs?wait */
+    void (*work)(http_reply *rep, const routes_ctx *ctx, const char *client, const char *body,
+                 size_t len, double wait, int deferred);
+} deferred_post;
+
+static void finish_post(http_reply *rep, void *arg)
 {
-    routes_ctx *ctx = arg;
-    char err[256] = "";
-    double wait;
-    if (atomic_load(&ctx->stopping)) {
-        rep->retry_after = ROUTES_RETRY_AFTER;
-        http_reply_error(rep, 503, "SHUTTING_DOWN", "", "the server is shutting down");
+    deferred_post *d = arg;
+    d->work(rep, d->ctx, d->client, d->body, d->len, d->wait, 1);
+    free(d->body);
+    free(d);
+}
+
+/* Runs work(...) here for a body up to ROUTES_INLINE_BODY bytes, else on a thread of the HTTP
+ * layer (http_defer); past the places for those, 503 BUSY or, past the client's, 429
+ * TOO_MANY_REQUESTS, both with Retry-After. */
+static void run_post(const http_request *req, http_reply *rep, const routes_ctx *ctx, double wait,
+                     void (*work)(http_reply *rep, const routes_ctx *ctx, const char *client,
+                                  const char *body, size_t len, double wait, int deferred))
+{
+    char client[CLIENT_KEY_MAX];
+    http_client(req, client, sizeof client);
+    if (req->body_len <= ROUTES_INLINE_BODY) {
+        work(rep, ctx, client, req->body, req->body_len, wait, 0);
         return;
     }
-    if (body_is_json(req, rep) != 0 || query_wait(req, rep, ctx, &wait) != 0) return;
-    job *j = body_job(req, rep, ctx);
+    deferred_post *d = malloc(sizeof *d);
+    char *copy = malloc(req->body_len + 1);
+    if (!d || !copy) {
+        free(d);
+        free(copy);
+        http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory for the request body");
+        return;
+    }
+    memcpy(copy, req->body, req->body_len + 1);
+    *d =
+        (deferred_post){.ctx = ctx, .body = copy, .len = req->body_len, .wait = wait, .work = work};
+    memcpy(d->client, client, sizeof client);
+    int rc = http_defer(rep, finish_post, d);
+    if (rc == 0) return;
+    free(copy);
+    free(d);
+    rep->retry_after = ROUTES_RETRY_AFTER;
+    if (rc == -2)
+        http_reply_error(rep, 429, "TOO_MANY_REQUESTS", "",
+                         "this client (%s) has as many requests being answered off the HTTP "
+                         "threads as it may (--max-waiters-per-client); try again in a few seconds",
+                         client);
+    else
+        http_reply_error(rep, 503, "BUSY", "",
+                         "every place for a body of more than %d bytes is taken (--max-waiters); "
+                         "try again in a few seconds",
+                         ROUTES_INLINE_BODY);
+}
+
+/* POST /api/jobs once the request is checked: parse, the client's place, store, queue, reply
+ * (or wait: here when deferred already, else by http_defer). */
+static void post_job_work(http_reply *rep, const routes_ctx *ctx, const char *client,
+                          const char *body, size_t len, double wait, int deferred)
+{
+    char err[256] = "";
+    job *j = body_job(body, len, rep, ctx);
     if (!j) return;
     char *spec = NULL;
     store *s = NULL;
     int reserved = 0;
 
     /* the client's place among its jobs, held from here (reserved) until the job has its id */
-    char client[CLIENT_KEY_MAX];
-    http_client(req, client, sizeof client);
     int held = client_count_take(ctx->jobs_by_client, client, ctx->max_jobs_per_client);
     if (held != 0) {
         if (held == 1) {
@@ -440,6 +506,10 @@ static void post_jobs(const http_request *req, http_reply *rep, void *arg)
     }
 
     /* ?wait: answered from a thread that may block, so this one serves others meanwhile */
+    if (wait > 0 && deferred) {
+        reply_new_job(rep, ctx, id, wait_for_job(ctx, id, wait));
+        goto done;
+    }
     job_wait *w = wait > 0 ? malloc(sizeof *w) : NULL;
     if (w) *w = (job_wait){.ctx = ctx, .id = id, .wait = wait};
     if (!w || http_defer(rep, finish_wait, w) != 0) {
@@ -451,6 +521,19 @@ done:
     if (reserved) client_count_give(ctx->jobs_by_client, client);
     free(spec);
     job_free(j);
+}
+
+static void post_jobs(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    double wait;
+    if (atomic_load(&ctx->stopping)) {
+        rep->retry_after = ROUTES_RETRY_AFTER;
+        http_reply_error(rep, 503, "SHUTTING_DOWN", "", "the server is shutting down");
+        return;
+    }
+    if (body_is_json(req, rep) != 0 || query_wait(req, rep, ctx, &wait) != 0) return;
+    run_post(req, rep, ctx, wait, post_job_work);
 }
 
 void routes_job_left(void *arg, int64_t id)
@@ -763,10 +846,13 @@ done:
 
 /* ---- POST /api/validate ---- */
 
-static void post_validate(const http_request *req, http_reply *rep, void *arg)
+static void validate_work(http_reply *rep, const routes_ctx *ctx, const char *client,
+                          const char *body, size_t len, double wait, int deferred)
 {
-    if (body_is_json(req, rep) != 0) return;
-    job *j = body_job(req, rep, arg);
+    (void)client;
+    (void)wait;
+    (void)deferred;
+    job *j = body_job(body, len, rep, ctx);
     if (!j) return;
     cJSON *o = cJSON_CreateObject();
     cJSON_AddBoolToObject(o, "valid", 1);
@@ -776,6 +862,12 @@ static void post_validate(const http_request *req, http_reply *rep, void *arg)
     }
     job_free(j);
     http_reply_json(rep, 200, o);
+}
+
+static void post_validate(const http_request *req, http_reply *rep, void *arg)
+{
+    if (body_is_json(req, rep) != 0) return;
+    run_post(req, rep, arg, 0, validate_work);
 }
 
 /* ---- GET /api/presets, /api/presets/{name} ---- */

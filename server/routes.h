@@ -17,9 +17,11 @@
  *   413 BODY_TOO_LARGE   415 UNSUPPORTED_MEDIA_TYPE
  *   421 HOST_NOT_ALLOWED (the Host header names a host not in --allowed-hosts; http.h)
  *   429 TOO_MANY_JOBS (with Retry-After: the client's address has --max-jobs-per-client jobs
- *       queued or running; the loopback address counts like any other)
+ *       queued or running; the loopback address counts like any other), TOO_MANY_REQUESTS (with
+ *       Retry-After: a body over 64 KiB past the client's --max-waiters-per-client)
  *   501 UNSUPPORTED_TRANSFER_ENCODING (a Transfer-Encoding other than chunked)
- *   503 QUEUE_FULL (with Retry-After), NO_MEMORY, DATABASE_ERROR, SHUTTING_DOWN
+ *   503 QUEUE_FULL (with Retry-After), NO_MEMORY, DATABASE_ERROR, SHUTTING_DOWN, BUSY (with
+ *       Retry-After: a body over 64 KiB, parsed off the HTTP threads, past --max-waiters)
  *
  * A job row (lists and single jobs):
  *   {"id", "name", "preset" (or null), "status" ("queued", "running", "done", "failed",
