@@ -588,11 +588,11 @@ static enum MHD_Result count_framing(void *cls, enum MHD_ValueKind kind, const c
  * reads the body by the first Content-Length, so duplicates and Content-Length with chunked
  * reach this check; it answers a Content-Length that is not a plain decimal number (a sign,
  * a letter, trailing blanks) 400, and one past 2^64 413, before the access handler runs, with a
- * body of HTML and its status line and headers written twice - this layer cannot mend that
- * (libmicrohttpd 0.9.76 and later do not do it); a Transfer-Encoding other than chunked it takes
- * as a body of unknown length that never ends, so without this check the request waits for the
- * idle timeout; it answers an HTTP/1.1 request without Host with no reply of its own (first_call
- * answers it 400 MISSING_HOST). Returns 1 after filling rep, else 0. */
+ * body of HTML and its status line and headers written twice - the access handler never sees
+ * such a request, so only libmicrohttpd (or a proxy in front) can mend that; a Transfer-Encoding
+ * other than chunked it takes as a body of unknown length that never ends, so without this check
+ * the request waits for the idle timeout; it passes an HTTP/1.1 request without Host to the
+ * handler (first_call answers it 400 MISSING_HOST). Returns 1 after filling rep, else 0. */
 static int framing_refused(struct MHD_Connection *conn, http_reply *rep)
 {
     framing f = {0};
