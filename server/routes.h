@@ -34,11 +34,14 @@
  * GET  /api/jobs/{id}        200 {row + "spec": normalised job, "metrics": {...} or null
  *                            (result_out.h), "message": text or null}
  * GET  /api/jobs/{id}/series ?channels=q,tau (default: all recorded) &joints=0,2 (coordinate
- *                            indices; default all) &every=N (default 1) &format=json|csv
- *                            (default json). json: the series object of `ctcsim run --format
- *                            json`; csv: exactly the CSV of `ctcsim run`. 409 NOT_FINISHED while
- *                            queued or running; 404 if the job has no series (cancelled before it
- *                            ran).
+ *                            indices; default all) &every=N (default 1) &max_points=N (2..1e9:
+ *                            at most N samples, first and last included, by the smallest stride
+ *                            that does it, or every if larger) &format=json|csv (default json).
+ *                            json: the series object of `ctcsim run --format json`; csv: exactly
+ *                            the CSV of `ctcsim run`. Streamed (chunked), a piece at a time from
+ *                            the store; cut short (closed without the last chunk) if the job is
+ *                            deleted meanwhile. 409 NOT_FINISHED while queued or running; 404 if
+ *                            the job has no series (cancelled before it ran).
  * DELETE /api/jobs/{id}      queued: cancelled, 200 {job}; running: cancel requested, 202 {row}
  *                            (the worker stops at its next step and records "cancelled");
  *                            finished: deleted with its series, 204.
