@@ -55,6 +55,8 @@ typedef struct server_settings {
     long long max_connections; /* open at once */
     long long max_per_ip;      /* open at once from one address */
     long long max_waiters;     /* POST /api/jobs?wait clients waiting at once */
+
+    long long max_series_streams; /* large GET /api/jobs/{id}/series replies sent at once */
 } server_settings;
 
 typedef enum setting_kind {
@@ -115,6 +117,8 @@ static const setting settings[] = {
      1, 100000, "N", "connections open at once from one client address; more are closed"},
     {"--max-waiters", "CTCSIM_MAX_WAITERS", SETTING_INTEGER, AT(max_waiters), 1, 100000, "N",
      "POST /api/jobs?wait clients waiting at once; more get 202 at once"},
+    {"--max-series-streams", "CTCSIM_MAX_SERIES_STREAMS", SETTING_INTEGER, AT(max_series_streams),
+     1, 100000, "N", "large series replies (over 1048576 values) sent at once; more get 503"},
 };
 
 #define NSETTINGS (sizeof settings / sizeof settings[0])
@@ -359,6 +363,7 @@ int main(int argc, char **argv)
         .max_connections = 1000,
         .max_per_ip = 64,
         .max_waiters = 256,
+        .max_series_streams = 4,
     };
     int rc = read_settings(argc, argv, &cfg);
     if (rc != 0) return rc > 0 ? 0 : EXIT_BAD_SETTING;
@@ -401,7 +406,8 @@ int main(int argc, char **argv)
                       .db_path = cfg.db,
                       .api_dir = cfg.api,
                       .max_wait = MAX_WAIT,
-                      .job_threads = (int)cfg.job_threads};
+                      .job_threads = (int)cfg.job_threads,
+                      .max_series_streams = (int)cfg.max_series_streams};
     http_config hc = {.bind = cfg.bind,
                       .port = (int)cfg.port,
                       .threads = (int)cfg.http_threads,

@@ -28,6 +28,10 @@
  * read transaction per piece (store_series_begin .. end). So a reader holds a few windows of
  * samples, never the series, and no snapshot between pieces - a slow client holds up neither
  * WAL checkpoints nor a deletion, which the next piece reports, cutting the reply short.
+ * Replies of more than ROUTES_LARGE_SERIES values hold one of --max-series-streams places from
+ * the handler until the reply is freed (sent, failed, the client gone or the server stopped);
+ * past them the answer is 503 TOO_MANY_STREAMS, since each costs its HTTP thread time while
+ * memory no longer grows with it.
  */
 #include "routes.h"
 
@@ -56,7 +60,11 @@
 #define ROUTES_LIST_MAX 200
 #define ROUTES_EVERY_MAX 1000000
 #define ROUTES_MAX_POINTS_MAX 1000000000
-#define ROUTES_RETRY_AFTER 5   /* s, with 503 QUEUE_FULL and SHUTTING_DOWN */
+/* values (samples x columns, t included) of a series reply past which it counts against
+   --max-series-streams: about 20 MB of text, a few tenths of a second of an HTTP thread. The
+   page's plots ask for about 2 samples a pixel of at most 24 coordinates, well below it */
+#define ROUTES_LARGE_SERIES 1048576
+#define ROUTES_RETRY_AFTER 5   /* s, with 503 QUEUE_FULL, TOO_MANY_STREAMS and SHUTTING_DOWN */
 #define ROUTES_WAIT_SLICE 0.25 /* s of one jobq_wait while a client waits */
 
 /* ---- the thread's store connection ---- */
@@ -566,6 +574,7 @@ typedef struct series_download {
     routes_ctx *ctx;
     int64_t id;
     series_stream *stream;
+    int counted;   /* holds one of ctx->max_series_streams */
     store *s;      /* the connection of the piece being made */
     int gone;      /* a read found the series deleted */
     char err[256]; /* why a read failed */
@@ -608,6 +617,7 @@ static ptrdiff_t download_body(void *arg, char *buf, size_t max)
 static void download_free(void *arg)
 {
     series_download *d = arg;
+    if (d->counted) atomic_fetch_sub(&d->ctx->series_streams, 1);
     series_stream_free(d->stream);
     free(d);
 }
@@ -723,6 +733,21 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
     }
     d->ctx = ctx;
     d->id = id;
+    uint64_t values = series_stream_values(d->stream);
+    if (values > ROUTES_LARGE_SERIES) {
+        int open = atomic_fetch_add(&ctx->series_streams, 1);
+        if (ctx->max_series_streams > 0 && open >= ctx->max_series_streams) {
+            atomic_fetch_sub(&ctx->series_streams, 1);
+            http_reply_error(rep, 503, "TOO_MANY_STREAMS", "",
+                             "%d large series are being sent, the most this server sends at "
+                             "once; try again later, or ask for fewer values (this one has "
+                             "%llu; max_points, every, channels or joints make it smaller)",
+                             open, (unsigned long long)values);
+            rep->retry_after = ROUTES_RETRY_AFTER;
+            goto done;
+        }
+        d->counted = 1;
+    }
     http_reply_stream(rep, 200, csv ? "text/csv; charset=utf-8" : "application/json", download_body,
                       download_free, d);
     d = NULL; /* the reply's */

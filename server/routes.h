@@ -15,7 +15,8 @@
  *   405 METHOD_NOT_ALLOWED (with Allow)   409 NOT_FINISHED (series of an unfinished job)
  *   413 BODY_TOO_LARGE   415 UNSUPPORTED_MEDIA_TYPE
  *   421 HOST_NOT_ALLOWED (the Host header names a host not in --allowed-hosts; http.h)
- *   503 QUEUE_FULL (with Retry-After), NO_MEMORY, DATABASE_ERROR, SHUTTING_DOWN
+ *   503 QUEUE_FULL, TOO_MANY_STREAMS (both with Retry-After), NO_MEMORY, DATABASE_ERROR,
+ *       SHUTTING_DOWN
  *
  * A job row (lists and single jobs):
  *   {"id", "name", "preset" (or null), "status" ("queued", "running", "done", "failed",
@@ -40,7 +41,9 @@
  *                            json: the series object of `ctcsim run --format json`; csv: exactly
  *                            the CSV of `ctcsim run`. Streamed (chunked), a piece at a time from
  *                            the store; cut short (closed without the last chunk) if the job is
- *                            deleted meanwhile. 409 NOT_FINISHED while queued or running; 404 if
+ *                            deleted meanwhile. A reply of more than ROUTES_LARGE_SERIES values
+ *                            counts against --max-series-streams: past them 503
+ *                            TOO_MANY_STREAMS. 409 NOT_FINISHED while queued or running; 404 if
  *                            the job has no series (cancelled before it ran).
  * DELETE /api/jobs/{id}      queued: cancelled, 200 {job}; running: cancel requested, 202 {row}
  *                            (the worker stops at its next step and records "cancelled");
@@ -75,6 +78,11 @@ typedef struct routes_ctx {
     int job_threads;     /* the most "threads" a job may ask for (--job-threads) */
     atomic_int stopping; /* set at shutdown (read by the HTTP threads, hence atomic): POST
                             /api/jobs answers 503 SHUTTING_DOWN */
+
+    /* large series replies (routes.c): past max_series_streams (--max-series-streams) sent at
+       once, 503 TOO_MANY_STREAMS; < 1 = no limit */
+    int max_series_streams;
+    atomic_int series_streams; /* being sent */
 } routes_ctx;
 
 /* The route table, terminated by {NULL}. Handlers expect a routes_ctx as their ctx. */

@@ -163,6 +163,45 @@ test('a bad max_points is 400 INVALID_QUERY naming the field', async () => {
     }
 });
 
+test('past --max-series-streams large reads: 503 TOO_MANY_STREAMS with Retry-After; small reads and health go on', async () => {
+    const two = await startServer({ workers: 1, args: ['--max-series-streams', '2'] });
+    try {
+        const res = await two.post('/api/jobs?wait=60', BIG);
+        assert.equal(res.status, 200, res.text);
+        const url = `/api/jobs/${res.json.id}/series`;
+        const a = await openPaused(two, url);
+        const b = await openPaused(two, url);
+        assert.equal(a.status, 200);
+        assert.equal(b.status, 200);
+        const third = await two.get(url);
+        assert.equal(third.status, 503, third.text.slice(0, 200));
+        assert.equal(third.json.error.code, 'TOO_MANY_STREAMS');
+        assert.equal(third.json.error.field, '');
+        assert.match(third.json.error.message, /^2 large series are being sent/);
+        assert.ok(Number(third.headers['retry-after']) >= 1, JSON.stringify(third.headers));
+        /* a decimated read is small: not counted */
+        const small = await two.get(`${url}?max_points=1000&format=csv`);
+        assert.equal(small.status, 200);
+        assert.equal(small.text.split('\n').length - 2, kept(SAMPLES, Math.ceil((SAMPLES - 1) / 999)));
+        const t0 = Date.now();
+        assert.equal((await two.get('/api/health')).status, 200);
+        assert.ok(Date.now() - t0 < 1000, `health took ${Date.now() - t0} ms`);
+        /* a reader that goes away gives its place back */
+        a.destroy();
+        await a.done;
+        const again = await waitFor(async () => {
+            const r = await two.get(`${url}?format=csv`);
+            return r.status === 200 ? r : null;
+        }, { timeoutMs: 5000, what: () => 'a large read after one ended' });
+        assert.equal(again.text.split('\n').length - 2, SAMPLES);
+        b.resume();
+        const rest = await b.done;
+        assert.ok(rest.complete, 'the paused read did not finish once resumed');
+    } finally {
+        await two.stop();
+    }
+});
+
 test('a job deleted while its series is being sent: the reply is cut short, the server goes on', async () => {
     const res = await srv.post('/api/jobs?wait=60', BIG);
     assert.equal(res.status, 200, res.text);
