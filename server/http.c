@@ -15,9 +15,10 @@
  * passes the limit is read on and dropped (libmicrohttpd 0.9.75 refuses a response queued half-way
  * through an upload), then answered 413, and a client that keeps sending far beyond the limit is
  * disconnected. The last call runs the handler, which fills an http_reply; the reply becomes a
- * libmicrohttpd response from its buffer or its file descriptor, with the headers every reply
- * carries. http_stop stops accepting, then gives the requests being answered a few seconds to
- * finish.
+ * libmicrohttpd response from its buffer, its file descriptor or its stream function (a response
+ * from a callback, of unknown size, sent chunked; libmicrohttpd frees it, and with it the
+ * stream's argument, once done with it), with the headers every reply carries. http_stop stops
+ * accepting, then gives the requests being answered a few seconds to finish.
  *
  * Paths are matched segment by segment; "{...}" in a pattern captures one non-empty segment.
  * HEAD is answered as GET (libmicrohttpd sends no body). Paths that no route matches go to the
@@ -145,6 +146,45 @@ static void reply_reset_body(http_reply *rep)
     if (rep->fd >= 0) close(rep->fd);
     rep->fd = -1;
     rep->fd_size = 0;
+    if (rep->stream && rep->stream_free) rep->stream_free(rep->stream_arg);
+    rep->stream = NULL;
+    rep->stream_free = NULL;
+    rep->stream_arg = NULL;
+}
+
+void http_reply_stream(http_reply *rep, int status, const char *content_type, http_stream_fn fn,
+                       void (*free_fn)(void *arg), void *arg)
+{
+    reply_reset_body(rep);
+    rep->status = status;
+    rep->content_type = content_type;
+    rep->stream = fn;
+    rep->stream_free = free_fn;
+    rep->stream_arg = arg;
+}
+
+/* a streamed body as libmicrohttpd holds it: made by send_reply, freed by stream_done */
+typedef struct http_stream {
+    http_stream_fn fn;
+    void (*free_fn)(void *arg);
+    void *arg;
+} http_stream;
+
+static ssize_t stream_read(void *cls, uint64_t pos, char *buf, size_t max)
+{
+    http_stream *h = cls;
+    (void)pos;
+    ptrdiff_t n = h->fn(h->arg, buf, max < HTTP_STREAM_BLOCK ? max : HTTP_STREAM_BLOCK);
+    return n > 0    ? (ssize_t)n
+           : n == 0 ? MHD_CONTENT_READER_END_OF_STREAM
+                    : MHD_CONTENT_READER_END_WITH_ERROR;
+}
+
+static void stream_done(void *cls)
+{
+    http_stream *h = cls;
+    if (h->free_fn) h->free_fn(h->arg);
+    free(h);
 }
 
 void http_reply_buffer(http_reply *rep, int status, const char *content_type, char *buf, size_t len)
@@ -512,6 +552,26 @@ static enum MHD_Result send_reply(struct MHD_Connection *conn, const char *path,
     if (rep->fd >= 0) {
         res = MHD_create_response_from_fd((size_t)rep->fd_size, rep->fd);
         if (res) rep->fd = -1; /* the response closes it */
+    } else if (rep->stream) {
+        http_stream *h = malloc(sizeof *h);
+        res = NULL;
+        if (h) {
+            *h = (http_stream){rep->stream, rep->stream_free, rep->stream_arg};
+            res = MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, HTTP_STREAM_BLOCK,
+                                                    stream_read, h, stream_done);
+            if (res)
+                rep->stream = NULL; /* the response frees it */
+            else
+                free(h);
+        }
+        if (!res) {
+            /* out of memory: the error reply instead (reply_reset_body frees the stream) */
+            reply_reset_body(rep);
+            status = 503;
+            res = MHD_create_response_from_buffer(sizeof no_memory_body - 1, (void *)no_memory_body,
+                                                  MHD_RESPMEM_PERSISTENT);
+            type = "application/json";
+        }
     } else if (rep->body) {
         res = MHD_create_response_from_buffer(rep->body_len, rep->body, MHD_RESPMEM_MUST_FREE);
         if (res) rep->body = NULL; /* the response frees it */

@@ -15,9 +15,17 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* the most bytes one call of a streamed body's function writes */
+#define HTTP_STREAM_BLOCK (64 * 1024)
+
 #include <cjson/cJSON.h>
 
 typedef struct http_server http_server;
+
+/* Writes the next at most max bytes of a streamed body into buf (http_reply_stream): returns the
+ * number written (>= 1), 0 at the end of the body, or -1 to stop on an error (the client then
+ * sees a truncated body: the connection is closed without the chunked body's last chunk). */
+typedef ptrdiff_t (*http_stream_fn)(void *arg, char *buf, size_t max);
 
 /* What a handler sees of a request. Strings are valid for the handler's call only. */
 typedef struct http_request {
@@ -41,6 +49,9 @@ typedef struct http_reply {
     int close;          /* 1: "Connection: close", the connection ends after this reply */
     int fd;             /* static file to send instead of body (>= 0), -1 = none */
     uint64_t fd_size;
+    http_stream_fn stream; /* a body made while it is sent instead of body, NULL = none */
+    void (*stream_free)(void *arg);
+    void *stream_arg;
 } http_reply;
 
 typedef void (*http_handler)(const http_request *req, http_reply *rep, void *ctx);
@@ -108,6 +119,16 @@ void http_reply_error(http_reply *rep, int status, const char *code, const char 
 /* Takes ownership of a malloc'd buffer as the body. */
 void http_reply_buffer(http_reply *rep, int status, const char *content_type, char *buf,
                        size_t len);
+
+/* A body of unknown length made while it is sent, with chunked transfer encoding: fn(arg, buf,
+ * max) is called, on the thread that serves the connection, each time the connection has room
+ * for more (HTTP_STREAM_BLOCK bytes at most), until it returns 0 or -1. The reply owns arg from
+ * here on: free_fn(arg) (may be NULL) is called once, when the response is done with - sent,
+ * failed, the client gone, the server stopped, or the reply replaced by another helper before it
+ * was sent - on whichever thread that happens, never while fn runs. HEAD sends no body and does
+ * not call fn. */
+void http_reply_stream(http_reply *rep, int status, const char *content_type, http_stream_fn fn,
+                       void (*free_fn)(void *arg), void *arg);
 
 /* For a handler that must wait (POST /api/jobs?wait): finishes the reply off libmicrohttpd's
  * threads, so that a waiting client holds up no other connection. Returns 0 when it took a place

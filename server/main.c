@@ -57,6 +57,8 @@ typedef struct server_settings {
     long long max_waiters;            /* POST /api/jobs?wait clients waiting at once */
     long long max_waiters_per_client; /* of which from one client address */
     long long max_jobs_per_client;    /* queued and running jobs of one client address */
+
+    long long max_series_streams; /* large GET /api/jobs/{id}/series replies sent at once */
 } server_settings;
 
 typedef enum setting_kind {
@@ -123,6 +125,8 @@ static const setting settings[] = {
     {"--max-jobs-per-client", "CTCSIM_MAX_JOBS_PER_CLIENT", SETTING_INTEGER,
      AT(max_jobs_per_client), 1, 1000000, "N",
      "jobs queued or running at once from one client address; more are refused with 429"},
+    {"--max-series-streams", "CTCSIM_MAX_SERIES_STREAMS", SETTING_INTEGER, AT(max_series_streams),
+     1, 100000, "N", "large series replies (over 1048576 values) sent at once; more get 503"},
 };
 
 #define NSETTINGS (sizeof settings / sizeof settings[0])
@@ -369,6 +373,7 @@ int main(int argc, char **argv)
         .max_waiters = 256,
         .max_waiters_per_client = 16,
         .max_jobs_per_client = 64,
+        .max_series_streams = 4,
     };
     int rc = read_settings(argc, argv, &cfg);
     if (rc != 0) return rc > 0 ? 0 : EXIT_BAD_SETTING;
@@ -403,7 +408,8 @@ int main(int argc, char **argv)
                       .max_wait = MAX_WAIT,
                       .job_threads = (int)cfg.job_threads,
                       .jobs_by_client = client_count_new(),
-                      .max_jobs_per_client = (unsigned)cfg.max_jobs_per_client};
+                      .max_jobs_per_client = (unsigned)cfg.max_jobs_per_client,
+                      .max_series_streams = (int)cfg.max_series_streams};
     if (!ctx.jobs_by_client) {
         fprintf(stderr, "ctcsim-server: out of memory\n");
         return EXIT_DATABASE;

@@ -161,7 +161,7 @@ static int column_kept(const ctc_sim_result *r, const result_select *sel, int c,
     return sel->coords[i] != 0;
 }
 
-static void column_name(char *buf, size_t len, int c, int i)
+void result_column_name(char *buf, size_t len, int c, int i)
 {
     if (c == CTC_CH_ENERGY)
         snprintf(buf, len, "energy[%s]", energy_parts[i]);
@@ -187,7 +187,7 @@ int result_write_csv(FILE *f, const ctc_sim_result *r, const result_select *sel)
     for (int c = 0; c < CTC_NCHANNELS; c++)
         for (int i = 0; selected(r, sel, c) && i < r->width[c]; i++) {
             if (!column_kept(r, sel, c, i)) continue;
-            column_name(name, sizeof name, c, i);
+            result_column_name(name, sizeof name, c, i);
             fprintf(f, ",%s", name);
         }
     fputc('\n', f);

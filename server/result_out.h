@@ -45,6 +45,10 @@ typedef struct result_select {
                            loop model (nind < nv columns) are kept whole */
 } result_select;
 
+/* The name of column i of channel c (a ctc_channel) into buf (len bytes): "q[2]",
+ * "energy[kinetic]", "loop[velocity]". */
+void result_column_name(char *buf, size_t len, int c, int i);
+
 /* Writes the series as CSV: a header line, then the selected samples and columns (sel may be
  * NULL: everything). Returns 0, or -1 on a write error. */
 int result_write_csv(FILE *f, const ctc_sim_result *r, const result_select *sel);

@@ -29,6 +29,18 @@
  *
  * Job rows are built from store_job in one place (job_row), so lists, single jobs and the replies
  * of POST and DELETE show the same fields.
+ *
+ * A series is streamed (http_reply_stream): the handler reads its shape only
+ * (store_get_series_info), checks the selection, and hands a series_stream to the reply; each
+ * piece of the body (HTTP_STREAM_BLOCK bytes at most) is then made on the HTTP thread that
+ * serves the connection, from samples read through that thread's store connection in one short
+ * read transaction per piece (store_series_begin .. end). So a reader holds a few windows of
+ * samples, never the series, and no snapshot between pieces - a slow client holds up neither
+ * WAL checkpoints nor a deletion, which the next piece reports, cutting the reply short.
+ * Replies of more than ROUTES_LARGE_SERIES values hold one of --max-series-streams places from
+ * the handler until the reply is freed (sent, failed, the client gone or the server stopped);
+ * past them the answer is 503 TOO_MANY_STREAMS, since each costs its HTTP thread time while
+ * memory no longer grows with it.
  */
 #include "routes.h"
 
@@ -51,12 +63,18 @@
 #include "job_json.h"
 #include "presets.h"
 #include "result_out.h"
+#include "series_stream.h"
 #include "store.h"
 
 #define ROUTES_LIST_DEFAULT 50
 #define ROUTES_LIST_MAX 200
 #define ROUTES_EVERY_MAX 1000000
-#define ROUTES_RETRY_AFTER 5   /* s, with 503 QUEUE_FULL and SHUTTING_DOWN */
+#define ROUTES_MAX_POINTS_MAX 1000000000
+/* values (samples x columns, t included) of a series reply past which it counts against
+   --max-series-streams: about 20 MB of text, a few tenths of a second of an HTTP thread. The
+   page's plots ask for about 2 samples a pixel of at most 24 coordinates, well below it */
+#define ROUTES_LARGE_SERIES 1048576
+#define ROUTES_RETRY_AFTER 5   /* s, with 503 QUEUE_FULL, TOO_MANY_STREAMS and SHUTTING_DOWN */
 #define ROUTES_WAIT_SLICE 0.25 /* s of one jobq_wait while a client waits */
 /* bytes of a POST body parsed on the HTTP thread; larger ones are parsed off it (run_post) */
 #define ROUTES_INLINE_BODY (64 * 1024)
@@ -669,13 +687,67 @@ static int query_joints(const http_request *req, http_reply *rep, long **list, i
     return 0;
 }
 
+/* A series being sent (http_reply_stream): the stream, made on the HTTP thread that serves the
+ * connection, one read transaction of that thread's store connection per piece. */
+typedef struct series_download {
+    routes_ctx *ctx;
+    int64_t id;
+    series_stream *stream;
+    int counted;   /* holds one of ctx->max_series_streams */
+    store *s;      /* the connection of the piece being made */
+    int gone;      /* a read found the series deleted */
+    char err[256]; /* why a read failed */
+} series_download;
+
+static int download_read(void *arg, int channel, uint64_t offset, void *buf, size_t len)
+{
+    series_download *d = arg;
+    int rc = store_series_read(d->s, d->id, channel, offset, buf, len, d->err, sizeof d->err);
+    if (rc == 1) d->gone = 1;
+    return rc;
+}
+
+/* the next piece of the body (http_stream_fn); a failure cuts the reply short */
+static ptrdiff_t download_body(void *arg, char *buf, size_t max)
+{
+    series_download *d = arg;
+    http_reply ignored = {.fd = -1};
+    ptrdiff_t n = -1;
+    d->s = thread_store(d->ctx, &ignored);
+    if (!d->s) {
+        fprintf(stderr, "ctcsim-server: series of job %" PRId64 ": no database connection\n",
+                d->id);
+    } else if (store_series_begin(d->s, d->err, sizeof d->err) != 0) {
+        database_failed(&ignored, "reading a series", d->err);
+    } else {
+        n = series_stream_fill(d->stream, buf, max);
+        store_series_end(d->s);
+        if (n < 0 && d->gone)
+            fprintf(stderr, "ctcsim-server: %s while it was being sent; the reply is cut short\n",
+                    d->err);
+        else if (n < 0)
+            database_failed(&ignored, "reading a series", d->err);
+    }
+    free(ignored.body);
+    d->s = NULL;
+    return n;
+}
+
+static void download_free(void *arg)
+{
+    series_download *d = arg;
+    if (d->counted) atomic_fetch_sub(&d->ctx->series_streams, 1);
+    series_stream_free(d->stream);
+    free(d);
+}
+
 static void get_series(const http_request *req, http_reply *rep, void *arg)
 {
     routes_ctx *ctx = arg;
     char err[256] = "";
     long *joints = NULL;
     char *coords = NULL;
-    ctc_sim_result *r = NULL;
+    series_download *d = NULL;
     store_job row = {0};
     int have_row = 0;
 
@@ -694,8 +766,10 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
             return;
         }
     }
-    long long every;
+    long long every, max_points;
     if (query_integer(req, rep, "every", 1, ROUTES_EVERY_MAX, 1, &every) != 0) return;
+    if (query_integer(req, rep, "max_points", 2, ROUTES_MAX_POINTS_MAX, 0, &max_points) != 0)
+        return;
     const char *format = http_query(req, "format");
     if (!format) format = "json";
     if (strcmp(format, "json") != 0 && strcmp(format, "csv") != 0) {
@@ -706,7 +780,7 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
     int njoints;
     if (query_joints(req, rep, &joints, &njoints) != 0) return;
 
-    /* the job: finished, with a series */
+    /* the job: finished, with a series, whose shape is read without its samples */
     if (path_job(req, rep, ctx, &row) != 0) goto done;
     have_row = 1;
     if (!job_finished(row.status)) {
@@ -717,7 +791,8 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
     }
     store *s = thread_store(ctx, rep);
     if (!s) goto done;
-    int rc = store_get_series(s, id, &r, err, sizeof err);
+    store_series_info info;
+    int rc = store_get_series_info(s, id, &info, err, sizeof err);
     if (rc == 1) {
         http_reply_error(rep, 404, "NOT_FOUND", "id",
                          "job %" PRId64 " has no series (it was %s before it ran)", id,
@@ -730,27 +805,27 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
     }
 
     /* the selection, checked against what was recorded */
-    unsigned missing = mask & ~r->channels;
+    unsigned missing = mask & ~info.channels;
     if (missing) {
         char names[128], recorded[128];
         channel_names(names, sizeof names, missing);
-        channel_names(recorded, sizeof recorded, r->channels);
+        channel_names(recorded, sizeof recorded, info.channels);
         http_reply_error(rep, 400, "INVALID_QUERY", "channels",
                          "job %" PRId64 " did not record %s (it recorded %s)", id, names, recorded);
         goto done;
     }
     if (njoints >= 0) {
-        coords = calloc((size_t)r->nv + 1, 1);
+        coords = calloc((size_t)info.nv + 1, 1);
         if (!coords) {
             http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
             goto done;
         }
         for (int i = 0; i < njoints; i++) {
-            if (joints[i] >= r->nv) {
+            if (joints[i] >= info.nv) {
                 http_reply_error(rep, 400, "INVALID_QUERY", "joints",
                                  "coordinate %ld is out of range (job %" PRId64
                                  " has %d coordinates, 0 to %d)",
-                                 joints[i], id, r->nv, r->nv - 1);
+                                 joints[i], id, info.nv, info.nv - 1);
                 goto done;
             }
             if (coords[joints[i]]) {
@@ -762,27 +837,42 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
         }
     }
 
-    /* written as the command line writes it */
-    result_select sel = {.channels = mask, .every = (int)every, .coords = coords};
-    char *buf = NULL;
-    size_t len = 0;
-    FILE *f = open_memstream(&buf, &len);
+    /* streamed as the command line writes it, a piece at a time */
+    series_layout lay = {.nsamples = info.nsamples, .nv = info.nv};
+    memcpy(lay.width, info.width, sizeof lay.width);
+    result_select sel = {.channels = mask,
+                         .every = series_stream_stride(info.nsamples, every, max_points),
+                         .coords = coords};
     int csv = strcmp(format, "csv") == 0;
-    int wrc = -1;
-    if (f) {
-        wrc = csv ? result_write_csv(f, r, &sel) : result_write_series_json(f, r, &sel);
-        if (!csv) fputc('\n', f);
-        if (fclose(f) != 0) wrc = -1;
-    }
-    if (wrc != 0) {
-        free(buf);
-        http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory writing the series");
+    d = calloc(1, sizeof *d);
+    if (d) d->stream = series_stream_new(&lay, &sel, csv, download_read, d);
+    if (!d || !d->stream) {
+        http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
         goto done;
     }
-    http_reply_buffer(rep, 200, csv ? "text/csv; charset=utf-8" : "application/json", buf, len);
+    d->ctx = ctx;
+    d->id = id;
+    uint64_t values = series_stream_values(d->stream);
+    if (values > ROUTES_LARGE_SERIES) {
+        int open = atomic_fetch_add(&ctx->series_streams, 1);
+        if (ctx->max_series_streams > 0 && open >= ctx->max_series_streams) {
+            atomic_fetch_sub(&ctx->series_streams, 1);
+            http_reply_error(rep, 503, "TOO_MANY_STREAMS", "",
+                             "%d large series are being sent, the most this server sends at "
+                             "once; try again later, or ask for fewer values (this one has "
+                             "%llu; max_points, every, channels or joints make it smaller)",
+                             open, (unsigned long long)values);
+            rep->retry_after = ROUTES_RETRY_AFTER;
+            goto done;
+        }
+        d->counted = 1;
+    }
+    http_reply_stream(rep, 200, csv ? "text/csv; charset=utf-8" : "application/json", download_body,
+                      download_free, d);
+    d = NULL; /* the reply's */
 done:
+    if (d) download_free(d);
     if (have_row) store_job_clear(&row);
-    ctc_sim_result_free(r);
     free(coords);
     free(joints);
 }

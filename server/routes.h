@@ -20,8 +20,9 @@
  *       queued or running; the loopback address counts like any other), TOO_MANY_REQUESTS (with
  *       Retry-After: a body over 64 KiB past the client's --max-waiters-per-client)
  *   501 UNSUPPORTED_TRANSFER_ENCODING (a Transfer-Encoding other than chunked)
- *   503 QUEUE_FULL (with Retry-After), NO_MEMORY, DATABASE_ERROR, SHUTTING_DOWN, BUSY (with
- *       Retry-After: a body over 64 KiB, parsed off the HTTP threads, past --max-waiters)
+ *   503 QUEUE_FULL, TOO_MANY_STREAMS (both with Retry-After), NO_MEMORY, DATABASE_ERROR,
+ *       SHUTTING_DOWN, BUSY (with Retry-After: a body over 64 KiB, parsed off the HTTP threads,
+ *       past --max-waiters)
  *
  * A job row (lists and single jobs):
  *   {"id", "name", "preset" (or null), "status" ("queued", "running", "done", "failed",
@@ -40,11 +41,16 @@
  * GET  /api/jobs/{id}        200 {row + "spec": normalised job, "metrics": {...} or null
  *                            (result_out.h), "message": text or null}
  * GET  /api/jobs/{id}/series ?channels=q,tau (default: all recorded) &joints=0,2 (coordinate
- *                            indices; default all) &every=N (default 1) &format=json|csv
- *                            (default json). json: the series object of `ctcsim run --format
- *                            json`; csv: exactly the CSV of `ctcsim run`. 409 NOT_FINISHED while
- *                            queued or running; 404 if the job has no series (cancelled before it
- *                            ran).
+ *                            indices; default all) &every=N (default 1) &max_points=N (2..1e9:
+ *                            at most N samples, first and last included, by the smallest stride
+ *                            that does it, or every if larger) &format=json|csv (default json).
+ *                            json: the series object of `ctcsim run --format json`; csv: exactly
+ *                            the CSV of `ctcsim run`. Streamed (chunked), a piece at a time from
+ *                            the store; cut short (closed without the last chunk) if the job is
+ *                            deleted meanwhile. A reply of more than ROUTES_LARGE_SERIES values
+ *                            counts against --max-series-streams: past them 503
+ *                            TOO_MANY_STREAMS. 409 NOT_FINISHED while queued or running; 404 if
+ *                            the job has no series (cancelled before it ran).
  * DELETE /api/jobs/{id}      queued: cancelled, 200 {job}; running: cancel requested, 202 {row}
  *                            (the worker stops at its next step and records "cancelled");
  *                            finished: deleted with its series, 204.
@@ -82,6 +88,11 @@ typedef struct routes_ctx {
     unsigned max_jobs_per_client; /* past them POST /api/jobs answers 429 (0 = no limit) */
     atomic_int stopping;          /* set at shutdown (read by the HTTP threads, hence atomic): POST
                                      /api/jobs answers 503 SHUTTING_DOWN */
+
+    /* large series replies (routes.c): past max_series_streams (--max-series-streams) sent at
+       once, 503 TOO_MANY_STREAMS; < 1 = no limit */
+    int max_series_streams;
+    atomic_int series_streams; /* being sent */
 } routes_ctx;
 
 /* The route table, terminated by {NULL}. Handlers expect a routes_ctx as their ctx. */

@@ -35,7 +35,13 @@
  * wall_s go in one transaction, so a job is either finished with all its series or unfinished
  * with none. store_get_series copies the blobs back (memcpy: a blob need not be aligned) into a
  * new ctc_sim_result and checks every row's size against its width and sample count, so a
- * damaged row is an error, never an out-of-bounds read.
+ * damaged row is an error, never an out-of-bounds read. A reader that must not hold a whole
+ * series (the service's GET of one) reads its shape with store_get_series_info (the same checks,
+ * the sizes from length(data), which SQLite answers from the record header without reading the
+ * blob) and then its samples in ranges through sqlite3_blob handles, inside a deferred read
+ * transaction (store_series_begin .. store_series_end): one snapshot, which writers never wait
+ * for. Each row is found by its key (job_id, channel), never by a rowid remembered from an
+ * earlier read, since a deleted job's rowids may be taken by the next one.
  *
  * Errors are the message of the failing step prefixed with what was being done and the job's
  * id ("cannot finish job 3: no such job", "job 3: storing series tau: disk I/O error").
@@ -137,6 +143,9 @@ typedef enum stmt_id {
     ST_LIST_ANY,
     ST_LIST_STATUS,
     ST_SERIES_GET,
+    ST_SERIES_INFO,
+    ST_SERIES_ROW,
+    ST_BEGIN_READ,
     ST_DELETE,
     ST_COUNT,
     ST_NSTMT
@@ -178,6 +187,11 @@ static const char *const stmt_sql[ST_NSTMT] = {
                        "ORDER BY id DESC LIMIT ?2",
     [ST_SERIES_GET] = "SELECT s.channel, s.width, s.nsamples, s.data, j.nv "
                       "FROM series AS s JOIN jobs AS j ON j.id = s.job_id WHERE s.job_id = ?1",
+    /* length() of a blob reads its size from the record header, not its pages */
+    [ST_SERIES_INFO] = "SELECT s.channel, s.width, s.nsamples, length(s.data), j.nv "
+                       "FROM series AS s JOIN jobs AS j ON j.id = s.job_id WHERE s.job_id = ?1",
+    [ST_SERIES_ROW] = "SELECT rowid FROM series WHERE job_id = ?1 AND channel = ?2",
+    [ST_BEGIN_READ] = "BEGIN",
     [ST_DELETE] = "DELETE FROM jobs WHERE id = ?1",
     [ST_COUNT] = "SELECT status, n FROM job_counts",
 };
@@ -186,6 +200,11 @@ struct store {
     sqlite3 *db;
     sqlite3_stmt *stmt[ST_NSTMT];
     long count_vm_steps; /* SQLite VM steps of the last store_count */
+    /* between store_series_begin and store_series_end: the read transaction, and the blob
+       handles opened on the series rows of job blob_job (t, then the channels) */
+    int reading;
+    int64_t blob_job;
+    sqlite3_blob *blob[CTC_NCHANNELS + 1];
 };
 
 static const char *const status_names[STORE_NSTATUS] = {
@@ -566,6 +585,7 @@ done:
 void store_close(store *s)
 {
     if (!s) return;
+    store_series_end(s);
     for (int i = 0; i < ST_NSTMT; i++) sqlite3_finalize(s->stmt[i]);
     sqlite3_close(s->db);
     free(s);
@@ -970,66 +990,83 @@ static int expected_width(int c, int nv, int nind)
                                                     : nind;
 }
 
+/* What the rows of a job's series read so far say: the job's nv, the width of the controller's
+ * channels (0 until the first), the samples per row (-1 until the first). */
+typedef struct series_rows {
+    int64_t id;
+    int nv, nind, nsamples;
+} series_rows;
+
+/* Checks one series row against its job and the rows before it - every row before its samples
+ * are touched, so a damaged one is an error, never an out-of-bounds read. *c receives its
+ * channel (-1 for t). 0, or -1 with a message. */
+static int check_series_row(series_rows *rows, const char *name, int width, sqlite3_int64 nsamples,
+                            sqlite3_int64 bytes, int *c, char *err, size_t errlen)
+{
+    long long id = (long long)rows->id;
+    *c = channel_of(name ? name : "");
+    if (*c == -2) {
+        set_err(err, errlen, "job %lld: series has an unknown channel '%s'", id, name ? name : "");
+        return -1;
+    }
+    int want = expected_width(*c, rows->nv, rows->nind);
+    if (width < 1 || (want && width != want)) {
+        set_err(err, errlen, "job %lld: series %s has width %d, expected %d", id, name, width,
+                want);
+        return -1;
+    }
+    if (*c >= 0 && *c != CTC_CH_Q && *c != CTC_CH_QD && *c != CTC_CH_ENERGY && *c != CTC_CH_LOOP &&
+        rows->nind == 0) {
+        /* the first of the controller's channels: at most one column per coordinate */
+        if (width > rows->nv) {
+            set_err(err, errlen, "job %lld: series %s has width %d, expected at most %d", id, name,
+                    width, rows->nv);
+            return -1;
+        }
+        rows->nind = width;
+    }
+    if (nsamples < 0 || nsamples > INT_MAX || (rows->nsamples >= 0 && nsamples != rows->nsamples)) {
+        set_err(err, errlen, "job %lld: series %s has %lld samples, the others %d", id, name,
+                (long long)nsamples, rows->nsamples);
+        return -1;
+    }
+    if ((sqlite3_uint64)bytes != (sqlite3_uint64)nsamples * (sqlite3_uint64)width * 8u) {
+        set_err(err, errlen,
+                "job %lld: series %s holds %lld bytes, expected %lld (%lld samples x %d "
+                "values x 8)",
+                id, name, (long long)bytes, (long long)nsamples * width * 8, (long long)nsamples,
+                width);
+        return -1;
+    }
+    rows->nsamples = (int)nsamples;
+    return 0;
+}
+
 int store_get_series(store *s, int64_t id, ctc_sim_result **out, char *err, size_t errlen)
 {
     sqlite3_stmt *q = s->stmt[ST_SERIES_GET];
     ctc_sim_result *r = NULL;
-    int rc = -1, step, nv = 0, nind = 0;
+    series_rows rows = {.id = id, .nsamples = -1};
+    int rc = -1, step;
     *out = NULL;
     sqlite3_bind_int64(q, 1, id);
     /* one statement, one snapshot: the rows are consistent with each other and with the job */
     while ((step = sqlite3_step(q)) == SQLITE_ROW) {
         const char *name = (const char *)sqlite3_column_text(q, 0);
-        int width = sqlite3_column_int(q, 1);
-        sqlite3_int64 nsamples = sqlite3_column_int64(q, 2);
         const void *blob = sqlite3_column_blob(q, 3);
         sqlite3_int64 bytes = sqlite3_column_bytes(q, 3);
-        int c = channel_of(name ? name : "");
+        int c;
         if (!r) {
-            nv = sqlite3_column_int(q, 4);
+            rows.nv = sqlite3_column_int(q, 4);
             r = calloc(1, sizeof *r);
             if (!r) {
                 set_err(err, errlen, "job %lld: reading its series: out of memory", (long long)id);
                 goto done;
             }
-            r->nsamples = -1;
         }
-        /* every row checked before it is copied: a damaged one is an error, not a crash */
-        if (c == -2) {
-            set_err(err, errlen, "job %lld: series has an unknown channel '%s'", (long long)id,
-                    name ? name : "");
+        if (check_series_row(&rows, name, sqlite3_column_int(q, 1), sqlite3_column_int64(q, 2),
+                             bytes, &c, err, errlen))
             goto done;
-        }
-        int want = expected_width(c, nv, nind);
-        if (width < 1 || (want && width != want)) {
-            set_err(err, errlen, "job %lld: series %s has width %d, expected %d", (long long)id,
-                    name, width, want);
-            goto done;
-        }
-        if (c >= 0 && c != CTC_CH_Q && c != CTC_CH_QD && c != CTC_CH_ENERGY && c != CTC_CH_LOOP &&
-            nind == 0) {
-            /* the first of the controller's channels: at most one column per coordinate */
-            if (width > nv) {
-                set_err(err, errlen, "job %lld: series %s has width %d, expected at most %d",
-                        (long long)id, name, width, nv);
-                goto done;
-            }
-            nind = width;
-        }
-        if (nsamples < 0 || nsamples > INT_MAX || (r->nsamples >= 0 && nsamples != r->nsamples)) {
-            set_err(err, errlen, "job %lld: series %s has %lld samples, the others %d",
-                    (long long)id, name, (long long)nsamples, r->nsamples);
-            goto done;
-        }
-        if ((sqlite3_uint64)bytes != (sqlite3_uint64)nsamples * (sqlite3_uint64)width * 8u) {
-            set_err(err, errlen,
-                    "job %lld: series %s holds %lld bytes, expected %lld (%lld samples x %d "
-                    "values x 8)",
-                    (long long)id, name, (long long)bytes, (long long)nsamples * width * 8,
-                    (long long)nsamples, width);
-            goto done;
-        }
-        r->nsamples = (int)nsamples;
         /* malloc(0) may be NULL: keep at least one value so that NULL means "out of memory" */
         double *data = malloc(bytes > 0 ? (size_t)bytes : sizeof(double));
         if (!data) {
@@ -1041,7 +1078,7 @@ int store_get_series(store *s, int64_t id, ctc_sim_result **out, char *err, size
             r->t = data;
         } else {
             r->ch[c] = data;
-            r->width[c] = width;
+            r->width[c] = sqlite3_column_int(q, 1);
             r->channels |= CTC_CH_BIT(c);
         }
     }
@@ -1059,9 +1096,10 @@ int store_get_series(store *s, int64_t id, ctc_sim_result **out, char *err, size
     }
     /* nq is q's width; with q not recorded it is taken as nv (they differ only with spherical
      * joints, and then only q has width nq) */
-    r->nv = nv;
-    r->nq = r->width[CTC_CH_Q] ? r->width[CTC_CH_Q] : nv;
-    r->metrics.nv = nv;
+    r->nsamples = rows.nsamples;
+    r->nv = rows.nv;
+    r->nq = r->width[CTC_CH_Q] ? r->width[CTC_CH_Q] : rows.nv;
+    r->metrics.nv = rows.nv;
     *out = r;
     r = NULL;
     rc = 0;
@@ -1069,6 +1107,136 @@ done:
     release(q);
     ctc_sim_result_free(r);
     return rc;
+}
+
+int store_get_series_info(store *s, int64_t id, store_series_info *out, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_SERIES_INFO];
+    series_rows rows = {.id = id, .nsamples = -1};
+    int rc = -1, step, found = 0, have_t = 0;
+    memset(out, 0, sizeof *out);
+    sqlite3_bind_int64(q, 1, id);
+    while ((step = sqlite3_step(q)) == SQLITE_ROW) {
+        const char *name = (const char *)sqlite3_column_text(q, 0);
+        int width = sqlite3_column_int(q, 1);
+        sqlite3_int64 bytes = sqlite3_column_int64(q, 3);
+        int c;
+        if (!found) rows.nv = sqlite3_column_int(q, 4);
+        found = 1;
+        if (check_series_row(&rows, name, width, sqlite3_column_int64(q, 2), bytes, &c, err,
+                             errlen))
+            goto done;
+        if (c == -1) {
+            have_t = 1;
+        } else {
+            out->width[c] = width;
+            out->channels |= CTC_CH_BIT(c);
+        }
+        out->bytes += bytes;
+    }
+    if (step != SQLITE_DONE) {
+        db_err(s, err, errlen, "job %lld: reading its series", (long long)id);
+        goto done;
+    }
+    if (!found) {
+        rc = 1;
+        goto done;
+    }
+    if (!have_t) {
+        set_err(err, errlen, "job %lld: series has no t", (long long)id);
+        goto done;
+    }
+    out->nsamples = rows.nsamples;
+    out->nv = rows.nv;
+    out->nq = out->width[CTC_CH_Q] ? out->width[CTC_CH_Q] : rows.nv;
+    rc = 0;
+done:
+    release(q);
+    if (rc) memset(out, 0, sizeof *out);
+    return rc;
+}
+
+int store_series_begin(store *s, char *err, size_t errlen)
+{
+    if (s->reading) {
+        set_err(err, errlen, "reading a series: a read is already under way");
+        return -1;
+    }
+    if (tx_step(s, ST_BEGIN_READ) != SQLITE_OK) {
+        db_err(s, err, errlen, "reading a series");
+        return -1;
+    }
+    s->reading = 1;
+    s->blob_job = 0;
+    return 0;
+}
+
+/* closes the blob handles of a read */
+static void close_blobs(store *s)
+{
+    for (int k = 0; k <= CTC_NCHANNELS; k++) {
+        sqlite3_blob_close(s->blob[k]);
+        s->blob[k] = NULL;
+    }
+}
+
+int store_series_read(store *s, int64_t id, int channel, uint64_t offset, void *buf, size_t len,
+                      char *err, size_t errlen)
+{
+    const char *name = channel < 0 ? "t" : ctc_channel_name((ctc_channel)channel);
+    if (!s->reading || channel < -1 || channel >= CTC_NCHANNELS) {
+        set_err(err, errlen, "job %lld: reading series %s: %s", (long long)id, name,
+                s->reading ? "no such channel" : "not inside store_series_begin");
+        return -1;
+    }
+    if (s->blob_job != id) {
+        close_blobs(s);
+        s->blob_job = id;
+    }
+    sqlite3_blob **blob = &s->blob[channel + 1];
+    if (!*blob) {
+        /* the row by its key, in this read's snapshot: a rowid alone could name a row that
+           another job took after this one was deleted */
+        sqlite3_stmt *q = s->stmt[ST_SERIES_ROW];
+        sqlite3_bind_int64(q, 1, id);
+        sqlite3_bind_text(q, 2, name, -1, SQLITE_STATIC);
+        int step = sqlite3_step(q);
+        sqlite3_int64 rowid = step == SQLITE_ROW ? sqlite3_column_int64(q, 0) : 0;
+        if (step != SQLITE_ROW && step != SQLITE_DONE)
+            db_err(s, err, errlen, "job %lld: reading series %s", (long long)id, name);
+        release(q);
+        if (step == SQLITE_DONE) {
+            set_err(err, errlen, "job %lld: series %s is gone", (long long)id, name);
+            return 1;
+        }
+        if (step != SQLITE_ROW) return -1;
+        if (sqlite3_blob_open(s->db, "main", "series", "data", rowid, 0, blob) != SQLITE_OK) {
+            db_err(s, err, errlen, "job %lld: reading series %s", (long long)id, name);
+            sqlite3_blob_close(*blob);
+            *blob = NULL;
+            return -1;
+        }
+    }
+    int bytes = sqlite3_blob_bytes(*blob);
+    if (offset > (uint64_t)bytes || len > (uint64_t)bytes - offset) {
+        set_err(err, errlen,
+                "job %lld: series %s holds %d bytes, not the %zu asked for at byte %llu",
+                (long long)id, name, bytes, len, (unsigned long long)offset);
+        return -1;
+    }
+    if (sqlite3_blob_read(*blob, buf, (int)len, (int)offset) != SQLITE_OK) {
+        db_err(s, err, errlen, "job %lld: reading series %s", (long long)id, name);
+        return -1;
+    }
+    return 0;
+}
+
+void store_series_end(store *s)
+{
+    if (!s || !s->reading) return;
+    close_blobs(s);
+    if (!sqlite3_get_autocommit(s->db) && tx_step(s, ST_COMMIT) != SQLITE_OK) tx_rollback(s);
+    s->reading = 0;
 }
 
 int store_delete(store *s, int64_t id, char *err, size_t errlen)

@@ -120,6 +120,37 @@ void store_jobs_free(store_job *rows, int n);
  * 0 on success, -1 on error. */
 int store_get_series(store *s, int64_t id, ctc_sim_result **out, char *err, size_t errlen);
 
+/* The shape of a job's series, read without its samples (store_get_series_info). */
+typedef struct store_series_info {
+    int nsamples;
+    int nq, nv;
+    unsigned channels;        /* CTC_CH_BIT mask of the recorded channels */
+    int width[CTC_NCHANNELS]; /* values per sample of each channel, 0 if not recorded */
+    int64_t bytes;            /* the samples' size, t included (8 bytes a value) */
+} store_series_info;
+
+/* Reads the shape of a job's series, checking every row as store_get_series does (the same
+ * messages) but reading none of the samples. Returns 1 if the job has no series, 0 on success,
+ * -1 on error. */
+int store_get_series_info(store *s, int64_t id, store_series_info *out, char *err, size_t errlen);
+
+/* Reading a series in pieces, for a reader that must not hold it all in memory: between
+ * store_series_begin and store_series_end the connection is inside one read transaction (one
+ * snapshot of the database, which no writer waits for), and store_series_read copies len bytes
+ * at offset of a channel's samples (channel -1 = t, else a ctc_channel; nsamples x width
+ * float64, row-major, little-endian) into buf through a blob handle kept open until the end. A
+ * reader that must not hold a snapshot for long (HTTP: the client sets the pace) ends the read
+ * after each piece: the series may then be deleted between two reads, which the next read
+ * reports. No other call may use s between begin and end, except store_close, which ends the
+ * read. store_series_begin returns 0 or -1 (a read already under way, or the database failed);
+ * store_series_read returns 0, 1 if the series is gone (the job was deleted; err says so) or
+ * -1 on error, a read past the row's end included; store_series_end does nothing outside a
+ * read, and accepts NULL. */
+int store_series_begin(store *s, char *err, size_t errlen);
+int store_series_read(store *s, int64_t id, int channel, uint64_t offset, void *buf, size_t len,
+                      char *err, size_t errlen);
+void store_series_end(store *s);
+
 /* Deletes a finished job and its series. Returns 1 if there is no such job, 2 if it is queued or
  * running (cancel it first), 0 on success, -1 on error. */
 int store_delete(store *s, int64_t id, char *err, size_t errlen);

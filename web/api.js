@@ -56,9 +56,12 @@ export function listJobs({limit = 25, cursor = null, status = ""} = {}, signal) 
 
 export const getJob = (id, signal) => request(`/api/jobs/${id}`, {signal});
 
-/* The series as columnar JSON: {t: [...], q: [[q0...], [q1...]], ...}. */
-export function getSeries(id, {channels, joints, every = 1} = {}, signal) {
-  const q = new URLSearchParams({every: String(every), format: "json"});
+/* The series as columnar JSON: {t: [...], q: [[q0...], [q1...]], ...}. The server keeps every
+ * every-th sample and the last, and at most maxPoints samples (first and last included): a
+ * bound on what a plot or the animation fetches, whatever every says. */
+export const SERIES_MAX_POINTS = 5000;
+export function getSeries(id, {channels, joints, every = 1, maxPoints = SERIES_MAX_POINTS} = {}, signal) {
+  const q = new URLSearchParams({every: String(every), max_points: String(maxPoints), format: "json"});
   if (channels) q.set("channels", channels.join(","));
   if (joints) q.set("joints", joints.join(","));
   return request(`/api/jobs/${id}/series?${q}`, {signal});

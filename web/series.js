@@ -3,7 +3,8 @@
  * coordinate each column of the controller's channels belongs to.
  *
  * The server decimates (every=N keeps every N-th sample and always the last), so a long run
- * costs no more than the plot can show: N = ceil(samples / (2 * plot width in px)). Chains with
+ * costs no more than the plot can show: N = ceil(samples / (2 * plot width in px)); getSeries
+ * also asks for at most SERIES_MAX_POINTS samples (max_points), a bound whatever the width. Chains with
  * more than MAX_PLOTTED coordinates plot the first MAX_PLOTTED (joints=0,1,...); the animation
  * then fetches q and q_des for all of them in a second request.
  *

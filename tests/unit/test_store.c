@@ -1102,10 +1102,24 @@ Test(store, series_are_absent_until_a_run_is_stored)
     store_close(s);
 }
 
+/* both readers of a series refuse it with the message want */
+static void assert_damaged(store *s, int64_t id, const char *want)
+{
+    char err[512] = "";
+    ctc_sim_result *got = NULL;
+    store_series_info info;
+    cr_assert_eq(store_get_series(s, id, &got, err, sizeof err), -1);
+    cr_assert_str_eq(err, want);
+    cr_assert_null(got);
+    err[0] = 0;
+    cr_assert_eq(store_get_series_info(s, id, &info, err, sizeof err), -1);
+    cr_assert_str_eq(err, want, "store_get_series_info");
+    cr_assert_eq(info.nsamples, 0, "a refused series left its shape behind");
+}
+
 Test(store, a_damaged_series_row_is_an_error_not_a_crash)
 {
-    char path[256], err[512] = "", want[256];
-    ctc_sim_result *got = NULL;
+    char path[256], want[256];
     path_of(path, sizeof path, "ctcsim.db");
     store *s = open_ok(path);
     ctc_sim_result *r = make_result(2, 3, 3, NULL);
@@ -1113,32 +1127,144 @@ Test(store, a_damaged_series_row_is_an_error_not_a_crash)
     ctc_sim_result_free(r);
 
     raw_exec(path, "UPDATE series SET data = x'00' WHERE channel = 'q'");
-    cr_assert_eq(store_get_series(s, id, &got, err, sizeof err), -1);
     snprintf(want, sizeof want,
              "job %lld: series q holds 1 bytes, expected 48 (2 samples x 3 values x 8)",
              (long long)id);
-    cr_assert_str_eq(err, want);
-    cr_assert_null(got);
+    assert_damaged(s, id, want);
 
     raw_exec(path, "UPDATE series SET width = 3, data = zeroblob(48) WHERE channel = 'energy'");
     raw_exec(path, "DELETE FROM series WHERE channel = 'q'");
-    cr_assert_eq(store_get_series(s, id, &got, err, sizeof err), -1);
     snprintf(want, sizeof want, "job %lld: series energy has width 3, expected 2", (long long)id);
-    cr_assert_str_eq(err, want);
+    assert_damaged(s, id, want);
     raw_exec(path, "UPDATE series SET width = 2, data = zeroblob(32) WHERE channel = 'energy'");
 
     raw_exec(path, "UPDATE series SET width = 4, data = zeroblob(64) WHERE channel = 'tau'");
-    cr_assert_eq(store_get_series(s, id, &got, err, sizeof err), -1);
     snprintf(want, sizeof want, "job %lld: series tau has width 4, expected at most 3",
              (long long)id);
-    cr_assert_str_eq(err, want);
+    assert_damaged(s, id, want);
     raw_exec(path, "UPDATE series SET width = 3, data = zeroblob(48) WHERE channel = 'tau'");
 
     raw_exec(path, "UPDATE series SET channel = 'torque' WHERE channel = 'tau'");
-    cr_assert_eq(store_get_series(s, id, &got, err, sizeof err), -1);
     snprintf(want, sizeof want, "job %lld: series has an unknown channel 'torque'", (long long)id);
-    cr_assert_str_eq(err, want);
+    assert_damaged(s, id, want);
+
+    raw_exec(path, "UPDATE series SET channel = 'tau' WHERE channel = 'torque'");
+    raw_exec(path, "DELETE FROM series WHERE channel = 't'");
+    snprintf(want, sizeof want, "job %lld: series has no t", (long long)id);
+    assert_damaged(s, id, want);
     store_close(s);
+}
+
+/* reads channel c (-1 = t) of job id in pieces of piece bytes, each in a read of its own */
+static double *read_in_pieces(store *s, int64_t id, int c, size_t bytes, size_t piece)
+{
+    char err[512] = "";
+    unsigned char *out = malloc(bytes + 1);
+    for (size_t off = 0; off < bytes; off += piece) {
+        size_t len = bytes - off < piece ? bytes - off : piece;
+        cr_assert_eq(store_series_begin(s, err, sizeof err), 0, "%s", err);
+        cr_assert_eq(store_series_read(s, id, c, off, out + off, len, err, sizeof err), 0, "%s",
+                     err);
+        store_series_end(s);
+    }
+    return (double *)(void *)out;
+}
+
+Test(store, a_series_read_in_pieces_has_its_shape_and_every_bit)
+{
+    char path[256], err[512] = "";
+    path_of(path, sizeof path, "ctcsim.db");
+    store *s = open_ok(path);
+    /* 3001 samples, q 4 wide, tau 3 wide: rows of several SQLite overflow pages */
+    ctc_sim_result *r = make_result(3001, 4, 3, NULL);
+    r->ch[CTC_CH_Q][5] = NAN, r->ch[CTC_CH_Q][6] = -0.0, r->ch[CTC_CH_TAU][7] = -INFINITY;
+    int64_t id = finished_job(s, "pieces", STORE_DONE, r);
+    store_series_info info;
+    cr_assert_eq(store_get_series_info(s, id, &info, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(info.nsamples, 3001);
+    cr_assert_eq(info.nq, 4);
+    cr_assert_eq(info.nv, 3);
+    cr_assert_eq(info.channels, r->channels);
+    cr_assert_eq(info.bytes, 3001LL * (1 + 4 + 3 + 2) * 8);
+    for (int c = 0; c < CTC_NCHANNELS; c++) cr_assert_eq(info.width[c], r->width[c]);
+    cr_assert_eq(store_get_series_info(s, id + 1, &info, err, sizeof err), 1, "no such job");
+
+    static const size_t pieces[] = {8, 1000, 16384, 1 << 20};
+    for (size_t p = 0; p < sizeof pieces / sizeof pieces[0]; p++)
+        for (int c = -1; c < CTC_NCHANNELS; c++) {
+            if (c >= 0 && !r->width[c]) continue;
+            const double *want = c < 0 ? r->t : r->ch[c];
+            size_t bytes = (size_t)r->nsamples * (size_t)(c < 0 ? 1 : r->width[c]) * 8;
+            double *got = read_in_pieces(s, id, c, bytes, pieces[p]);
+            cr_assert_eq(memcmp(got, want, bytes), 0, "channel %d in pieces of %zu", c, pieces[p]);
+            free(got);
+        }
+
+    /* several pieces in one read; a read past the end is refused */
+    double x[2];
+    cr_assert_eq(store_series_begin(s, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(store_series_begin(s, err, sizeof err), -1);
+    cr_assert_str_eq(err, "reading a series: a read is already under way");
+    cr_assert_eq(store_series_read(s, id, CTC_CH_TAU, 8 * 7, x, 8, err, sizeof err), 0, "%s", err);
+    cr_assert(isinf(x[0]) && x[0] < 0);
+    cr_assert_eq(store_series_read(s, id, -1, 8 * 3000, x, 8, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(x[0], r->t[3000]);
+    cr_assert_eq(store_series_read(s, id, -1, 8 * 3000, x, 16, err, sizeof err), -1);
+    char want[256];
+    snprintf(want, sizeof want,
+             "job %lld: series t holds 24008 bytes, not the 16 asked for at byte 24000",
+             (long long)id);
+    cr_assert_str_eq(err, want);
+    cr_assert_eq(store_series_read(s, id, CTC_CH_W, 0, x, 8, err, sizeof err), 1);
+    snprintf(want, sizeof want, "job %lld: series w is gone", (long long)id);
+    cr_assert_str_eq(err, want);
+    store_series_end(s);
+    store_series_end(s);
+    cr_assert_eq(store_series_read(s, id, -1, 0, x, 8, err, sizeof err), -1);
+    snprintf(want, sizeof want, "job %lld: reading series t: not inside store_series_begin",
+             (long long)id);
+    cr_assert_str_eq(err, want);
+    ctc_sim_result_free(r);
+    store_close(s);
+}
+
+Test(store, a_read_keeps_its_snapshot_and_the_next_one_sees_a_deletion)
+{
+    char path[256], err[512] = "", want[256];
+    path_of(path, sizeof path, "ctcsim.db");
+    store *s = open_ok(path), *other = open_ok(path);
+    ctc_sim_result *r = make_result(2000, 3, 3, NULL);
+    int64_t id = finished_job(s, "deleted", STORE_DONE, r);
+    double x;
+
+    /* a deletion by another connection does not wait for the read, nor change what it reads */
+    cr_assert_eq(store_series_begin(s, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(store_series_read(s, id, -1, 8 * 1999, &x, 8, err, sizeof err), 0, "%s", err);
+    double t0 = wall_now();
+    cr_assert_eq(store_delete(other, id, err, sizeof err), 0, "%s", err);
+    cr_assert_lt(wall_now() - t0, 1.0, "the deletion waited for the reader");
+    cr_assert_eq(store_series_read(s, id, CTC_CH_Q, 8 * 5999, &x, 8, err, sizeof err), 0, "%s",
+                 err);
+    cr_assert_eq(x, r->ch[CTC_CH_Q][5999]);
+    store_series_end(s);
+
+    /* the next read reports it gone, and so does a job whose rowids another job took over */
+    cr_assert_eq(store_series_begin(s, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(store_series_read(s, id, CTC_CH_Q, 0, &x, 8, err, sizeof err), 1);
+    snprintf(want, sizeof want, "job %lld: series q is gone", (long long)id);
+    cr_assert_str_eq(err, want);
+    store_series_end(s);
+    int64_t next = finished_job(other, "next", STORE_DONE, r);
+    cr_assert_gt(next, id);
+    cr_assert_eq(store_series_begin(s, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(store_series_read(s, id, -1, 0, &x, 8, err, sizeof err), 1);
+    cr_assert_eq(store_series_read(s, next, -1, 8, &x, 8, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(x, r->t[1]);
+    /* closing in the middle of a read ends it */
+    store_close(s);
+    store_close(other);
+    ctc_sim_result_free(r);
+    assert_integrity(path);
 }
 
 Test(store, status_names_round_trip)
