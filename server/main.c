@@ -55,6 +55,7 @@ typedef struct server_settings {
     long long max_connections; /* open at once */
     long long max_per_ip;      /* open at once from one address */
     long long max_waiters;     /* POST /api/jobs?wait clients waiting at once */
+    long long db_max_size;     /* bytes the database may grow to; 0 = as the disk allows */
 } server_settings;
 
 typedef enum setting_kind {
@@ -115,6 +116,9 @@ static const setting settings[] = {
      1, 100000, "N", "connections open at once from one client address; more are closed"},
     {"--max-waiters", "CTCSIM_MAX_WAITERS", SETTING_INTEGER, AT(max_waiters), 1, 100000, "N",
      "POST /api/jobs?wait clients waiting at once; more get 202 at once"},
+    {"--db-max-size", "CTCSIM_DB_MAX_SIZE", SETTING_BYTES, AT(db_max_size), 0, 1LL << 50, "BYTES",
+     "largest size of the database file (0: as the disk allows); past it writes fail as on a "
+     "full disk (503 DATABASE_FULL) and DELETE frees room"},
 };
 
 #define NSETTINGS (sizeof settings / sizeof settings[0])
@@ -133,9 +137,9 @@ static void default_text(const setting *st, const server_settings *def, char *bu
     case SETTING_INTEGER:
     case SETTING_BYTES: {
         long long x = *(const long long *)(const void *)base;
-        if (st->kind == SETTING_BYTES && x % (1024 * 1024) == 0)
+        if (st->kind == SETTING_BYTES && x != 0 && x % (1024 * 1024) == 0)
             snprintf(buf, len, "%lldM", x / (1024 * 1024));
-        else if (st->kind == SETTING_BYTES && x % 1024 == 0)
+        else if (st->kind == SETTING_BYTES && x != 0 && x % 1024 == 0)
             snprintf(buf, len, "%lldK", x / 1024);
         else
             snprintf(buf, len, "%lld", x);
@@ -387,21 +391,32 @@ int main(int argc, char **argv)
                 "ctcsim-server: warning: web root %s is not a directory (pages answer 404)\n",
                 cfg.web);
 
-    /* the workers, then the HTTP daemon */
+    /* the database's state as the writes see it, one for all threads; the workers, then the
+     * HTTP daemon */
+    store_health *health = store_health_new();
+    if (!health) {
+        fprintf(stderr, "ctcsim-server: out of memory\n");
+        return EXIT_DATABASE;
+    }
     jobq_config qc = {.db_path = cfg.db,
                       .workers = (int)cfg.workers,
                       .max_queue = (int)cfg.max_queue,
-                      .job_time_limit = cfg.job_time_limit};
+                      .job_time_limit = cfg.job_time_limit,
+                      .db_max_size = cfg.db_max_size,
+                      .health = health};
     jobq *queue = NULL;
     if (jobq_start(&qc, &queue, err, sizeof err) != 0) {
         database_error(cfg.db, err);
+        store_health_free(health);
         return EXIT_DATABASE;
     }
     routes_ctx ctx = {.queue = queue,
                       .db_path = cfg.db,
                       .api_dir = cfg.api,
                       .max_wait = MAX_WAIT,
-                      .job_threads = (int)cfg.job_threads};
+                      .job_threads = (int)cfg.job_threads,
+                      .db_max_size = cfg.db_max_size,
+                      .health = health};
     http_config hc = {.bind = cfg.bind,
                       .port = (int)cfg.port,
                       .threads = (int)cfg.http_threads,
@@ -419,6 +434,7 @@ int main(int argc, char **argv)
     if (http_start(&hc, &http, err, sizeof err) != 0) {
         fprintf(stderr, "ctcsim-server: %s\n", err);
         jobq_stop(queue);
+        store_health_free(health);
         return EXIT_LISTEN;
     }
     int v6 = strchr(cfg.bind, ':') != NULL;
@@ -436,6 +452,8 @@ int main(int argc, char **argv)
     atomic_store(&ctx.stopping, 1);
     http_stop(http);
     jobq_stop(queue);
+    /* the HTTP threads' connections closed with their threads, the workers' with the queue */
+    store_health_free(health);
     fprintf(stderr, "ctcsim-server: stopped\n");
     return 0;
 }

@@ -15,7 +15,11 @@
  *   405 METHOD_NOT_ALLOWED (with Allow)   409 NOT_FINISHED (series of an unfinished job)
  *   413 BODY_TOO_LARGE   415 UNSUPPORTED_MEDIA_TYPE
  *   421 HOST_NOT_ALLOWED (the Host header names a host not in --allowed-hosts; http.h)
- *   503 QUEUE_FULL (with Retry-After), NO_MEMORY, DATABASE_ERROR, SHUTTING_DOWN
+ *   503 QUEUE_FULL (with Retry-After), NO_MEMORY, DATABASE_ERROR, SHUTTING_DOWN, and when a
+ *       write cannot be made now (with Retry-After): DATABASE_BUSY (another connection or
+ *       process held the write lock past ROUTES_BUSY_MS), DATABASE_FULL (disk or --db-max-size
+ *       full: DELETE of finished jobs still works and frees room), DATABASE_READONLY,
+ *       DATABASE_IO_ERROR
  *
  * A job row (lists and single jobs):
  *   {"id", "name", "preset" (or null), "status" ("queued", "running", "done", "failed",
@@ -47,8 +51,16 @@
  * GET  /api/presets/{name}   200 the preset's job document; query parameters are its params
  *                            (?n=16); 404 UNKNOWN_PRESET; 400 INVALID_QUERY for a bad param.
  * GET  /api/health           200 {"status": "ok", "version", "workers", "busy", "queued",
- *                            "database": "ok", "jobs": {status: count}}; 503 with "status":
- *                            "error" and "database": "error" when the database fails.
+ *                            "database": {"state": "ok"}, "jobs": {status: count}}, in O(1)
+ *                            and without waiting for any lock. While the service's writes
+ *                            meet a fault (store.h, one state for the whole process): 503 with
+ *                            "status" "degraded" (state "locked") or "error" (state "full",
+ *                            "readonly", "io_error"), and "database": {"state", "since" (ISO
+ *                            time of the first failed write), "message", "failures" (writes
+ *                            failed since)}; the fault clears at the next write that succeeds
+ *                            (health itself tries one that changes nothing at most every
+ *                            ROUTES_PROBE_INTERVAL s while it lasts). 503 with "status" "error"
+ *                            and state "error" when the job counts cannot be read ("jobs": {}).
  * GET  /api/openapi.yaml     the API description (application/yaml).
  * GET  / and other paths      static files from the web root (http.h).
  */
@@ -65,13 +77,15 @@
 /* What the handlers share; one for the whole server. */
 typedef struct routes_ctx {
     jobq *queue;
-    const char *db_path; /* each HTTP thread opens its own connection on first use; it is
-                            closed when the thread exits (a pthread key destructor) */
-    const char *api_dir; /* directory holding openapi.yaml */
-    double max_wait;     /* s, the largest ?wait= accepted (300) */
-    int job_threads;     /* the most "threads" a job may ask for (--job-threads) */
-    atomic_int stopping; /* set at shutdown (read by the HTTP threads, hence atomic): POST
-                            /api/jobs answers 503 SHUTTING_DOWN */
+    const char *db_path;         /* each HTTP thread opens its own connection on first use; it is
+                                    closed when the thread exits (a pthread key destructor) */
+    const char *api_dir;         /* directory holding openapi.yaml */
+    double max_wait;             /* s, the largest ?wait= accepted (300) */
+    int job_threads;             /* the most "threads" a job may ask for (--job-threads) */
+    long long db_max_size;       /* bytes each connection may grow the database to; 0 = no cap */
+    struct store_health *health; /* the database's state, shared with the workers (store.h) */
+    atomic_int stopping;         /* set at shutdown (read by the HTTP threads, hence atomic): POST
+                                    /api/jobs answers 503 SHUTTING_DOWN */
 } routes_ctx;
 
 /* The route table, terminated by {NULL}. Handlers expect a routes_ctx as their ctx. */
