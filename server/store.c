@@ -5,13 +5,14 @@
  * Connections. Each store owns one sqlite3 connection in WAL mode (readers never block the
  * writer and the writer never blocks readers), synchronous=NORMAL (a commit survives a crash of
  * the process; a power cut may lose the last commits but never corrupts the file), foreign keys
- * on (a job's series go with it, ON DELETE CASCADE) and a busy timeout of STORE_BUSY_MS, so the
- * connections of the workers and of the HTTP threads wait for each other's write locks instead
- * of failing. Every statement is prepared once at open (SQLITE_PREPARE_PERSISTENT), bound with
- * sqlite3_bind_* (no value is ever written into SQL text) and reset and unbound after each use,
- * so no statement holds a read snapshot between calls. Writes of more than one statement run in
- * BEGIN IMMEDIATE transactions: the write lock is taken first, so a transaction never has to
- * upgrade a stale read snapshot (which SQLite would answer with SQLITE_BUSY at once).
+ * on (a job's series go with it, ON DELETE CASCADE) and a busy timeout of STORE_BUSY_MS, which
+ * callers shorten with store_set_busy_timeout (the service: 0.3 s on HTTP threads, 1 s per try
+ * in the workers, which retry; none for progress). Every statement is prepared once at open
+ * (SQLITE_PREPARE_PERSISTENT), bound with sqlite3_bind_* (no value is ever written into SQL
+ * text) and reset and unbound after each use, so no statement holds a read snapshot between
+ * calls. Writes of more than one statement run in BEGIN IMMEDIATE transactions: the write lock
+ * is taken first, so a transaction never has to upgrade a stale read snapshot (which SQLite
+ * would answer with SQLITE_BUSY at once).
  *
  * Schema. PRAGMA user_version holds the schema's version. store_open reads it: the current
  * version needs nothing; a newer one, or version 0 with tables of someone else, is refused and
@@ -36,6 +37,18 @@
  * with none. store_get_series copies the blobs back (memcpy: a blob need not be aligned) into a
  * new ctc_sim_result and checks every row's size against its width and sample count, so a
  * damaged row is an error, never an out-of-bounds read.
+ *
+ * Faults and health. Every public call starts with call_begin, which clears the call's fault
+ * and notes sqlite3_total_changes64; db_err, the one place a database failure becomes a message,
+ * records the fault from sqlite3_extended_errcode (the first one of the call, with its message).
+ * Public writes are thin wrappers that end in write_end, which tells an attached store_health
+ * (store.h) what happened: a transient fault, or a success that changed rows. The state is one
+ * struct behind a mutex, so every thread reads the same answer in O(1). A full database is
+ * cleared only by a write that adds rows or frees room, or by store_probe measuring at least
+ * STORE_ROOM_BYTES free on the disk and under the size cap (PRAGMA max_page_count); other faults
+ * by any write that changed rows, the probe's included (it rewrites one count with its value).
+ * store_reserve allocates the -wal file's blocks past its end (fallocate FALLOC_FL_KEEP_SIZE):
+ * SQLite never sees them, but its appends use them, so on a full disk a delete still commits.
  *
  * Errors are the message of the failing step prefixed with what was being done and the job's
  * id ("cannot finish job 3: no such job", "job 3: storing series tau: disk I/O error").
