@@ -8,11 +8,12 @@
  *
  * Start-up order: block SIGINT and SIGTERM (before any thread exists, so every thread inherits
  * the mask and only main's sigwait sees them); open the database once, which creates or migrates
- * it and refuses one that is not ctcsim's (exit 3); start the workers, which re-queue the jobs a
- * previous run left queued or running; start listening (exit 4 when the address cannot be bound);
- * print one line saying where. Shutdown: refuse new jobs, stop the HTTP daemon (requests in flight
- * finish), stop the workers (running jobs go back to queued and restart at the next start), exit
- * 0.
+ * it and refuses one that is not ctcsim's (exit 3); make the one store_health (store.h) that every
+ * connection's writes report to and GET /api/health reads; start the workers, which re-queue the
+ * jobs a previous run left queued or running and reserve disk for SQLite's log; start listening
+ * (exit 4 when the address cannot be bound); print one line saying where. Shutdown: refuse new
+ * jobs, stop the HTTP daemon (requests in flight finish), stop the workers (running jobs go back
+ * to queued and restart at the next start), exit 0.
  */
 #include <arpa/inet.h>
 #include <errno.h>
