@@ -24,9 +24,27 @@
  * jobs a worker brought to a final status; a job jobq_cancel takes out of the ring is recorded by
  * the caller and not counted here.
  *
- * Failures a worker cannot hand to anyone (the database refusing a write) go to stderr, prefixed
- * "jobq: job ID:". A job whose result cannot be stored is recorded failed without its series
- * when that still works; otherwise its row stays unfinished until the next start recovers it.
+ * Database faults. Each store call of a worker goes through a loop (the *_retrying functions):
+ * while store_last_fault is transient the worker pauses (JOBQ_RETRY_FIRST doubling to
+ * JOBQ_RETRY_MAX, in slices of at most JOBQ_RETRY_SLICE so that jobq_stop is not held up) and
+ * tries again; it stops trying when the call succeeds, fails for a reason that is not the
+ * database's (the job was cancelled or deleted meanwhile: then there is nothing to record), or
+ * the queue stops (the row stays queued or running and the next start recovers it). Each
+ * connection waits JOBQ_BUSY_MS for a lock per try, except for progress writes, which do not
+ * wait: a simulation is never slowed by a lock held elsewhere. A result whose series meets a full
+ * database is recorded failed without its series, with SQLite's reason ("could not store the
+ * result: database or disk is full"); any other result that cannot be stored likewise, with its
+ * error. Cancellation stays correct during the retries because the slot keeps the job until the
+ * worker is done with it: jobq_cancel sets the flag, and the worker's writes are conditional on
+ * the job's stored status (store_start needs it queued, store_finish queued or running).
+ *
+ * Room on a full disk. jobq_start reserves disk for the write-ahead log (store_reserve), so that
+ * when the disk fills a DELETE still commits and frees pages for new jobs: JOBQ_LOG_RESERVE, about
+ * the log's size between two automatic checkpoints, or half of it and half again while the disk
+ * refuses, down to JOBQ_LOG_RESERVE_MIN (a file system without fallocate gets none).
+ *
+ * What a worker cannot hand to anyone goes to stderr, prefixed "jobq: job ID:": the first failed
+ * try of each call and then every JOBQ_RETRY_LOG-th.
  */
 #include "jobq.h"
 
@@ -47,7 +65,11 @@
 #include "sim.h"
 #include "store.h"
 
-#define JOBQ_MAX_WAIT 1e9 /* s: longer waits are cut to this (about 31 years) */
+#define JOBQ_MAX_WAIT 1e9            /* s: longer waits are cut to this (about 31 years) */
+#define JOBQ_RETRY_SLICE 0.05        /* s: a pause is slept in slices this long, stopping checked */
+#define JOBQ_RETRY_LOG 20            /* after the first failed try, one in this many is logged */
+#define JOBQ_LOG_RESERVE (4LL << 20) /* bytes: about SQLite's auto-checkpoint of 1000 pages */
+#define JOBQ_LOG_RESERVE_MIN (256LL << 10) /* bytes: the least tried on a nearly full disk */
 
 /* what became of a popped job */
 typedef enum worker_outcome {
@@ -157,9 +179,12 @@ static void hook_progress(void *ctx, double fraction)
     double t = monotonic_now();
     if (t - w->last_progress < JOBQ_PROGRESS_INTERVAL) return;
     w->last_progress = t;
-    /* progress is a hint: a failed write is not worth stopping the run for */
+    /* progress is a hint: it does not wait for a lock, and a failed write is followed by the
+     * next one rather than retried */
     char err[256];
+    store_set_busy_timeout(w->db, 0);
     (void)store_progress(w->db, w->job_id, fraction, err, sizeof err);
+    store_set_busy_timeout(w->db, JOBQ_BUSY_MS);
 }
 
 static int hook_cancelled(void *ctx)
@@ -188,17 +213,79 @@ static store_status store_status_of(ctc_run_status st)
     return STORE_FAILED;
 }
 
-/* Stores a final status; if that fails with a series, tries once more as failed without it. */
+/* After a failed store call of job id: 1 when it should be tried again (its fault is transient:
+ * the pause for this attempt, 0-based, has been slept), 0 when not (a fault that is not the
+ * database's, or the queue is stopping). Logs the first failure and every JOBQ_RETRY_LOG-th. */
+static int retry_after_pause(jobq_worker *w, int64_t id, int attempt, const char *what,
+                             const char *err)
+{
+    store_fault f = store_last_fault(w->db);
+    if (!store_fault_transient(f)) return 0;
+    if (attempt % JOBQ_RETRY_LOG == 0)
+        fprintf(stderr, "jobq: job %lld: %s (try %d, retrying): %s\n", (long long)id, what,
+                attempt + 1, err);
+    double pause = JOBQ_RETRY_FIRST * ldexp(1.0, attempt < 30 ? attempt : 30);
+    if (pause > JOBQ_RETRY_MAX) pause = JOBQ_RETRY_MAX;
+    for (double left = pause; left > 0; left -= JOBQ_RETRY_SLICE) {
+        if (atomic_load(&w->q->stopping)) return 0;
+        double slice = left < JOBQ_RETRY_SLICE ? left : JOBQ_RETRY_SLICE;
+        struct timespec ts = {.tv_sec = 0, .tv_nsec = (long)(slice * 1e9)};
+        while (nanosleep(&ts, &ts) != 0 && errno == EINTR) continue;
+    }
+    return !atomic_load(&w->q->stopping);
+}
+
+/* store_start, retried while the fault is transient (store_start's return codes) */
+static int start_retrying(jobq_worker *w, int64_t id, char *err, size_t errlen)
+{
+    for (int attempt = 0;; attempt++) {
+        int rc = store_start(w->db, id, err, errlen);
+        if (rc >= 0 || !retry_after_pause(w, id, attempt, "marking it running", err)) return rc;
+    }
+}
+
+/* store_get, retried while the fault is transient (store_get's return codes) */
+static int get_retrying(jobq_worker *w, int64_t id, store_job *row, char *err, size_t errlen)
+{
+    for (int attempt = 0;; attempt++) {
+        int rc = store_get(w->db, id, row, err, errlen);
+        if (rc >= 0 || !retry_after_pause(w, id, attempt, "reading the job", err)) return rc;
+    }
+}
+
+/* store_finish, retried while the fault is transient; a result meeting a full database is not
+ * retried (-1 with STORE_FAULT_FULL left in store_last_fault) */
+static int finish_retrying(jobq_worker *w, int64_t id, store_status status, const char *message,
+                           const char *metrics, const ctc_sim_result *r, char *err, size_t errlen)
+{
+    for (int attempt = 0;; attempt++) {
+        if (store_finish(w->db, id, status, message, metrics, r, err, errlen) == 0) return 0;
+        if (r && store_last_fault(w->db) == STORE_FAULT_FULL) return -1;
+        if (!retry_after_pause(w, id, attempt, "storing the result", err)) return -1;
+    }
+}
+
+/* Stores a final status; a result that cannot be stored (a full database, or an error that is
+ * not transient) is recorded failed without its series instead. */
 static worker_outcome finish(jobq_worker *w, int64_t id, store_status status, const char *message,
                              const char *metrics, const ctc_sim_result *r)
 {
     char err[512], why[768];
-    if (store_finish(w->db, id, status, message, metrics, r, err, sizeof err) == 0)
+    if (finish_retrying(w, id, status, message, metrics, r, err, sizeof err) == 0)
         return OUTCOME_FINISHED;
-    fprintf(stderr, "jobq: job %lld: storing the result: %s\n", (long long)id, err);
-    if (!r) return OUTCOME_SKIPPED;
-    snprintf(why, sizeof why, "the result could not be stored: %s", err);
-    if (store_finish(w->db, id, STORE_FAILED, why, NULL, NULL, err, sizeof err) == 0)
+    store_fault f = store_last_fault(w->db);
+    /* without a result there is nothing smaller to store; a transient fault other than a full
+     * database ends the retries only when the queue stops (the next start recovers the job) */
+    if (!r || (store_fault_transient(f) && f != STORE_FAULT_FULL)) {
+        fprintf(stderr, "jobq: job %lld: storing the result: %s\n", (long long)id, err);
+        return OUTCOME_SKIPPED;
+    }
+    if (f == STORE_FAULT_FULL)
+        snprintf(why, sizeof why, "could not store the result: %s", store_fault_text(f));
+    else
+        snprintf(why, sizeof why, "could not store the result: %s", err);
+    fprintf(stderr, "jobq: job %lld: %s; recording it failed\n", (long long)id, err);
+    if (finish_retrying(w, id, STORE_FAILED, why, NULL, NULL, err, sizeof err) == 0)
         return OUTCOME_FINISHED;
     fprintf(stderr, "jobq: job %lld: recording the failure: %s\n", (long long)id, err);
     return OUTCOME_SKIPPED;
@@ -217,7 +304,7 @@ static worker_outcome run_job(jobq_worker *w, int64_t id)
 
     /* a stop between the pop and here leaves the job queued, as it is stored */
     if (atomic_load(&q->stopping)) return OUTCOME_SKIPPED;
-    int rc = store_start(w->db, id, err, sizeof err);
+    int rc = start_retrying(w, id, err, sizeof err);
     if (rc == 1) return OUTCOME_SKIPPED; /* cancelled or deleted meanwhile */
     if (rc != 0) {
         fprintf(stderr, "jobq: job %lld: marking it running: %s\n", (long long)id, err);
@@ -225,7 +312,7 @@ static worker_outcome run_job(jobq_worker *w, int64_t id)
     }
 
     /* the stored spec, validated at submission; it should parse again */
-    rc = store_get(w->db, id, &row, err, sizeof err);
+    rc = get_retrying(w, id, &row, err, sizeof err);
     if (rc == 1) goto cleanup; /* deleted under us: nothing to record */
     if (rc != 0) {
         snprintf(why, sizeof why, "reading the job: %s", err);
@@ -412,11 +499,22 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
         jobq_worker *w = &q->workers[i];
         w->q = q;
         atomic_init(&w->cancel, 0);
-        if (store_open(q->db_path, &w->db, why, sizeof why) != 0) {
+        if (store_open(q->db_path, &w->db, why, sizeof why) != 0 ||
+            (config->db_max_size > 0 &&
+             store_set_max_size(w->db, config->db_max_size, why, sizeof why) != 0)) {
             fail(err, errlen, "worker %d: %s", i, why);
             goto cleanup;
         }
+        store_set_busy_timeout(w->db, JOBQ_BUSY_MS);
+        store_attach(w->db, config->health);
     }
+
+    /* room for the log on a full disk, so that DELETE can still free space: as much of
+     * JOBQ_LOG_RESERVE as the disk gives (the log lives while the workers' connections do) */
+    long long reserve = JOBQ_LOG_RESERVE;
+    while (store_reserve(q->workers[0].db, reserve, why, sizeof why) != 0 &&
+           reserve > JOBQ_LOG_RESERVE_MIN)
+        reserve /= 2;
 
     /* the threads inherit the caller's signal mask (main.c blocks SIGINT and SIGTERM first) */
     for (int i = 0; i < config->workers; i++) {

@@ -8,6 +8,16 @@
  * cancellation polled between steps, then store the result, status and series in one transaction.
  * A per-job wall-time limit from the configuration caps the job's own limits.wall_time.
  *
+ * A worker never drops a job. Every store write it makes (marking the job running, storing the
+ * result, marking it failed or cancelled) and the read of its spec are retried while the store's
+ * fault is transient (store.h: locked, full, read-only, I/O error), with a pause that doubles from
+ * JOBQ_RETRY_FIRST to JOBQ_RETRY_MAX seconds, until they succeed, fail for good, or the queue
+ * stops (then the job stays queued or running in the database and the next start recovers it).
+ * A result whose series does not fit (STORE_FAULT_FULL) is not retried: the job is recorded
+ * failed, "could not store the result: database or disk is full", as soon as that small write is
+ * accepted. Progress writes do not wait for locks at all (a missed one is followed by the next).
+ * A worker holds no lock of the queue's while it waits.
+ *
  * The queue is a mutex + condition variable ring (wait while empty, pop under the lock, work
  * outside it). jobq_stop stops taking jobs, asks running ones to stop at their next step, puts
  * them back to queued in the database (they restart from t = 0 at the next start), and joins the
@@ -22,6 +32,11 @@
 #include <stdint.h>
 
 #define JOBQ_PROGRESS_INTERVAL 0.25 /* s between progress writes of one job */
+#define JOBQ_BUSY_MS 1000           /* ms one worker write waits for a lock before it is retried */
+#define JOBQ_RETRY_FIRST 0.01       /* s, the first pause before a retry */
+#define JOBQ_RETRY_MAX 2.0          /* s, the longest pause between retries */
+
+struct store_health;
 
 typedef struct jobq jobq;
 
@@ -35,6 +50,9 @@ typedef struct jobq_config {
        lock; NULL = none. It must not call back into the queue. */
     void (*left)(void *arg, int64_t id);
     void *left_arg;
+    long long db_max_size; /* bytes the workers may grow the database to (store_set_max_size); 0 =
+                              no cap */
+    struct store_health *health; /* the state the workers' writes report to (store.h), or NULL */
 } jobq_config;
 
 typedef struct jobq_stats {

@@ -8,11 +8,12 @@
  *
  * Start-up order: block SIGINT and SIGTERM (before any thread exists, so every thread inherits
  * the mask and only main's sigwait sees them); open the database once, which creates or migrates
- * it and refuses one that is not ctcsim's (exit 3); start the workers, which re-queue the jobs a
- * previous run left queued or running; start listening (exit 4 when the address cannot be bound);
- * print one line saying where. Shutdown: refuse new jobs, stop the HTTP daemon (requests in flight
- * finish), stop the workers (running jobs go back to queued and restart at the next start), exit
- * 0.
+ * it and refuses one that is not ctcsim's (exit 3); make the one store_health (store.h) that every
+ * connection's writes report to and GET /api/health reads; start the workers, which re-queue the
+ * jobs a previous run left queued or running and reserve disk for SQLite's log; start listening
+ * (exit 4 when the address cannot be bound); print one line saying where. Shutdown: refuse new
+ * jobs, stop the HTTP daemon (requests in flight finish), stop the workers (running jobs go back
+ * to queued and restart at the next start), exit 0.
  */
 #include <arpa/inet.h>
 #include <errno.h>
@@ -59,6 +60,7 @@ typedef struct server_settings {
     long long max_jobs_per_client;    /* queued and running jobs of one client address */
 
     long long max_series_streams; /* large GET /api/jobs/{id}/series replies sent at once */
+    long long db_max_size;        /* bytes the database may grow to; 0 = as the disk allows */
 } server_settings;
 
 typedef enum setting_kind {
@@ -127,6 +129,9 @@ static const setting settings[] = {
      "jobs queued or running at once from one client address; more are refused with 429"},
     {"--max-series-streams", "CTCSIM_MAX_SERIES_STREAMS", SETTING_INTEGER, AT(max_series_streams),
      1, 100000, "N", "large series replies (over 1048576 values) sent at once; more get 503"},
+    {"--db-max-size", "CTCSIM_DB_MAX_SIZE", SETTING_BYTES, AT(db_max_size), 0, 1LL << 50, "BYTES",
+     "largest size of the database file (0: as the disk allows); past it writes fail as on a "
+     "full disk (503 DATABASE_FULL) and DELETE frees room"},
 };
 
 #define NSETTINGS (sizeof settings / sizeof settings[0])
@@ -145,9 +150,9 @@ static void default_text(const setting *st, const server_settings *def, char *bu
     case SETTING_INTEGER:
     case SETTING_BYTES: {
         long long x = *(const long long *)(const void *)base;
-        if (st->kind == SETTING_BYTES && x % (1024 * 1024) == 0)
+        if (st->kind == SETTING_BYTES && x != 0 && x % (1024 * 1024) == 0)
             snprintf(buf, len, "%lldM", x / (1024 * 1024));
-        else if (st->kind == SETTING_BYTES && x % 1024 == 0)
+        else if (st->kind == SETTING_BYTES && x != 0 && x % 1024 == 0)
             snprintf(buf, len, "%lldK", x / 1024);
         else
             snprintf(buf, len, "%lld", x);
@@ -402,6 +407,12 @@ int main(int argc, char **argv)
                 "ctcsim-server: warning: web root %s is not a directory (pages answer 404)\n",
                 cfg.web);
 
+    /* the database's state as the writes see it, one for all threads */
+    store_health *health = store_health_new();
+    if (!health) {
+        fprintf(stderr, "ctcsim-server: out of memory\n");
+        return EXIT_DATABASE;
+    }
     /* the workers, then the HTTP daemon; a job leaving the workers frees its client's place */
     routes_ctx ctx = {.db_path = cfg.db,
                       .api_dir = cfg.api,
@@ -409,8 +420,11 @@ int main(int argc, char **argv)
                       .job_threads = (int)cfg.job_threads,
                       .jobs_by_client = client_count_new(),
                       .max_jobs_per_client = (unsigned)cfg.max_jobs_per_client,
-                      .max_series_streams = (int)cfg.max_series_streams};
+                      .max_series_streams = (int)cfg.max_series_streams,
+                      .db_max_size = cfg.db_max_size,
+                      .health = health};
     if (!ctx.jobs_by_client) {
+        store_health_free(health);
         fprintf(stderr, "ctcsim-server: out of memory\n");
         return EXIT_DATABASE;
     }
@@ -418,12 +432,15 @@ int main(int argc, char **argv)
                       .workers = (int)cfg.workers,
                       .max_queue = (int)cfg.max_queue,
                       .job_time_limit = cfg.job_time_limit,
+                      .db_max_size = cfg.db_max_size,
+                      .health = health,
                       .left = routes_job_left,
                       .left_arg = &ctx};
     jobq *queue = NULL;
     if (jobq_start(&qc, &queue, err, sizeof err) != 0) {
         database_error(cfg.db, err);
         client_count_free(ctx.jobs_by_client);
+        store_health_free(health);
         return EXIT_DATABASE;
     }
     ctx.queue = queue;
@@ -446,6 +463,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "ctcsim-server: %s\n", err);
         jobq_stop(queue);
         client_count_free(ctx.jobs_by_client);
+        store_health_free(health);
         return EXIT_LISTEN;
     }
     int v6 = strchr(cfg.bind, ':') != NULL;
@@ -464,6 +482,8 @@ int main(int argc, char **argv)
     http_stop(http);
     jobq_stop(queue);
     client_count_free(ctx.jobs_by_client);
+    /* the HTTP threads' connections closed with their threads, the workers' with the queue */
+    store_health_free(health);
     fprintf(stderr, "ctcsim-server: stopped\n");
     return 0;
 }

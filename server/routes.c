@@ -41,6 +41,15 @@
  * the handler until the reply is freed (sent, failed, the client gone or the server stopped);
  * past them the answer is 503 TOO_MANY_STREAMS, since each costs its HTTP thread time while
  * memory no longer grows with it.
+ *
+ * Database waits. An HTTP thread serves many connections, so it never waits long for the
+ * database: its connection's busy timeout is ROUTES_BUSY_MS, and a write that meets a lock held
+ * longer (another process's transaction), a full disk or a read-only file is answered 503 with
+ * a code naming the fault and Retry-After (database_failed), the connection kept. Reads need no
+ * wait: in WAL mode a reader never waits for the writer. Health reads the shared store_health
+ * (store.h) and six rows of counts; while a fault lasts it probes, with one write that changes
+ * nothing, at most every ROUTES_PROBE_INTERVAL s, so the state clears even when no other write
+ * comes.
  */
 #include "routes.h"
 
@@ -78,6 +87,8 @@
 #define ROUTES_WAIT_SLICE 0.25 /* s of one jobq_wait while a client waits */
 /* bytes of a POST body parsed on the HTTP thread; larger ones are parsed off it (run_post) */
 #define ROUTES_INLINE_BODY (64 * 1024)
+#define ROUTES_BUSY_MS 300        /* ms an HTTP thread's write waits for another's lock */
+#define ROUTES_PROBE_INTERVAL 1.0 /* s between health's probes while the database is at fault */
 
 /* ---- the thread's store connection ---- */
 
@@ -107,11 +118,15 @@ static store *thread_store(const routes_ctx *ctx, http_reply *rep)
     store *s = pthread_getspecific(store_key);
     if (s) return s;
     char err[256] = "";
-    if (store_open(ctx->db_path, &s, err, sizeof err) != 0) {
+    if (store_open(ctx->db_path, &s, err, sizeof err) != 0 ||
+        (ctx->db_max_size > 0 && store_set_max_size(s, ctx->db_max_size, err, sizeof err) != 0)) {
+        store_close(s);
         fprintf(stderr, "ctcsim-server: database: %s\n", err);
         http_reply_error(rep, 503, "DATABASE_ERROR", "", "the database cannot be opened: %s", err);
         return NULL;
     }
+    store_set_busy_timeout(s, ROUTES_BUSY_MS);
+    store_attach(s, ctx->health);
     if (pthread_setspecific(store_key, s) != 0) {
         store_close(s);
         http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
@@ -120,12 +135,30 @@ static store *thread_store(const routes_ctx *ctx, http_reply *rep)
     return s;
 }
 
-/* After a failed store call: logs it, replies 503 DATABASE_ERROR and drops the connection. */
+/* After a failed store call on this thread's connection: logs it and replies 503. A transient
+ * fault (store.h) gets its own code and Retry-After, and the connection is kept; any other drops
+ * the connection (the next request opens a fresh one) and is DATABASE_ERROR. */
 static void database_failed(http_reply *rep, const char *what, const char *err)
 {
-    fprintf(stderr, "ctcsim-server: database: %s: %s\n", what, err);
-    http_reply_error(rep, 503, "DATABASE_ERROR", "", "the database failed (%s): %s", what, err);
+    static const struct {
+        const char *code;
+        int retry_after; /* s */
+    } faults[STORE_NFAULT] = {
+        [STORE_FAULT_LOCKED] = {"DATABASE_BUSY", 1},
+        [STORE_FAULT_FULL] = {"DATABASE_FULL", 30},
+        [STORE_FAULT_READONLY] = {"DATABASE_READONLY", 30},
+        [STORE_FAULT_IO] = {"DATABASE_IO_ERROR", 30},
+    };
     store *s = pthread_getspecific(store_key);
+    store_fault f = s ? store_last_fault(s) : STORE_FAULT_OTHER;
+    fprintf(stderr, "ctcsim-server: database: %s: %s\n", what, err);
+    if (store_fault_transient(f)) {
+        rep->retry_after = faults[f].retry_after;
+        http_reply_error(rep, 503, faults[f].code, "", "the database cannot take this now (%s): %s",
+                         what, err);
+        return;
+    }
+    http_reply_error(rep, 503, "DATABASE_ERROR", "", "the database failed (%s): %s", what, err);
     if (s) {
         pthread_setspecific(store_key, NULL);
         store_close(s);
@@ -905,6 +938,11 @@ static void delete_job(const http_request *req, http_reply *rep, void *arg)
         if (rc == 1 || !job_finished(row.status)) {
             if (store_finish(s, id, STORE_CANCELLED, "cancelled by request", NULL, NULL, err,
                              sizeof err) != 0) {
+                /* still queued in the database: back in the queue, so no job is stranded */
+                if (rc == 1 && jobq_submit(ctx->queue, id) != 0)
+                    fprintf(stderr,
+                            "ctcsim-server: job %" PRId64 " stays queued until the next start\n",
+                            id);
                 database_failed(rep, "cancelling a job", err);
                 goto done;
             }
@@ -1058,6 +1096,20 @@ static void get_preset(const http_request *req, http_reply *rep, void *arg)
 
 /* ---- GET /api/health ---- */
 
+/* The database's state as health shows it: {"state"} when writes work, with "since",
+ * "message" and "failures" while a fault lasts. */
+static cJSON *database_json(const store_state *st)
+{
+    cJSON *d = cJSON_CreateObject();
+    cJSON_AddStringToObject(d, "state", store_fault_name(st->fault));
+    if (st->fault != STORE_FAULT_NONE) {
+        cJSON_AddItemToObject(d, "since", time_json(st->since));
+        cJSON_AddStringToObject(d, "message", st->message);
+        cJSON_AddNumberToObject(d, "failures", (double)st->failures);
+    }
+    return d;
+}
+
 static void get_health(const http_request *req, http_reply *rep, void *arg)
 {
     (void)req;
@@ -1068,25 +1120,47 @@ static void get_health(const http_request *req, http_reply *rep, void *arg)
     char err[256] = "";
     http_reply ignored = {.fd = -1};
     store *s = thread_store(ctx, &ignored);
-    int ok = s && store_count(s, counts, err, sizeof err) == 0;
-    if (s && !ok) database_failed(&ignored, "counting jobs", err);
+    int readable = s && store_count(s, counts, err, sizeof err) == 0;
+    if (s && !readable) database_failed(&ignored, "counting jobs", err);
     free(ignored.body);
 
+    /* the writes' shared state; while at fault, a probe may learn that it has passed */
+    store_state st = {.fault = STORE_FAULT_NONE};
+    if (ctx->health) {
+        /* without waiting: a probe that meets a lock leaves the state as it is */
+        if (readable && store_health_probe_due(ctx->health, ROUTES_PROBE_INTERVAL)) {
+            store_set_busy_timeout(s, 0);
+            (void)store_probe(s, err, sizeof err);
+            store_set_busy_timeout(s, ROUTES_BUSY_MS);
+        }
+        store_health_read(ctx->health, &st);
+    }
+    if (!readable && st.fault == STORE_FAULT_NONE) {
+        st.fault = STORE_FAULT_OTHER;
+        snprintf(st.message, sizeof st.message, "%s", s ? err : "the database cannot be opened");
+        st.since = 0;
+    }
+    const char *status = st.fault == STORE_FAULT_NONE     ? "ok"
+                         : st.fault == STORE_FAULT_LOCKED ? "degraded"
+                                                          : "error";
+
     cJSON *o = cJSON_CreateObject();
-    cJSON_AddStringToObject(o, "status", ok ? "ok" : "error");
+    cJSON_AddStringToObject(o, "status", status);
     cJSON_AddStringToObject(o, "version", CTCSIM_VERSION);
     cJSON_AddNumberToObject(o, "workers", stats.workers);
     cJSON_AddNumberToObject(o, "busy", stats.busy);
     cJSON_AddNumberToObject(o, "queued", stats.queued);
-    cJSON_AddStringToObject(o, "database", ok ? "ok" : "error");
-    cJSON *jobs = cJSON_AddObjectToObject(o, "jobs"); /* {} when the database failed */
-    for (int st = 0; ok && st < STORE_NSTATUS; st++)
-        cJSON_AddNumberToObject(jobs, store_status_name((store_status)st), (double)counts[st]);
-    if (!cJSON_GetObjectItemCaseSensitive(o, "jobs")) {
+    cJSON_AddItemToObject(o, "database", database_json(&st));
+    cJSON *jobs = cJSON_AddObjectToObject(o, "jobs"); /* {} when the counts cannot be read */
+    for (int i = 0; readable && i < STORE_NSTATUS; i++)
+        cJSON_AddNumberToObject(jobs, store_status_name((store_status)i), (double)counts[i]);
+    if (!cJSON_GetObjectItemCaseSensitive(o, "jobs") ||
+        !cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(o, "database"),
+                                          "state")) {
         cJSON_Delete(o);
         o = NULL;
     }
-    http_reply_json(rep, ok ? 200 : 503, o);
+    http_reply_json(rep, st.fault == STORE_FAULT_NONE ? 200 : 503, o);
 }
 
 /* ---- GET /api/openapi.yaml ---- */

@@ -22,7 +22,10 @@
  *   501 UNSUPPORTED_TRANSFER_ENCODING (a Transfer-Encoding other than chunked)
  *   503 QUEUE_FULL, TOO_MANY_STREAMS (both with Retry-After), NO_MEMORY, DATABASE_ERROR,
  *       SHUTTING_DOWN, BUSY (with Retry-After: a body over 64 KiB, parsed off the HTTP threads,
- *       past --max-waiters)
+ *       past --max-waiters), and when a write cannot be made now (with Retry-After):
+ *       DATABASE_BUSY (another connection or process held the write lock past ROUTES_BUSY_MS),
+ *       DATABASE_FULL (disk or --db-max-size full: DELETE of finished jobs still works and frees
+ *       room), DATABASE_READONLY, DATABASE_IO_ERROR
  *
  * A job row (lists and single jobs):
  *   {"id", "name", "preset" (or null), "status" ("queued", "running", "done", "failed",
@@ -59,8 +62,16 @@
  * GET  /api/presets/{name}   200 the preset's job document; query parameters are its params
  *                            (?n=16); 404 UNKNOWN_PRESET; 400 INVALID_QUERY for a bad param.
  * GET  /api/health           200 {"status": "ok", "version", "workers", "busy", "queued",
- *                            "database": "ok", "jobs": {status: count}}; 503 with "status":
- *                            "error" and "database": "error" when the database fails.
+ *                            "database": {"state": "ok"}, "jobs": {status: count}}, in O(1)
+ *                            and without waiting for any lock. While the service's writes
+ *                            meet a fault (store.h, one state for the whole process): 503 with
+ *                            "status" "degraded" (state "locked") or "error" (state "full",
+ *                            "readonly", "io_error"), and "database": {"state", "since" (ISO
+ *                            time of the first failed write), "message", "failures" (writes
+ *                            failed since)}; the fault clears at the next write that succeeds
+ *                            (health itself tries one that changes nothing at most every
+ *                            ROUTES_PROBE_INTERVAL s while it lasts). 503 with "status" "error"
+ *                            and state "error" when the job counts cannot be read ("jobs": {}).
  * GET  /api/openapi.yaml     the API description (application/yaml).
  * GET  / and other paths      static files from the web root (http.h).
  */
@@ -86,6 +97,8 @@ typedef struct routes_ctx {
     int job_threads;              /* the most "threads" a job may ask for (--job-threads) */
     client_count *jobs_by_client; /* each client address's queued and running jobs */
     unsigned max_jobs_per_client; /* past them POST /api/jobs answers 429 (0 = no limit) */
+    long long db_max_size;        /* bytes each connection may grow the database to; 0 = no cap */
+    struct store_health *health;  /* the database's state, shared with the workers (store.h) */
     atomic_int stopping;          /* set at shutdown (read by the HTTP threads, hence atomic): POST
                                      /api/jobs answers 503 SHUTTING_DOWN */
 

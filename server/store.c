@@ -5,13 +5,14 @@
  * Connections. Each store owns one sqlite3 connection in WAL mode (readers never block the
  * writer and the writer never blocks readers), synchronous=NORMAL (a commit survives a crash of
  * the process; a power cut may lose the last commits but never corrupts the file), foreign keys
- * on (a job's series go with it, ON DELETE CASCADE) and a busy timeout of STORE_BUSY_MS, so the
- * connections of the workers and of the HTTP threads wait for each other's write locks instead
- * of failing. Every statement is prepared once at open (SQLITE_PREPARE_PERSISTENT), bound with
- * sqlite3_bind_* (no value is ever written into SQL text) and reset and unbound after each use,
- * so no statement holds a read snapshot between calls. Writes of more than one statement run in
- * BEGIN IMMEDIATE transactions: the write lock is taken first, so a transaction never has to
- * upgrade a stale read snapshot (which SQLite would answer with SQLITE_BUSY at once).
+ * on (a job's series go with it, ON DELETE CASCADE) and a busy timeout of STORE_BUSY_MS, which
+ * callers shorten with store_set_busy_timeout (the service: 0.3 s on HTTP threads, 1 s per try
+ * in the workers, which retry; none for progress). Every statement is prepared once at open
+ * (SQLITE_PREPARE_PERSISTENT), bound with sqlite3_bind_* (no value is ever written into SQL
+ * text) and reset and unbound after each use, so no statement holds a read snapshot between
+ * calls. Writes of more than one statement run in BEGIN IMMEDIATE transactions: the write lock
+ * is taken first, so a transaction never has to upgrade a stale read snapshot (which SQLite
+ * would answer with SQLITE_BUSY at once).
  *
  * Schema. PRAGMA user_version holds the schema's version. store_open reads it: the current
  * version needs nothing; a newer one, or version 0 with tables of someone else, is refused and
@@ -43,20 +44,37 @@
  * for. Each row is found by its key (job_id, channel), never by a rowid remembered from an
  * earlier read, since a deleted job's rowids may be taken by the next one.
  *
+ * Faults and health. Every public call starts with call_begin, which clears the call's fault
+ * and notes sqlite3_total_changes64; db_err, the one place a database failure becomes a message,
+ * records the fault from sqlite3_extended_errcode (the first one of the call, with its message).
+ * Public writes are thin wrappers that end in write_end, which tells an attached store_health
+ * (store.h) what happened: a transient fault, or a success that changed rows. The state is one
+ * struct behind a mutex, so every thread reads the same answer in O(1). A full database is
+ * cleared only by a write that adds rows or frees room, or by store_probe measuring at least
+ * STORE_ROOM_BYTES free on the disk and under the size cap (PRAGMA max_page_count); other faults
+ * by any write that changed rows, the probe's included (it rewrites one count with its value).
+ * store_reserve allocates the -wal file's blocks past its end (fallocate FALLOC_FL_KEEP_SIZE):
+ * SQLite never sees them, but its appends use them, so on a full disk a delete still commits.
+ *
  * Errors are the message of the failing step prefixed with what was being done and the job's
  * id ("cannot finish job 3: no such job", "job 3: storing series tau: disk I/O error").
  */
+#define _GNU_SOURCE /* fallocate and FALLOC_FL_KEEP_SIZE (store_reserve) */
+
 #include "store.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <float.h>
 #include <limits.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -73,6 +91,7 @@ _Static_assert(sizeof(double) == 8 && DBL_MANT_DIG == 53 && FLT_RADIX == 2,
 
 #define STORE_BUSY_MS 5000 /* how long a connection waits for another's lock */
 #define STORE_MAX_LIST 1000
+#define STORE_ROOM_BYTES (1 << 20) /* free bytes that make a full database writable again */
 
 /* migrations[v] takes the schema from version v to v + 1 (run in one transaction) */
 static const char *const migrations[STORE_SCHEMA_VERSION] = {
@@ -148,6 +167,7 @@ typedef enum stmt_id {
     ST_BEGIN_READ,
     ST_DELETE,
     ST_COUNT,
+    ST_PROBE,
     ST_NSTMT
 } stmt_id;
 
@@ -194,17 +214,29 @@ static const char *const stmt_sql[ST_NSTMT] = {
     [ST_BEGIN_READ] = "BEGIN",
     [ST_DELETE] = "DELETE FROM jobs WHERE id = ?1",
     [ST_COUNT] = "SELECT status, n FROM job_counts",
+    [ST_PROBE] = "UPDATE job_counts SET n = n WHERE status = 'queued'",
 };
 
 struct store {
     sqlite3 *db;
     sqlite3_stmt *stmt[ST_NSTMT];
-    long count_vm_steps; /* SQLite VM steps of the last store_count */
+    long count_vm_steps;          /* SQLite VM steps of the last store_count */
+    int busy_ms;                  /* the busy timeout set on db */
+    store_fault fault;            /* of the current (or last) call */
+    char fault_msg[256];          /* its message, when fault is not NONE */
+    sqlite3_int64 changes_before; /* sqlite3_total_changes64 when the current call began */
+    store_health *health;         /* NULL = not attached */
     /* between store_series_begin and store_series_end: the read transaction, and the blob
        handles opened on the series rows of job blob_job (t, then the channels) */
     int reading;
     int64_t blob_job;
     sqlite3_blob *blob[CTC_NCHANNELS + 1];
+};
+
+struct store_health {
+    pthread_mutex_t lock;
+    store_state state;
+    double last_probe; /* monotonic s of the last store_health_probe_due that said 1 */
 };
 
 static const char *const status_names[STORE_NSTATUS] = {
@@ -237,19 +269,47 @@ static void set_err(char *err, size_t errlen, const char *fmt, ...)
     va_end(ap);
 }
 
-/* "WHAT: sqlite's message", with WHAT formatted; call before resetting the failed statement */
-static void db_err(const store *s, char *err, size_t errlen, const char *fmt, ...)
+/* the fault of an SQLite result code (primary or extended) */
+static store_fault fault_of(int code)
+{
+    switch (code & 0xff) {
+    case SQLITE_OK:
+    case SQLITE_ROW:
+    case SQLITE_DONE:
+        return STORE_FAULT_NONE;
+    case SQLITE_BUSY:
+    case SQLITE_LOCKED:
+        return STORE_FAULT_LOCKED;
+    case SQLITE_FULL:
+        return STORE_FAULT_FULL;
+    case SQLITE_READONLY:
+        return STORE_FAULT_READONLY;
+    case SQLITE_IOERR:
+        return STORE_FAULT_IO;
+    default:
+        return STORE_FAULT_OTHER;
+    }
+}
+
+/* "WHAT: sqlite's message", with WHAT formatted; call before resetting the failed statement.
+ * Records the call's fault from SQLite's last error code. */
+static void db_err(store *s, char *err, size_t errlen, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 
-static void db_err(const store *s, char *err, size_t errlen, const char *fmt, ...)
+static void db_err(store *s, char *err, size_t errlen, const char *fmt, ...)
 {
-    if (!err || errlen == 0) return;
+    char what[256];
     va_list ap;
     va_start(ap, fmt);
-    int n = vsnprintf(err, errlen, fmt, ap);
+    vsnprintf(what, sizeof what, fmt, ap);
     va_end(ap);
-    if (n >= 0 && (size_t)n < errlen)
-        snprintf(err + n, errlen - (size_t)n, ": %s", sqlite3_errmsg(s->db));
+    if (s->fault == STORE_FAULT_NONE) {
+        s->fault = fault_of(sqlite3_extended_errcode(s->db));
+        /* an error code that says nothing (a misuse) is still the database's failure */
+        if (s->fault == STORE_FAULT_NONE) s->fault = STORE_FAULT_OTHER;
+        set_err(s->fault_msg, sizeof s->fault_msg, "%s: %s", what, sqlite3_errmsg(s->db));
+    }
+    set_err(err, errlen, "%s: %s", what, sqlite3_errmsg(s->db));
 }
 
 static double now_s(void)
@@ -257,6 +317,136 @@ static double now_s(void)
     struct timespec ts;
     clock_gettime(CLOCK_REALTIME, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static double monotonic_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ---- faults and health ---- */
+
+store_fault store_last_fault(const store *s)
+{
+    return s->fault;
+}
+
+int store_fault_transient(store_fault f)
+{
+    return f == STORE_FAULT_LOCKED || f == STORE_FAULT_FULL || f == STORE_FAULT_READONLY ||
+           f == STORE_FAULT_IO;
+}
+
+const char *store_fault_name(store_fault f)
+{
+    static const char *const names[STORE_NFAULT] = {"ok",       "locked",   "full",
+                                                    "readonly", "io_error", "error"};
+    return (unsigned)f < STORE_NFAULT ? names[f] : "error";
+}
+
+const char *store_fault_text(store_fault f)
+{
+    static const int codes[STORE_NFAULT] = {SQLITE_OK,       SQLITE_BUSY,  SQLITE_FULL,
+                                            SQLITE_READONLY, SQLITE_IOERR, SQLITE_ERROR};
+    return sqlite3_errstr((unsigned)f < STORE_NFAULT ? codes[f] : SQLITE_ERROR);
+}
+
+store_health *store_health_new(void)
+{
+    store_health *h = calloc(1, sizeof *h);
+    if (!h) return NULL;
+    if (pthread_mutex_init(&h->lock, NULL) != 0) {
+        free(h);
+        return NULL;
+    }
+    h->last_probe = -INFINITY;
+    return h;
+}
+
+void store_health_free(store_health *h)
+{
+    if (!h) return;
+    pthread_mutex_destroy(&h->lock);
+    free(h);
+}
+
+void store_attach(store *s, store_health *h)
+{
+    s->health = h;
+}
+
+void store_health_read(store_health *h, store_state *out)
+{
+    pthread_mutex_lock(&h->lock);
+    *out = h->state;
+    pthread_mutex_unlock(&h->lock);
+}
+
+int store_health_probe_due(store_health *h, double interval_s)
+{
+    int due = 0;
+    double t = monotonic_s();
+    pthread_mutex_lock(&h->lock);
+    if (h->state.fault != STORE_FAULT_NONE && t - h->last_probe >= interval_s) {
+        h->last_probe = t;
+        due = 1;
+    }
+    pthread_mutex_unlock(&h->lock);
+    return due;
+}
+
+/* the start of a public call: no fault yet, and the changes so far (to see whether it wrote) */
+static void call_begin(store *s)
+{
+    s->fault = STORE_FAULT_NONE;
+    s->fault_msg[0] = '\0';
+    s->changes_before = sqlite3_total_changes64(s->db);
+}
+
+/* a transient fault seen by a write: the state takes it (its time and message kept while the
+ * same fault lasts) */
+static void health_fault(store_health *h, store_fault f, const char *message)
+{
+    double t = now_s();
+    pthread_mutex_lock(&h->lock);
+    if (h->state.fault != f) {
+        h->state.fault = f;
+        h->state.since = t;
+        snprintf(h->state.message, sizeof h->state.message, "%s", message);
+    }
+    h->state.failures++;
+    pthread_mutex_unlock(&h->lock);
+}
+
+/* a write that worked: the state clears, except a full database when the write proved no room
+ * (room 0) */
+static void health_ok(store_health *h, int room)
+{
+    double t = now_s();
+    pthread_mutex_lock(&h->lock);
+    if (room || h->state.fault != STORE_FAULT_FULL) {
+        h->state.fault = STORE_FAULT_NONE;
+        h->state.since = 0;
+        h->state.failures = 0;
+        h->state.message[0] = '\0';
+    }
+    h->state.last_ok = t;
+    pthread_mutex_unlock(&h->lock);
+}
+
+/* the end of a public write call: its outcome told to the health state (a transient fault sets
+ * it; a call that changed rows without a fault clears it, except a full database, which only a
+ * call that could have met it clears: one that adds rows or frees room, said by room); rc */
+static int write_end(store *s, int rc, int room)
+{
+    if (!s->health) return rc;
+    if (store_fault_transient(s->fault) && !(s->fault == STORE_FAULT_LOCKED && s->busy_ms == 0))
+        health_fault(s->health, s->fault, s->fault_msg);
+    else if (s->fault == STORE_FAULT_NONE && sqlite3_total_changes64(s->db) != s->changes_before)
+        health_ok(s->health, room);
+    return rc;
 }
 
 /* makes a statement ready for its next use: no snapshot held, no pointer into the caller kept */
@@ -542,7 +732,7 @@ int store_open(const char *path, store **out, char *err, size_t errlen)
                 path);
         goto done;
     }
-    sqlite3_busy_timeout(s->db, STORE_BUSY_MS);
+    store_set_busy_timeout(s, STORE_BUSY_MS);
     /* the first read of the file: a file that is not SQLite's fails here */
     int wal = query_one(s->db, "PRAGMA journal_mode = WAL", NULL, mode, sizeof mode);
     if ((wal & 0xff) == SQLITE_READONLY || (wal & 0xff) == SQLITE_CANTOPEN) {
@@ -582,6 +772,115 @@ done:
     return rc;
 }
 
+void store_set_busy_timeout(store *s, int ms)
+{
+    s->busy_ms = ms > 0 ? ms : 0;
+    sqlite3_busy_timeout(s->db, s->busy_ms);
+}
+
+int store_set_max_size(store *s, long long max_bytes, char *err, size_t errlen)
+{
+    int page = 0, count = 0;
+    char sql[64];
+    call_begin(s);
+    if (max_bytes < 0) {
+        set_err(err, errlen, "the database's size limit must be >= 0 bytes (got %lld)", max_bytes);
+        return -1;
+    }
+    if (query_one(s->db, "PRAGMA page_size", &page, NULL, 0) != SQLITE_OK || page <= 0) {
+        db_err(s, err, errlen, "reading the database's page size");
+        return -1;
+    }
+    /* uncapped: SQLite's default SQLITE_MAX_PAGE_COUNT; a cap under one page is one page */
+    long long pages = max_bytes ? max_bytes / page : 1073741823LL;
+    snprintf(sql, sizeof sql, "PRAGMA max_page_count = %lld", pages > 0 ? pages : 1);
+    if (query_one(s->db, sql, &count, NULL, 0) != SQLITE_OK) {
+        db_err(s, err, errlen, "setting the database's size limit");
+        return -1;
+    }
+    return 0;
+}
+
+/* the bytes writes may still add: the disk's free space for unprivileged users, and under the
+ * size cap the pages neither used nor past it (free pages inside the file count); -1 when
+ * unknown */
+static long long room_bytes(store *s)
+{
+    int page = 0, count = 0, free_pages = 0, max_pages = 0;
+    const char *path = sqlite3_db_filename(s->db, "main");
+    struct statvfs fs;
+    if (!path || !*path || statvfs(path, &fs) != 0 ||
+        query_one(s->db, "PRAGMA page_size", &page, NULL, 0) != SQLITE_OK ||
+        query_one(s->db, "PRAGMA page_count", &count, NULL, 0) != SQLITE_OK ||
+        query_one(s->db, "PRAGMA freelist_count", &free_pages, NULL, 0) != SQLITE_OK ||
+        query_one(s->db, "PRAGMA max_page_count", &max_pages, NULL, 0) != SQLITE_OK)
+        return -1;
+    long long disk = (long long)fs.f_bavail * (long long)fs.f_frsize;
+    long long cap = ((long long)max_pages - count + free_pages) * page;
+    return disk < cap ? disk : cap;
+}
+
+int store_probe(store *s, char *err, size_t errlen)
+{
+    int rc = -1, in_tx = 0;
+    store_state st = {.fault = STORE_FAULT_NONE};
+    call_begin(s);
+    if (s->health) store_health_read(s->health, &st);
+    /* a full database: a write in place may work on a full disk, so the room is measured */
+    if (st.fault == STORE_FAULT_FULL) {
+        long long room = room_bytes(s);
+        if (room >= STORE_ROOM_BYTES) {
+            health_ok(s->health, 1);
+            return 0;
+        }
+        set_err(err, errlen, "probing the database: %lld bytes free, %d needed", room,
+                STORE_ROOM_BYTES);
+        health_fault(s->health, STORE_FAULT_FULL, err ? err : "");
+        return -1;
+    }
+    if (tx_step(s, ST_BEGIN) != SQLITE_OK) {
+        db_err(s, err, errlen, "probing the database");
+        goto done;
+    }
+    in_tx = 1;
+    if (tx_step(s, ST_PROBE) != SQLITE_OK || tx_step(s, ST_COMMIT) != SQLITE_OK) {
+        db_err(s, err, errlen, "probing the database");
+        goto done;
+    }
+    in_tx = 0;
+    rc = 0;
+done:
+    if (in_tx) tx_rollback(s);
+    return write_end(s, rc, 0);
+}
+
+int store_reserve(store *s, long long bytes, char *err, size_t errlen)
+{
+    const char *db = sqlite3_db_filename(s->db, "main");
+    const char *wal = db && *db ? sqlite3_filename_wal(db) : NULL;
+    call_begin(s);
+    if (!wal || !*wal) {
+        set_err(err, errlen, "reserving room for the log: the database has no file");
+        return -1;
+    }
+    int fd = open(wal, O_WRONLY | O_CLOEXEC);
+    if (fd < 0) {
+        set_err(err, errlen, "reserving room for the log: %s: %s", wal, strerror(errno));
+        return -1;
+    }
+    /* the blocks past the end are allocated, the size SQLite sees is left as it is */
+    int rc = 0;
+    while (fallocate(fd, FALLOC_FL_KEEP_SIZE, 0, (off_t)bytes) != 0) {
+        if (errno == EINTR) continue;
+        set_err(err, errlen, "reserving %lld bytes for the log %s: %s", bytes, wal,
+                strerror(errno));
+        rc = -1;
+        break;
+    }
+    close(fd);
+    return rc;
+}
+
 void store_close(store *s)
 {
     if (!s) return;
@@ -593,8 +892,9 @@ void store_close(store *s)
 
 /* ---- jobs ---- */
 
-int store_insert(store *s, const char *name, const char *preset, int nbodies, int nv,
-                 const char *controller, const char *spec, int64_t *id, char *err, size_t errlen)
+static int insert_job(store *s, const char *name, const char *preset, int nbodies, int nv,
+                      const char *controller, const char *spec, int64_t *id, char *err,
+                      size_t errlen)
 {
     sqlite3_stmt *q = s->stmt[ST_INSERT];
     int rc = -1;
@@ -627,7 +927,15 @@ done:
     return rc;
 }
 
-int store_recover(store *s, int64_t **ids, int *n, char *err, size_t errlen)
+int store_insert(store *s, const char *name, const char *preset, int nbodies, int nv,
+                 const char *controller, const char *spec, int64_t *id, char *err, size_t errlen)
+{
+    call_begin(s);
+    return write_end(s, insert_job(s, name, preset, nbodies, nv, controller, spec, id, err, errlen),
+                     1);
+}
+
+static int recover_jobs(store *s, int64_t **ids, int *n, char *err, size_t errlen)
 {
     sqlite3_stmt *sel = s->stmt[ST_RECOVER_IDS];
     int rc = -1, in_tx = 0, count = 0, cap = 16, step;
@@ -683,7 +991,13 @@ done:
     return rc;
 }
 
-int store_start(store *s, int64_t id, char *err, size_t errlen)
+int store_recover(store *s, int64_t **ids, int *n, char *err, size_t errlen)
+{
+    call_begin(s);
+    return write_end(s, recover_jobs(s, ids, n, err, errlen), 0);
+}
+
+static int start_job(store *s, int64_t id, char *err, size_t errlen)
 {
     sqlite3_stmt *q = s->stmt[ST_START];
     int rc = -1;
@@ -699,7 +1013,13 @@ done:
     return rc;
 }
 
-int store_progress(store *s, int64_t id, double progress, char *err, size_t errlen)
+int store_start(store *s, int64_t id, char *err, size_t errlen)
+{
+    call_begin(s);
+    return write_end(s, start_job(s, id, err, errlen), 0);
+}
+
+static int record_progress(store *s, int64_t id, double progress, char *err, size_t errlen)
 {
     sqlite3_stmt *q = s->stmt[ST_PROGRESS];
     int rc = -1;
@@ -725,7 +1045,13 @@ done:
     return rc;
 }
 
-int store_requeue(store *s, int64_t id, char *err, size_t errlen)
+int store_progress(store *s, int64_t id, double progress, char *err, size_t errlen)
+{
+    call_begin(s);
+    return write_end(s, record_progress(s, id, progress, err, errlen), 0);
+}
+
+static int requeue_job(store *s, int64_t id, char *err, size_t errlen)
 {
     sqlite3_stmt *q = s->stmt[ST_REQUEUE];
     int rc = -1;
@@ -743,6 +1069,12 @@ int store_requeue(store *s, int64_t id, char *err, size_t errlen)
 done:
     release(q);
     return rc;
+}
+
+int store_requeue(store *s, int64_t id, char *err, size_t errlen)
+{
+    call_begin(s);
+    return write_end(s, requeue_job(s, id, err, errlen), 0);
 }
 
 /* the largest finite-or-infinite entry of the run's e_max, NaN when there is none */
@@ -802,8 +1134,8 @@ done:
     return rc;
 }
 
-int store_finish(store *s, int64_t id, store_status status, const char *message,
-                 const char *metrics, const ctc_sim_result *r, char *err, size_t errlen)
+static int finish_job(store *s, int64_t id, store_status status, const char *message,
+                      const char *metrics, const ctc_sim_result *r, char *err, size_t errlen)
 {
     sqlite3_stmt *q = s->stmt[ST_FINISH];
     sqlite3_stmt *del = s->stmt[ST_SERIES_DELETE];
@@ -872,8 +1204,16 @@ done:
     return rc;
 }
 
+int store_finish(store *s, int64_t id, store_status status, const char *message,
+                 const char *metrics, const ctc_sim_result *r, char *err, size_t errlen)
+{
+    call_begin(s);
+    return write_end(s, finish_job(s, id, status, message, metrics, r, err, errlen), r != NULL);
+}
+
 int store_get(store *s, int64_t id, store_job *out, char *err, size_t errlen)
 {
+    call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_GET];
     int rc = -1;
     memset(out, 0, sizeof *out);
@@ -909,6 +1249,7 @@ void store_job_clear(store_job *j)
 int store_list(store *s, int64_t before, int status, int limit, store_job **rows, int *n, char *err,
                size_t errlen)
 {
+    call_begin(s);
     sqlite3_stmt *q = s->stmt[status < 0 ? ST_LIST_ANY : ST_LIST_STATUS];
     int rc = -1, count = 0, cap = 0, step;
     store_job *list = NULL;
@@ -1044,6 +1385,7 @@ static int check_series_row(series_rows *rows, const char *name, int width, sqli
 
 int store_get_series(store *s, int64_t id, ctc_sim_result **out, char *err, size_t errlen)
 {
+    call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_SERIES_GET];
     ctc_sim_result *r = NULL;
     series_rows rows = {.id = id, .nsamples = -1};
@@ -1111,6 +1453,7 @@ done:
 
 int store_get_series_info(store *s, int64_t id, store_series_info *out, char *err, size_t errlen)
 {
+    call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_SERIES_INFO];
     series_rows rows = {.id = id, .nsamples = -1};
     int rc = -1, step, found = 0, have_t = 0;
@@ -1158,6 +1501,7 @@ done:
 
 int store_series_begin(store *s, char *err, size_t errlen)
 {
+    call_begin(s);
     if (s->reading) {
         set_err(err, errlen, "reading a series: a read is already under way");
         return -1;
@@ -1183,6 +1527,7 @@ static void close_blobs(store *s)
 int store_series_read(store *s, int64_t id, int channel, uint64_t offset, void *buf, size_t len,
                       char *err, size_t errlen)
 {
+    call_begin(s);
     const char *name = channel < 0 ? "t" : ctc_channel_name((ctc_channel)channel);
     if (!s->reading || channel < -1 || channel >= CTC_NCHANNELS) {
         set_err(err, errlen, "job %lld: reading series %s: %s", (long long)id, name,
@@ -1239,7 +1584,7 @@ void store_series_end(store *s)
     s->reading = 0;
 }
 
-int store_delete(store *s, int64_t id, char *err, size_t errlen)
+static int delete_job(store *s, int64_t id, char *err, size_t errlen)
 {
     sqlite3_stmt *q = s->stmt[ST_DELETE];
     int rc = -1, in_tx = 0;
@@ -1276,8 +1621,15 @@ done:
     return rc;
 }
 
+int store_delete(store *s, int64_t id, char *err, size_t errlen)
+{
+    call_begin(s);
+    return write_end(s, delete_job(s, id, err, errlen), 1);
+}
+
 int store_count(store *s, long counts[STORE_NSTATUS], char *err, size_t errlen)
 {
+    call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_COUNT];
     int rc = -1, step;
     for (int i = 0; i < STORE_NSTATUS; i++) counts[i] = 0;

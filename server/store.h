@@ -21,6 +21,22 @@
  * Every function returns 0 on success and -1 on failure with a message in err (errlen bytes; err
  * may be NULL), except where it says otherwise. Strings returned in structs are owned by the
  * struct and freed by its clear function.
+ *
+ * Faults. After a -1, store_last_fault says what the database answered: a lock held too long
+ * (SQLITE_BUSY, SQLITE_LOCKED), a full disk or a full database (SQLITE_FULL), a read-only file
+ * (SQLITE_READONLY) or an I/O error (SQLITE_IOERR) are transient: the same call may succeed later
+ * and the caller may retry it (the workers do, with backoff); any other failure (a job in the
+ * wrong state, a damaged row, no memory) is not. The busy timeout bounds how long one call waits
+ * for another connection's write lock before failing with STORE_FAULT_LOCKED.
+ *
+ * Health. A store_health is the database's state as the service's writes observe it, shared by
+ * every connection attached to it (one per process; its own mutex, so any thread may read it).
+ * Each write call on an attached store reports its outcome: a transient fault sets the state
+ * (the first one's time is kept as `since` while the fault lasts), and a write that changed rows
+ * clears it; a full database is cleared only by a write that adds rows (store_insert,
+ * store_finish with a result) or frees room (store_delete), since an update in place may succeed
+ * on a full disk. A connection whose busy timeout is 0 does not wait for locks by design, so its
+ * lock failures are not reported (contention, not a fault). Reading the state is O(1).
  */
 #ifndef STORE_H
 #define STORE_H
@@ -44,6 +60,29 @@ typedef enum store_status {
 } store_status;
 
 typedef struct store store;
+
+/* What the database answered to a store's last failed call (see "Faults" above). */
+typedef enum store_fault {
+    STORE_FAULT_NONE = 0, /* the last call succeeded, or failed for a reason not the database's */
+    STORE_FAULT_LOCKED,   /* another connection or process held the write lock too long */
+    STORE_FAULT_FULL,     /* the disk, or the database's size limit, is full */
+    STORE_FAULT_READONLY, /* the database cannot be written */
+    STORE_FAULT_IO,       /* the operating system reported an I/O error */
+    STORE_FAULT_OTHER,    /* any other SQLite error: not transient */
+    STORE_NFAULT
+} store_fault;
+
+/* The shared state of the database as writes observe it (see "Health" above). */
+typedef struct store_health store_health;
+
+/* A snapshot of a store_health. */
+typedef struct store_state {
+    store_fault fault; /* STORE_FAULT_NONE when writes work (or none was tried yet) */
+    double since;      /* s since the epoch of the first write that met this fault; 0 if none */
+    double last_ok;    /* s since the epoch of the last write that changed rows; 0 if none */
+    long failures;     /* writes that met a transient fault since the last success */
+    char message[256]; /* the first failing call's message while the fault lasts, else "" */
+} store_state;
 
 /* One job's row, without its series. */
 typedef struct store_job {
@@ -71,6 +110,61 @@ int store_open(const char *path, store **out, char *err, size_t errlen);
 
 /* Closes the connection (finalising its statements); NULL is allowed. */
 void store_close(store *s);
+
+/* Sets how long (ms, >= 0) the calls of s wait for another connection's lock before failing with
+ * STORE_FAULT_LOCKED; store_open sets 5000. 0 does not wait (and reports no lock to health). */
+void store_set_busy_timeout(store *s, int ms);
+
+/* Caps the database's size at max_bytes (rounded down to whole pages; 0 = no cap beyond SQLite's
+ * own) for the writes of s: a write that would grow the file past it fails with
+ * STORE_FAULT_FULL, as on a full disk. A cap below the current size refuses every growing write
+ * but lets deletes run. The cap belongs to the connection, not to the file. */
+int store_set_max_size(store *s, long long max_bytes, char *err, size_t errlen);
+
+/* The fault of the last call on s: STORE_FAULT_NONE after a success or a failure that was not
+ * the database's. Cleared at the start of every call. */
+store_fault store_last_fault(const store *s);
+
+/* 1 for the faults a retry may outlive (LOCKED, FULL, READONLY, IO), else 0. */
+int store_fault_transient(store_fault f);
+
+/* "ok", "locked", "full", "readonly", "io_error", "error": the name health shows. */
+const char *store_fault_name(store_fault f);
+
+/* SQLite's words for the fault ("database is locked", "database or disk is full", "attempt to
+ * write a readonly database", "disk I/O error"; "not an error" for NONE). */
+const char *store_fault_text(store_fault f);
+
+/* A new health state (fault NONE), or NULL when out of memory. Free with store_health_free after
+ * every store attached to it is closed; NULL is allowed there. */
+store_health *store_health_new(void);
+void store_health_free(store_health *h);
+
+/* Attaches s to h (NULL detaches): each later write call on s reports its outcome to h.
+ * h must outlive s. */
+void store_attach(store *s, store_health *h);
+
+/* Copies h's state into *out. O(1), thread-safe. */
+void store_health_read(store_health *h, store_state *out);
+
+/* 1 when h holds a fault and no probe ran in the last interval_s seconds (the caller should run
+ * store_probe now; the probe's time is taken, so concurrent callers get 0), else 0. Thread-safe. */
+int store_health_probe_due(store_health *h, double interval_s);
+
+/* Learns whether the fault of s's health state has passed, when no other write comes to say so,
+ * and reports it like a write: a full database is writable again when the disk and the size cap
+ * both leave 1 MiB free (measured: statvfs and the page counts, nothing written); any other fault
+ * is tested with a write that changes nothing a reader can see (one row of job_counts rewritten
+ * with its own value, in a transaction). 0 when the database can take writes. */
+int store_probe(store *s, char *err, size_t errlen);
+
+/* Allocates bytes of disk for the database's write-ahead log (the -wal file's blocks, past its
+ * end, its size unchanged: Linux fallocate with FALLOC_FL_KEEP_SIZE), so that the log can take
+ * the next transactions when the disk is full: a delete, which frees pages, can then commit.
+ * The log exists while a connection is open and goes when the last one closes, so call it with
+ * the service's connections open. Fails with errno's message (e.g. no space, or a file system
+ * without fallocate); the database is untouched either way. */
+int store_reserve(store *s, long long bytes, char *err, size_t errlen);
 
 /* Inserts a new queued job: name, preset (may be NULL), nbodies, nv, controller name and the
  * normalised spec JSON. *id receives its id (increasing). */

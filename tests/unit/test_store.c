@@ -24,6 +24,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -427,9 +428,9 @@ static void assert_counts_match_the_table(store *s, const char *path)
     cr_assert_eq(store_count(s, counts, err, sizeof err), 0, "%s", err);
     sqlite3 *db = raw_open(path);
     sqlite3_stmt *q = NULL;
-    cr_assert_eq(sqlite3_prepare_v2(db, "SELECT count(*) FROM jobs WHERE status = ?1", -1, &q,
-                                    NULL),
-                 SQLITE_OK);
+    cr_assert_eq(
+        sqlite3_prepare_v2(db, "SELECT count(*) FROM jobs WHERE status = ?1", -1, &q, NULL),
+        SQLITE_OK);
     for (int st = 0; st < STORE_NSTATUS; st++) {
         sqlite3_bind_text(q, 1, store_status_name((store_status)st), -1, SQLITE_STATIC);
         cr_assert_eq(sqlite3_step(q), SQLITE_ROW);
@@ -1265,6 +1266,214 @@ Test(store, a_read_keeps_its_snapshot_and_the_next_one_sees_a_deletion)
     store_close(other);
     ctc_sim_result_free(r);
     assert_integrity(path);
+}
+
+/* ---- faults and the shared health state ---- */
+
+/* a raw connection holding the write lock (BEGIN IMMEDIATE and a write) until raw_release */
+static sqlite3 *raw_lock(const char *path)
+{
+    sqlite3 *db = raw_open(path);
+    char *why = NULL;
+    cr_assert_eq(sqlite3_exec(db, "BEGIN IMMEDIATE; UPDATE job_counts SET n = n", NULL, NULL, &why),
+                 SQLITE_OK, "locking: %s", why ? why : "");
+    return db;
+}
+
+static void raw_release(sqlite3 *db)
+{
+    cr_assert_eq(sqlite3_exec(db, "COMMIT", NULL, NULL, NULL), SQLITE_OK);
+    sqlite3_close(db);
+}
+
+Test(store, a_write_lock_held_elsewhere_is_a_transient_fault_that_health_reports_and_clears)
+{
+    char path[256], err[512] = "";
+    int64_t id = 0;
+    long counts[STORE_NSTATUS];
+    path_of(path, sizeof path, "ctcsim.db");
+    store *s = open_ok(path);
+    store_health *h = store_health_new();
+    cr_assert_not_null(h);
+    store_attach(s, h);
+    store_set_busy_timeout(s, 50);
+    store_state st;
+    store_health_read(h, &st);
+    cr_assert_eq(st.fault, STORE_FAULT_NONE);
+    cr_assert_eq(st.since, 0);
+
+    /* another connection (as another process would) holds the write lock */
+    sqlite3 *lock = raw_lock(path);
+    double t0 = wall_now();
+    cr_assert_eq(store_insert(s, "blocked", NULL, 3, 3, "pid", "{}", &id, err, sizeof err), -1);
+    double t1 = wall_now();
+    cr_assert_str_eq(err, "cannot store job 'blocked': database is locked");
+    cr_assert_eq(store_last_fault(s), STORE_FAULT_LOCKED);
+    cr_assert(store_fault_transient(STORE_FAULT_LOCKED));
+    /* the busy timeout (50 ms) bounds the wait */
+    cr_assert_lt(t1 - t0, 1.0, "waited %.3f s", t1 - t0);
+    store_health_read(h, &st);
+    cr_assert_eq(st.fault, STORE_FAULT_LOCKED);
+    cr_assert_str_eq(store_fault_name(st.fault), "locked");
+    cr_assert_str_eq(st.message, "cannot store job 'blocked': database is locked");
+    cr_assert(st.since >= t0 && st.since <= t1, "since %.3f outside [%.3f, %.3f]", st.since, t0,
+              t1);
+    cr_assert_eq(st.failures, 1);
+
+    /* reads do not wait for the writer (WAL), and a read clears no fault */
+    cr_assert_eq(store_count(s, counts, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(store_last_fault(s), STORE_FAULT_NONE);
+    /* a second failure keeps the first one's time and message */
+    cr_assert_eq(store_insert(s, "again", NULL, 3, 3, "pid", "{}", &id, err, sizeof err), -1);
+    store_health_read(h, &st);
+    cr_assert_eq(st.failures, 2);
+    cr_assert_str_eq(st.message, "cannot store job 'blocked': database is locked");
+    cr_assert(st.since <= t1);
+
+    /* the probe cannot write either; once the lock goes, it can, and the state clears */
+    cr_assert(store_health_probe_due(h, 0.0));
+    cr_assert_eq(store_probe(s, err, sizeof err), -1);
+    cr_assert_str_eq(err, "probing the database: database is locked");
+    raw_release(lock);
+    cr_assert_eq(store_probe(s, err, sizeof err), 0, "%s", err);
+    store_health_read(h, &st);
+    cr_assert_eq(st.fault, STORE_FAULT_NONE);
+    cr_assert_str_eq(st.message, "");
+    cr_assert_eq(st.failures, 0);
+    cr_assert_geq(st.last_ok, t1);
+    cr_assert_eq(raw_int(path, "SELECT sum(n) FROM job_counts", 0), 0, "the probe changed a count");
+    cr_assert_eq(store_insert(s, "free", NULL, 3, 3, "pid", "{}", &id, err, sizeof err), 0, "%s",
+                 err);
+    store_close(s);
+    store_health_free(h);
+}
+
+Test(store, a_connection_that_does_not_wait_reports_no_lock_to_health)
+{
+    char path[256], err[512] = "";
+    path_of(path, sizeof path, "ctcsim.db");
+    store *s = open_ok(path);
+    int64_t id = insert_job(s, "running");
+    cr_assert_eq(store_start(s, id, err, sizeof err), 0, "%s", err);
+    store_health *h = store_health_new();
+    store_attach(s, h);
+    store_set_busy_timeout(s, 0);
+    sqlite3 *lock = raw_lock(path);
+    cr_assert_eq(store_progress(s, id, 0.5, err, sizeof err), -1);
+    cr_assert_eq(store_last_fault(s), STORE_FAULT_LOCKED);
+    store_state st;
+    store_health_read(h, &st);
+    cr_assert_eq(st.fault, STORE_FAULT_NONE, "a no-wait write reported %s",
+                 store_fault_name(st.fault));
+    cr_assert_eq(store_health_probe_due(h, 0.0), 0);
+    raw_release(lock);
+    store_close(s);
+    store_health_free(h);
+}
+
+Test(store, a_full_database_fails_the_series_keeps_what_is_stored_and_a_delete_frees_room)
+{
+    char path[256], err[512] = "";
+    store_job j;
+    path_of(path, sizeof path, "ctcsim.db");
+    store *s = open_ok(path);
+    store_health *h = store_health_new();
+    store_attach(s, h);
+    ctc_sim_result *small = make_result(50, 3, 3, NULL);
+    int64_t kept = finished_job(s, "kept", STORE_DONE, small);
+    int64_t freed = finished_job(s, "freed", STORE_DONE, small);
+    ctc_sim_result *big = make_result(20000, 3, 3, NULL); /* 1.3 MB of series */
+
+    /* the cap: the file as it is and 16 pages more */
+    long long size = raw_int(path, "PRAGMA page_count", 0) * raw_int(path, "PRAGMA page_size", 0);
+    cr_assert_eq(store_set_max_size(s, size + 16 * 4096, err, sizeof err), 0, "%s", err);
+    int64_t id = insert_job(s, "big");
+    cr_assert_eq(store_start(s, id, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(store_finish(s, id, STORE_DONE, NULL, "{}", big, err, sizeof err), -1);
+    cr_assert_eq(store_last_fault(s), STORE_FAULT_FULL, "%s", err);
+    char want[128];
+    snprintf(want, sizeof want, "job %lld: storing series t: database or disk is full",
+             (long long)id);
+    cr_assert_str_eq(err, want);
+    cr_assert_str_eq(store_fault_text(STORE_FAULT_FULL), "database or disk is full");
+    store_state st;
+    store_health_read(h, &st);
+    cr_assert_eq(st.fault, STORE_FAULT_FULL);
+    cr_assert_str_eq(store_fault_name(st.fault), "full");
+
+    /* nothing of the failed finish stayed; an update in place works but does not clear "full" */
+    cr_assert_eq(raw_int(path, "SELECT count(*) FROM series WHERE job_id = ?1", id), 0);
+    cr_assert_eq(store_progress(s, id, 0.5, err, sizeof err), 0, "%s", err);
+    store_health_read(h, &st);
+    cr_assert_eq(st.fault, STORE_FAULT_FULL);
+    /* the probe measures the room left under the cap: less than 1 MiB */
+    cr_assert_eq(store_probe(s, err, sizeof err), -1);
+    cr_assert(strstr(err, "bytes free, 1048576 needed"), "%s", err);
+
+    /* recorded failed without its series: a small write that fits */
+    cr_assert_eq(store_finish(s, id, STORE_FAILED, "could not store the result", NULL, NULL, err,
+                              sizeof err),
+                 0, "%s", err);
+    /* a delete frees pages, and clears the state */
+    cr_assert_eq(store_delete(s, freed, err, sizeof err), 0, "%s", err);
+    store_health_read(h, &st);
+    cr_assert_eq(st.fault, STORE_FAULT_NONE);
+    cr_assert_geq(raw_int(path, "PRAGMA freelist_count", 0), 1);
+    insert_job(s, "after");
+    cr_assert_eq(store_get(s, kept, &j, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(j.status, STORE_DONE);
+    store_job_clear(&j);
+    ctc_sim_result *got = NULL;
+    cr_assert_eq(store_get_series(s, kept, &got, err, sizeof err), 0, "%s", err);
+    assert_same_series(small, got);
+    assert_integrity(path);
+
+    /* the cap lifted: the big result fits */
+    cr_assert_eq(store_set_max_size(s, 0, err, sizeof err), 0, "%s", err);
+    finished_job(s, "big again", STORE_DONE, big);
+    cr_assert_eq(store_set_max_size(s, -1, err, sizeof err), -1);
+    cr_assert_str_eq(err, "the database's size limit must be >= 0 bytes (got -1)");
+    ctc_sim_result_free(got);
+    ctc_sim_result_free(small);
+    ctc_sim_result_free(big);
+    store_close(s);
+    store_health_free(h);
+}
+
+Test(store, reserve_allocates_the_logs_blocks_without_changing_its_size)
+{
+    char path[256], wal[300], err[512] = "";
+    path_of(path, sizeof path, "ctcsim.db");
+    snprintf(wal, sizeof wal, "%s-wal", path);
+    store *s = open_ok(path);
+    insert_job(s, "one");
+    struct stat before, after;
+    cr_assert_eq(stat(wal, &before), 0);
+    cr_assert_eq(store_reserve(s, 1 << 20, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(stat(wal, &after), 0);
+    cr_assert_eq(after.st_size, before.st_size);
+    cr_assert_geq((long long)after.st_blocks * 512, 1 << 20, "%lld blocks",
+                  (long long)after.st_blocks);
+    /* the log still reads: the reserved blocks lie past its end */
+    insert_job(s, "two");
+    store_close(s);
+    assert_integrity(path);
+    cr_assert_eq(raw_int(path, "SELECT count(*) FROM jobs", 0), 2);
+}
+
+Test(store, fault_names_and_texts)
+{
+    const char *names[STORE_NFAULT] = {"ok", "locked", "full", "readonly", "io_error", "error"};
+    for (int f = 0; f < STORE_NFAULT; f++)
+        cr_assert_str_eq(store_fault_name((store_fault)f), names[f]);
+    cr_assert_str_eq(store_fault_text(STORE_FAULT_LOCKED), "database is locked");
+    cr_assert_str_eq(store_fault_text(STORE_FAULT_READONLY),
+                     "attempt to write a readonly database");
+    cr_assert_str_eq(store_fault_text(STORE_FAULT_IO), "disk I/O error");
+    cr_assert_eq(store_fault_transient(STORE_FAULT_NONE), 0);
+    cr_assert_eq(store_fault_transient(STORE_FAULT_OTHER), 0);
+    cr_assert(store_fault_transient(STORE_FAULT_FULL) && store_fault_transient(STORE_FAULT_IO) &&
+              store_fault_transient(STORE_FAULT_READONLY));
 }
 
 Test(store, status_names_round_trip)
