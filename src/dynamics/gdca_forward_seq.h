@@ -9,7 +9,8 @@
  * the free end, so only its handle-1 equations are ever formed (gdca_forward_seq.c), and the
  * same from the grounded base. An open chain's forward pass takes it unless the pass is to split
  * over threads (gdca_forward_order_seq: two threads or more and a measured length); loop models,
- * whose root solves the loop's boundary equations together (gdca_loop.h), always take the
+ * whose root solves the loop's boundary equations together (gdca_loop.h), and branched trees
+ * (model.h chain = 0), whose plan rakes light subtrees into their parents, always take the
  * tree.
  */
 #ifndef CTC_GDCA_FORWARD_SEQ_H

@@ -83,6 +83,8 @@ typedef struct ctc_data {
     double *icomp;   /* ((2n - 1) x csize) inverse assemblies in composite form (gdca_inverse.c):
                         I (dim x dim), w (dim), c (dim), r12 (3) */
     double *icomp_e; /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */
+    double *rake;    /* (n x (dim^2 + dim)) a branched tree's raked bodies: M'^-1 and x0 of the
+                        pseudo-body (gdca_rake.h), at the body's index */
     double *tload;   /* ((2n - 1) x 2 dim) per assembly during a disassembly: F1 and F2
                         (forward, mobility inverse) or A1 and F2 (composite inverse); the
                         sequential forward order keeps each joint's load at [dim k] */

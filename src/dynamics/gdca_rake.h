@@ -1,0 +1,217 @@
+/*
+ * gdca_rake.h - raking a body's light subtrees into it: the kernels of the SUM and RAKE nodes of a
+ * branched tree's plan (model.c, "the plan of a branched tree"), for the passes that keep handle
+ * records in mobility form (the forward pass and the mobility-form inverse; the composite inverse
+ * rakes composite inertias, gdca_inverse.c). Internal to the library; meant to be inlined into
+ * CTC_SPECIALISE wrappers with a constant dim, like gdca_tree.h.
+ *
+ * A light child c of body k, its subtree assembled with its tip free (A1 = h11 F + h13), is joined
+ * to k's point c as a chain's root is joined to the ground (gdca_forward_joint.h with no left
+ * part; the mobility inverse: gdca_inverse_mobility.c), which gives its load
+ *     F_c = W_c A_c + z_c,      W_c = E E^T,
+ * with A_c body k's acceleration at c. Body k about its centre of mass, X = (alpha, a_com) and
+ * A_c = T_c X + kappa_c (T(r) = [1 0; -[r]x 1], kappa_c = (0; w x (w x r_c)), r_c = c - com),
+ * obeys M' X = b' + T_1^T F_1 + T_2^T F_2 with
+ *     M' = M + sum_c T_c^T W_c T_c,     b' = b - sum_c T_c^T (W_c kappa_c + z_c),
+ * M = diag(I_c, m 1) (planar diag(J, m, m)), b = (-w x I_c w; m g) (planar (0; m g)), the body's
+ * handle-equation terms of handles.h. The pseudo-body's record is then
+ *     h_ij = T_i M'^-1 T_j^T,   h_i3 = T_i x0 + kappa_i,   x0 = M'^-1 b',
+ * which for no light child is handles.h's. The sums run over a binary tree of SUM nodes, whose
+ * records hold a partial sum S = sum T_c^T W_c T_c (at H11) and s = sum T_c^T (W_c kappa_c + z_c)
+ * (at H13). d->rake keeps M'^-1 and x0 of each raked body for its disassembly and for the
+ * refinement's bias-free correction (kappa = 0, b = 0, M' reused).
+ */
+#ifndef CTC_GDCA_RAKE_H
+#define CTC_GDCA_RAKE_H
+
+#include "data.h"
+#include "gdca_tree.h"
+
+/* doubles that d->rake holds per body: M'^-1 (dim x dim) and x0 (dim) */
+static inline double *gdca_rake_slot(const ctc_data *d, int k, const int dim)
+{
+    return d->rake + (size_t)k * (dim * dim + dim);
+}
+
+/* kappa = (0; w x (w x r)) for body k's angular velocity w (planar: (0, -w^2 r)) */
+static inline void gdca_rake_kappa(const ctc_data *d, int k, const int dim, const double r[3],
+                                   double *kappa)
+{
+    const double *w = d->omega + 3 * k;
+    if (dim == 3) {
+        const double w2 = w[2] * w[2];
+        kappa[0] = 0, kappa[1] = -w2 * r[0], kappa[2] = -w2 * r[1];
+    } else {
+        double wr[3];
+        ctc_v3_cross(wr, w, r);
+        ctc_v3_set(kappa, 0, 0, 0);
+        ctc_v3_cross(kappa + 3, w, wr);
+    }
+}
+
+/* r = point c (joint c's centre) - body k's centre of mass, and kappa of it, world (planar: the
+   plane's) coordinates */
+static inline void gdca_rake_point(const ctc_data *d, int k, int c, const int dim, double r[3],
+                                   double *kappa)
+{
+    ctc_v3_sub(r, d->xpos + 3 * c, d->xcom + 3 * k);
+    if (dim == 3) r[2] = 0;
+    gdca_rake_kappa(d, k, dim, r, kappa);
+}
+
+/* T(r) as a dense matrix (dim x dim, row-major) */
+static inline void gdca_rake_T(const int dim, const double r[3], double *t)
+{
+    for (int i = 0; i < dim * dim; i++) t[i] = 0;
+    for (int i = 0; i < dim; i++) t[i * dim + i] = 1;
+    if (dim == 3) {
+        t[3] = -r[1];
+        t[6] = r[0];
+    } else { /* -[r]x in the lower left block */
+        t[6 * 3 + 1] = r[2], t[6 * 3 + 2] = -r[1];
+        t[6 * 4 + 0] = -r[2], t[6 * 4 + 2] = r[0];
+        t[6 * 5 + 0] = r[1], t[6 * 5 + 1] = -r[0];
+    }
+}
+
+/* one light child's terms: s (dim x dim; NULL: not formed) = T^T E E^T T and b (dim) =
+   T^T (E E^T kappa + z), for E (dim x nc), r and kappa (NULL: zero) of gdca_rake_point */
+static inline void gdca_rake_light(const int dim, int nc, const double *e, const double r[3],
+                                   const double *kappa, const double *z, double *s, double *b)
+{
+    double v[CTC_DENSE_MAX];
+    if (kappa != NULL) {
+        gdca_factor_apply_nc(dim, nc, e, kappa, v);
+        for (int i = 0; i < dim; i++) v[i] += z[i];
+    } else {
+        for (int i = 0; i < dim; i++) v[i] = z[i];
+    }
+    ctc_transfer_force(dim, r, v, b);
+    if (s == NULL) return;
+    double q[CTC_DENSE_MAX * CTC_DENSE_MAX], col[CTC_DENSE_MAX], tc[CTC_DENSE_MAX];
+    for (int c = 0; c < nc; c++) { /* column c of Q = T^T E */
+        for (int i = 0; i < dim; i++) col[i] = e[i * nc + c];
+        ctc_transfer_force(dim, r, col, tc);
+        for (int i = 0; i < dim; i++) q[i * nc + c] = tc[i];
+    }
+    for (int i = 0; i < dim; i++) {
+        for (int j = i; j < dim; j++) {
+            double t = 0;
+            for (int c = 0; c < nc; c++) t += q[i * nc + c] * q[j * nc + c];
+            s[i * dim + j] = s[j * dim + i] = t;
+        }
+    }
+}
+
+/* body k's M (dim x dim) and b (dim) about its centre of mass (handles.h) */
+static inline void gdca_rake_body(const ctc_model *m, const ctc_data *d, int k, const int dim,
+                                  double *mm, double *b)
+{
+    for (int i = 0; i < dim * dim; i++) mm[i] = 0;
+    if (dim == 3) {
+        const ctc_planar_body *p = &m->planar[k];
+        mm[0] = p->inertia, mm[4] = mm[8] = p->mass;
+        b[0] = 0, b[1] = p->mass * m->plane_gravity[0], b[2] = p->mass * m->plane_gravity[1];
+        return;
+    }
+    const ctc_body_spec *body = &m->bodies[k];
+    const double *w = d->omega + 3 * k;
+    double iw[9], iww[3];
+    ctc_m3_rotate_sym(iw, d->xrot + 9 * k, body->inertia);
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) mm[6 * i + j] = iw[3 * i + j];
+        mm[6 * (3 + i) + 3 + i] = body->mass;
+    }
+    ctc_m3_mulv(iww, iw, w);
+    ctc_v3_cross(b, iww, w); /* -w x I w */
+    ctc_v3_scale(b + 3, m->gravity, body->mass);
+}
+
+/* The raked body's record (out, hsize) from M' (mm, dim x dim, overwritten) and b' (dim), its
+ * handles r1, r2 relative to its centre of mass and kappa1, kappa2 (NULL: zero, the correction);
+ * keeps M'^-1 and x0 in slot (gdca_rake_slot). matrices = 0 (the correction) reuses slot's M'^-1
+ * and writes only h13 and h23. Returns 0, or -1 if M' is not positive definite. */
+static inline int gdca_rake_record(const int dim, double *mm, const double *bp, const double *r1,
+                                   const double *r2, const double *kappa1, const double *kappa2,
+                                   double *slot, double *out, int matrices)
+{
+    double *minv = slot, *x0 = slot + dim * dim;
+    int st = 0;
+    if (matrices) {
+        double li[CTC_DENSE_MAX * CTC_DENSE_MAX];
+        st = gdca_chol_inv(dim, mm, li); /* M' = L L^T, M'^-1 = L^-T L^-1 */
+        for (int i = 0; i < dim; i++) {
+            for (int j = i; j < dim; j++) {
+                double t = 0;
+                for (int k = j; k < dim; k++) t += li[k * dim + i] * li[k * dim + j];
+                minv[i * dim + j] = minv[j * dim + i] = st == 0 ? t : NAN;
+            }
+        }
+        double t1[CTC_DENSE_MAX * CTC_DENSE_MAX], t2[CTC_DENSE_MAX * CTC_DENSE_MAX];
+        double g1[CTC_DENSE_MAX * CTC_DENSE_MAX], g2[CTC_DENSE_MAX * CTC_DENSE_MAX];
+        gdca_rake_T(dim, r1, t1);
+        gdca_rake_T(dim, r2, t2);
+        for (int i = 0; i < dim; i++) { /* G_i = T_i M'^-1 */
+            for (int j = 0; j < dim; j++) {
+                double a = 0, c = 0;
+                for (int k = 0; k < dim; k++) {
+                    a += t1[i * dim + k] * minv[k * dim + j];
+                    c += t2[i * dim + k] * minv[k * dim + j];
+                }
+                g1[i * dim + j] = a, g2[i * dim + j] = c;
+            }
+        }
+        for (int i = 0; i < dim; i++) { /* h_ij = G_i T_j^T */
+            for (int j = 0; j < dim; j++) {
+                double h11 = 0, h12 = 0, h22 = 0;
+                for (int k = 0; k < dim; k++) {
+                    h11 += g1[i * dim + k] * t1[j * dim + k];
+                    h12 += g1[i * dim + k] * t2[j * dim + k];
+                    h22 += g2[i * dim + k] * t2[j * dim + k];
+                }
+                out[H11(dim) + i * dim + j] = h11;
+                out[H12(dim) + i * dim + j] = h12;
+                out[H22(dim) + i * dim + j] = h22;
+            }
+        }
+        for (int i = 0; i < dim; i++) { /* exactly symmetric */
+            for (int j = i + 1; j < dim; j++) {
+                out[H11(dim) + j * dim + i] = out[H11(dim) + i * dim + j];
+                out[H22(dim) + j * dim + i] = out[H22(dim) + i * dim + j];
+            }
+        }
+    }
+    ctc_dense_mulv(dim, dim, minv, bp, x0);
+    ctc_transfer_motion(dim, r1, x0, out + H13(dim));
+    ctc_transfer_motion(dim, r2, x0, out + H23(dim));
+    for (int i = 0; kappa1 != NULL && i < dim; i++) {
+        out[H13(dim) + i] += kappa1[i];
+        out[H23(dim) + i] += kappa2[i];
+    }
+    return st;
+}
+
+/* the raked body's X = (alpha, a_com) = x0 + M'^-1 (T_1^T F1 + T_2^T F2) from its loads */
+static inline void gdca_rake_motion(const int dim, const double *slot, const double *r1,
+                                    const double *r2, const double *f1, const double *f2, double *x)
+{
+    double t1[CTC_DENSE_MAX], t2[CTC_DENSE_MAX];
+    ctc_transfer_force(dim, r1, f1, t1);
+    ctc_transfer_force(dim, r2, f2, t2);
+    for (int i = 0; i < dim; i++) t1[i] += t2[i];
+    ctc_dense_mulv(dim, dim, slot, t1, t2);
+    for (int i = 0; i < dim; i++) x[i] = slot[dim * dim + i] + t2[i];
+}
+
+/* a light child's A_c = T_c X + kappa (kappa NULL: zero) and load F_c = E E^T A_c + z */
+static inline void gdca_rake_child_load(const int dim, int nc, const double *e, const double *z,
+                                        const double r[3], const double *kappa, const double *x,
+                                        double *ac, double *fc)
+{
+    ctc_transfer_motion(dim, r, x, ac);
+    for (int i = 0; kappa != NULL && i < dim; i++) ac[i] += kappa[i];
+    gdca_factor_apply_nc(dim, nc, e, ac, fc);
+    for (int i = 0; i < dim; i++) fc[i] += z[i];
+}
+
+#endif
