@@ -22,9 +22,11 @@
 
 #include "chains.h"
 #include "ctc.h"
+#include "gdca_refine.h"
 #include "linalg.h"
 #include "oracle.h"
 #include "model_fixture.h"
+#include "oracle_fixture.h"
 
 #define MAX_COND_N 512
 
@@ -356,5 +358,85 @@ Test(gdca_tree, threads_give_bitwise_the_serial_results, .timeout = 120)
             ctc_model_free(m);
             test_chain_free(c);
         }
+    }
+}
+
+/* the Y tree of oracle_fixture.h (two rods hung from a third's tip) in closed form: the composite
+   inverse gives tau = M a + h, the forward pass a = M^-1 (f - h), the mobility inverse tau */
+Test(gdca_tree, y_tree_matches_its_closed_form)
+{
+    const double mass[3] = {1.3, 0.7, 0.9}, len[3] = {1.1, 0.8, 0.6};
+    ctc_model *m;
+    ctc_oracle *o = fx_make_y_tree(mass, len, &m);
+    cr_assert_eq(m->form, CTC_FORM_PLANAR);
+    cr_assert_eq(m->chain, 0);
+    ctc_data *d = ctc_data_new(m);
+    fx_rng rng = {31};
+    const double zero[3] = {0, 0, 0};
+    for (int s = 0; s < 100; s++) {
+        double q[12], v[3], a[3], mm[9], want[3], bias[3], tau[3], acc[3], rhs[3];
+        fx_random_state(&rng, m, q, v, a);
+        fx_y_tree(mass, len, q, v, a, mm, want);
+        fx_y_tree(mass, len, q, v, zero, mm, bias);
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        ctc_gdca_inverse(m, d, a, tau);
+        double scale = fmax(1.0, fx_max_abs(3, want));
+        cr_assert_leq(fx_max_abs_diff(3, tau, want) / scale, 1e-13, "sample %d: inverse", s);
+        ctc_gdca_inverse_mobility(m, d, a, tau);
+        cr_assert_leq(fx_max_abs_diff(3, tau, want) / scale, 1e-12, "sample %d: mobility", s);
+        ctc_gdca_forward(m, d, want, acc);
+        /* M acc + h = tau: the closed form's own equations, solved by neither pass */
+        for (int i = 0; i < 3; i++)
+            rhs[i] = mm[3 * i] * acc[0] + mm[3 * i + 1] * acc[1] + mm[3 * i + 2] * acc[2] +
+                     bias[i] - want[i];
+        cr_assert_leq(fx_max_abs(3, rhs) / scale, 1e-12, "sample %d: forward", s);
+    }
+    ctc_data_free(d);
+    ctc_oracle_free(o);
+    ctc_model_free(m);
+}
+
+/* the refinement's bias-free correction (gdca_refine.h) through the rake: dq = M^-1 r, M from
+   CRBA, on trees whose light subtrees carry every joint type */
+Test(gdca_tree, correction_pass_solves_the_mass_matrix)
+{
+    for (int form = 0; form < 2; form++) {
+        const int n = 23;
+        int parent[23];
+        test_random_parents(n, 150 + (uint64_t)form, 0.1, parent);
+        test_chain *c = form ? test_chain_random_spatial(n, 61, TEST_ALL_JOINTS)
+                             : test_chain_random_planar(n, 61, 1, 0);
+        test_chain_set_parents(c, parent);
+        ctc_model *m = build(&c->spec);
+        cr_assert_eq(m->chain, 0);
+        ctc_data *d = ctc_data_new(m);
+        ctc_oracle *o = ctc_oracle_new(m);
+        const int nv = m->nv;
+        double *q = calloc((size_t)m->nq, 8), *v = calloc((size_t)nv, 8),
+               *f = calloc((size_t)nv, 8);
+        double *a = calloc((size_t)nv, 8), *r = calloc((size_t)nv, 8), *dq = calloc((size_t)nv, 8);
+        double *ref = calloc((size_t)nv, 8), *mass = calloc((size_t)nv * (size_t)nv, 8);
+        cr_assert(q && v && f && a && r && dq && ref && mass);
+        uint64_t rng = 62;
+        test_random_state(m, &rng, 2.0, q, v);
+        for (int i = 0; i < nv; i++) f[i] = test_uniform(&rng, -5, 5);
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        d->opt.fwd_refine = 0;
+        ctc_gdca_forward(m, d, f, a);      /* the factors the correction reuses */
+        gdca_forward_correct(m, d, r, dq); /* r = 0 */
+        for (int i = 0; i < nv; i++) cr_assert_eq(dq[i], 0.0);
+        for (int i = 0; i < nv; i++) r[i] = test_uniform(&rng, -5, 5);
+        gdca_forward_correct(m, d, r, dq);
+        ctc_oracle_mass_matrix(m, o, q, mass);
+        cr_assert_eq(test_solve_spd(mass, nv, r, ref), 0);
+        double err = test_rel_err(dq, ref, nv);
+        cr_assert(err < 1e-11, "%s: M^-1 r off by %.3g", form ? "spatial" : "planar", err);
+        free(q), free(v), free(f), free(a), free(r), free(dq), free(ref), free(mass);
+        ctc_oracle_free(o);
+        ctc_data_free(d);
+        ctc_model_free(m);
+        test_chain_free(c);
     }
 }
