@@ -273,7 +273,7 @@ static inline void forward_rake_down(const forward_args *a, int i, const int dim
 /* assembly of tree nodes lo..hi-1, children before parents; returns the first node whose joint
    is singular, or -1 */
 static inline int forward_assemble(const forward_args *a, int lo, int hi, const int dim,
-                                   const int correct)
+                                   const int correct, const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
@@ -281,7 +281,7 @@ static inline int forward_assemble(const forward_args *a, int lo, int hi, const 
     int first = -1;
     for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
-        if (node->kind != CTC_NODE_JOIN) {
+        if (tree && node->kind != CTC_NODE_JOIN) {
             if (forward_rake_node(a, node, d->hfwd + (size_t)i * hs, dim, correct) != 0 &&
                 first < 0) {
                 first = i;
@@ -310,49 +310,58 @@ static inline int forward_assemble(const forward_args *a, int lo, int hi, const 
     return first;
 }
 
+/* ground child j's joint to its subtree, assembled at x, whose free end carries F2 = 0 */
+static inline void forward_root_joint(const forward_args *a, int j, int x, const int dim,
+                                      const int correct)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const double *root = ctc_data_handles(m, d, x, 0);
+    const double *b13 = forward_bias(a, x, 0, dim, correct),
+                 *beta = gdca_forward_beta(a->d, j, dim, correct);
+    double *tl = d->tload + (size_t)x * 2 * dim, a1[CTC_DENSE_MAX], *load = d->jnt_load + dim * j;
+    if (forward_joint(m, d, j, NULL, root, gdca_zero6, b13, beta, a->f, !correct, NULL, dim) != 0 &&
+        d->singular_joint < 0) {
+        d->singular_joint = j;
+    }
+    for (int r = 0; r < dim; r++) {
+        tl[r] = d->fwd_z[dim * j + r];
+        tl[dim + r] = 0;
+        load[r] = correct ? load[r] + tl[r] : tl[r];
+    }
+    ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
+    for (int r = 0; r < dim; r++) a1[r] += b13[r];
+    forward_accel(m, d, j, a1, gdca_zero6, beta, a->qacc, dim);
+}
+
 /* the root: a loop model's, or the ground joint 0 with the free end's load F2 = 0 */
 static inline void forward_root(const forward_args *a, const int dim, const int correct)
 {
     const ctc_model *m = a->m;
-    ctc_data *d = a->d;
     if (m->has_loop) {
         forward_loop_root(a, dim, correct);
         return;
     }
-    for (int i = 0; i < m->nroots; i++) { /* each ground child's subtree: a chain has one */
-        const int j = m->root_joint[i], x = m->root_asm[i];
-        const double *root = ctc_data_handles(m, d, x, 0);
-        const double *b13 = forward_bias(a, x, 0, dim, correct),
-                     *beta = gdca_forward_beta(a->d, j, dim, correct);
-        double *tl = d->tload + (size_t)x * 2 * dim, a1[CTC_DENSE_MAX],
-               *load = d->jnt_load + dim * j;
-        if (forward_joint(m, d, j, NULL, root, gdca_zero6, b13, beta, a->f, !correct, NULL, dim) !=
-                0 &&
-            d->singular_joint < 0) {
-            d->singular_joint = j;
-        }
-        for (int r = 0; r < dim; r++) {
-            tl[r] = d->fwd_z[dim * j + r];
-            tl[dim + r] = 0;
-            load[r] = correct ? load[r] + tl[r] : tl[r];
-        }
-        ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
-        for (int r = 0; r < dim; r++) a1[r] += b13[r];
-        forward_accel(m, d, j, a1, gdca_zero6, beta, a->qacc, dim);
+    if (m->chain) {
+        forward_root_joint(a, 0, m->root, dim, correct);
+        return;
+    }
+    for (int i = 0; i < m->nroots; i++) {
+        forward_root_joint(a, m->root_joint[i], m->root_asm[i], dim, correct);
     }
 }
 
 /* disassembly of tree nodes hi-1 down to lo, parents before children: each writes its joint's
    load and acceleration and its children's terminal loads */
 static inline void forward_disassemble(const forward_args *a, int lo, int hi, const int dim,
-                                       const int correct)
+                                       const int correct, const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
     const int n = m->nbodies;
     for (int i = hi - 1; i >= lo; i--) {
         const ctc_tree_node *node = &m->tree[i];
-        if (node->kind != CTC_NODE_JOIN) {
+        if (tree && node->kind != CTC_NODE_JOIN) {
             forward_rake_down(a, i, dim, correct);
             continue;
         }
@@ -381,25 +390,30 @@ static inline void forward_disassemble(const forward_args *a, int lo, int hi, co
     }
 }
 
-/* the stages specialised to the planar and the spatial form, full and correction */
-static CTC_SPECIALISE int assemble_planar(void *a, int lo, int hi)
-{
-    return forward_assemble(a, lo, hi, 3, 0);
-}
+/* the stages specialised to the planar and the spatial form, full and correction, and for a
+   chain's tree (JOIN nodes only) or a branched tree's plan */
+#define FORWARD_STAGES(name, dim, correct, tree)                                                   \
+    static CTC_SPECIALISE int assemble_##name(void *a, int lo, int hi)                             \
+    {                                                                                              \
+        return forward_assemble(a, lo, hi, dim, correct, tree);                                    \
+    }                                                                                              \
+    static CTC_SPECIALISE void disassemble_##name(void *a, int lo, int hi)                         \
+    {                                                                                              \
+        forward_disassemble(a, lo, hi, dim, correct, tree);                                        \
+    }
+
+FORWARD_STAGES(planar, 3, 0, 0)
+FORWARD_STAGES(spatial, 6, 0, 0)
+FORWARD_STAGES(correct_planar, 3, 1, 0)
+FORWARD_STAGES(correct_spatial, 6, 1, 0)
+FORWARD_STAGES(planar_tree, 3, 0, 1)
+FORWARD_STAGES(spatial_tree, 6, 0, 1)
+FORWARD_STAGES(correct_planar_tree, 3, 1, 1)
+FORWARD_STAGES(correct_spatial_tree, 6, 1, 1)
 
 static CTC_SPECIALISE void root_planar(void *a)
 {
     forward_root(a, 3, 0);
-}
-
-static CTC_SPECIALISE void disassemble_planar(void *a, int lo, int hi)
-{
-    forward_disassemble(a, lo, hi, 3, 0);
-}
-
-static CTC_SPECIALISE int assemble_spatial(void *a, int lo, int hi)
-{
-    return forward_assemble(a, lo, hi, 6, 0);
 }
 
 static CTC_SPECIALISE void root_spatial(void *a)
@@ -407,29 +421,9 @@ static CTC_SPECIALISE void root_spatial(void *a)
     forward_root(a, 6, 0);
 }
 
-static CTC_SPECIALISE void disassemble_spatial(void *a, int lo, int hi)
-{
-    forward_disassemble(a, lo, hi, 6, 0);
-}
-
-static CTC_SPECIALISE int correct_assemble_planar(void *a, int lo, int hi)
-{
-    return forward_assemble(a, lo, hi, 3, 1);
-}
-
 static CTC_SPECIALISE void correct_root_planar(void *a)
 {
     forward_root(a, 3, 1);
-}
-
-static CTC_SPECIALISE void correct_disassemble_planar(void *a, int lo, int hi)
-{
-    forward_disassemble(a, lo, hi, 3, 1);
-}
-
-static CTC_SPECIALISE int correct_assemble_spatial(void *a, int lo, int hi)
-{
-    return forward_assemble(a, lo, hi, 6, 1);
 }
 
 static CTC_SPECIALISE void correct_root_spatial(void *a)
@@ -437,45 +431,41 @@ static CTC_SPECIALISE void correct_root_spatial(void *a)
     forward_root(a, 6, 1);
 }
 
-static CTC_SPECIALISE void correct_disassemble_spatial(void *a, int lo, int hi)
-{
-    forward_disassemble(a, lo, hi, 6, 1);
-}
+/* the stage functions by [spatial][correct][tree] */
+static int (*const forward_assemble_fn[2][2][2])(void *, int, int) = {
+    {{assemble_planar, assemble_planar_tree},
+     {assemble_correct_planar, assemble_correct_planar_tree}},
+    {{assemble_spatial, assemble_spatial_tree},
+     {assemble_correct_spatial, assemble_correct_spatial_tree}}};
+static void (*const forward_disassemble_fn[2][2][2])(void *, int, int) = {
+    {{disassemble_planar, disassemble_planar_tree},
+     {disassemble_correct_planar, disassemble_correct_planar_tree}},
+    {{disassemble_spatial, disassemble_spatial_tree},
+     {disassemble_correct_spatial, disassemble_correct_spatial_tree}}};
+static void (*const forward_root_fn[2][2])(void *) = {{root_planar, correct_root_planar},
+                                                      {root_spatial, correct_root_spatial}};
 
-/* assembly and disassembly over the tree, serial or a tree height at a time (gdca_par.h); the
-   full pass (correct = 0) or the correction */
-static void forward_planar(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
-                           int correct)
+/* assembly and disassembly over the plan, serial or a height at a time (gdca_par.h); the full
+   pass (correct = 0) or the correction */
+static void forward_plan(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
+                         int correct)
 {
     forward_args a = {m, d, f, qacc};
+    const int sp = m->form != CTC_FORM_PLANAR, tree = !m->chain;
     gdca_par_pass pass = {.ctx = &a,
-                          .assemble = correct ? correct_assemble_planar : assemble_planar,
-                          .root = correct ? correct_root_planar : root_planar,
-                          .disassemble = correct ? correct_disassemble_planar : disassemble_planar,
-                          .grain = FORWARD_GRAIN_PLANAR,
+                          .assemble = forward_assemble_fn[sp][correct][tree],
+                          .root = forward_root_fn[sp][correct],
+                          .disassemble = forward_disassemble_fn[sp][correct][tree],
+                          .grain = sp ? FORWARD_GRAIN_SPATIAL : FORWARD_GRAIN_PLANAR,
                           .root_takes_top = 1,
-                          .min_bodies = FORWARD_MIN_BODIES_PLANAR};
-    gdca_par_run(m, d, &pass);
-}
-
-static void forward_spatial(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
-                            int correct)
-{
-    forward_args a = {m, d, f, qacc};
-    gdca_par_pass pass = {.ctx = &a,
-                          .assemble = correct ? correct_assemble_spatial : assemble_spatial,
-                          .root = correct ? correct_root_spatial : root_spatial,
-                          .disassemble =
-                              correct ? correct_disassemble_spatial : disassemble_spatial,
-                          .grain = FORWARD_GRAIN_SPATIAL,
-                          .root_takes_top = 1,
-                          .min_bodies = FORWARD_MIN_BODIES_SPATIAL};
+                          .min_bodies =
+                              sp ? FORWARD_MIN_BODIES_SPATIAL : FORWARD_MIN_BODIES_PLANAR};
     gdca_par_run(m, d, &pass);
 }
 
 int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d)
 {
-    if (m->has_loop || !m->chain || d->opt.fwd_order == CTC_ORDER_TREE) return 0;
+    if (m->has_loop || d->opt.fwd_order == CTC_ORDER_TREE) return 0;
     if (d->opt.fwd_order == CTC_ORDER_SEQ) return 1;
     const ctc_data *o = d->pool_owner != NULL ? d->pool_owner : d;
     const int min = m->form == CTC_FORM_PLANAR ? FORWARD_TREE_MIN_BODIES_PLANAR
@@ -486,11 +476,9 @@ int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d)
 void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, double *dq)
 {
     if (gdca_forward_order_seq(m, d)) {
-        gdca_forward_seq(m, d, r, dq, 1);
-    } else if (m->form == CTC_FORM_PLANAR) {
-        forward_planar(m, d, r, dq, 1);
+        (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, r, dq, 1);
     } else {
-        forward_spatial(m, d, r, dq, 1);
+        forward_plan(m, d, r, dq, 1);
     }
 }
 
@@ -503,11 +491,9 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         f = fm;
     }
     if (gdca_forward_order_seq(m, d)) {
-        gdca_forward_seq(m, d, f, qacc, 0);
-    } else if (m->form == CTC_FORM_PLANAR) {
-        forward_planar(m, d, f, qacc, 0);
+        (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, f, qacc, 0);
     } else {
-        forward_spatial(m, d, f, qacc, 0);
+        forward_plan(m, d, f, qacc, 0);
     }
 
     /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r,

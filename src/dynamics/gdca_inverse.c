@@ -313,14 +313,15 @@ static inline void inverse_rake_down(const inverse_args *a, int i, const int dim
 
 /* assembly of tree nodes lo..hi-1, children before parents; nothing is inverted, so no joint
    is singular: returns -1 */
-static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const int dim)
+static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const int dim,
+                                   const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
     const int n = m->nbodies;
     for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
-        if (node->kind != CTC_NODE_JOIN) {
+        if (tree && node->kind != CTC_NODE_JOIN) {
             inverse_rake_node(a, node, record(d, n + i), dim);
             continue;
         }
@@ -355,38 +356,47 @@ static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const 
     return -1;
 }
 
-/* root: for each ground child j's subtree (a chain has one), A1 = P u + beta of joint j,
+/* the root of ground child j's subtree, assembled at x: A1 = P u + beta of joint j,
    F1 = I A1 + w (free end: F2 = 0) */
-static inline void inverse_root(const inverse_args *a, const int dim)
+static inline void inverse_root_joint(const inverse_args *a, int j, int x, const int dim)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
-    const double *u = a->u;
-    for (int i = 0; i < m->nroots; i++) {
-        const int j = m->root_joint[i], x = m->root_asm[i];
-        const double *root = record(d, x), *P = d->jnt_P + 3 * dim * j;
-        double *tl = d->tload + (size_t)x * 2 * dim, *load = d->jnt_load_inv + dim * j;
-        for (int r = 0; r < dim; r++) tl[r] = d->jnt_beta[dim * j + r];
-        for (int col = 0; col < m->jnt_nv[j]; col++) {
-            for (int r = 0; r < dim; r++) tl[r] += P[col * dim + r] * u[m->jnt_vadr[j] + col];
-        }
-        for (int r = 0; r < dim; r++) tl[dim + r] = 0;
-        gdca_tmulv(dim, root + CI(dim), tl, load);
-        for (int r = 0; r < dim; r++) load[r] += root[CW(dim) + r];
-        inverse_drive(m, d, j, a->f, dim);
+    const double *root = record(d, x), *P = d->jnt_P + 3 * dim * j, *u = a->u + m->jnt_vadr[j];
+    double *tl = d->tload + (size_t)x * 2 * dim, *load = d->jnt_load_inv + dim * j;
+    for (int r = 0; r < dim; r++) tl[r] = d->jnt_beta[dim * j + r];
+    for (int col = 0; col < m->jnt_nv[j]; col++) {
+        for (int r = 0; r < dim; r++) tl[r] += P[col * dim + r] * u[col];
     }
+    for (int r = 0; r < dim; r++) tl[dim + r] = 0;
+    gdca_tmulv(dim, root + CI(dim), tl, load);
+    for (int r = 0; r < dim; r++) load[r] += root[CW(dim) + r];
+    inverse_drive(m, d, j, a->f, dim);
+}
+
+/* the root: a chain's ground joint 0, or each ground child's of a tree */
+static inline void inverse_root(const inverse_args *a, const int dim)
+{
+    const ctc_model *m = a->m;
+    if (m->chain) {
+        inverse_root_joint(a, 0, m->root, dim);
+        return;
+    }
+    for (int i = 0; i < m->nroots; i++)
+        inverse_root_joint(a, m->root_joint[i], m->root_asm[i], dim);
 }
 
 /* disassembly of tree nodes hi-1 down to lo, parents before children:
    F = I^R A1^R + w^R - T(r12^R)^T F2, and the joint's driving force f = P^T F */
-static inline void inverse_disassemble(const inverse_args *a, int lo, int hi, const int dim)
+static inline void inverse_disassemble(const inverse_args *a, int lo, int hi, const int dim,
+                                       const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
     const int n = m->nbodies;
     for (int i = hi - 1; i >= lo; i--) {
         const ctc_tree_node *node = &m->tree[i];
-        if (node->kind != CTC_NODE_JOIN) {
+        if (tree && node->kind != CTC_NODE_JOIN) {
             inverse_rake_down(a, i, dim);
             continue;
         }
@@ -424,12 +434,22 @@ static CTC_SPECIALISE void bodies_spatial(void *a, int lo, int hi)
 
 static CTC_SPECIALISE int assemble_planar(void *a, int lo, int hi)
 {
-    return inverse_assemble(a, lo, hi, 3);
+    return inverse_assemble(a, lo, hi, 3, 0);
 }
 
 static CTC_SPECIALISE int assemble_spatial(void *a, int lo, int hi)
 {
-    return inverse_assemble(a, lo, hi, 6);
+    return inverse_assemble(a, lo, hi, 6, 0);
+}
+
+static CTC_SPECIALISE int assemble_planar_tree(void *a, int lo, int hi)
+{
+    return inverse_assemble(a, lo, hi, 3, 1);
+}
+
+static CTC_SPECIALISE int assemble_spatial_tree(void *a, int lo, int hi)
+{
+    return inverse_assemble(a, lo, hi, 6, 1);
 }
 
 static CTC_SPECIALISE void root_planar(void *a)
@@ -444,12 +464,22 @@ static CTC_SPECIALISE void root_spatial(void *a)
 
 static CTC_SPECIALISE void disassemble_planar(void *a, int lo, int hi)
 {
-    inverse_disassemble(a, lo, hi, 3);
+    inverse_disassemble(a, lo, hi, 3, 0);
 }
 
 static CTC_SPECIALISE void disassemble_spatial(void *a, int lo, int hi)
 {
-    inverse_disassemble(a, lo, hi, 6);
+    inverse_disassemble(a, lo, hi, 6, 0);
+}
+
+static CTC_SPECIALISE void disassemble_planar_tree(void *a, int lo, int hi)
+{
+    inverse_disassemble(a, lo, hi, 3, 1);
+}
+
+static CTC_SPECIALISE void disassemble_spatial_tree(void *a, int lo, int hi)
+{
+    inverse_disassemble(a, lo, hi, 6, 1);
 }
 
 /* body records, assembly and disassembly, serial or a tree height at a time (gdca_par.h) */
@@ -458,9 +488,9 @@ static void inverse_planar(const ctc_model *m, ctc_data *d, const double *u, dou
     inverse_args a = {m, d, u, f, keep};
     gdca_par_pass pass = {.ctx = &a,
                           .bodies = keep ? NULL : bodies_planar,
-                          .assemble = assemble_planar,
+                          .assemble = m->chain ? assemble_planar : assemble_planar_tree,
                           .root = root_planar,
-                          .disassemble = disassemble_planar,
+                          .disassemble = m->chain ? disassemble_planar : disassemble_planar_tree,
                           .grain = INVERSE_GRAIN_PLANAR,
                           .min_bodies = INVERSE_MIN_BODIES_PLANAR};
     gdca_par_run(m, d, &pass);
@@ -471,9 +501,9 @@ static void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u, do
     inverse_args a = {m, d, u, f, keep};
     gdca_par_pass pass = {.ctx = &a,
                           .bodies = keep ? NULL : bodies_spatial,
-                          .assemble = assemble_spatial,
+                          .assemble = m->chain ? assemble_spatial : assemble_spatial_tree,
                           .root = root_spatial,
-                          .disassemble = disassemble_spatial,
+                          .disassemble = m->chain ? disassemble_spatial : disassemble_spatial_tree,
                           .grain = INVERSE_GRAIN_SPATIAL,
                           .min_bodies = INVERSE_MIN_BODIES_SPATIAL};
     gdca_par_run(m, d, &pass);

@@ -222,7 +222,8 @@ static inline void mobility_rake_down(const mobility_args *a, int i, const int d
 
 /* assembly of tree nodes lo..hi-1, children before parents; returns the first node whose joint
    is singular, or -1 */
-static inline int mobility_assemble(const mobility_args *a, int lo, int hi, const int dim)
+static inline int mobility_assemble(const mobility_args *a, int lo, int hi, const int dim,
+                                    const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
@@ -230,7 +231,7 @@ static inline int mobility_assemble(const mobility_args *a, int lo, int hi, cons
     int first = -1;
     for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
-        if (node->kind != CTC_NODE_JOIN) {
+        if (tree && node->kind != CTC_NODE_JOIN) {
             if (mobility_rake_node(a, node, d->hinv + (size_t)i * hs, dim) != 0 && first < 0) {
                 first = i;
             }
@@ -244,6 +245,24 @@ static inline int mobility_assemble(const mobility_args *a, int lo, int hi, cons
                       d->inv_z + dim * j, d->hinv + (size_t)i * hs);
     }
     return first;
+}
+
+/* ground child j's joint to its subtree, assembled at x, whose free end carries F2 = 0 */
+static inline void mobility_root_joint(const mobility_args *a, int j, int x, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const double *root = ctc_data_handles(m, d, x, 1);
+    double *t = d->tload + (size_t)x * 2 * dim;
+    if (inverse_joint(m, d, j, NULL, root, a->u, dim) != 0 && d->singular_joint < 0) {
+        d->singular_joint = j;
+    }
+    for (int r = 0; r < dim; r++) {
+        t[r] = d->inv_z[dim * j + r];
+        t[dim + r] = 0;
+        d->jnt_load_inv[dim * j + r] = t[r];
+    }
+    inverse_drive(m, d, j, t, a->f, dim);
 }
 
 /* the root: a loop model's, or the ground joint 0 with the free end's load F2 = 0 */
@@ -263,25 +282,18 @@ static inline void mobility_root(const mobility_args *a, const int dim)
         }
         return;
     }
-    for (int i = 0; i < m->nroots; i++) { /* each ground child's subtree: a chain has one */
-        const int j = m->root_joint[i], x = m->root_asm[i];
-        const double *root = ctc_data_handles(m, d, x, 1);
-        double *t = d->tload + (size_t)x * 2 * dim;
-        if (inverse_joint(m, d, j, NULL, root, a->u, dim) != 0 && d->singular_joint < 0) {
-            d->singular_joint = j;
-        }
-        for (int r = 0; r < dim; r++) {
-            t[r] = d->inv_z[dim * j + r];
-            t[dim + r] = 0;
-            d->jnt_load_inv[dim * j + r] = t[r];
-        }
-        inverse_drive(m, d, j, t, f, dim);
+    if (m->chain) {
+        mobility_root_joint(a, 0, m->root, dim);
+        return;
     }
+    for (int i = 0; i < m->nroots; i++)
+        mobility_root_joint(a, m->root_joint[i], m->root_asm[i], dim);
 }
 
 /* disassembly of tree nodes hi-1 down to lo, parents before children; a loop model's stops
    where no independent joint is left below (Fig. 4) */
-static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, const int dim)
+static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, const int dim,
+                                        const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
@@ -290,7 +302,7 @@ static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, 
     for (int i = hi - 1; i >= lo; i--) {
         if (prune && !m->inv_need[i]) continue;
         const ctc_tree_node *node = &m->tree[i];
-        if (node->kind != CTC_NODE_JOIN) {
+        if (tree && node->kind != CTC_NODE_JOIN) {
             mobility_rake_down(a, i, dim);
             continue;
         }
@@ -309,12 +321,22 @@ static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, 
 /* the stages specialised to the planar and the spatial form */
 static CTC_SPECIALISE int assemble_planar(void *a, int lo, int hi)
 {
-    return mobility_assemble(a, lo, hi, 3);
+    return mobility_assemble(a, lo, hi, 3, 0);
+}
+
+static CTC_SPECIALISE int assemble_planar_tree(void *a, int lo, int hi)
+{
+    return mobility_assemble(a, lo, hi, 3, 1);
 }
 
 static CTC_SPECIALISE int assemble_spatial(void *a, int lo, int hi)
 {
-    return mobility_assemble(a, lo, hi, 6);
+    return mobility_assemble(a, lo, hi, 6, 0);
+}
+
+static CTC_SPECIALISE int assemble_spatial_tree(void *a, int lo, int hi)
+{
+    return mobility_assemble(a, lo, hi, 6, 1);
 }
 
 static CTC_SPECIALISE void root_planar(void *a)
@@ -329,12 +351,22 @@ static CTC_SPECIALISE void root_spatial(void *a)
 
 static CTC_SPECIALISE void disassemble_planar(void *a, int lo, int hi)
 {
-    mobility_disassemble(a, lo, hi, 3);
+    mobility_disassemble(a, lo, hi, 3, 0);
+}
+
+static CTC_SPECIALISE void disassemble_planar_tree(void *a, int lo, int hi)
+{
+    mobility_disassemble(a, lo, hi, 3, 1);
 }
 
 static CTC_SPECIALISE void disassemble_spatial(void *a, int lo, int hi)
 {
-    mobility_disassemble(a, lo, hi, 6);
+    mobility_disassemble(a, lo, hi, 6, 0);
+}
+
+static CTC_SPECIALISE void disassemble_spatial_tree(void *a, int lo, int hi)
+{
+    mobility_disassemble(a, lo, hi, 6, 1);
 }
 
 void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u, double *f)
@@ -343,9 +375,11 @@ void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u,
     const int planar = m->form == CTC_FORM_PLANAR;
     gdca_par_pass pass = {
         .ctx = &a,
-        .assemble = planar ? assemble_planar : assemble_spatial,
+        .assemble = planar ? (m->chain ? assemble_planar : assemble_planar_tree)
+                           : (m->chain ? assemble_spatial : assemble_spatial_tree),
         .root = planar ? root_planar : root_spatial,
-        .disassemble = planar ? disassemble_planar : disassemble_spatial,
+        .disassemble = planar ? (m->chain ? disassemble_planar : disassemble_planar_tree)
+                              : (m->chain ? disassemble_spatial : disassemble_spatial_tree),
         .grain = planar ? MOBILITY_GRAIN_PLANAR : MOBILITY_GRAIN_SPATIAL,
         .root_takes_top = 1,
         .min_bodies = planar ? MOBILITY_MIN_BODIES_PLANAR : MOBILITY_MIN_BODIES_SPATIAL,

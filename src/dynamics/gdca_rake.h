@@ -59,18 +59,44 @@ static inline void gdca_rake_point(const ctc_data *d, int k, int c, const int di
     gdca_rake_kappa(d, k, dim, r, kappa);
 }
 
-/* T(r) as a dense matrix (dim x dim, row-major) */
-static inline void gdca_rake_T(const int dim, const double r[3], double *t)
+/* out = T(r) a for a (dim x dim, row-major): a's rows transferred. Spatial, T = [1 0; X 1] with
+   X y = y x r: the lower rows gain X times the upper ones, column by column; planar, rows 1 and 2
+   gain -r_y and r_x times row 0. out may not alias a. */
+static inline void gdca_rake_trows(const int dim, const double r[3], const double *a, double *out)
 {
-    for (int i = 0; i < dim * dim; i++) t[i] = 0;
-    for (int i = 0; i < dim; i++) t[i * dim + i] = 1;
+    for (int i = 0; i < dim * dim; i++) out[i] = a[i];
     if (dim == 3) {
-        t[3] = -r[1];
-        t[6] = r[0];
-    } else { /* -[r]x in the lower left block */
-        t[6 * 3 + 1] = r[2], t[6 * 3 + 2] = -r[1];
-        t[6 * 4 + 0] = -r[2], t[6 * 4 + 2] = r[0];
-        t[6 * 5 + 0] = r[1], t[6 * 5 + 1] = -r[0];
+        for (int c = 0; c < 3; c++) {
+            out[3 + c] -= r[1] * a[c];
+            out[6 + c] += r[0] * a[c];
+        }
+        return;
+    }
+    for (int c = 0; c < 6; c++) {
+        const double y[3] = {a[c], a[6 + c], a[12 + c]};
+        double x[3];
+        ctc_v3_cross(x, y, r);
+        out[18 + c] += x[0], out[24 + c] += x[1], out[30 + c] += x[2];
+    }
+}
+
+/* out = a T(r)^T for a (dim x dim, row-major): a's columns transferred; spatial, row i's last
+   three entries gain (its first three) x r; planar, columns 1 and 2 gain -r_y and r_x times
+   column 0. out may not alias a. */
+static inline void gdca_rake_tcols(const int dim, const double r[3], const double *a, double *out)
+{
+    for (int i = 0; i < dim * dim; i++) out[i] = a[i];
+    if (dim == 3) {
+        for (int i = 0; i < 3; i++) {
+            out[3 * i + 1] -= r[1] * a[3 * i];
+            out[3 * i + 2] += r[0] * a[3 * i];
+        }
+        return;
+    }
+    for (int i = 0; i < 6; i++) {
+        double x[3];
+        ctc_v3_cross(x, a + 6 * i, r);
+        out[6 * i + 3] += x[0], out[6 * i + 4] += x[1], out[6 * i + 5] += x[2];
     }
 }
 
@@ -138,7 +164,8 @@ static inline int gdca_rake_record(const int dim, double *mm, const double *bp, 
     double *minv = slot, *x0 = slot + dim * dim;
     int st = 0;
     if (matrices) {
-        double li[CTC_DENSE_MAX * CTC_DENSE_MAX];
+        double li[CTC_DENSE_MAX * CTC_DENSE_MAX], p1[CTC_DENSE_MAX * CTC_DENSE_MAX];
+        double p2[CTC_DENSE_MAX * CTC_DENSE_MAX];
         st = gdca_chol_inv(dim, mm, li); /* M' = L L^T, M'^-1 = L^-T L^-1 */
         for (int i = 0; i < dim; i++) {
             for (int j = i; j < dim; j++) {
@@ -147,33 +174,11 @@ static inline int gdca_rake_record(const int dim, double *mm, const double *bp, 
                 minv[i * dim + j] = minv[j * dim + i] = st == 0 ? t : NAN;
             }
         }
-        double t1[CTC_DENSE_MAX * CTC_DENSE_MAX], t2[CTC_DENSE_MAX * CTC_DENSE_MAX];
-        double g1[CTC_DENSE_MAX * CTC_DENSE_MAX], g2[CTC_DENSE_MAX * CTC_DENSE_MAX];
-        gdca_rake_T(dim, r1, t1);
-        gdca_rake_T(dim, r2, t2);
-        for (int i = 0; i < dim; i++) { /* G_i = T_i M'^-1 */
-            for (int j = 0; j < dim; j++) {
-                double a = 0, c = 0;
-                for (int k = 0; k < dim; k++) {
-                    a += t1[i * dim + k] * minv[k * dim + j];
-                    c += t2[i * dim + k] * minv[k * dim + j];
-                }
-                g1[i * dim + j] = a, g2[i * dim + j] = c;
-            }
-        }
-        for (int i = 0; i < dim; i++) { /* h_ij = G_i T_j^T */
-            for (int j = 0; j < dim; j++) {
-                double h11 = 0, h12 = 0, h22 = 0;
-                for (int k = 0; k < dim; k++) {
-                    h11 += g1[i * dim + k] * t1[j * dim + k];
-                    h12 += g1[i * dim + k] * t2[j * dim + k];
-                    h22 += g2[i * dim + k] * t2[j * dim + k];
-                }
-                out[H11(dim) + i * dim + j] = h11;
-                out[H12(dim) + i * dim + j] = h12;
-                out[H22(dim) + i * dim + j] = h22;
-            }
-        }
+        gdca_rake_trows(dim, r1, minv, p1); /* T_i M'^-1 */
+        gdca_rake_trows(dim, r2, minv, p2);
+        gdca_rake_tcols(dim, r1, p1, out + H11(dim)); /* h_ij = (T_i M'^-1) T_j^T */
+        gdca_rake_tcols(dim, r2, p1, out + H12(dim));
+        gdca_rake_tcols(dim, r2, p2, out + H22(dim));
         for (int i = 0; i < dim; i++) { /* exactly symmetric */
             for (int j = i + 1; j < dim; j++) {
                 out[H11(dim) + j * dim + i] = out[H11(dim) + i * dim + j];

@@ -12,6 +12,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     if (d == NULL) return NULL;
     size_t n = (size_t)m->nbodies, dim = (size_t)m->dim;
     size_t nt = n > 1 ? n - 1 : 1, nj = (size_t)m->njoints;
+    size_t nfwd = m->chain ? nt : 2 * n; /* a tree's sequential order: S_k and R_k per body */
     d->dim = m->dim;
     d->hsize = (int)(3 * dim * dim + 2 * dim);
     d->singular_joint = -1;
@@ -29,7 +30,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->jnt_beta = calloc(nj * dim, sizeof(double));
     d->hr = calloc(n * 6, sizeof(double));
     d->hbody = calloc(n * (size_t)d->hsize, sizeof(double));
-    d->hfwd = calloc(nt * (size_t)d->hsize, sizeof(double));
+    d->hfwd = calloc(nfwd * (size_t)d->hsize, sizeof(double));
     d->hinv = calloc(nt * (size_t)d->hsize, sizeof(double));
     d->fwd_E = calloc(n * dim * dim, sizeof(double));
     d->fwd_z = calloc(n * dim, sizeof(double));

@@ -8,6 +8,9 @@
  * parent arrays over random spatial bodies with every joint type and planar ones with prismatic
  * joints, with one root or several on the ground.
  *
+ * The forward pass runs in both of its orders: the plan (gdca_forward.c, what threads split) and
+ * the sequential tip runs (gdca_forward_tseq.c, one thread's default).
+ *
  * Tolerances, as for chains (test_gdca_forward.c, test_gdca_inverse.c): the composite inverse
  * 1e-10 relative to RNEA; the forward pass 1e-10 relative to ABA, widened to 1e-14 cond(M) where
  * the mass matrix (CRBA) is ill conditioned, and the mobility inverse to 1e-13 cond(M). Beyond
@@ -85,25 +88,30 @@ static void check_tree(const ctc_model *m, uint64_t seed, int trials, const char
                       m->nbodies, t, err, cond);
         }
 
-        /* forward, of random forces, against ABA (or by its backward error) */
+        /* forward, of random forces, in both orders, against ABA (or by its backward error) */
         for (int i = 0; i < nv; i++) f[i] = test_uniform(&rng, -5, 5);
-        ctc_gdca_forward(m, d, f, a);
-        cr_assert_eq(d->singular_joint, -1, "%s: singular joint %d", what, d->singular_joint);
-        if (nc) {
-            ctc_oracle_aba(m, o, q, v, f, ref);
-            err = test_rel_err(a, ref, nv);
-            cr_assert(err <= forward_tolerance(cond),
-                      "%s, n=%d trial %d: forward error %.3g > %.3g (cond %.3g)", what, m->nbodies,
-                      t, err, forward_tolerance(cond), cond);
-        } else {
-            ctc_oracle_rnea(m, o, q, v, a, ref);
-            ctc_oracle_rnea(m, o, q, v, zero, bias);
-            double scale = fmax(max_abs(f, nv), max_abs(bias, nv)), worst = 0;
-            for (int i = 0; i < nv; i++) worst = fmax(worst, fabs(ref[i] - f[i]));
-            cr_assert(worst <= 1e-10 * scale,
-                      "%s, n=%d trial %d: forward backward error %.3g of %.3g", what, m->nbodies, t,
-                      worst, scale);
+        for (int order = 0; order < 2; order++) {
+            const char *oname = order ? "sequential" : "plan";
+            d->opt.fwd_order = order ? CTC_ORDER_SEQ : CTC_ORDER_TREE;
+            ctc_gdca_forward(m, d, f, a);
+            cr_assert_eq(d->singular_joint, -1, "%s: singular joint %d", what, d->singular_joint);
+            if (nc) {
+                ctc_oracle_aba(m, o, q, v, f, ref);
+                err = test_rel_err(a, ref, nv);
+                cr_assert(err <= forward_tolerance(cond),
+                          "%s, %s, n=%d trial %d: forward error %.3g > %.3g (cond %.3g)", what,
+                          oname, m->nbodies, t, err, forward_tolerance(cond), cond);
+            } else {
+                ctc_oracle_rnea(m, o, q, v, a, ref);
+                ctc_oracle_rnea(m, o, q, v, zero, bias);
+                double scale = fmax(max_abs(f, nv), max_abs(bias, nv)), worst = 0;
+                for (int i = 0; i < nv; i++) worst = fmax(worst, fabs(ref[i] - f[i]));
+                cr_assert(worst <= 1e-10 * scale,
+                          "%s, %s, n=%d trial %d: forward backward error %.3g of %.3g", what, oname,
+                          m->nbodies, t, worst, scale);
+            }
         }
+        d->opt.fwd_order = CTC_ORDER_AUTO;
     }
     free(q), free(v), free(u), free(f), free(ref), free(a), free(bias), free(zero), free(mass);
     ctc_oracle_free(o);
@@ -336,6 +344,7 @@ Test(gdca_tree, threads_give_bitwise_the_serial_results, .timeout = 120)
                 ctc_data *d = ctc_data_new(m);
                 cr_assert_eq(ctc_data_set_threads(d, threads[t], NULL, 0), CTC_OK);
                 d->opt.par_grain = 1;
+                d->opt.fwd_order = CTC_ORDER_TREE; /* one thread's default is the sequential */
                 for (int p = 0; p < 3; p++) out[t][p] = calloc((size_t)nv, 8);
                 ctc_kinematics(m, d, q, v);
                 ctc_handles(m, d);
