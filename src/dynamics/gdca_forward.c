@@ -162,8 +162,8 @@ static inline int forward_light(const forward_args *a, int k, int c, int x, doub
                            forward_bias(a, x, 0, dim, correct),
                            gdca_forward_beta(d, c, dim, correct), a->f, !correct, NULL, dim);
     gdca_rake_point(d, k, c, dim, r, kappa);
-    gdca_rake_light(dim, dim - m->jnt_nv[c], d->fwd_E + dim * dim * c, r, correct ? NULL : kappa,
-                    d->fwd_z + dim * c, s, b);
+    gdca_rake_light(dim, (int)m->joints[c].type, dim - m->jnt_nv[c], d->fwd_E + dim * dim * c, r,
+                    correct ? NULL : kappa, d->fwd_z + dim * c, s, b);
     return st;
 }
 
@@ -230,8 +230,8 @@ static inline void forward_light_down(const forward_args *a, int k, int c, int s
     double r[3], kappa[CTC_DENSE_MAX], ac[CTC_DENSE_MAX], fc[CTC_DENSE_MAX], a1[CTC_DENSE_MAX];
     double *tl = d->tload + (size_t)sub * 2 * dim, *load = d->jnt_load + dim * c;
     gdca_rake_point(d, k, c, dim, r, kappa);
-    gdca_rake_child_load(dim, dim - m->jnt_nv[c], d->fwd_E + dim * dim * c, d->fwd_z + dim * c, r,
-                         correct ? NULL : kappa, x, ac, fc);
+    gdca_rake_child_load(dim, (int)m->joints[c].type, dim - m->jnt_nv[c], d->fwd_E + dim * dim * c,
+                         d->fwd_z + dim * c, r, correct ? NULL : kappa, x, ac, fc);
     ctc_dense_mulv(dim, dim, rec + H11(dim), fc, a1);
     for (int i = 0; i < dim; i++) {
         a1[i] += b13[i];

@@ -94,8 +94,8 @@ static inline int tseq_rake(const tseq_args *a, int k, const int dim, const int 
             singular = tseq_first(singular, c);
         }
         gdca_rake_point(d, k, c, dim, r, kappa);
-        gdca_rake_light(dim, dim - m->jnt_nv[c], d->fwd_E + dim * dim * c, r,
-                        correct ? NULL : kappa, d->fwd_z + dim * c, correct ? NULL : ts, tb);
+        gdca_rake_light(dim, (int)m->joints[c].type, dim - m->jnt_nv[c], d->fwd_E + dim * dim * c,
+                        r, correct ? NULL : kappa, d->fwd_z + dim * c, correct ? NULL : ts, tb);
         for (int i = 0; !correct && i < dim * dim; i++) s[i] += ts[i];
         for (int i = 0; i < dim; i++) sb[i] += tb[i];
     }
@@ -182,8 +182,9 @@ static inline void tseq_disassemble(const tseq_args *a, int k, const int dim, co
         double r[3], kappa[CTC_DENSE_MAX], ac[CTC_DENSE_MAX], a1[CTC_DENSE_MAX];
         double *fc = d->tload + dim * c;
         gdca_rake_point(d, k, c, dim, r, kappa);
-        gdca_rake_child_load(dim, dim - m->jnt_nv[c], d->fwd_E + dim * dim * c, d->fwd_z + dim * c,
-                             r, correct ? NULL : kappa, xk, ac, fc);
+        gdca_rake_child_load(dim, (int)m->joints[c].type, dim - m->jnt_nv[c],
+                             d->fwd_E + dim * dim * c, d->fwd_z + dim * c, r,
+                             correct ? NULL : kappa, xk, ac, fc);
         gdca_tmulv(dim, sc + H11(dim), fc, a1); /* h11 is symmetric */
         for (int i = 0; i < dim; i++) a1[i] += b13[i];
         forward_accel(m, d, c, a1, ac, gdca_forward_beta(d, c, dim, correct), a->qacc, dim);

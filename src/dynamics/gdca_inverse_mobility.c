@@ -148,7 +148,7 @@ static inline int mobility_operand(const mobility_args *a, int k, int x, int c, 
         double r[3], kappa[CTC_DENSE_MAX];
         st = inverse_joint(m, d, c, NULL, ctc_data_handles(m, d, x, 1), a->u, dim);
         gdca_rake_point(d, k, c, dim, r, kappa);
-        gdca_rake_light(dim, inverse_nc(m, c, dim), d->inv_E + dim * dim * c, r, kappa,
+        gdca_rake_light(dim, -1, inverse_nc(m, c, dim), d->inv_E + dim * dim * c, r, kappa,
                         d->inv_z + dim * c, ts, tb);
     } else {
         const double *rec = ctc_data_handles(m, d, x, 1);
@@ -210,7 +210,7 @@ static inline void mobility_rake_down(const mobility_args *a, int i, const int d
         }
         double r3[3], kappa[CTC_DENSE_MAX], ac[CTC_DENSE_MAX], *fc = d->jnt_load_inv + dim * c;
         gdca_rake_point(d, k, c, dim, r3, kappa);
-        gdca_rake_child_load(dim, inverse_nc(m, c, dim), d->inv_E + dim * dim * c,
+        gdca_rake_child_load(dim, -1, inverse_nc(m, c, dim), d->inv_E + dim * dim * c,
                              d->inv_z + dim * c, r3, kappa, x, ac, fc);
         for (int r = 0; r < dim; r++) {
             t[r] = fc[r];

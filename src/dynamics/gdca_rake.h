@@ -100,14 +100,28 @@ static inline void gdca_rake_tcols(const int dim, const double r[3], const doubl
     }
 }
 
+/* out = E E^T x for E (dim x nc) made by gdca_joint_factor_typed for a joint of type `type`, or
+   by the general factor when type < 0 */
+static inline void gdca_rake_apply(const int dim, int type, int nc, const double *e,
+                                   const double *x, double *out)
+{
+    if (type >= 0) {
+        gdca_factor_apply_typed(dim, (ctc_joint_type)type, nc, e, x, out);
+    } else {
+        gdca_factor_apply_nc(dim, nc, e, x, out);
+    }
+}
+
 /* one light child's terms: s (dim x dim; NULL: not formed) = T^T E E^T T and b (dim) =
-   T^T (E E^T kappa + z), for E (dim x nc), r and kappa (NULL: zero) of gdca_rake_point */
-static inline void gdca_rake_light(const int dim, int nc, const double *e, const double r[3],
-                                   const double *kappa, const double *z, double *s, double *b)
+   T^T (E E^T kappa + z), for E (dim x nc; type as gdca_rake_apply), r and kappa (NULL: zero) of
+   gdca_rake_point */
+static inline void gdca_rake_light(const int dim, int type, int nc, const double *e,
+                                   const double r[3], const double *kappa, const double *z,
+                                   double *s, double *b)
 {
     double v[CTC_DENSE_MAX];
     if (kappa != NULL) {
-        gdca_factor_apply_nc(dim, nc, e, kappa, v);
+        gdca_rake_apply(dim, type, nc, e, kappa, v);
         for (int i = 0; i < dim; i++) v[i] += z[i];
     } else {
         for (int i = 0; i < dim; i++) v[i] = z[i];
@@ -208,14 +222,15 @@ static inline void gdca_rake_motion(const int dim, const double *slot, const dou
     for (int i = 0; i < dim; i++) x[i] = slot[dim * dim + i] + t2[i];
 }
 
-/* a light child's A_c = T_c X + kappa (kappa NULL: zero) and load F_c = E E^T A_c + z */
-static inline void gdca_rake_child_load(const int dim, int nc, const double *e, const double *z,
-                                        const double r[3], const double *kappa, const double *x,
-                                        double *ac, double *fc)
+/* a light child's A_c = T_c X + kappa (kappa NULL: zero) and load F_c = E E^T A_c + z (type as
+   gdca_rake_apply) */
+static inline void gdca_rake_child_load(const int dim, int type, int nc, const double *e,
+                                        const double *z, const double r[3], const double *kappa,
+                                        const double *x, double *ac, double *fc)
 {
     ctc_transfer_motion(dim, r, x, ac);
     for (int i = 0; kappa != NULL && i < dim; i++) ac[i] += kappa[i];
-    gdca_factor_apply_nc(dim, nc, e, ac, fc);
+    gdca_rake_apply(dim, type, nc, e, ac, fc);
     for (int i = 0; i < dim; i++) fc[i] += z[i];
 }
 
