@@ -180,7 +180,7 @@ Test(gdca_tree, matches_the_oracle_on_stars)
     }
 }
 
-Test(gdca_tree, matches_the_oracle_on_random_trees_of_every_joint_type, .timeout = 120)
+Test(gdca_tree, matches_the_oracle_on_random_trees_of_every_joint_type)
 {
     const int n[] = {2, 4, 7, 16, 40, 100, 300};
     const double ground[] = {0, 0.05, 0.3};
