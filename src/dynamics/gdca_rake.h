@@ -16,10 +16,11 @@
  * M = diag(I_c, m 1) (planar diag(J, m, m)), b = (-w x I_c w; m g) (planar (0; m g)), the body's
  * handle-equation terms of handles.h. The pseudo-body's record is then
  *     h_ij = T_i M'^-1 T_j^T,   h_i3 = T_i x0 + kappa_i,   x0 = M'^-1 b',
- * which for no light child is handles.h's. The sums run over a binary tree of SUM nodes, whose
- * records hold a partial sum S = sum T_c^T W_c T_c (at H11) and s = sum T_c^T (W_c kappa_c + z_c)
- * (at H13). d->rake keeps M'^-1 and x0 of each raked body for its disassembly and for the
- * refinement's bias-free correction (kappa = 0, b = 0, M' reused).
+ * which for no light child is handles.h's. In the plan the sums run over a binary tree of SUM
+ * nodes, whose records hold a partial sum S = sum T_c^T W_c T_c (at H11) and
+ * s = sum T_c^T (W_c kappa_c + z_c) (at H13); the sequential order (gdca_forward_tseq.c) sums them
+ * in the order of k's children. d->rake keeps M'^-1 and x0 of each raked body for its disassembly
+ * and for the refinement's bias-free correction (kappa = 0, b = 0, M' reused).
  */
 #ifndef CTC_GDCA_RAKE_H
 #define CTC_GDCA_RAKE_H
