@@ -12,10 +12,14 @@
  * steps the default makes and ctc with and without refinement, and the unrefined forward pass
  * and ctc with the forward pass in the balanced tree's order (gdca_forward_seq.h), at n = 16, 64,
  * 256, 1024 and 4096.
+ * A third table times ctc and pair on Featherstone's autoTree family (tests/support/chains.h
+ * test_auto_tree: taper 1, branching factor 1 = a chain, 2 and 4; planar with no skew, spatial
+ * with skew 0.5 rad) at n = 16, 64, 256, 1024 and 4096, per body, with the plan's height and the
+ * tree's ctc per body over the chain's (bf 1) at the same n and form.
  * Batches of each are interleaved so that machine noise hits all of them alike; the figures are
  * medians over the batches, per evaluation, and the ratio is ctc / pair from the same run.
- * Usage: bench_dynamics [max_n [batches [parts]]]: parts "t" (the first table), "s" (the split) or
- * both (the default)
+ * Usage: bench_dynamics [max_n [batches [parts]]]: parts "t" (the first table), "s" (the split),
+ * "a" (autoTree), any of them (default: all three)
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -154,8 +158,10 @@ static void measure(bench_case *c, int batches, const int *which, int nw, double
     free(samples);
 }
 
-/* the main table's row (split = 0) or the stage split's (split = 1) */
-static void bench_chain(const char *label, test_chain *chain, int batches, int split)
+/* the main table's row (split = 0), the stage split's (split = 1) or the autoTree table's (split
+   = 2, its ctc per body over chain_per_body, or none when that is 0); returns ctc per body, s */
+static double bench_chain(const char *label, test_chain *chain, int batches, int split,
+                          double chain_per_body)
 {
     char err[256];
     ctc_model *m = NULL;
@@ -176,7 +182,18 @@ static void bench_chain(const char *label, test_chain *chain, int batches, int s
 
     double med[NT];
     int n = m->nbodies;
-    if (split) {
+    if (split == 2) {
+        static const int which[] = {T_CTC, T_PAIR};
+        measure(&c, batches, which, 2, med);
+        printf("| %-7s | %5d | %6d | %10.2f | %10.2f | %5.2f | %7.1f | %7.1f | ", label, n,
+               m->height, 1e6 * med[T_CTC], 1e6 * med[T_PAIR], med[T_CTC] / med[T_PAIR],
+               1e9 * med[T_CTC] / n, 1e9 * med[T_PAIR] / n);
+        if (chain_per_body > 0) {
+            printf("%5.2f |\n", med[T_CTC] / n / chain_per_body);
+        } else {
+            printf("    - |\n");
+        }
+    } else if (split) {
         static const int which[] = {T_KIN_ONLY, T_HANDLES, T_INV,       T_FWD0,    T_FWD1,
                                     T_CTC,      T_CTC0,    T_FWD0_TREE, T_CTC_TREE};
         measure(&c, batches, which, (int)(sizeof which / sizeof *which), med);
@@ -201,15 +218,16 @@ static void bench_chain(const char *label, test_chain *chain, int batches, int s
     ctc_oracle_free(c.o);
     ctc_data_free(c.d);
     ctc_model_free(m);
+    return med[T_CTC] / n;
 }
 
 int main(int argc, char **argv)
 {
     int max_n = argc > 1 ? atoi(argv[1]) : 4096;
     int batches = argc > 2 ? atoi(argv[2]) : 15;
-    const char *parts = argc > 3 ? argv[3] : "ts";
-    if (max_n < 2 || batches < 1 || parts[strspn(parts, "ts")] != '\0') {
-        fprintf(stderr, "usage: bench_dynamics [max_n >= 2 [batches >= 1 [parts: t s]]]\n");
+    const char *parts = argc > 3 ? argv[3] : "tsa";
+    if (max_n < 2 || batches < 1 || parts[strspn(parts, "tsa")] != '\0') {
+        fprintf(stderr, "usage: bench_dynamics [max_n >= 2 [batches >= 1 [parts: t s a]]]\n");
         return 2;
     }
     if (strchr(parts, 't') != NULL) {
@@ -224,12 +242,12 @@ int main(int argc, char **argv)
             "-------: | -------: | -------: |\n");
         for (int n = 2; n <= max_n; n *= 2) {
             test_chain *c = test_chain_random_planar(n, 7, 0, 1);
-            bench_chain("planar", c, batches, 0);
+            bench_chain("planar", c, batches, 0, 0);
             test_chain_free(c);
         }
         for (int n = 2; n <= max_n; n *= 2) {
             test_chain *c = test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE);
-            bench_chain("spatial", c, batches, 0);
+            bench_chain("spatial", c, batches, 0, 0);
             test_chain_free(c);
         }
     }
@@ -246,8 +264,32 @@ int main(int argc, char **argv)
             for (int n = 16; n <= max_n; n *= 4) {
                 test_chain *c = form ? test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE)
                                      : test_chain_random_planar(n, 7, 0, 1);
-                bench_chain(form ? "spatial" : "planar", c, batches, 1);
+                bench_chain(form ? "spatial" : "planar", c, batches, 1, 0);
                 test_chain_free(c);
+            }
+        }
+    }
+    if (strchr(parts, 'a') != NULL) {
+        printf("\nautoTree (taper 1; planar: skew 0, spatial: skew 0.5 rad): one CTC right-hand "
+               "side, ctc against pair; tree/chain = ctc per body over the chain's (bf 1) at the "
+               "same n and form.\n\n");
+        printf(
+            "| form    |     n | height | ctc (us)   | pair (us)  | ratio | ctc/n ns | pair/n ns "
+            "| tree/chain |\n");
+        printf("| ------- | ----: | -----: | ---------: | ---------: | ----: | ------: | ------: | "
+               "----: |\n");
+        for (int form = 0; form < 2; form++) {
+            for (int n = 16; n <= max_n; n *= 4) {
+                double chain = 0;
+                const int bf[] = {1, 2, 4};
+                for (int b = 0; b < 3; b++) {
+                    char label[16];
+                    snprintf(label, sizeof label, "%s %d", form ? "sp bf" : "pl bf", bf[b]);
+                    test_chain *c = test_auto_tree(n, bf[b], form ? 0.5 : 0.0, 1.0);
+                    double per = bench_chain(label, c, batches, 2, chain);
+                    if (b == 0) chain = per;
+                    test_chain_free(c);
+                }
             }
         }
     }

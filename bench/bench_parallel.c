@@ -26,6 +26,9 @@
  *             evaluation on 1 thread in the sequential order, which an unthreaded forward pass
  *             takes (gdca_forward_seq.h), and "vs seq" = that time / time on k threads: where
  *             the split tree beats it, the library may take the tree on threads.
+ *             The same speed-up table follows for Featherstone's autoTree (branching factors 2 and
+ *             4, planar and spatial, n = 1024, 4096, 16384), whose plan (model.c) splits as the
+ *             chains' tree does and whose sequential order is the tip runs (gdca_forward_tseq.c).
  * Before timing, the results on k threads are checked bitwise against 1 thread; a mismatch ends
  * the run with status 1. Every timing of a case first runs round-robin for WARM_S. Batches of
  * all timings of one chain are interleaved, each batch starting one timing further on; each
@@ -518,7 +521,7 @@ static void print_pays(const speed_row *rows, int nrows, int k, int p, const cha
         printf("none in the table\n");
 }
 
-static void print_speedup(const speed_row *rows, int nrows)
+static void print_speedup(const speed_row *rows, int nrows, int pays)
 {
     printf("| chain   |     n |");
     for (int p = 0; p < NP; p++) {
@@ -554,6 +557,7 @@ static void print_speedup(const speed_row *rows, int nrows)
         }
         printf("\n");
     }
+    if (!pays) return;
 
     printf("\nThe least n from which every larger n of the table runs at least 5%% faster on k "
            "threads (the tree) than on 1 thread:\n\n");
@@ -657,7 +661,24 @@ int main(int argc, char **argv)
             test_chain_free(c);
         }
     }
-    print_speedup(rows, nrows);
+    print_speedup(rows, nrows, 1);
+
+    printf("\nThe same on Featherstone's autoTree (taper 1; pl: planar, no skew; sp: spatial, "
+           "skew 0.5 rad; bf: branching factor): the plan split over threads against the plan "
+           "and the sequential tip runs on 1 thread:\n\n");
+    nrows = 0;
+    for (int form = 0; form < 2; form++) {
+        for (int bf = 2; bf <= 4; bf += 2) {
+            for (int n = 1024; n <= max_n && n <= 16384 && nrows < MAXROWS; n *= 4) {
+                char label[8];
+                snprintf(label, sizeof label, "%s bf%d", form ? "sp" : "pl", bf);
+                test_chain *c = test_auto_tree(n, bf, form ? 0.5 : 0.0, 1.0);
+                failed |= bench_speedup(label, c, batches, &rows[nrows++]);
+                test_chain_free(c);
+            }
+        }
+    }
+    print_speedup(rows, nrows, 0);
     printf("\nLoad average at the end: %.2f; %.0f s in all.\n", loadavg(), now() - t0);
     if (failed) return 1;
     return sink == 12345.678 ? 1 : 0;

@@ -22,6 +22,12 @@
  * residual, the factors E and the assembled matrices reused, so that only the vectors are
  * recomputed, by the same kernels and on the same threads.
  *
+ * On a branched tree the plan's SUM and RAKE nodes rake each light subtree into its parent body
+ * (gdca_rake.h): its root joint is solved as a chain's ground joint is, with the parent's point
+ * in place of the ground, and its articulated terms added to the parent's inertia; their
+ * disassembly gives the joint's load and acceleration and the subtree's terminal loads (F, 0).
+ * Each ground child's subtree is joined to the ground at the root.
+ *
  * This file is the pass over the model's tree (balanced; its root split at a loop's first joint
  * when the loop closes on a body: model.h), which loop models and passes split over threads
  * take (gdca_forward_order_seq below); other open-chain passes take the sequential order
@@ -40,6 +46,7 @@
 #include "gdca_forward_seq.h"
 #include "gdca_loop.h"
 #include "gdca_par.h"
+#include "gdca_rake.h"
 #include "gdca_refine.h"
 #include "gdca_tree.h"
 
@@ -142,10 +149,131 @@ static inline void forward_loop_root(const forward_args *a, const int dim, const
     forward_accel(m, d, n, s.ab, s.ar2, gdca_forward_beta(a->d, n, dim, correct), a->qacc, dim);
 }
 
+/* light child c's terms for body k's rake (gdca_rake.h), its subtree assembled at x: joint c's
+   E and z as a root joint's (the full pass factors it), then s (NULL: not formed) and b; returns
+   as forward_joint */
+static inline int forward_light(const forward_args *a, int k, int c, int x, double *s, double *b,
+                                const int dim, const int correct)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    double r[3], kappa[CTC_DENSE_MAX];
+    int st = forward_joint(m, d, c, NULL, ctc_data_handles(m, d, x, 0), gdca_zero6,
+                           forward_bias(a, x, 0, dim, correct),
+                           gdca_forward_beta(d, c, dim, correct), a->f, !correct, NULL, dim);
+    gdca_rake_point(d, k, c, dim, r, kappa);
+    gdca_rake_light(dim, (int)m->joints[c].type, dim - m->jnt_nv[c], d->fwd_E + dim * dim * c, r,
+                    correct ? NULL : kappa, d->fwd_z + dim * c, s, b);
+    return st;
+}
+
+/* the terms of operand x (a light child's subtree when c >= 0, else a SUM node's partial sums)
+   of a SUM or RAKE node of body k, added to s and b (add = 0: written) */
+static inline int forward_operand(const forward_args *a, int k, int x, int c, double *s, double *b,
+                                  int add, const int dim, const int correct)
+{
+    double ts[CTC_DENSE_MAX * CTC_DENSE_MAX], tb[CTC_DENSE_MAX];
+    const double *ps = ts, *pb = tb;
+    int st = 0;
+    if (c >= 0) {
+        st = forward_light(a, k, c, x, correct ? NULL : ts, tb, dim, correct);
+    } else {
+        const double *rec = ctc_data_handles(a->m, a->d, x, 0);
+        ps = rec + H11(dim), pb = rec + H13(dim);
+    }
+    for (int i = 0; !correct && i < dim * dim; i++) s[i] = add ? s[i] + ps[i] : ps[i];
+    for (int i = 0; i < dim; i++) b[i] = add ? b[i] + pb[i] : pb[i];
+    return st;
+}
+
+/* a SUM node's partial sums, or a RAKE node's pseudo-body record (gdca_rake.h); returns -1, or
+   0 when a light child's joint (or the pseudo-body's inertia) is singular */
+static inline int forward_rake_node(const forward_args *a, const ctc_tree_node *node, double *out,
+                                    const int dim, const int correct)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const int k = node->body;
+    int st = forward_operand(a, k, node->left, node->ljoint, out + H11(dim), out + H13(dim), 0, dim,
+                             correct);
+    if (node->kind == CTC_NODE_SUM) {
+        st |= forward_operand(a, k, node->right, node->rjoint, out + H11(dim), out + H13(dim), 1,
+                              dim, correct);
+        return st;
+    }
+    double mm[CTC_DENSE_MAX * CTC_DENSE_MAX], b[CTC_DENSE_MAX], sb[CTC_DENSE_MAX];
+    double s[CTC_DENSE_MAX * CTC_DENSE_MAX], k1[CTC_DENSE_MAX], k2[CTC_DENSE_MAX];
+    st |= forward_operand(a, k, node->left, node->ljoint, s, sb, 0, dim, correct);
+    if (correct) {
+        for (int i = 0; i < dim; i++) b[i] = -sb[i];
+    } else {
+        gdca_rake_body(m, d, k, dim, mm, b);
+        for (int i = 0; i < dim * dim; i++) mm[i] += s[i];
+        for (int i = 0; i < dim; i++) b[i] -= sb[i];
+        gdca_rake_kappa(d, k, dim, d->hr + 6 * k, k1);
+        gdca_rake_kappa(d, k, dim, d->hr + 6 * k + 3, k2);
+    }
+    st |= gdca_rake_record(dim, mm, b, d->hr + 6 * k, d->hr + 6 * k + 3, correct ? NULL : k1,
+                           correct ? NULL : k2, gdca_rake_slot(d, k, dim), out, !correct);
+    return st;
+}
+
+/* a light child c's disassembly from its parent k's motion x (gdca_rake.h): its joint's load,
+   acceleration, and its subtree's terminal loads (F_c, 0) at x's assembly index sub */
+static inline void forward_light_down(const forward_args *a, int k, int c, int sub, const double *x,
+                                      const int dim, const int correct)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const double *rec = ctc_data_handles(m, d, sub, 0),
+                 *b13 = forward_bias(a, sub, 0, dim, correct);
+    double r[3], kappa[CTC_DENSE_MAX], ac[CTC_DENSE_MAX], fc[CTC_DENSE_MAX], a1[CTC_DENSE_MAX];
+    double *tl = d->tload + (size_t)sub * 2 * dim, *load = d->jnt_load + dim * c;
+    gdca_rake_point(d, k, c, dim, r, kappa);
+    gdca_rake_child_load(dim, (int)m->joints[c].type, dim - m->jnt_nv[c], d->fwd_E + dim * dim * c,
+                         d->fwd_z + dim * c, r, correct ? NULL : kappa, x, ac, fc);
+    ctc_dense_mulv(dim, dim, rec + H11(dim), fc, a1);
+    for (int i = 0; i < dim; i++) {
+        a1[i] += b13[i];
+        tl[i] = fc[i];
+        tl[dim + i] = 0;
+        load[i] = correct ? load[i] + fc[i] : fc[i];
+    }
+    forward_accel(m, d, c, a1, ac, gdca_forward_beta(d, c, dim, correct), a->qacc, dim);
+}
+
+/* a SUM or RAKE node's disassembly: the raked body's motion X (a RAKE's from its loads, a SUM's
+   from its parent node), handed to each operand */
+static inline void forward_rake_down(const forward_args *a, int i, const int dim, const int correct)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const ctc_tree_node *node = &m->tree[i];
+    const int k = node->body;
+    const double *tl = d->tload + (size_t)(m->nbodies + i) * 2 * dim;
+    double x[CTC_DENSE_MAX];
+    if (node->kind == CTC_NODE_RAKE) {
+        gdca_rake_motion(dim, gdca_rake_slot(d, k, dim), d->hr + 6 * k, d->hr + 6 * k + 3, tl,
+                         tl + dim, x);
+    } else {
+        for (int r = 0; r < dim; r++) x[r] = tl[r];
+    }
+    const int ops = node->kind == CTC_NODE_SUM ? 2 : 1;
+    for (int o = 0; o < ops; o++) {
+        const int sub = o ? node->right : node->left, c = o ? node->rjoint : node->ljoint;
+        if (c >= 0) {
+            forward_light_down(a, k, c, sub, x, dim, correct);
+        } else {
+            double *t = d->tload + (size_t)sub * 2 * dim;
+            for (int r = 0; r < dim; r++) t[r] = x[r];
+        }
+    }
+}
+
 /* assembly of tree nodes lo..hi-1, children before parents; returns the first node whose joint
    is singular, or -1 */
 static inline int forward_assemble(const forward_args *a, int lo, int hi, const int dim,
-                                   const int correct)
+                                   const int correct, const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
@@ -153,6 +281,13 @@ static inline int forward_assemble(const forward_args *a, int lo, int hi, const 
     int first = -1;
     for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
+        if (tree && node->kind != CTC_NODE_JOIN) {
+            if (forward_rake_node(a, node, d->hfwd + (size_t)i * hs, dim, correct) != 0 &&
+                first < 0) {
+                first = i;
+            }
+            continue;
+        }
         const double *left = ctc_data_handles(m, d, node->left, 0);
         const double *right = ctc_data_handles(m, d, node->right, 0);
         const int j = node->joint, nc = dim - m->jnt_nv[j];
@@ -175,43 +310,61 @@ static inline int forward_assemble(const forward_args *a, int lo, int hi, const 
     return first;
 }
 
+/* ground child j's joint to its subtree, assembled at x, whose free end carries F2 = 0 */
+static inline void forward_root_joint(const forward_args *a, int j, int x, const int dim,
+                                      const int correct)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const double *root = ctc_data_handles(m, d, x, 0);
+    const double *b13 = forward_bias(a, x, 0, dim, correct),
+                 *beta = gdca_forward_beta(a->d, j, dim, correct);
+    double *tl = d->tload + (size_t)x * 2 * dim, a1[CTC_DENSE_MAX], *load = d->jnt_load + dim * j;
+    if (forward_joint(m, d, j, NULL, root, gdca_zero6, b13, beta, a->f, !correct, NULL, dim) != 0 &&
+        d->singular_joint < 0) {
+        d->singular_joint = j;
+    }
+    for (int r = 0; r < dim; r++) {
+        tl[r] = d->fwd_z[dim * j + r];
+        tl[dim + r] = 0;
+        load[r] = correct ? load[r] + tl[r] : tl[r];
+    }
+    ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
+    for (int r = 0; r < dim; r++) a1[r] += b13[r];
+    forward_accel(m, d, j, a1, gdca_zero6, beta, a->qacc, dim);
+}
+
 /* the root: a loop model's, or the ground joint 0 with the free end's load F2 = 0 */
 static inline void forward_root(const forward_args *a, const int dim, const int correct)
 {
     const ctc_model *m = a->m;
-    ctc_data *d = a->d;
     if (m->has_loop) {
         forward_loop_root(a, dim, correct);
         return;
     }
-    const double *root = ctc_data_handles(m, d, m->root, 0);
-    const double *b13 = forward_bias(a, m->root, 0, dim, correct),
-                 *beta = gdca_forward_beta(a->d, 0, dim, correct);
-    double *tl = d->tload + (size_t)m->root * 2 * dim, a1[CTC_DENSE_MAX];
-    if (forward_joint(m, d, 0, NULL, root, gdca_zero6, b13, beta, a->f, !correct, NULL, dim) != 0 &&
-        d->singular_joint < 0) {
-        d->singular_joint = 0;
+    if (m->chain) {
+        forward_root_joint(a, 0, m->root, dim, correct);
+        return;
     }
-    for (int i = 0; i < dim; i++) {
-        tl[i] = d->fwd_z[i];
-        tl[dim + i] = 0;
-        d->jnt_load[i] = correct ? d->jnt_load[i] + tl[i] : tl[i];
+    for (int i = 0; i < m->nroots; i++) {
+        forward_root_joint(a, m->root_joint[i], m->root_asm[i], dim, correct);
     }
-    ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
-    for (int i = 0; i < dim; i++) a1[i] += b13[i];
-    forward_accel(m, d, 0, a1, gdca_zero6, beta, a->qacc, dim);
 }
 
 /* disassembly of tree nodes hi-1 down to lo, parents before children: each writes its joint's
    load and acceleration and its children's terminal loads */
 static inline void forward_disassemble(const forward_args *a, int lo, int hi, const int dim,
-                                       const int correct)
+                                       const int correct, const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
     const int n = m->nbodies;
     for (int i = hi - 1; i >= lo; i--) {
         const ctc_tree_node *node = &m->tree[i];
+        if (tree && node->kind != CTC_NODE_JOIN) {
+            forward_rake_down(a, i, dim, correct);
+            continue;
+        }
         const double *left = ctc_data_handles(m, d, node->left, 0);
         const double *right = ctc_data_handles(m, d, node->right, 0);
         const double *f1 = d->tload + (size_t)(n + i) * 2 * dim, *f2 = f1 + dim;
@@ -237,25 +390,30 @@ static inline void forward_disassemble(const forward_args *a, int lo, int hi, co
     }
 }
 
-/* the stages specialised to the planar and the spatial form, full and correction */
-static CTC_SPECIALISE int assemble_planar(void *a, int lo, int hi)
-{
-    return forward_assemble(a, lo, hi, 3, 0);
-}
+/* the stages specialised to the planar and the spatial form, full and correction, and for a
+   chain's tree (JOIN nodes only) or a branched tree's plan */
+#define FORWARD_STAGES(name, dim, correct, tree)                                                   \
+    static CTC_SPECIALISE int assemble_##name(void *a, int lo, int hi)                             \
+    {                                                                                              \
+        return forward_assemble(a, lo, hi, dim, correct, tree);                                    \
+    }                                                                                              \
+    static CTC_SPECIALISE void disassemble_##name(void *a, int lo, int hi)                         \
+    {                                                                                              \
+        forward_disassemble(a, lo, hi, dim, correct, tree);                                        \
+    }
+
+FORWARD_STAGES(planar, 3, 0, 0)
+FORWARD_STAGES(spatial, 6, 0, 0)
+FORWARD_STAGES(correct_planar, 3, 1, 0)
+FORWARD_STAGES(correct_spatial, 6, 1, 0)
+FORWARD_STAGES(planar_tree, 3, 0, 1)
+FORWARD_STAGES(spatial_tree, 6, 0, 1)
+FORWARD_STAGES(correct_planar_tree, 3, 1, 1)
+FORWARD_STAGES(correct_spatial_tree, 6, 1, 1)
 
 static CTC_SPECIALISE void root_planar(void *a)
 {
     forward_root(a, 3, 0);
-}
-
-static CTC_SPECIALISE void disassemble_planar(void *a, int lo, int hi)
-{
-    forward_disassemble(a, lo, hi, 3, 0);
-}
-
-static CTC_SPECIALISE int assemble_spatial(void *a, int lo, int hi)
-{
-    return forward_assemble(a, lo, hi, 6, 0);
 }
 
 static CTC_SPECIALISE void root_spatial(void *a)
@@ -263,29 +421,9 @@ static CTC_SPECIALISE void root_spatial(void *a)
     forward_root(a, 6, 0);
 }
 
-static CTC_SPECIALISE void disassemble_spatial(void *a, int lo, int hi)
-{
-    forward_disassemble(a, lo, hi, 6, 0);
-}
-
-static CTC_SPECIALISE int correct_assemble_planar(void *a, int lo, int hi)
-{
-    return forward_assemble(a, lo, hi, 3, 1);
-}
-
 static CTC_SPECIALISE void correct_root_planar(void *a)
 {
     forward_root(a, 3, 1);
-}
-
-static CTC_SPECIALISE void correct_disassemble_planar(void *a, int lo, int hi)
-{
-    forward_disassemble(a, lo, hi, 3, 1);
-}
-
-static CTC_SPECIALISE int correct_assemble_spatial(void *a, int lo, int hi)
-{
-    return forward_assemble(a, lo, hi, 6, 1);
 }
 
 static CTC_SPECIALISE void correct_root_spatial(void *a)
@@ -293,39 +431,35 @@ static CTC_SPECIALISE void correct_root_spatial(void *a)
     forward_root(a, 6, 1);
 }
 
-static CTC_SPECIALISE void correct_disassemble_spatial(void *a, int lo, int hi)
-{
-    forward_disassemble(a, lo, hi, 6, 1);
-}
+/* the stage functions by [spatial][correct][tree] */
+static int (*const forward_assemble_fn[2][2][2])(void *, int, int) = {
+    {{assemble_planar, assemble_planar_tree},
+     {assemble_correct_planar, assemble_correct_planar_tree}},
+    {{assemble_spatial, assemble_spatial_tree},
+     {assemble_correct_spatial, assemble_correct_spatial_tree}}};
+static void (*const forward_disassemble_fn[2][2][2])(void *, int, int) = {
+    {{disassemble_planar, disassemble_planar_tree},
+     {disassemble_correct_planar, disassemble_correct_planar_tree}},
+    {{disassemble_spatial, disassemble_spatial_tree},
+     {disassemble_correct_spatial, disassemble_correct_spatial_tree}}};
+static void (*const forward_root_fn[2][2])(void *) = {{root_planar, correct_root_planar},
+                                                      {root_spatial, correct_root_spatial}};
 
-/* assembly and disassembly over the tree, serial or a tree height at a time (gdca_par.h); the
-   full pass (correct = 0) or the correction */
-static void forward_planar(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
-                           int correct)
+/* assembly and disassembly over the plan, serial or a height at a time (gdca_par.h); the full
+   pass (correct = 0) or the correction */
+static void forward_plan(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
+                         int correct)
 {
     forward_args a = {m, d, f, qacc};
+    const int sp = m->form != CTC_FORM_PLANAR, tree = !m->chain;
     gdca_par_pass pass = {.ctx = &a,
-                          .assemble = correct ? correct_assemble_planar : assemble_planar,
-                          .root = correct ? correct_root_planar : root_planar,
-                          .disassemble = correct ? correct_disassemble_planar : disassemble_planar,
-                          .grain = FORWARD_GRAIN_PLANAR,
+                          .assemble = forward_assemble_fn[sp][correct][tree],
+                          .root = forward_root_fn[sp][correct],
+                          .disassemble = forward_disassemble_fn[sp][correct][tree],
+                          .grain = sp ? FORWARD_GRAIN_SPATIAL : FORWARD_GRAIN_PLANAR,
                           .root_takes_top = 1,
-                          .min_bodies = FORWARD_MIN_BODIES_PLANAR};
-    gdca_par_run(m, d, &pass);
-}
-
-static void forward_spatial(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
-                            int correct)
-{
-    forward_args a = {m, d, f, qacc};
-    gdca_par_pass pass = {.ctx = &a,
-                          .assemble = correct ? correct_assemble_spatial : assemble_spatial,
-                          .root = correct ? correct_root_spatial : root_spatial,
-                          .disassemble =
-                              correct ? correct_disassemble_spatial : disassemble_spatial,
-                          .grain = FORWARD_GRAIN_SPATIAL,
-                          .root_takes_top = 1,
-                          .min_bodies = FORWARD_MIN_BODIES_SPATIAL};
+                          .min_bodies =
+                              sp ? FORWARD_MIN_BODIES_SPATIAL : FORWARD_MIN_BODIES_PLANAR};
     gdca_par_run(m, d, &pass);
 }
 
@@ -342,11 +476,9 @@ int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d)
 void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, double *dq)
 {
     if (gdca_forward_order_seq(m, d)) {
-        gdca_forward_seq(m, d, r, dq, 1);
-    } else if (m->form == CTC_FORM_PLANAR) {
-        forward_planar(m, d, r, dq, 1);
+        (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, r, dq, 1);
     } else {
-        forward_spatial(m, d, r, dq, 1);
+        forward_plan(m, d, r, dq, 1);
     }
 }
 
@@ -359,11 +491,9 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         f = fm;
     }
     if (gdca_forward_order_seq(m, d)) {
-        gdca_forward_seq(m, d, f, qacc, 0);
-    } else if (m->form == CTC_FORM_PLANAR) {
-        forward_planar(m, d, f, qacc, 0);
+        (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, f, qacc, 0);
     } else {
-        forward_spatial(m, d, f, qacc, 0);
+        forward_plan(m, d, f, qacc, 0);
     }
 
     /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r,

@@ -8,8 +8,8 @@
  * assembly B_{k-1} of the ground and bodies 0..k-1 to body k at joint k, for k = 0 up to r - 1
  * (B_k = B_{k-1} : k, B_{-1} = the ground); the root joins B_{r-1} to S_r at joint r. Both runs
  * join consecutive bodies, so they hold while every body k's parent is k - 1 (model.h
- * body_parent: a chain, the one topology ctc_model_build accepts), which each assembly asserts.
- * Every S_i
+ * body_parent: a chain; gdca_forward_order_seq takes this order on chains only), which each
+ * assembly asserts. Every S_i
  * holds the free tip (its F2 = 0) and every B_k the ground (joint 0 included, no handle 1), so of
  * their handle equations (data.h) only
  *     S_i:  A1 = h11 F1 + h13,        B_k:  A2 = h22 F2 + h23

@@ -9,8 +9,9 @@
  * the free end, so only its handle-1 equations are ever formed (gdca_forward_seq.c), and the
  * same from the grounded base. An open chain's forward pass takes it unless the pass is to split
  * over threads (gdca_forward_order_seq: two threads or more and a measured length); loop models,
- * whose root solves the loop's boundary equations together (gdca_loop.h), always take the
- * tree.
+ * whose root solves the loop's boundary equations together (gdca_loop.h), always take the tree.
+ * A branched tree's sequential order is the tip run along every heavy path, its light subtrees
+ * raked into their parents as they are met (gdca_forward_tseq.c).
  */
 #ifndef CTC_GDCA_FORWARD_SEQ_H
 #define CTC_GDCA_FORWARD_SEQ_H
@@ -28,5 +29,13 @@ int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d);
  * records (S_i: h11, h13 and K in the h22 slot; B_k: h22, h23 and K in the h11 slot) and
  * d->tload. qacc may not alias f. */
 void gdca_forward_seq(const ctc_model *m, ctc_data *d, const double *f, double *qacc, int correct);
+
+/* The same on a branched tree (model.h chain = 0; gdca_forward_tseq.c): each heavy path in the
+ * tip run, its light subtrees raked in as they are met. Serial. Fills d->jnt_load (correct: adds
+ * to it), d->singular_joint (the lowest singular joint), d->fwd_E, d->fwd_z, d->rake, the forward
+ * records (2n slots: S_k's h11, h13 and its heavy joint's K at slot k, the raked R_k at n + k) and
+ * d->tload. qacc may not alias f. */
+void gdca_forward_seq_tree(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
+                           int correct);
 
 #endif

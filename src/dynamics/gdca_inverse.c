@@ -26,6 +26,14 @@
  * A body's record: I = T(rho)^T M_c T(rho), w = T(rho)^T (M_c kappa - b), rho = c_m - handle 1,
  * kappa = (0; w x (w x rho)), b = (-w x I_c w; m g), c = (0; w x (w x r12)).
  *
+ * On a branched tree (model.c, "the plan of a branched tree") a light child c of body k, its
+ * subtree's record (I^S, w^S) assembled with its tip free, moves with A1^S = T(r) A1(k) + e,
+ * r = c - handle 1 of k, e = (0; w x (w x r)) + P u + beta, and loads k at c with
+ * F = I^S A1^S + w^S, so the RAKE node's record is k's with
+ *     I += T(r)^T I^S T(r),   w += T(r)^T (I^S e + w^S)
+ * (c and r12 are k's own), summed over k's light children through SUM nodes; the disassembly
+ * hands A1(k) down and recovers F and the driving force P^T F of each light child's joint.
+ *
  * The body records, and the nodes of one tree height, are independent: a body writes its own
  * record; a node's assembly its own record and its joint's offset e; its disassembly its joint's
  * load and driving force and its two children's (A1, F2). gdca_par.c may therefore split them
@@ -199,15 +207,124 @@ static inline void inverse_bodies(const inverse_args *a, int lo, int hi, const i
     for (int k = lo; k < hi; k++) body_record(a->m, a->d, k, record(a->d, k), dim);
 }
 
+/* r = joint c's centre - body k's handle 1 and e = (0; w x (w x r)) + P u + beta of joint c: a
+   light child's subtree moves with A1 = T(r) A1(k) + e (model.c, "the plan of a branched tree") */
+static inline void inverse_light_offset(const inverse_args *a, int k, int c, double r[3], double *e,
+                                        const int dim)
+{
+    const ctc_model *m = a->m;
+    const ctc_data *d = a->d;
+    const double *w = d->omega + 3 * k, *P = d->jnt_P + 3 * dim * c, *beta = d->jnt_beta + dim * c;
+    const double *uc = a->u + m->jnt_vadr[c];
+    ctc_v3_sub(r, d->xpos + 3 * c, d->xpos + 3 * k);
+    if (dim == 3) {
+        const double w2 = w[2] * w[2];
+        r[2] = 0;
+        e[0] = 0, e[1] = -w2 * r[0], e[2] = -w2 * r[1];
+    } else {
+        double wr[3];
+        ctc_v3_cross(wr, w, r);
+        ctc_v3_set(e, 0, 0, 0);
+        ctc_v3_cross(e + 3, w, wr);
+    }
+    for (int i = 0; i < dim; i++) e[i] += beta[i];
+    for (int col = 0; col < m->jnt_nv[c]; col++) {
+        for (int i = 0; i < dim; i++) e[i] += P[col * dim + i] * uc[col];
+    }
+}
+
+/* the terms of operand x of a SUM or RAKE node of body k, added to in (unless keep) and w (add
+   = 0: written): a light child c's (c >= 0) T(r)^T I^S T(r) and T(r)^T (I^S e + w^S), keeping e
+   in icomp_e, or a SUM node's partial sums */
+static inline void inverse_operand(const inverse_args *a, int k, int x, int c, double *in,
+                                   double *w, int add, const int dim)
+{
+    ctc_data *d = a->d;
+    const double *S = record(d, x);
+    double ts[CTC_DENSE_MAX * CTC_DENSE_MAX], tw[CTC_DENSE_MAX];
+    const double *ps = S + CI(dim), *pw = S + CW(dim);
+    if (c >= 0) {
+        double r[3], ie[CTC_DENSE_MAX], *e = d->icomp_e + dim * c;
+        inverse_light_offset(a, k, c, r, e, dim);
+        if (!a->keep) congruence(dim, r, S + CI(dim), ts);
+        gdca_tmulv(dim, S + CI(dim), e, ie);
+        for (int i = 0; i < dim; i++) ie[i] += S[CW(dim) + i];
+        ctc_transfer_force(dim, r, ie, tw);
+        ps = ts, pw = tw;
+    }
+    for (int i = 0; !a->keep && i < dim * dim; i++) in[i] = add ? in[i] + ps[i] : ps[i];
+    for (int i = 0; i < dim; i++) w[i] = add ? w[i] + pw[i] : pw[i];
+}
+
+/* a SUM node's partial sums, or a RAKE node's record: body k's with its light children's
+   composite inertias and biases added (c and r12 are k's own) */
+static inline void inverse_rake_node(const inverse_args *a, const ctc_tree_node *node, double *N,
+                                     const int dim)
+{
+    const ctc_data *d = a->d;
+    const int k = node->body;
+    if (node->kind == CTC_NODE_SUM) {
+        inverse_operand(a, k, node->left, node->ljoint, N + CI(dim), N + CW(dim), 0, dim);
+        inverse_operand(a, k, node->right, node->rjoint, N + CI(dim), N + CW(dim), 1, dim);
+        return;
+    }
+    const double *B = record(d, k);
+    if (!a->keep) {
+        for (int i = 0; i < dim * dim; i++) N[CI(dim) + i] = B[CI(dim) + i];
+        for (int i = 0; i < 3; i++) N[CR(dim) + i] = B[CR(dim) + i];
+    }
+    for (int i = 0; i < dim; i++) {
+        N[CW(dim) + i] = B[CW(dim) + i];
+        N[CC(dim) + i] = B[CC(dim) + i];
+    }
+    inverse_operand(a, k, node->left, node->ljoint, N + CI(dim), N + CW(dim), 1, dim);
+}
+
+/* a SUM or RAKE node's disassembly: body k's A1 handed to each operand; a light child's subtree
+   gets A1 = T(r) A1(k) + e and F2 = 0, its joint the load F = I^S A1 + w^S */
+static inline void inverse_rake_down(const inverse_args *a, int i, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const ctc_tree_node *node = &m->tree[i];
+    const double *a1 = d->tload + (size_t)(m->nbodies + i) * 2 * dim;
+    const int ops = node->kind == CTC_NODE_SUM ? 2 : 1;
+    for (int o = 0; o < ops; o++) {
+        const int sub = o ? node->right : node->left, c = o ? node->rjoint : node->ljoint;
+        double *t = d->tload + (size_t)sub * 2 * dim;
+        if (c < 0) {
+            for (int r = 0; r < dim; r++) t[r] = a1[r];
+            continue;
+        }
+        const double *S = record(d, sub), *e = d->icomp_e + dim * c;
+        double r3[3], *load = d->jnt_load_inv + dim * c;
+        ctc_v3_sub(r3, d->xpos + 3 * c, d->xpos + 3 * node->body);
+        if (dim == 3) r3[2] = 0;
+        ctc_transfer_motion(dim, r3, a1, t);
+        for (int r = 0; r < dim; r++) t[r] += e[r];
+        gdca_tmulv(dim, S + CI(dim), t, load);
+        for (int r = 0; r < dim; r++) {
+            load[r] += S[CW(dim) + r];
+            t[dim + r] = 0;
+        }
+        inverse_drive(m, d, c, a->f, dim);
+    }
+}
+
 /* assembly of tree nodes lo..hi-1, children before parents; nothing is inverted, so no joint
    is singular: returns -1 */
-static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const int dim)
+static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const int dim,
+                                   const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
     const int n = m->nbodies;
     for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
+        if (tree && node->kind != CTC_NODE_JOIN) {
+            inverse_rake_node(a, node, record(d, n + i), dim);
+            continue;
+        }
         const double *L = record(d, node->left), *R = record(d, node->right);
         double *N = record(d, n + i), *e = d->icomp_e + dim * node->joint;
         const double *P = d->jnt_P + 3 * dim * node->joint, *beta = d->jnt_beta + dim * node->joint;
@@ -239,32 +356,50 @@ static inline int inverse_assemble(const inverse_args *a, int lo, int hi, const 
     return -1;
 }
 
-/* root: A1 = P u + beta of the ground joint, F1 = I A1 + w (free end: F2 = 0) */
-static inline void inverse_root(const inverse_args *a, const int dim)
+/* the root of ground child j's subtree, assembled at x: A1 = P u + beta of joint j,
+   F1 = I A1 + w (free end: F2 = 0) */
+static inline void inverse_root_joint(const inverse_args *a, int j, int x, const int dim)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
-    const double *root = record(d, m->root), *u = a->u;
-    double *tl = d->tload + (size_t)m->root * 2 * dim, *load0 = d->jnt_load_inv;
-    for (int r = 0; r < dim; r++) tl[r] = d->jnt_beta[r];
-    for (int col = 0; col < m->jnt_nv[0]; col++) {
-        for (int r = 0; r < dim; r++) tl[r] += d->jnt_P[col * dim + r] * u[col];
+    const double *root = record(d, x), *P = d->jnt_P + 3 * dim * j, *u = a->u + m->jnt_vadr[j];
+    double *tl = d->tload + (size_t)x * 2 * dim, *load = d->jnt_load_inv + dim * j;
+    for (int r = 0; r < dim; r++) tl[r] = d->jnt_beta[dim * j + r];
+    for (int col = 0; col < m->jnt_nv[j]; col++) {
+        for (int r = 0; r < dim; r++) tl[r] += P[col * dim + r] * u[col];
     }
     for (int r = 0; r < dim; r++) tl[dim + r] = 0;
-    gdca_tmulv(dim, root + CI(dim), tl, load0);
-    for (int r = 0; r < dim; r++) load0[r] += root[CW(dim) + r];
-    inverse_drive(m, d, 0, a->f, dim);
+    gdca_tmulv(dim, root + CI(dim), tl, load);
+    for (int r = 0; r < dim; r++) load[r] += root[CW(dim) + r];
+    inverse_drive(m, d, j, a->f, dim);
+}
+
+/* the root: a chain's ground joint 0, or each ground child's of a tree */
+static inline void inverse_root(const inverse_args *a, const int dim)
+{
+    const ctc_model *m = a->m;
+    if (m->chain) {
+        inverse_root_joint(a, 0, m->root, dim);
+        return;
+    }
+    for (int i = 0; i < m->nroots; i++)
+        inverse_root_joint(a, m->root_joint[i], m->root_asm[i], dim);
 }
 
 /* disassembly of tree nodes hi-1 down to lo, parents before children:
    F = I^R A1^R + w^R - T(r12^R)^T F2, and the joint's driving force f = P^T F */
-static inline void inverse_disassemble(const inverse_args *a, int lo, int hi, const int dim)
+static inline void inverse_disassemble(const inverse_args *a, int lo, int hi, const int dim,
+                                       const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
     const int n = m->nbodies;
     for (int i = hi - 1; i >= lo; i--) {
         const ctc_tree_node *node = &m->tree[i];
+        if (tree && node->kind != CTC_NODE_JOIN) {
+            inverse_rake_down(a, i, dim);
+            continue;
+        }
         const double *L = record(d, node->left), *R = record(d, node->right);
         const double *a1 = d->tload + (size_t)(n + i) * 2 * dim, *f2 = a1 + dim;
         double *tlL = d->tload + (size_t)node->left * 2 * dim;
@@ -299,12 +434,22 @@ static CTC_SPECIALISE void bodies_spatial(void *a, int lo, int hi)
 
 static CTC_SPECIALISE int assemble_planar(void *a, int lo, int hi)
 {
-    return inverse_assemble(a, lo, hi, 3);
+    return inverse_assemble(a, lo, hi, 3, 0);
 }
 
 static CTC_SPECIALISE int assemble_spatial(void *a, int lo, int hi)
 {
-    return inverse_assemble(a, lo, hi, 6);
+    return inverse_assemble(a, lo, hi, 6, 0);
+}
+
+static CTC_SPECIALISE int assemble_planar_tree(void *a, int lo, int hi)
+{
+    return inverse_assemble(a, lo, hi, 3, 1);
+}
+
+static CTC_SPECIALISE int assemble_spatial_tree(void *a, int lo, int hi)
+{
+    return inverse_assemble(a, lo, hi, 6, 1);
 }
 
 static CTC_SPECIALISE void root_planar(void *a)
@@ -319,12 +464,22 @@ static CTC_SPECIALISE void root_spatial(void *a)
 
 static CTC_SPECIALISE void disassemble_planar(void *a, int lo, int hi)
 {
-    inverse_disassemble(a, lo, hi, 3);
+    inverse_disassemble(a, lo, hi, 3, 0);
 }
 
 static CTC_SPECIALISE void disassemble_spatial(void *a, int lo, int hi)
 {
-    inverse_disassemble(a, lo, hi, 6);
+    inverse_disassemble(a, lo, hi, 6, 0);
+}
+
+static CTC_SPECIALISE void disassemble_planar_tree(void *a, int lo, int hi)
+{
+    inverse_disassemble(a, lo, hi, 3, 1);
+}
+
+static CTC_SPECIALISE void disassemble_spatial_tree(void *a, int lo, int hi)
+{
+    inverse_disassemble(a, lo, hi, 6, 1);
 }
 
 /* body records, assembly and disassembly, serial or a tree height at a time (gdca_par.h) */
@@ -333,9 +488,9 @@ static void inverse_planar(const ctc_model *m, ctc_data *d, const double *u, dou
     inverse_args a = {m, d, u, f, keep};
     gdca_par_pass pass = {.ctx = &a,
                           .bodies = keep ? NULL : bodies_planar,
-                          .assemble = assemble_planar,
+                          .assemble = m->chain ? assemble_planar : assemble_planar_tree,
                           .root = root_planar,
-                          .disassemble = disassemble_planar,
+                          .disassemble = m->chain ? disassemble_planar : disassemble_planar_tree,
                           .grain = INVERSE_GRAIN_PLANAR,
                           .min_bodies = INVERSE_MIN_BODIES_PLANAR};
     gdca_par_run(m, d, &pass);
@@ -346,9 +501,9 @@ static void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u, do
     inverse_args a = {m, d, u, f, keep};
     gdca_par_pass pass = {.ctx = &a,
                           .bodies = keep ? NULL : bodies_spatial,
-                          .assemble = assemble_spatial,
+                          .assemble = m->chain ? assemble_spatial : assemble_spatial_tree,
                           .root = root_spatial,
-                          .disassemble = disassemble_spatial,
+                          .disassemble = m->chain ? disassemble_spatial : disassemble_spatial_tree,
                           .grain = INVERSE_GRAIN_SPATIAL,
                           .min_bodies = INVERSE_MIN_BODIES_SPATIAL};
     gdca_par_run(m, d, &pass);

@@ -39,6 +39,7 @@
 
 #include "gdca_loop.h"
 #include "gdca_par.h"
+#include "gdca_rake.h"
 #include "gdca_tree.h"
 
 /* the factor's column count of joint j: dim across an independent joint, dim - nv otherwise */
@@ -132,9 +133,97 @@ typedef struct mobility_args {
     double *f;
 } mobility_args;
 
+/* the terms of operand x of a SUM or RAKE node of body k (gdca_rake.h), added to s and b (add =
+   0: written): a light child c's (c >= 0; its joint solved as a root's, X = K^-1), or a SUM
+   node's partial sums; returns as inverse_joint */
+static inline int mobility_operand(const mobility_args *a, int k, int x, int c, double *s,
+                                   double *b, int add, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    double ts[CTC_DENSE_MAX * CTC_DENSE_MAX], tb[CTC_DENSE_MAX];
+    const double *ps = ts, *pb = tb;
+    int st = 0;
+    if (c >= 0) {
+        double r[3], kappa[CTC_DENSE_MAX];
+        st = inverse_joint(m, d, c, NULL, ctc_data_handles(m, d, x, 1), a->u, dim);
+        gdca_rake_point(d, k, c, dim, r, kappa);
+        gdca_rake_light(dim, -1, inverse_nc(m, c, dim), d->inv_E + dim * dim * c, r, kappa,
+                        d->inv_z + dim * c, ts, tb);
+    } else {
+        const double *rec = ctc_data_handles(m, d, x, 1);
+        ps = rec + H11(dim), pb = rec + H13(dim);
+    }
+    for (int i = 0; i < dim * dim; i++) s[i] = add ? s[i] + ps[i] : ps[i];
+    for (int i = 0; i < dim; i++) b[i] = add ? b[i] + pb[i] : pb[i];
+    return st;
+}
+
+/* a SUM node's partial sums, or a RAKE node's pseudo-body record (gdca_rake.h) */
+static inline int mobility_rake_node(const mobility_args *a, const ctc_tree_node *node, double *out,
+                                     const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const int k = node->body;
+    if (node->kind == CTC_NODE_SUM) {
+        int st = mobility_operand(a, k, node->left, node->ljoint, out + H11(dim), out + H13(dim), 0,
+                                  dim);
+        return st | mobility_operand(a, k, node->right, node->rjoint, out + H11(dim),
+                                     out + H13(dim), 1, dim);
+    }
+    double mm[CTC_DENSE_MAX * CTC_DENSE_MAX], b[CTC_DENSE_MAX], sb[CTC_DENSE_MAX];
+    double s[CTC_DENSE_MAX * CTC_DENSE_MAX], k1[CTC_DENSE_MAX], k2[CTC_DENSE_MAX];
+    int st = mobility_operand(a, k, node->left, node->ljoint, s, sb, 0, dim);
+    gdca_rake_body(m, d, k, dim, mm, b);
+    for (int i = 0; i < dim * dim; i++) mm[i] += s[i];
+    for (int i = 0; i < dim; i++) b[i] -= sb[i];
+    gdca_rake_kappa(d, k, dim, d->hr + 6 * k, k1);
+    gdca_rake_kappa(d, k, dim, d->hr + 6 * k + 3, k2);
+    return st | gdca_rake_record(dim, mm, b, d->hr + 6 * k, d->hr + 6 * k + 3, k1, k2,
+                                 gdca_rake_slot(d, k, dim), out, 1);
+}
+
+/* a SUM or RAKE node's disassembly: body k's motion X handed to each operand; a light child's
+   joint gets its load F_c = X A_c + z and driving force, its subtree the loads (F_c, 0) */
+static inline void mobility_rake_down(const mobility_args *a, int i, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const ctc_tree_node *node = &m->tree[i];
+    const int k = node->body;
+    const double *tl = d->tload + (size_t)(m->nbodies + i) * 2 * dim;
+    double x[CTC_DENSE_MAX];
+    if (node->kind == CTC_NODE_RAKE) {
+        gdca_rake_motion(dim, gdca_rake_slot(d, k, dim), d->hr + 6 * k, d->hr + 6 * k + 3, tl,
+                         tl + dim, x);
+    } else {
+        for (int r = 0; r < dim; r++) x[r] = tl[r];
+    }
+    const int ops = node->kind == CTC_NODE_SUM ? 2 : 1;
+    for (int o = 0; o < ops; o++) {
+        const int sub = o ? node->right : node->left, c = o ? node->rjoint : node->ljoint;
+        double *t = d->tload + (size_t)sub * 2 * dim;
+        if (c < 0) {
+            for (int r = 0; r < dim; r++) t[r] = x[r];
+            continue;
+        }
+        double r3[3], kappa[CTC_DENSE_MAX], ac[CTC_DENSE_MAX], *fc = d->jnt_load_inv + dim * c;
+        gdca_rake_point(d, k, c, dim, r3, kappa);
+        gdca_rake_child_load(dim, -1, inverse_nc(m, c, dim), d->inv_E + dim * dim * c,
+                             d->inv_z + dim * c, r3, kappa, x, ac, fc);
+        for (int r = 0; r < dim; r++) {
+            t[r] = fc[r];
+            t[dim + r] = 0;
+        }
+        inverse_drive(m, d, c, fc, a->f, dim);
+    }
+}
+
 /* assembly of tree nodes lo..hi-1, children before parents; returns the first node whose joint
    is singular, or -1 */
-static inline int mobility_assemble(const mobility_args *a, int lo, int hi, const int dim)
+static inline int mobility_assemble(const mobility_args *a, int lo, int hi, const int dim,
+                                    const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
@@ -142,6 +231,12 @@ static inline int mobility_assemble(const mobility_args *a, int lo, int hi, cons
     int first = -1;
     for (int i = lo; i < hi; i++) {
         const ctc_tree_node *node = &m->tree[i];
+        if (tree && node->kind != CTC_NODE_JOIN) {
+            if (mobility_rake_node(a, node, d->hinv + (size_t)i * hs, dim) != 0 && first < 0) {
+                first = i;
+            }
+            continue;
+        }
         const double *left = ctc_data_handles(m, d, node->left, 1);
         const double *right = ctc_data_handles(m, d, node->right, 1);
         int j = node->joint;
@@ -152,13 +247,31 @@ static inline int mobility_assemble(const mobility_args *a, int lo, int hi, cons
     return first;
 }
 
+/* ground child j's joint to its subtree, assembled at x, whose free end carries F2 = 0 */
+static inline void mobility_root_joint(const mobility_args *a, int j, int x, const int dim)
+{
+    const ctc_model *m = a->m;
+    ctc_data *d = a->d;
+    const double *root = ctc_data_handles(m, d, x, 1);
+    double *t = d->tload + (size_t)x * 2 * dim;
+    if (inverse_joint(m, d, j, NULL, root, a->u, dim) != 0 && d->singular_joint < 0) {
+        d->singular_joint = j;
+    }
+    for (int r = 0; r < dim; r++) {
+        t[r] = d->inv_z[dim * j + r];
+        t[dim + r] = 0;
+        d->jnt_load_inv[dim * j + r] = t[r];
+    }
+    inverse_drive(m, d, j, t, a->f, dim);
+}
+
 /* the root: a loop model's, or the ground joint 0 with the free end's load F2 = 0 */
 static inline void mobility_root(const mobility_args *a, const int dim)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
     const int n = m->nbodies;
-    double *tl = d->tload + (size_t)m->root * 2 * dim, *f = a->f;
+    double *f = a->f;
     if (m->has_loop) {
         inverse_loop_root(m, d, a->u, dim);
         for (int j = 0; j < m->nvx; j++) f[j] = 0; /* dependent coordinates */
@@ -169,21 +282,18 @@ static inline void mobility_root(const mobility_args *a, const int dim)
         }
         return;
     }
-    const double *root = ctc_data_handles(m, d, m->root, 1);
-    if (inverse_joint(m, d, 0, NULL, root, a->u, dim) != 0 && d->singular_joint < 0) {
-        d->singular_joint = 0;
+    if (m->chain) {
+        mobility_root_joint(a, 0, m->root, dim);
+        return;
     }
-    for (int i = 0; i < dim; i++) {
-        tl[i] = d->inv_z[i];
-        tl[dim + i] = 0;
-        d->jnt_load_inv[i] = tl[i];
-    }
-    inverse_drive(m, d, 0, tl, f, dim);
+    for (int i = 0; i < m->nroots; i++)
+        mobility_root_joint(a, m->root_joint[i], m->root_asm[i], dim);
 }
 
 /* disassembly of tree nodes hi-1 down to lo, parents before children; a loop model's stops
    where no independent joint is left below (Fig. 4) */
-static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, const int dim)
+static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, const int dim,
+                                        const int tree)
 {
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
@@ -192,6 +302,10 @@ static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, 
     for (int i = hi - 1; i >= lo; i--) {
         if (prune && !m->inv_need[i]) continue;
         const ctc_tree_node *node = &m->tree[i];
+        if (tree && node->kind != CTC_NODE_JOIN) {
+            mobility_rake_down(a, i, dim);
+            continue;
+        }
         const double *left = ctc_data_handles(m, d, node->left, 1);
         const double *right = ctc_data_handles(m, d, node->right, 1);
         const double *f1 = d->tload + (size_t)(n + i) * 2 * dim, *f2 = f1 + dim;
@@ -207,12 +321,22 @@ static inline void mobility_disassemble(const mobility_args *a, int lo, int hi, 
 /* the stages specialised to the planar and the spatial form */
 static CTC_SPECIALISE int assemble_planar(void *a, int lo, int hi)
 {
-    return mobility_assemble(a, lo, hi, 3);
+    return mobility_assemble(a, lo, hi, 3, 0);
+}
+
+static CTC_SPECIALISE int assemble_planar_tree(void *a, int lo, int hi)
+{
+    return mobility_assemble(a, lo, hi, 3, 1);
 }
 
 static CTC_SPECIALISE int assemble_spatial(void *a, int lo, int hi)
 {
-    return mobility_assemble(a, lo, hi, 6);
+    return mobility_assemble(a, lo, hi, 6, 0);
+}
+
+static CTC_SPECIALISE int assemble_spatial_tree(void *a, int lo, int hi)
+{
+    return mobility_assemble(a, lo, hi, 6, 1);
 }
 
 static CTC_SPECIALISE void root_planar(void *a)
@@ -227,12 +351,22 @@ static CTC_SPECIALISE void root_spatial(void *a)
 
 static CTC_SPECIALISE void disassemble_planar(void *a, int lo, int hi)
 {
-    mobility_disassemble(a, lo, hi, 3);
+    mobility_disassemble(a, lo, hi, 3, 0);
+}
+
+static CTC_SPECIALISE void disassemble_planar_tree(void *a, int lo, int hi)
+{
+    mobility_disassemble(a, lo, hi, 3, 1);
 }
 
 static CTC_SPECIALISE void disassemble_spatial(void *a, int lo, int hi)
 {
-    mobility_disassemble(a, lo, hi, 6);
+    mobility_disassemble(a, lo, hi, 6, 0);
+}
+
+static CTC_SPECIALISE void disassemble_spatial_tree(void *a, int lo, int hi)
+{
+    mobility_disassemble(a, lo, hi, 6, 1);
 }
 
 void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u, double *f)
@@ -241,9 +375,11 @@ void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u,
     const int planar = m->form == CTC_FORM_PLANAR;
     gdca_par_pass pass = {
         .ctx = &a,
-        .assemble = planar ? assemble_planar : assemble_spatial,
+        .assemble = planar ? (m->chain ? assemble_planar : assemble_planar_tree)
+                           : (m->chain ? assemble_spatial : assemble_spatial_tree),
         .root = planar ? root_planar : root_spatial,
-        .disassemble = planar ? disassemble_planar : disassemble_spatial,
+        .disassemble = planar ? (m->chain ? disassemble_planar : disassemble_planar_tree)
+                              : (m->chain ? disassemble_spatial : disassemble_spatial_tree),
         .grain = planar ? MOBILITY_GRAIN_PLANAR : MOBILITY_GRAIN_SPATIAL,
         .root_takes_top = 1,
         .min_bodies = planar ? MOBILITY_MIN_BODIES_PLANAR : MOBILITY_MIN_BODIES_SPATIAL,

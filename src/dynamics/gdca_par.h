@@ -1,6 +1,7 @@
 /*
  * gdca_par.h - one GDCA pass over the model's assembly tree (balanced; for a loop closed on a body,
- * the root splits at the loop's first joint: model.h loop_first), one tree height at a time, with
+ * the root splits at the loop's first joint: model.h loop_first; a branched tree's plan of JOIN,
+ * SUM and RAKE nodes, model.c), one tree height at a time, with
  * the nodes of a height split over the threads of the data's pool (internal to the library; used by
  * gdca_forward.c, gdca_inverse.c and gdca_inverse_mobility.c).
  *

@@ -9,8 +9,6 @@
  */
 #include "handles.h"
 
-#include <assert.h>
-
 #include "spatial.h"
 
 static void planar_block(double *h, const double ri[2], const double rj[2], double ij, double im)
@@ -26,13 +24,12 @@ static void planar_block(double *h, const double ri[2], const double rj[2], doub
     h[8] = ri[0] * rj[0] * ij + im;
 }
 
-/* Body k's handle 2: its child's joint centre (its only child: a body of a chain has at most
- * one, and two handles), else the closing joint's centre on the tip of a loop model, else the
- * centre of mass c, where no load acts. */
+/* Body k's handle 2: its heavy child's joint centre (model.h body_heavy; a chain's one child;
+ * the light children are raked into a tree's body by the passes, gdca_rake.h), else the closing
+ * joint's centre on the tip of a loop model, else the centre of mass c, where no load acts. */
 static inline const double *handle2(const ctc_model *m, const ctc_data *d, int k, const double *c)
 {
-    const int child = m->body_child[k];
-    assert(child < 0 || m->body_sibling[child] < 0);
+    const int child = m->body_heavy[k];
     return child >= 0                           ? d->xpos + 3 * child
            : m->has_loop && k == m->nbodies - 1 ? d->loop_pt /* the closing joint's parent */
                                                 : c;

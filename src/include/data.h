@@ -70,8 +70,9 @@ typedef struct ctc_data {
     double *hbody; /* (n x hsize) */
 
     /* GDCA tree records and joint solutions */
-    double *hfwd;        /* (ntree x hsize) forward assemblies; in the sequential order slot i
-                            holds S_i or B_i and their joint's K (gdca_forward_seq.c) */
+    double *hfwd;        /* (ntree x hsize; 2n x hsize for a branched tree) forward assemblies;
+                            in the sequential order slot i holds S_i or B_i and their joint's K
+                            (gdca_forward_seq.c, gdca_forward_tseq.c) */
     double *hinv;        /* (ntree x hsize) inverse assemblies of the mobility form */
     double *fwd_E;       /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
     double *fwd_z;       /* (n x dim)   joint k: W Y + P f */
@@ -83,6 +84,8 @@ typedef struct ctc_data {
     double *icomp;   /* ((2n - 1) x csize) inverse assemblies in composite form (gdca_inverse.c):
                         I (dim x dim), w (dim), c (dim), r12 (3) */
     double *icomp_e; /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */
+    double *rake;    /* (n x (dim^2 + dim)) a branched tree's raked bodies: M'^-1 and x0 of the
+                        pseudo-body (gdca_rake.h), at the body's index */
     double *tload;   /* ((2n - 1) x 2 dim) per assembly during a disassembly: F1 and F2
                         (forward, mobility inverse) or A1 and F2 (composite inverse); the
                         sequential forward order keeps each joint's load at [dim k] */
@@ -126,11 +129,11 @@ void ctc_data_free(ctc_data *d);
  * (pool.h). Heights too small to pay for the split still run on the calling thread (gdca_par.h).
  * The nthreads - 1 workers start at the first pass that uses them and belong to d: they stop when
  * d is freed or its count changes, so no two data share them unless ctc_data_share_pool says so.
- * The results are bitwise the same for every count, with one exception: an open chain's forward
- * pass takes the sequential order on one thread and, from a measured length on (planar 4096,
- * spatial 1024 bodies), the balanced tree on two threads or more (gdca_forward_seq.h,
- * opt.fwd_order), so at those lengths one thread and several agree to rounding, and any two counts
- * of two or more bitwise. Returns CTC_OK, or CTC_EINVAL with a message
+ * The results are bitwise the same for every count, with one exception: an open chain's (or
+ * tree's) forward pass takes the sequential order on one thread and, from a measured length on
+ * (planar 4096, spatial 1024 bodies; chains' figures, used for trees too), the balanced tree (the
+ * plan) on two threads or more (gdca_forward_seq.h, opt.fwd_order), so at those lengths one thread
+ * and several agree to rounding, and any two counts of two or more bitwise. Returns CTC_OK, or CTC_EINVAL with a message
  * in err (errlen bytes; may be NULL) when nthreads is out of range. */
 ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t errlen);
 

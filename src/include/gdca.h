@@ -2,14 +2,16 @@
  * gdca.h - forward dynamics by the Generalized Divide-and-Conquer Algorithm and inverse dynamics
  * for computed torque control by the inverse GDCA (paper sections 3-4, DESIGN.md section 4).
  *
- * Both work on a binary assembly tree of the bodies without forming the mass matrix: an assembly
+ * Both work on a binary assembly tree of the bodies without forming the mass matrix (on a branched
+ * kinematic tree, the plan of model.c: each heavy path assembled as a chain, each light subtree
+ * raked into its parent as an articulated body, gdca_rake.h): an assembly
  * pass from the leaves to the root eliminates the load at each joint, the ground and free-end
  * boundary conditions are solved at the root, and a disassembly pass from the root to the leaves
  * recovers every joint load. Work is O(n). On the balanced tree (model.h) the nodes of one tree
- * height are independent (O(log n) depth with O(n) processors). An open chain's forward pass
- * takes the sequential order instead unless it is to split over threads (gdca_forward_order_seq):
- * single bodies joined from the free tip and from the grounded base, about half the arithmetic
- * (gdca_forward_seq.h).
+ * height are independent (O(log n) depth with O(n) processors). An open chain's (or tree's)
+ * forward pass takes the sequential order instead unless it is to split over threads
+ * (gdca_forward_order_seq): single bodies joined from the free tip and from the grounded base,
+ * about half the arithmetic (gdca_forward_seq.h; a tree's paths from their tips only).
  *
  * Call order for one state: ctc_kinematics(m, d, q, v), ctc_handles(m, d), then any number of
  * ctc_gdca_inverse and ctc_gdca_forward calls, which share the body-level records (Eq. 42-43).

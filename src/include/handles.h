@@ -3,7 +3,8 @@
  *
  * For body k with mass m, centre of mass c, inertia I_c and inverse I_c^-1 (world frame),
  * angular velocity w, handle i at r_i = handle - c (handle 1 = joint k, handle 2 = the joint of
- * its child, m->body_child[k], which is k+1 in a chain, the one topology with two handles a body;
+ * its heavy child, m->body_heavy[k], which is k+1 in a chain; a tree's light children are raked in
+ * by the passes, gdca_rake.h;
  * a body without a child has its handle 2 at its centre of mass, where no load acts, or in a loop
  * model the tip has it at the closing joint's centre on it, d->loop_pt):
  *

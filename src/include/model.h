@@ -1,14 +1,15 @@
 /*
- * model.h - rigid bodies, joints and a serial chain on a fixed base: the constant model.
+ * model.h - rigid bodies, joints and a kinematic tree on a fixed base: the constant model.
  *
  * A model is built once from a ctc_chain_spec, validated, and is read-only afterwards, so any
  * number of threads may share it. Everything that changes with the state lives in ctc_data
  * (data.h).
  *
  * Conventions (SI units, radians; see DESIGN.md section 2):
- *  - Bodies are numbered 0..n-1 from the base; joint k connects body k's parent, body_parent[k]
- *    (the topology arrays of ctc_model; in a chain body k-1, the ground for k = 0), to body k.
- *    Body k's handle 1 is its inboard joint k, handle 2 its outboard joint, its child's (k+1).
+ *  - Bodies are numbered 0..n-1 from the base, each after its parent; joint k connects body k's
+ *    parent, body_parent[k] (ctc_chain_spec.parent; in a chain body k-1, the ground for k = 0),
+ *    to body k. Body k's handle 1 is its inboard joint k, handle 2 its heavy child's joint (in a
+ *    chain its child's, k+1; model.h body_heavy).
  *  - Each body has a frame. Its origin is the centre of joint k and, when all joint coordinates
  *    are zero, its axes are parallel to its parent's, hence to the world's. A joint's axis and
  *    location are given in the parent's frame (the world's for joint 0); a body's centre of mass
@@ -170,6 +171,8 @@ typedef struct ctc_chain_spec {
     int nbodies;                      /* n >= 1 (>= 2 with a loop) */
     const ctc_body_spec *bodies;      /* (n) */
     const ctc_joint_spec *joints;     /* (n) joint k joins body k-1 (ground for k = 0) to body k */
+    const int *parent;                /* (n) body k's parent: -1 the ground, else a body < k.
+                                         NULL: a chain (parent k - 1) */
     double gravity[3];                /* m/s^2, world frame (e.g. 0, -9.81, 0) */
     ctc_form form;                    /* AUTO (recommended), or force PLANAR / SPATIAL */
     const ctc_loop_spec *loop;        /* NULL: an open chain */
@@ -179,15 +182,28 @@ typedef struct ctc_chain_spec {
                                          NULL: every joint independent (open chains) */
 } ctc_chain_spec;
 
-/* One internal node of the balanced binary assembly tree. An "assembly index" a < n names body a
- * (a leaf); a >= n names internal node a - n. */
+/* The kinds of node of the assembly plan (model.c, "the plan of a branched tree"). */
+typedef enum ctc_node_kind {
+    CTC_NODE_JOIN = 0, /* left:right, joined at `joint` (the two-handle GDCA assembly) */
+    CTC_NODE_SUM,      /* a partial sum of body `body`'s light children's articulated terms */
+    CTC_NODE_RAKE,     /* body `body` with all its light children raked in: a pseudo-body */
+} ctc_node_kind;
+
+/* One internal node of the assembly plan. An "assembly index" a < n names body a (a leaf);
+ * a >= n names internal node a - n. A chain's plan is the balanced binary tree of JOIN nodes. */
 typedef struct ctc_tree_node {
-    int left;  /* assembly index of the left (inboard) part */
-    int right; /* assembly index of the right (outboard) part */
-    int joint; /* the joint that joins them: the first body of the right part */
-    int first; /* bodies first..last make up this node */
-    int last;
+    int left;   /* assembly index of the left (inboard) part; SUM, RAKE: the first operand */
+    int right;  /* assembly index of the right (outboard) part; SUM: the second operand; RAKE: -1 */
+    int joint;  /* JOIN: the joint that joins them (the first body of the right part); SUM, RAKE:
+                   the joint of the first light child under the node (named if it is singular) */
+    int first;  /* JOIN: the first and last bodies of the node's path segment (a chain: bodies */
+    int last;   /* first..last make up this node); SUM, RAKE: body, body */
     int height; /* 1 + the larger of the children's heights; leaves have height 0 */
+    int kind;   /* ctc_node_kind */
+    int body;   /* SUM, RAKE: the body whose light children the node sums; JOIN: -1 */
+    int ljoint; /* SUM, RAKE: the light child (= its joint) whose subtree, assembled at `left`, is
+                   the first operand, or -1 when `left` is a SUM node; JOIN: -1 */
+    int rjoint; /* SUM: the same for `right`; JOIN, RAKE: -1 */
 } ctc_tree_node;
 
 /* Planar data of one body and its inboard joint, in the plane's coordinates (form PLANAR only). */
@@ -232,21 +248,30 @@ typedef struct ctc_model {
        and one over k = n-1..0 every child before its parent; the children of a body (and of the
        ground) are listed in increasing order by body_child and body_sibling. A loop's closing
        joint is not a tree edge: it appears in none of these arrays (loop_body, loop.h). Every
-       pass finds a parent or a child here. ctc_model_build accepts chains only, where
-       body_parent[k] = k - 1; the balanced assembly tree below, and the handles (a body's handle
-       2 is its one child's joint), rely on that and assert it. */
+       pass finds a parent or a child here. A chain is the tree whose body_parent[k] = k - 1
+       (chain = 1); a loop is accepted on chains only.
+       The heavy child of a body is its child with the largest subtree (ties: the lowest index);
+       the heavy children split the tree into paths, each a chain that the two-handle GDCA
+       assembles, and a body's handle 2 is its heavy child's joint. Its other ("light") children's
+       subtrees are raked into it as articulated bodies (model.c, "the plan of a branched tree";
+       gdca_rake.h). A chain has one path and no light children. */
     int *body_parent;  /* (n) lambda(k): body k's parent, -1 for the ground */
     int *body_child;   /* (n) body k's first (lowest-numbered) child, -1 for a leaf */
     int *body_sibling; /* (n) the next child of body k's parent after k, -1 for the last */
     int ground_child;  /* the ground's first child (body 0) */
+    int *body_heavy;   /* (n) body k's heavy child, -1 for a leaf */
+    int chain;         /* 1: every body_parent[k] = k - 1 */
 
-    int ntree;           /* n - 1 internal nodes */
+    int ntree;           /* n - nroots internal nodes (n - 1 for a chain) */
     ctc_tree_node *tree; /* (ntree) ordered by height: children before parents, root last */
-    int height;        /* root height: ceil(log2 n), or up to one more when a loop closed on a body
-                          splits the root off the middle */
-    int *height_start; /* (height + 2) nodes of height h are tree[height_start[h-1] ..
-                          height_start[h] - 1] for h >= 1; height_start[0] = 0 */
-    int root;          /* assembly index of the whole chain */
+    int height;          /* root height: ceil(log2 n) for a chain, or up to one more when a loop
+                            closed on a body splits the root off the middle; O(log n) on any tree */
+    int *height_start;   /* (height + 2) nodes of height h are tree[height_start[h-1] ..
+                            height_start[h] - 1] for h >= 1; height_start[0] = 0 */
+    int root;            /* assembly index of the whole chain (the first ground child's subtree) */
+    int nroots;      /* the ground's children: each subtree is joined to the ground at the root */
+    int *root_joint; /* (nroots) each ground child (= its joint), in increasing order */
+    int *root_asm;   /* (nroots) the assembly index of its subtree; root_asm[0] = root */
 
     /* loop models (has_loop = 1); open chains have has_loop = 0, njoints = n, nvx = nv, nind = nv,
        every joint independent and the loop fields zero / NULL */

@@ -13,16 +13,17 @@
 #ifndef CTC_OPTIONS_H
 #define CTC_OPTIONS_H
 
-/* the forward pass's assembly orders of an open chain (gdca_forward_seq.h) */
+/* the forward pass's assembly orders of an open chain or tree (gdca_forward_seq.h) */
 enum {
     CTC_ORDER_AUTO = 0, /* by rule: the balanced tree with two threads or more from a measured
                            length on (gdca_forward_order_seq), else the sequential order */
-    CTC_ORDER_TREE = 1, /* the balanced assembly tree (gdca_forward.c) */
-    CTC_ORDER_SEQ = 2   /* the sequential order (gdca_forward_seq.c); loops take the tree */
+    CTC_ORDER_TREE = 1, /* the balanced assembly tree, a branched tree's plan (gdca_forward.c) */
+    CTC_ORDER_SEQ = 2   /* the sequential order (gdca_forward_seq.c, a branched tree's
+                           gdca_forward_tseq.c); loops take the tree */
 };
 
 typedef struct ctc_options {
-    int fwd_order;  /* CTC_ORDER_*: the forward pass's assembly order on an open chain */
+    int fwd_order;  /* CTC_ORDER_*: the forward pass's assembly order on an open chain or tree */
     int fwd_refine; /* most refinement steps of ctc_gdca_forward (gdca_refine.h): -1 = its rule
                        (CTC_REFINE_MAX_STEPS on stiffly proportioned chains, one on long ones,
                        else none); >= 0: at most that many */

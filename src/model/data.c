@@ -12,6 +12,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     if (d == NULL) return NULL;
     size_t n = (size_t)m->nbodies, dim = (size_t)m->dim;
     size_t nt = n > 1 ? n - 1 : 1, nj = (size_t)m->njoints;
+    size_t nfwd = m->chain ? nt : 2 * n; /* a tree's sequential order: S_k and R_k per body */
     d->dim = m->dim;
     d->hsize = (int)(3 * dim * dim + 2 * dim);
     d->singular_joint = -1;
@@ -29,7 +30,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->jnt_beta = calloc(nj * dim, sizeof(double));
     d->hr = calloc(n * 6, sizeof(double));
     d->hbody = calloc(n * (size_t)d->hsize, sizeof(double));
-    d->hfwd = calloc(nt * (size_t)d->hsize, sizeof(double));
+    d->hfwd = calloc(nfwd * (size_t)d->hsize, sizeof(double));
     d->hinv = calloc(nt * (size_t)d->hsize, sizeof(double));
     d->fwd_E = calloc(n * dim * dim, sizeof(double));
     d->fwd_z = calloc(n * dim, sizeof(double));
@@ -40,6 +41,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->icomp = calloc((2 * n - 1) * (size_t)d->csize, sizeof(double));
     d->icomp_e = calloc(n * dim, sizeof(double));
     d->tload = calloc((2 * n - 1) * 2 * dim, sizeof(double));
+    d->rake = calloc(n * (dim * dim + dim), sizeof(double));
     d->jnt_load = calloc(nj * dim, sizeof(double));
     d->jnt_load_inv = calloc(nj * dim, sizeof(double));
     d->loop_cond = 1;
@@ -47,10 +49,11 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->xbuf = calloc(2 * (size_t)m->nvx + (size_t)m->nq + 1, sizeof(double));
     if (d->xpos == NULL || d->xrot == NULL || d->xcom == NULL || d->omega == NULL ||
         d->xvel == NULL || d->jnt_P == NULL || d->jnt_D == NULL || d->jnt_beta == NULL ||
-        d->hr == NULL || d->hbody == NULL || d->hfwd == NULL || d->hinv == NULL ||
-        d->fwd_E == NULL || d->fwd_z == NULL || d->fwd_res == NULL || d->inv_E == NULL ||
-        d->inv_z == NULL || d->icomp == NULL || d->icomp_e == NULL || d->tload == NULL ||
-        d->jnt_load == NULL || d->jnt_load_inv == NULL || d->xbuf == NULL || d->xangle == NULL) {
+        d->hr == NULL || d->rake == NULL || d->hbody == NULL || d->hfwd == NULL ||
+        d->hinv == NULL || d->fwd_E == NULL || d->fwd_z == NULL || d->fwd_res == NULL ||
+        d->inv_E == NULL || d->inv_z == NULL || d->icomp == NULL || d->icomp_e == NULL ||
+        d->tload == NULL || d->jnt_load == NULL || d->jnt_load_inv == NULL || d->xbuf == NULL ||
+        d->xangle == NULL) {
         ctc_data_free(d);
         return NULL;
     }
@@ -82,6 +85,7 @@ void ctc_data_free(ctc_data *d)
     free(d->icomp);
     free(d->icomp_e);
     free(d->tload);
+    free(d->rake);
     free(d->jnt_load);
     free(d->jnt_load_inv);
     free(d->xbuf);

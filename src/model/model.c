@@ -1,15 +1,18 @@
 /*
- * model.c - building, validating and describing a serial chain (model.h).
+ * model.c - building, validating and describing a kinematic tree (model.h).
  *
  * The builder copies the spec, checks every number (finite, masses positive, inertias symmetric,
  * positive semidefinite and satisfying the triangle inequality of principal moments, axes of
  * non-zero length), decides the form (planar when every joint moves in one plane and gravity lies
- * in it, DESIGN.md section 3), precomputes what the kinematics and handle passes need per body,
- * records the topology (each body's parent, lambda(k), and its children: here a chain, parent
- * k - 1), and lays out the balanced binary assembly tree of GDCA (paper section 3, Fig. 3): bodies
- * [first, last] split at the middle, depth ceil(log2 n), nodes stored by height so that the nodes
- * of one height are independent of each other. A loop closed on body b splits the root at joint
- * b + 1 instead (at most one level more), so that the loop's bodies form one subtree.
+ * in it, DESIGN.md section 3; per joint, so a tree needs nothing more), precomputes what the
+ * kinematics and handle passes need per body, records the topology (each body's parent,
+ * lambda(k), from the spec's parent array, and its children), and lays out the assembly plan of
+ * GDCA, nodes stored by height so that the nodes of one height are independent of each other.
+ * A chain's plan is the balanced binary tree (paper section 3, Fig. 3): bodies [first, last]
+ * split at the middle, depth ceil(log2 n); a loop closed on body b splits the root at joint b + 1
+ * instead (at most one level more), so that the loop's bodies form one subtree. A branched tree's
+ * plan joins each heavy path as a chain and rakes the light subtrees into their parents ("the
+ * plan of a branched tree" below); loops are accepted on chains only.
  */
 #include "model.h"
 
@@ -299,7 +302,7 @@ static int build_subtree(ctc_model *m, ctc_tree_node *tmp, int *count, int first
     if (mid <= first) mid = first + (last - first + 1) / 2; /* the right part starts at mid */
     /* the assembly tree splits a chain of consecutive bodies: joint mid joins the left part's
        last body (mid - 1, its handle 2) to the right part's first (mid, its handle 1), which
-       holds only while body mid's parent is mid - 1 (a chain, the one topology accepted) */
+       holds only while body mid's parent is mid - 1 (a chain: build_tree) */
     assert(m->body_parent[mid] == mid - 1);
     int left = build_subtree(m, tmp, count, first, mid - 1, 0);
     int right = build_subtree(m, tmp, count, mid, last, 0);
@@ -311,29 +314,272 @@ static int build_subtree(ctc_model *m, ctc_tree_node *tmp, int *count, int first
     node->joint = mid;
     node->first = first;
     node->last = last;
+    node->kind = CTC_NODE_JOIN;
+    node->body = node->ljoint = node->rjoint = -1;
     node->height = 1 + (hl > hr ? hl : hr);
     return m->nbodies + (*count)++;
 }
 
-/* Lays out the tree with nodes sorted by height (stable), children before parents. A loop closed
- * on a body b splits the root at joint b + 1 (model.h), so its two parts are whole subtrees. */
+/* ---- the plan of a branched tree ----
+ *
+ * GDCA joins two-handle assemblies; a body with several children has more handles than two. The
+ * plan reduces a tree to chains by heavy-path decomposition (Sleator and Tarjan's heavy-light
+ * split): a body's heavy child is its child with the largest subtree (ties: the lowest index),
+ * the heavy children link the bodies into paths, and each path is a chain whose bodies' handle 2
+ * is the heavy child's joint (handles.c). A light child c of body k heads a path of its own; once
+ * that path is assembled, with its tip free (F2 = 0), its handle-1 equation A1 = h11 F + h13
+ * (h11 its inverse articulated inertia) is an articulated body seen through joint c. Joint c
+ * gives, exactly as the root joint of a chain does (DESIGN.md section 4 with the ground replaced
+ * by body k's point c, whose acceleration A_c is left free), the load on the subtree
+ *     F_c = W_c A_c + z_c,   W_c = D (D^T h11 D)^-1 D^T,   z_c = W_c (beta - h13 - h11 P f) + P f,
+ * W_c being the subtree's articulated inertia projected through the joint (Featherstone's
+ * Ia - Ia P (P^T Ia P)^-1 P^T Ia, Ia = h11^-1; the inverse passes: W_c = Ia, all of the motion
+ * prescribed). Body k's Newton-Euler equations about its centre of mass, M X = b + sum_i T_i^T F_i
+ * (X = (alpha, a_com), T_i the transfer to handle i), with -F_c acting at c and
+ * A_c = T_c X + kappa_c, become
+ *     M' X = b' + T_1^T F_1 + T_2^T F_2,   M' = M + sum_c T_c^T W_c T_c,
+ *     b' = b - sum_c T_c^T (W_c kappa_c + z_c),
+ * a pseudo-body (a RAKE node) whose handle equations h_ij = T_i M'^-1 T_j^T,
+ * h_i3 = T_i M'^-1 b' + kappa_i take the place of body k's in its path (gdca_rake.h). The sums
+ * over k's light children run over a binary tree of SUM nodes, so a star's rake is O(log n)
+ * deep too. Disassembly reverses it: the pseudo-body's loads give X, then each light child's
+ * F_c, its joint's acceleration, and its path's disassembly as a chain's from its root.
+ *
+ * Each path is split into a binary tree of JOIN nodes weighted by what hangs from each of its
+ * bodies (the body and its light subtrees, size[k] - size[heavy]): the left part is the longest
+ * prefix whose weight is at most half the segment's. An element's depth in its path's tree is then
+ * O(log(W / w)) for a segment of weight W and an element of weight w, and a light subtree weighs
+ * at most half its parent's, so the plan's height is O(log n) for chains, stars, binary and
+ * random trees alike (a biased search tree's argument). Work stays O(n): every body is a leaf of
+ * one path, every light child one operand of one SUM or RAKE node. A chain keeps its balanced
+ * split at the middle (build_subtree), which this rule gives for unit weights. */
+typedef struct plan_ctx {
+    ctc_model *m;
+    ctc_tree_node *tmp; /* the nodes in post-order */
+    int count;
+    int *size;      /* (n) subtree sizes */
+    int *seg;       /* scratch (2n + 1): the assembly indices of the leaves or operands in hand */
+    int *segb;      /* their bodies (a path's) or light children (a rake's) */
+    long long *pre; /* prefix sums of their weights */
+} plan_ctx;
+
+static int plan_height(const plan_ctx *p, int a)
+{
+    return a < p->m->nbodies ? 0 : p->tmp[a - p->m->nbodies].height;
+}
+
+/* appends a node (its height from its operands); returns its assembly index */
+static int plan_emit(plan_ctx *p, ctc_tree_node node)
+{
+    int h = plan_height(p, node.left);
+    if (node.right >= 0 && plan_height(p, node.right) > h) h = plan_height(p, node.right);
+    node.height = 1 + h;
+    p->tmp[p->count] = node;
+    return p->m->nbodies + p->count++;
+}
+
+/* the split of scratch elements lo..hi (lo < hi): the largest mid in lo+1..hi whose left part
+   lo..mid-1 weighs at most half of lo..hi, or lo + 1 */
+static int plan_split(const plan_ctx *p, int lo, int hi)
+{
+    const long long *pre = p->pre;
+    int a = lo + 1, b = hi;
+    if (2 * (pre[a] - pre[lo]) > pre[hi + 1] - pre[lo]) return a;
+    while (a < b) {
+        int mid = a + (b - a + 1) / 2;
+        if (2 * (pre[mid] - pre[lo]) <= pre[hi + 1] - pre[lo]) {
+            a = mid;
+        } else {
+            b = mid - 1;
+        }
+    }
+    return a;
+}
+
+/* JOIN nodes over the path segment in scratch lo..hi; returns its assembly index */
+static int plan_join(plan_ctx *p, int lo, int hi)
+{
+    if (lo == hi) return p->seg[lo];
+    int mid = plan_split(p, lo, hi);
+    int left = plan_join(p, lo, mid - 1), right = plan_join(p, mid, hi);
+    ctc_tree_node node = {.left = left,
+                          .right = right,
+                          .joint = p->segb[mid],
+                          .first = p->segb[lo],
+                          .last = p->segb[hi],
+                          .kind = CTC_NODE_JOIN,
+                          .body = -1,
+                          .ljoint = -1,
+                          .rjoint = -1};
+    return plan_emit(p, node);
+}
+
+/* the first light child's joint under operand (a, j) */
+static int plan_first_joint(const plan_ctx *p, int a, int j)
+{
+    return j >= 0 ? j : p->tmp[a - p->m->nbodies].joint;
+}
+
+/* SUM nodes over body k's light children in scratch lo..hi; returns the operand's assembly index
+   and, in *joint, the light child when the operand is one subtree (else -1) */
+static int plan_sum(plan_ctx *p, int k, int lo, int hi, int *joint)
+{
+    if (lo == hi) {
+        *joint = p->segb[lo];
+        return p->seg[lo];
+    }
+    int mid = plan_split(p, lo, hi), jl, jr;
+    int left = plan_sum(p, k, lo, mid - 1, &jl), right = plan_sum(p, k, mid, hi, &jr);
+    ctc_tree_node node = {.left = left,
+                          .right = right,
+                          .joint = plan_first_joint(p, left, jl),
+                          .first = k,
+                          .last = k,
+                          .kind = CTC_NODE_SUM,
+                          .body = k,
+                          .ljoint = jl,
+                          .rjoint = jr};
+    *joint = -1;
+    return plan_emit(p, node);
+}
+
+static void plan_prefix(plan_ctx *p, int lo, int hi, const long long *w)
+{
+    p->pre[lo] = 0;
+    for (int i = lo; i <= hi; i++) p->pre[i + 1] = p->pre[i] + w[i - lo];
+}
+
+/* the path headed by body head and everything hanging from it, with scratch from top; returns
+   its assembly index */
+static int plan_path(plan_ctx *p, int head, int top)
+{
+    const ctc_model *m = p->m;
+    int len = 0;
+    for (int k = head; k >= 0; k = m->body_heavy[k]) len++;
+    const int lo = top;
+    top += len;
+    long long wbuf[64], *w = len <= 64 ? wbuf : malloc((size_t)len * sizeof *w);
+    if (w == NULL) return -1;
+    int i = lo;
+    for (int k = head; k >= 0; k = m->body_heavy[k], i++) {
+        const int heavy = m->body_heavy[k];
+        int leaf = k, nl = 0;
+        for (int c = m->body_child[k]; c >= 0; c = m->body_sibling[c]) nl += c != heavy;
+        if (nl > 0) { /* the light children's paths, then their rake */
+            long long lbuf[64], *lw = nl <= 64 ? lbuf : malloc((size_t)nl * sizeof *lw);
+            if (lw == NULL) leaf = -1;
+            int t = top;
+            for (int c = m->body_child[k]; lw != NULL && c >= 0; c = m->body_sibling[c]) {
+                if (c == heavy) continue;
+                p->seg[t] = plan_path(p, c, top + nl);
+                if (p->seg[t] < 0) leaf = -1;
+                p->segb[t] = c;
+                lw[t - top] = p->size[c];
+                t++;
+            }
+            if (leaf >= 0) {
+                int jop;
+                plan_prefix(p, top, top + nl - 1, lw);
+                int op = plan_sum(p, k, top, top + nl - 1, &jop);
+                ctc_tree_node node = {.left = op,
+                                      .right = -1,
+                                      .joint = plan_first_joint(p, op, jop),
+                                      .first = k,
+                                      .last = k,
+                                      .kind = CTC_NODE_RAKE,
+                                      .body = k,
+                                      .ljoint = jop,
+                                      .rjoint = -1};
+                leaf = plan_emit(p, node);
+            }
+            if (lw != lbuf) free(lw);
+            if (leaf < 0) {
+                if (w != wbuf) free(w);
+                return -1;
+            }
+        }
+        p->seg[i] = leaf;
+        p->segb[i] = k;
+        w[i - lo] = p->size[k] - (heavy >= 0 ? p->size[heavy] : 0);
+    }
+    plan_prefix(p, lo, lo + len - 1, w);
+    if (w != wbuf) free(w);
+    return plan_join(p, lo, lo + len - 1);
+}
+
+/* each body's heavy child (and the subtree sizes into size) */
+static void plan_heavy(ctc_model *m, int *size)
+{
+    const int n = m->nbodies;
+    for (int k = 0; k < n; k++) size[k] = 1, m->body_heavy[k] = -1;
+    for (int k = n - 1; k >= 0; k--) {
+        for (int c = m->body_child[k]; c >= 0; c = m->body_sibling[c]) {
+            if (m->body_heavy[k] < 0 || size[c] > size[m->body_heavy[k]]) m->body_heavy[k] = c;
+        }
+        if (m->body_parent[k] >= 0) size[m->body_parent[k]] += size[k];
+    }
+}
+
+/* Lays out the plan with nodes sorted by height (stable), children before parents: a chain's
+ * balanced tree (a loop closed on a body b splits its root at joint b + 1, model.h, so its two
+ * parts are whole subtrees), or a branched tree's plan above. */
 static ctc_status build_tree(ctc_model *m, char *err, size_t errlen)
 {
     int n = m->nbodies;
     m->ntree = n - 1;
     m->height = 0;
     m->root = 0;
+    int nroots = 0;
+    for (int g = m->ground_child; g >= 0; g = m->body_sibling[g]) nroots++;
+    m->nroots = nroots;
+    m->root_joint = malloc((size_t)nroots * sizeof(int));
+    m->root_asm = malloc((size_t)nroots * sizeof(int));
     m->tree = calloc((size_t)(n > 1 ? n - 1 : 1), sizeof *m->tree);
     ctc_tree_node *tmp = calloc((size_t)(n > 1 ? n - 1 : 1), sizeof *tmp);
     int *where = calloc((size_t)(n > 1 ? n - 1 : 1), sizeof *where);
-    if (m->tree == NULL || tmp == NULL || where == NULL) {
+    int *scratch = malloc((size_t)(6 * n + 3) * sizeof(int));
+    long long *pre = malloc((size_t)(2 * n + 2) * sizeof *pre);
+    if (m->tree == NULL || tmp == NULL || where == NULL || scratch == NULL || pre == NULL ||
+        m->root_joint == NULL || m->root_asm == NULL) {
         free(tmp);
         free(where);
+        free(scratch);
+        free(pre);
         return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     }
-    int count = 0;
-    int root = build_subtree(m, tmp, &count, 0, n - 1, m->loop_first);
-    if (root >= n) m->height = tmp[root - n].height;
+    int count = 0, root;
+    plan_ctx p = {m, tmp, 0, scratch, scratch + n, scratch + 3 * n + 1, pre};
+    plan_heavy(m, p.size);
+    if (m->chain) {
+        root = build_subtree(m, tmp, &count, 0, n - 1, m->loop_first);
+        m->root_joint[0] = 0;
+        m->root_asm[0] = root;
+    } else {
+        int i = 0;
+        root = -1;
+        for (int g = m->ground_child; g >= 0; g = m->body_sibling[g], i++) {
+            m->root_joint[i] = g;
+            m->root_asm[i] = plan_path(&p, g, 0);
+            if (m->root_asm[i] < 0) root = -2;
+        }
+        if (root == -2) {
+            free(tmp);
+            free(where);
+            free(scratch);
+            free(pre);
+            return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+        }
+        count = p.count;
+        m->ntree = count;
+        root = m->root_asm[0];
+        for (i = 0; i < nroots; i++) {
+            int h = plan_height(&p, m->root_asm[i]);
+            if (h > m->height) m->height = h;
+        }
+    }
+    free(scratch);
+    free(pre);
+    if (m->chain && root >= n) m->height = tmp[root - n].height;
     m->height_start = calloc((size_t)m->height + 2, sizeof *m->height_start);
     if (m->height_start == NULL) {
         free(tmp);
@@ -361,6 +607,9 @@ static ctc_status build_tree(ctc_model *m, char *err, size_t errlen)
         m->tree[where[i]] = node;
     }
     m->root = root < n ? root : n + where[root - n];
+    for (int i = 0; i < nroots; i++) {
+        if (m->root_asm[i] >= n) m->root_asm[i] = n + where[m->root_asm[i] - n];
+    }
     free(fill);
     free(tmp);
     free(where);
@@ -420,6 +669,13 @@ static ctc_status check_chain_spec(const ctc_chain_spec *spec, char *err, size_t
         spec->form != CTC_FORM_SPATIAL) {
         return ctc_fail(CTC_EINVAL, err, errlen, "chain: unknown form %d", (int)spec->form);
     }
+    for (int k = 0; spec->parent != NULL && k < n; k++) {
+        if (spec->parent[k] < -1 || spec->parent[k] >= k) {
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "body %d: parent must be a body before it (-1 for the ground), got %d",
+                            k, spec->parent[k]);
+        }
+    }
     if (spec->loop && n < 2) {
         return ctc_fail(CTC_EINVAL, err, errlen, "loop: a loop needs at least 2 bodies (got %d)",
                         n);
@@ -451,8 +707,9 @@ static ctc_model *model_alloc(const ctc_chain_spec *spec)
     m->body_parent = malloc((size_t)n * sizeof(int));
     m->body_child = malloc((size_t)n * sizeof(int));
     m->body_sibling = malloc((size_t)n * sizeof(int));
-    if (m->bodies == NULL || m->joints == NULL || m->jnt_qadr == NULL || m->jnt_vadr == NULL ||
-        m->jnt_nq == NULL || m->jnt_nv == NULL || m->jnt_indep == NULL ||
+    m->body_heavy = malloc((size_t)n * sizeof(int));
+    if (m->body_heavy == NULL || m->bodies == NULL || m->joints == NULL || m->jnt_qadr == NULL ||
+        m->jnt_vadr == NULL || m->jnt_nq == NULL || m->jnt_nv == NULL || m->jnt_indep == NULL ||
         m->body_inertia_inv == NULL || m->jnt_perp == NULL || m->body_parent == NULL ||
         m->body_child == NULL || m->body_sibling == NULL) {
         ctc_model_free(m);
@@ -633,7 +890,17 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
         st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
         goto fail;
     }
-    for (int k = 0; k < n; k++) m->body_parent[k] = k - 1; /* a chain: the specs give no other */
+    m->chain = 1;
+    for (int k = 0; k < n; k++) {
+        m->body_parent[k] = spec->parent != NULL ? spec->parent[k] : k - 1;
+        m->chain &= m->body_parent[k] == k - 1;
+    }
+    if (spec->loop != NULL && !m->chain) {
+        st = ctc_fail(CTC_EINVAL, err, errlen,
+                      "loop: a loop on a branched tree is not supported yet (the bodies must "
+                      "form a chain, each body's parent the one before it)");
+        goto fail;
+    }
     build_topology(m);
     if (m->has_loop && (st = setup_loop(m, spec->loop, err, errlen)) != CTC_OK) goto fail;
     if ((st = setup_actuation(m, spec->independent, err, errlen)) != CTC_OK) goto fail;
@@ -666,6 +933,9 @@ void ctc_model_free(ctc_model *m)
     free(m->body_parent);
     free(m->body_child);
     free(m->body_sibling);
+    free(m->body_heavy);
+    free(m->root_joint);
+    free(m->root_asm);
     free(m->planar);
     free(m->tree);
     free(m->height_start);

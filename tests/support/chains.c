@@ -66,7 +66,59 @@ void test_chain_free(test_chain *c)
     if (c == NULL) return;
     free(c->bodies);
     free(c->joints);
+    free(c->parent);
     free(c);
+}
+
+void test_chain_set_parents(test_chain *c, const int *parent)
+{
+    int n = c->spec.nbodies;
+    if (c->parent == NULL) c->parent = malloc((size_t)n * sizeof *c->parent);
+    if (c->parent == NULL) abort();
+    memcpy(c->parent, parent, (size_t)n * sizeof *parent);
+    c->spec.parent = c->parent;
+}
+
+test_chain *test_auto_tree(int n, double bf, double skew, double taper)
+{
+    test_chain *c = chain_alloc(n);
+    int *parent = malloc((size_t)n * sizeof *parent), *depth = malloc((size_t)n * sizeof *depth);
+    if (parent == NULL || depth == NULL) abort();
+    ctc_v3_set(c->spec.gravity, 0, -9.81, 0);
+    c->spec.form = CTC_FORM_AUTO;
+    for (int i = 0; i < n; i++) {
+        parent[i] = (int)floor((i - 1 + ceil(bf)) / bf) - 1;
+        if (parent[i] >= i) parent[i] = i - 1;
+        depth[i] = parent[i] < 0 ? 0 : depth[parent[i]] + 1;
+        const double len = pow(taper, i), mass = pow(taper, 3.0 * i);
+        ctc_body_spec *b = &c->bodies[i];
+        b->mass = mass;
+        ctc_v3_set(b->com, 0.5 * len, 0, 0);
+        memset(b->inertia, 0, sizeof b->inertia);
+        b->inertia[0] = mass * len * len * 0.0025;
+        b->inertia[4] = b->inertia[8] = mass * len * len * 1.015 / 12;
+        ctc_joint_spec *j = &c->joints[i];
+        j->type = CTC_JOINT_REVOLUTE;
+        const double a = skew * depth[i];
+        ctc_v3_set(j->axis, 0, -sin(a), cos(a));
+        ctc_v3_set(j->location, parent[i] < 0 ? 0.0 : pow(taper, parent[i]), 0, 0);
+    }
+    test_chain_set_parents(c, parent);
+    free(parent);
+    free(depth);
+    return c;
+}
+
+void test_random_parents(int n, uint64_t seed, double ground_share, int *parent)
+{
+    uint64_t rng = seed;
+    for (int k = 0; k < n; k++) {
+        if (k == 0 || test_uniform(&rng, 0, 1) < ground_share) {
+            parent[k] = -1;
+        } else {
+            parent[k] = (int)(splitmix64(&rng) % (uint64_t)k);
+        }
+    }
 }
 
 test_chain *test_chain_random_spatial(int n, uint64_t seed, unsigned type_mask)

@@ -16,6 +16,7 @@ typedef struct test_chain {
     ctc_chain_spec spec;
     ctc_body_spec *bodies;
     ctc_joint_spec *joints;
+    int *parent; /* NULL (a chain), or (n) the tree's parents, spec.parent */
 } test_chain;
 
 /* joint types a random spatial chain may draw from (bit 1 << ctc_joint_type) */
@@ -54,6 +55,25 @@ test_chain *test_chain_rod_pendulum(int n, double length, double mass);
 test_chain *test_chain_coil(int n);
 
 void test_chain_free(test_chain *c);
+
+/* Makes c a tree: copies parent (n, -1 <= parent[k] < k) into c->parent, spec.parent. Joint
+ * locations stay as they are, now read in the new parents' frames. */
+void test_chain_set_parents(test_chain *c, const int *parent);
+
+/* Featherstone's autoTree family (R. Featherstone, Rigid Body Dynamics Algorithms, 2008, sec.
+ * 10.? benchmarks, and autoTree.m of his spatial_v2), in ctcsim's conventions: body i (0-based)
+ * hangs from body floor((i - 1 + ceil(bf)) / bf) - 1 (-1: the ground), so bf = 1 is a chain,
+ * bf = 2 a binary tree, bf = 4 a quaternary one (non-integer bf mixes them). Body i is a rod of
+ * length l_i = taper^i along its frame's x axis, mass taper^(3 i) kg, centre of mass at l_i / 2,
+ * inertia m l_i^2 diag(0.0025, 1.015 / 12, 1.015 / 12) about it; its revolute joint sits at its
+ * parent's rod end (l_parent, 0, 0) (the origin for a root), about z turned by skew (rad) about x
+ * once per generation. Gravity (0, -9.81, 0): skew = 0 moves in the x-y plane (form AUTO picks
+ * planar), any other skew is spatial. */
+test_chain *test_auto_tree(int n, double bf, double skew, double taper);
+
+/* random parents: parent[0] = -1 and parent[k] uniform in -1..k-1 (ground_share > 0: the ground
+ * with that probability, else a body uniform in 0..k-1) */
+void test_random_parents(int n, uint64_t seed, double ground_share, int *parent);
 
 /* The anchor that closes spec's loop (spec->loop set, its anchor ignored) at q0: where the
  * library's kinematics put the tip's closing point, in world coordinates when body < 0, else in

@@ -25,7 +25,8 @@ static inline ctc_model *build(const ctc_chain_spec *spec)
  * rebuilt here by appending each body to its parent's list, apart from the builder's code. The
  * joints' locations must already be given in the new parents' frames. Only passes that read
  * nothing of the chain's layout but the topology arrays may use the result (the oracle, the
- * kinematics); the handles and the GDCA passes keep asserting a chain. */
+ * kinematics); the handles and the GDCA passes read the plan and heavy children that
+ * ctc_model_build makes from ctc_chain_spec.parent, which this leaves as the chain's. */
 static inline void fixture_set_parents(ctc_model *m, const int *parent)
 {
     m->ground_child = -1;

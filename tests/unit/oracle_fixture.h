@@ -409,8 +409,9 @@ static inline void fx_double_pendulum(const double mass[2], const double len[2],
 
 /* A Y-shaped tree of three rods (not a chain): rod 0 on a revolute +z joint at the origin, rods 1
  * and 2 both hung from rod 0's tip on revolute +z joints, gravity (0, -g, 0). The chain spec of
- * fx_rod_chain with joint 2 moved to rod 0's tip (in rod 0's frame): the model built from it is a
- * chain, to be rewired with parents FX_Y_PARENTS (model_fixture.h fixture_set_parents). */
+ * fx_rod_chain with joint 2 moved to rod 0's tip (in rod 0's frame), built with the parents
+ * FX_Y_PARENTS (fx_make_y_tree), or built as a chain and rewired (model_fixture.h
+ * fixture_set_parents). */
 #define FX_Y_PARENTS                                                                               \
     {                                                                                              \
         -1, 0, 0                                                                                   \
@@ -421,14 +422,23 @@ static inline void fx_rod_y(const double mass[3], const double len[3], fx_chain 
     c->joints[2].location[1] = -len[0];
 }
 
-/* The Y tree's model, rewired to FX_Y_PARENTS, in *m and its oracle (free both) */
+/* The Y tree's model, built with the parents FX_Y_PARENTS (ctc_chain_spec.parent), in *m and
+ * its oracle (free both) */
 static inline ctc_oracle *fx_make_y_tree(const double mass[3], const double len[3], ctc_model **m)
 {
     static const int parent[3] = FX_Y_PARENTS;
     fx_chain c;
+    char err[256] = "";
     fx_rod_y(mass, len, &c);
-    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, m);
-    fixture_set_parents(*m, parent);
+    ctc_chain_spec spec = {.nbodies = c.n,
+                           .bodies = c.bodies,
+                           .joints = c.joints,
+                           .parent = parent,
+                           .gravity = {c.gravity[0], c.gravity[1], c.gravity[2]}};
+    ctc_status st = ctc_model_build(&spec, m, err, sizeof err);
+    cr_assert_eq(st, CTC_OK, "ctc_model_build failed: %s", err);
+    ctc_oracle *o = ctc_oracle_new(*m);
+    cr_assert_not_null(o, "ctc_oracle_new failed");
     return o;
 }
 

@@ -403,3 +403,72 @@ Test(model, a_loops_closing_joint_is_not_a_tree_edge)
         test_chain_free(c);
     }
 }
+
+Test(model, builds_any_tree_its_parent_array_gives)
+{
+    /* random parent arrays, one root or several on the ground; the topology against the array,
+       and each heavy child against a subtree count made here from the array alone */
+    int parent[130], size[130];
+    for (int n = 1; n <= 130; n += 3) {
+        test_chain *c = test_chain_random_spatial(n, 17 + (uint64_t)n, TEST_ALL_JOINTS);
+        test_random_parents(n, 29 + (uint64_t)n, n % 2 ? 0.0 : 0.2, parent);
+        test_chain_set_parents(c, parent);
+        ctc_model *m = build(&c->spec);
+        check_topology(m, parent);
+        int chain = 1;
+        for (int k = 0; k < n; k++) chain &= parent[k] == k - 1;
+        cr_assert_eq(m->chain, chain, "n=%d", n);
+        for (int k = 0; k < n; k++) size[k] = 1;
+        for (int k = n - 1; k > 0; k--) {
+            if (parent[k] >= 0) size[parent[k]] += size[k];
+        }
+        for (int k = 0; k < n; k++) {
+            int best = -1;
+            for (int j = k + 1; j < n; j++) {
+                if (parent[j] == k && (best < 0 || size[j] > size[best])) best = j;
+            }
+            cr_assert_eq(m->body_heavy[k], best, "n=%d body %d", n, k);
+        }
+        ctc_model_free(m);
+        test_chain_free(c);
+    }
+}
+
+Test(model, rejects_parents_that_are_not_earlier_bodies)
+{
+    test_chain *c = test_chain_rod_pendulum(5, 1.0, 1.0);
+    int parent[5] = {-1, 0, 0, 5, 1};
+    c->spec.parent = parent;
+    expect_error(&c->spec, "body 3: parent must be a body before it (-1 for the ground), got 5");
+    parent[3] = 3;
+    expect_error(&c->spec, "body 3: parent must be a body before it (-1 for the ground), got 3");
+    parent[3] = -2;
+    expect_error(&c->spec, "body 3: parent must be a body before it (-1 for the ground), got -2");
+    parent[3] = 1;
+    parent[0] = 0;
+    expect_error(&c->spec, "body 0: parent must be a body before it (-1 for the ground), got 0");
+    test_chain_free(c);
+}
+
+Test(model, refuses_a_loop_on_a_branched_tree_and_keeps_it_on_a_chain)
+{
+    test_chain *c = test_chain_rod_pendulum(5, 1.0, 1.0);
+    ctc_loop_spec loop = {0};
+    loop.joint.type = CTC_JOINT_REVOLUTE;
+    ctc_v3_set(loop.joint.axis, 0, 0, 1);
+    ctc_v3_set(loop.anchor, 1.0, 0, 0);
+    unsigned char indep[6] = {1, 1, 0, 0, 0, 0};
+    int parent[5] = {-1, 0, 1, 1, 3};
+    c->spec.loop = &loop;
+    c->spec.independent = indep;
+    c->spec.parent = parent;
+    expect_error(&c->spec, "loop: a loop on a branched tree is not supported yet (the bodies must "
+                           "form a chain, each body's parent the one before it)");
+    int chain[5] = {-1, 0, 1, 2, 3}; /* a chain given by its parents is a chain */
+    c->spec.parent = chain;
+    ctc_model *m = build(&c->spec);
+    cr_assert_eq(m->chain, 1);
+    cr_assert_eq(m->has_loop, 1);
+    ctc_model_free(m);
+    test_chain_free(c);
+}

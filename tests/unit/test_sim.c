@@ -190,6 +190,41 @@ Test(sim, exact_pd_error_follows_closed_form_on_32_link_chain)
     scene_free(s);
 }
 
+/* a branched tree under CTC: body 0 carries two double pendulums (the planar "Y": rods, bodies
+   1-2 and 3-4 hang from body 0's tip), or Featherstone's autoTree with branching factor 2 and
+   skewed axes (spatial, 7 bodies); each joint tracks its own sine */
+static scene *tree_scene(int spatial)
+{
+    test_chain *c;
+    if (spatial) {
+        c = test_auto_tree(7, 2, 0.4, 0.9);
+    } else {
+        c = test_chain_rod_pendulum(5, 1, 1);
+        const int parent[5] = {-1, 0, 1, 0, 3};
+        test_chain_set_parents(c, parent);
+    }
+    scene *s = scene_new(c, c->spec.nbodies);
+    for (int k = 0; k < s->nv; k++) {
+        s->q0[k] = (k % 2 ? -1 : 1) * (0.2 + 0.1 * k);
+        s->v0[k] = 0.1 * k;
+        s->traj[k] = (ctc_traj){.type = k % 2 ? CTC_TRAJ_COSINE : CTC_TRAJ_SINE,
+                                .amplitude = 0.5,
+                                .period = 1.0 + 0.25 * k};
+    }
+    s->spec.duration = 2;
+    return s;
+}
+
+Test(sim, exact_pd_error_follows_closed_form_on_branched_trees)
+{
+    for (int spatial = 0; spatial < 2; spatial++) {
+        scene *s = tree_scene(spatial);
+        check_pd_closed_form(s, 100, 20);
+        check_pd_closed_form(s, 100, 6);
+        scene_free(s);
+    }
+}
+
 /* hold q_d = q0 against a constant disturbance z for 10 s; returns the final error */
 static ctc_sim_result *hold_against_disturbance(scene *s, double ki)
 {
