@@ -170,6 +170,8 @@ typedef struct ctc_chain_spec {
     int nbodies;                      /* n >= 1 (>= 2 with a loop) */
     const ctc_body_spec *bodies;      /* (n) */
     const ctc_joint_spec *joints;     /* (n) joint k joins body k-1 (ground for k = 0) to body k */
+    const int *parent;                /* (n) body k's parent: -1 the ground, else a body < k.
+                                         NULL: a chain (parent k - 1) */
     double gravity[3];                /* m/s^2, world frame (e.g. 0, -9.81, 0) */
     ctc_form form;                    /* AUTO (recommended), or force PLANAR / SPATIAL */
     const ctc_loop_spec *loop;        /* NULL: an open chain */
@@ -232,9 +234,11 @@ typedef struct ctc_model {
        and one over k = n-1..0 every child before its parent; the children of a body (and of the
        ground) are listed in increasing order by body_child and body_sibling. A loop's closing
        joint is not a tree edge: it appears in none of these arrays (loop_body, loop.h). Every
-       pass finds a parent or a child here. ctc_model_build accepts chains only, where
-       body_parent[k] = k - 1; the balanced assembly tree below, and the handles (a body's handle
-       2 is its one child's joint), rely on that and assert it. */
+       pass finds a parent or a child here. ctc_model_build reads them from the spec's parent
+       array but accepts chains only, where body_parent[k] = k - 1 (a branched parent array is
+       refused: "body 1 has two children (2 and 3): branched trees need the tree dynamics"); the
+       balanced assembly tree below, and the handles (a body's handle 2 is its one child's
+       joint), rely on that and assert it. */
     int *body_parent;  /* (n) lambda(k): body k's parent, -1 for the ground */
     int *body_child;   /* (n) body k's first (lowest-numbered) child, -1 for a leaf */
     int *body_sibling; /* (n) the next child of body k's parent after k, -1 for the last */

@@ -5,11 +5,12 @@
  * positive semidefinite and satisfying the triangle inequality of principal moments, axes of
  * non-zero length), decides the form (planar when every joint moves in one plane and gravity lies
  * in it, DESIGN.md section 3), precomputes what the kinematics and handle passes need per body,
- * records the topology (each body's parent, lambda(k), and its children: here a chain, parent
- * k - 1), and lays out the balanced binary assembly tree of GDCA (paper section 3, Fig. 3): bodies
- * [first, last] split at the middle, depth ceil(log2 n), nodes stored by height so that the nodes
- * of one height are independent of each other. A loop closed on body b splits the root at joint
- * b + 1 instead (at most one level more), so that the loop's bodies form one subtree.
+ * records the topology (each body's parent, lambda(k), from the spec's parent array, and its
+ * children; only chains, parent k - 1, are accepted), and lays out the balanced binary assembly
+ * tree of GDCA (paper section 3, Fig. 3): bodies [first, last] split at the middle, depth
+ * ceil(log2 n), nodes stored by height so that the nodes of one height are independent of each
+ * other. A loop closed on body b splits the root at joint b + 1 instead (at most one level more),
+ * so that the loop's bodies form one subtree.
  */
 #include "model.h"
 
@@ -289,6 +290,39 @@ static void build_topology(ctc_model *m)
         m->body_sibling[k] = *first;
         *first = k;
     }
+}
+
+/* The parent array (NULL: a chain) checked and copied into body_parent, then the children lists
+ * (build_topology). Every entry must name the ground (-1) or a body before its child; a body or
+ * the ground with two children is refused, since the dynamics below take chains only. */
+static ctc_status setup_parents(ctc_model *m, const int *parent, char *err, size_t errlen)
+{
+    for (int k = 0; k < m->nbodies; k++) {
+        int p = parent ? parent[k] : k - 1;
+        if (p < -1 || p >= k) {
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "body %d: parent must be a body before it (-1 for the ground), got %d",
+                            k, p);
+        }
+        m->body_parent[k] = p;
+    }
+    build_topology(m);
+    for (int p = -1; p < m->nbodies; p++) {
+        int a = p < 0 ? m->ground_child : m->body_child[p];
+        int b = a < 0 ? -1 : m->body_sibling[a];
+        if (b < 0) continue;
+        if (p < 0) {
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "the ground has two children (%d and %d): branched trees need the "
+                            "tree dynamics",
+                            a, b);
+        }
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "body %d has two children (%d and %d): branched trees need the tree "
+                        "dynamics",
+                        p, a, b);
+    }
+    return CTC_OK;
 }
 
 /* Builds the subtree of bodies [first, last] into tmp (post-order); returns its assembly index
@@ -633,8 +667,7 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
         st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
         goto fail;
     }
-    for (int k = 0; k < n; k++) m->body_parent[k] = k - 1; /* a chain: the specs give no other */
-    build_topology(m);
+    if ((st = setup_parents(m, spec->parent, err, errlen)) != CTC_OK) goto fail;
     if (m->has_loop && (st = setup_loop(m, spec->loop, err, errlen)) != CTC_OK) goto fail;
     if ((st = setup_actuation(m, spec->independent, err, errlen)) != CTC_OK) goto fail;
     if ((st = setup_bodies_and_joints(m, moments, err, errlen)) != CTC_OK) goto fail;

@@ -403,3 +403,33 @@ Test(model, a_loops_closing_joint_is_not_a_tree_edge)
         test_chain_free(c);
     }
 }
+
+Test(model, reads_the_spec_parent_array_and_refuses_bad_parents)
+{
+    /* a parent array written out as a chain builds the same topology as none */
+    test_chain *c = pendulum();
+    int chain[3] = {-1, 0, 1};
+    ctc_chain_spec spec = c->spec;
+    spec.parent = chain;
+    ctc_model *m = build(&spec);
+    check_topology(m, chain);
+    ctc_model_free(m);
+
+    /* a parent not before its child, or below the ground */
+    int after[3] = {-1, 0, 5}, self[3] = {-1, 1, 1}, below[3] = {-2, 0, 1};
+    spec.parent = after;
+    expect_error(&spec, "body 2: parent must be a body before it (-1 for the ground), got 5");
+    spec.parent = self;
+    expect_error(&spec, "body 1: parent must be a body before it (-1 for the ground), got 1");
+    spec.parent = below;
+    expect_error(&spec, "body 0: parent must be a body before it (-1 for the ground), got -2");
+
+    /* branches wait for the tree dynamics: two bodies on body 0, two on the ground */
+    int y[3] = {-1, 0, 0}, two_roots[3] = {-1, -1, 1};
+    spec.parent = y;
+    expect_error(&spec, "body 0 has two children (1 and 2): branched trees need the tree dynamics");
+    spec.parent = two_roots;
+    expect_error(&spec,
+                 "the ground has two children (0 and 1): branched trees need the tree dynamics");
+    test_chain_free(c);
+}
