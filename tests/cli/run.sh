@@ -160,6 +160,12 @@ sed 's/"parent": "upper"/"parent": "lower"/' "$tmp/named.json" >"$tmp/named_bad.
 expect_exit 2 "a body its own parent" "$CTCSIM" validate "$tmp/named_bad.json"
 expect_grep "the parent's field and reason" "$tmp/err" 'scene.bodies[1].parent: "lower" must name a body before body 1 (it names body 1)'
 
+# a tree preset: validate lists its parents (the Y's right branch on the arm, body 0)
+"$CTCSIM" preset y_pendulum_pd >"$tmp/y.json"
+expect_exit 0 "validate the Y tree" "$CTCSIM" validate "$tmp/y.json"
+expect_grep "validate lists a tree's parents" "$tmp/err" "valid (5 bodies in a tree, parents -1 0 1 0 3, 5 coordinates, controller pd)"
+expect_grep "the normalised Y's right branch hangs from the arm" "$tmp/out" '"parent":	0,'
+
 # every example job of the API documentation is valid
 for example in api/examples/*.json; do
     expect_exit 0 "validate $example" "$CTCSIM" validate "$example"

@@ -8,7 +8,7 @@
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
 
-import { launchBrowser, pollValue, screenshot, startWebServer, withView } from './lib.mjs';
+import { animImage, launchBrowser, pollValue, runJob, screenshot, startWebServer, withView } from './lib.mjs';
 
 let srv;
 let browser;
@@ -172,5 +172,17 @@ test('the job form has a parent selector per body, the previous body by default,
         await page.locator('textarea#job-json').fill(JSON.stringify(d, null, 2));
         await pollValue(() => field('scene.bodies[2].parent'), (v) => v === '-1', 'the select after "ground" in the JSON');
         await screenshot(page, 'tree-form.png');
+    });
+});
+
+test('the job view of the y_pendulum_pd preset animates a tree', async () => {
+    const job = await runJob(srv, { preset: 'y_pendulum_pd', duration: 0.5 });
+    await withView(browser, srv, `#/jobs/${job.id}`, 'tree-job', async (page) => {
+        await page.waitForSelector('canvas#anim');
+        assert.match(await page.getAttribute('canvas#anim', 'aria-label'), /animation of the tree/);
+        assert.equal(await page.getAttribute('canvas#anim', 'data-mode'), 'planar');
+        const img = await animImage(page);
+        assert.notEqual(img.image, img.blank, 'the canvas is blank');
+        await screenshot(page, 'tree-job.png');
     });
 });
