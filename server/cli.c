@@ -222,6 +222,21 @@ static int cmd_run(int argc, char **argv)
     return rc;
 }
 
+/* " in a tree, parents -1 0 1 0 3" for a job whose bodies are not a chain (the first 16 parents,
+ * then "..."), else "" */
+static void describe_tree(const job *j, char *out, size_t len)
+{
+    int n = j->spec.chain.nbodies, chain = 1;
+    for (int k = 0; k < n; k++) chain &= j->parent[k] == k - 1;
+    out[0] = '\0';
+    if (chain) return;
+    size_t used = (size_t)snprintf(out, len, " in a tree, parents");
+    for (int k = 0; k < n && used < len; k++) {
+        used += (size_t)snprintf(out + used, len - used, k < 16 ? " %d" : " ...", j->parent[k]);
+        if (k >= 16) break;
+    }
+}
+
 static int cmd_validate(int argc, char **argv)
 {
     if (argc != 1) {
@@ -240,15 +255,17 @@ static int cmd_validate(int argc, char **argv)
     char *text = cJSON_Print(j->normalised);
     if (text) printf("%s\n", text);
     cJSON_free(text);
+    char tree[160] = "";
+    describe_tree(j, tree, sizeof tree);
     if (j->spec.chain.loop)
         fprintf(stderr,
-                "%s: valid (%d bodies and a loop, %d coordinates, %d independent, "
+                "%s: valid (%d bodies%s and a loop, %d coordinates, %d independent, "
                 "controller %s)\n",
-                argv[0], j->spec.chain.nbodies, j->nv, j->nind,
+                argv[0], j->spec.chain.nbodies, tree, j->nv, j->nind,
                 ctc_ctrl_type_name(j->spec.controller));
     else
-        fprintf(stderr, "%s: valid (%d bodies, %d coordinates, controller %s)\n", argv[0],
-                j->spec.chain.nbodies, j->nv, ctc_ctrl_type_name(j->spec.controller));
+        fprintf(stderr, "%s: valid (%d bodies%s, %d coordinates, controller %s)\n", argv[0],
+                j->spec.chain.nbodies, tree, j->nv, ctc_ctrl_type_name(j->spec.controller));
     job_free(j);
     return text ? 0 : EXIT_IO;
 }

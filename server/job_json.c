@@ -732,6 +732,7 @@ void job_free(job *j)
     free(j->v0);
     free(j->bodies);
     free(j->joints);
+    free(j->parent);
     free(j->independent);
     free(j->name);
     free(j->preset);

@@ -17,8 +17,12 @@
  *   "scene"       object, required:
  *       "gravity"   [gx, gy, gz] m/s^2, default [0, -9.81, 0]
  *       "form"      "auto" (default) | "planar" | "spatial"
- *       "bodies"    array of 1..JOB_MAX_BODIES bodies, base first; each:
+ *       "bodies"    array of 1..JOB_MAX_BODIES bodies, each after its parent; each:
  *           "name"     string, optional (1..JOB_MAX_NAME bytes)
+ *           "parent"   the body it hangs from (model.h's topology): the index of a body before
+ *                      it (a whole number), a body's "name" (unique among the bodies), or -1 /
+ *                      "ground" for the ground; default the ground for the first body and the
+ *                      previous body after it (a chain). Written as the index (-1: the ground)
  *           "mass"     kg > 0, required (a shape needs it too)
  *           "com"      [x, y, z] m, centre of mass in the body frame   } both, or a "shape"
  *           "inertia"  3x3 array of rows, or [Ixx, Iyy, Izz] (principal   } instead
@@ -44,7 +48,8 @@
  *                       (default [0,0,0]), "independent": false (default) | true}
  *           "anchor"   [x,y,z] m, required: the joint's centre on the ground, world frame
  *                      (or on body "body", in its frame)
- *           "body"     optional, a whole number 0..n-2: the loop closes on this body instead
+ *           "body"     optional, a body before the tip by its index 0..n-2 or its name (as
+ *                      "parent"; written as the index): the loop closes on this body instead
  *                      of the ground; the joints before it (0..body) carry the loop and must
  *                      be independent (unless every joint is dependent)
  *           "stabilization"  how the state is kept on the closure (sim.h), default "project":
@@ -192,7 +197,8 @@ typedef struct job {
                               coordinates of a loop (model.h) */
     ctc_body_spec *bodies; /* (nbodies) */
     ctc_joint_spec *joints;
-    ctc_loop_spec loop;         /* the closing joint; spec.chain.loop points here with a loop */
+    int *parent;        /* (nbodies) each body's parent, -1 the ground (spec.chain.parent) */
+    ctc_loop_spec loop; /* the closing joint; spec.chain.loop points here with a loop */
     unsigned char *independent; /* (nbodies + 1) with a loop, the closing joint last; NULL for an
                                    open chain (spec.chain.independent) */
     double *q0, *v0;            /* (nq), (nv) */

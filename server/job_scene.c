@@ -232,10 +232,115 @@ static int parse_joint(parser *p, const cJSON *body, const char *body_path, int 
     return parse_joint_rest(p, v, path, body_path, joint, 1, &p->j->independent[k], out);
 }
 
-static const char *const body_keys[] = {"name", "mass", "com", "inertia", "shape", "joint", NULL};
+/* A reference to a body (body_ref): the parent of a body, or the body a loop closes on. */
+typedef struct body_ref {
+    const cJSON *bodies; /* the scene's "bodies" array, as given (names are looked up in it) */
+    int before;          /* the body referred to must come before this one */
+    const char *which;   /* body `before` in messages: "body 3", "the tip (body 4)" */
+    int ground;          /* 1: -1 and "ground" name the ground */
+} body_ref;
 
-/* body k: mass, then com and inertia or a shape, then its joint */
-static int parse_body(parser *p, const cJSON *v, int k, cJSON *out_bodies)
+/* The index of the body whose "name" is the string name in r->bodies (*count of them; -1 for
+ * none), and the second such one in *second. */
+static int body_named(const body_ref *r, const char *name, int *count, int *second)
+{
+    int k = 0, first = -1;
+    *count = 0;
+    *second = -1;
+    for (const cJSON *b = r->bodies->child; b != NULL; b = b->next, k++) {
+        const cJSON *nm = json_member(b, "name");
+        if (!cJSON_IsString(nm) || strcmp(nm->valuestring, name) != 0) continue;
+        if ((*count)++ == 0)
+            first = k;
+        else if (*count == 2)
+            *second = k;
+    }
+    return first;
+}
+
+/* *out = the body v (at path) refers to, by its index (a whole number) or its name (a string,
+ * the body's "name", unique among the bodies), before body r->before; -1 for the ground where
+ * r->ground allows it (-1 or "ground"). */
+static int parse_body_ref(parser *p, const cJSON *v, const char *path, const body_ref *r, int *out)
+{
+    const int lo = r->ground ? -1 : 0, hi = r->before - 1;
+    if (cJSON_IsString(v)) {
+        const char *name = v->valuestring;
+        int count, second, k = body_named(r, name, &count, &second);
+        if (r->ground && strcmp(name, "ground") == 0) {
+            if (count > 0) {
+                return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                                     "\"ground\" is the ground, but body %d is named \"ground\" "
+                                     "too: rename it, or refer to bodies by index",
+                                     k);
+            }
+            *out = -1;
+            return 0;
+        }
+        if (count == 0) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                                 "\"%s\" names no body (give a body's \"name\" or index%s)", name,
+                                 r->ground ? ", or \"ground\"" : "");
+        }
+        if (count > 1) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                                 "\"%s\" is the name of bodies %d and %d: a name used to refer to "
+                                 "a body must be unique",
+                                 name, k, second);
+        }
+        if (k > hi) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                                 "\"%s\" must name a body before %s (it names body %d)", name,
+                                 r->which, k);
+        }
+        *out = k;
+        return 0;
+    }
+    if (!cJSON_IsNumber(v)) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                             "must be a body's index or name%s (got %s)",
+                             r->ground ? ", or \"ground\"" : "", json_kind(v));
+    }
+    double x;
+    if (json_number_at(p, v, path, &x) != 0) return -1;
+    if (!(x >= lo && x <= hi && x == floor(x))) {
+        if (r->ground && r->before == 0) { /* the first body: only the ground is before it */
+            return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                                 "must be -1 or \"ground\": nothing but the ground comes before "
+                                 "%s (got %g)",
+                                 r->which, x);
+        }
+        return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                             "must be %sthe index of a body before %s: a whole number from %d to "
+                             "%d (got %g)",
+                             r->ground ? "-1 (the ground) or " : "", r->which, lo, hi, x);
+    }
+    *out = (int)x;
+    return 0;
+}
+
+/* body k's "parent" (default: the ground for body 0, body k - 1 after it), written as an index */
+static int parse_parent(parser *p, const cJSON *v, const char *path, const cJSON *bodies, int k,
+                        cJSON *out)
+{
+    char at[PATH_LEN], which[32];
+    const cJSON *given = json_member(v, "parent");
+    int *parent = &p->j->parent[k];
+    *parent = k - 1;
+    snprintf(which, sizeof which, "body %d", k);
+    body_ref r = {bodies, k, which, 1};
+    if (given != NULL && parse_body_ref(p, given, json_key_path(at, path, "parent"), &r, parent))
+        return -1;
+    json_put_number(p, out, "parent", *parent);
+    return 0;
+}
+
+static const char *const body_keys[] = {"name",    "parent", "mass",  "com",
+                                        "inertia", "shape",  "joint", NULL};
+
+/* body k of bodies: its name and parent, its mass, then com and inertia or a shape, then its
+ * joint */
+static int parse_body(parser *p, const cJSON *bodies, const cJSON *v, int k, cJSON *out_bodies)
 {
     char path[PATH_LEN], at[PATH_LEN];
     ctc_body_spec *body = &p->j->bodies[k];
@@ -251,6 +356,7 @@ static int parse_body(parser *p, const cJSON *v, int k, cJSON *out_bodies)
         if (json_name_at(p, name, json_key_path(at, path, "name"), &s) != 0) return -1;
         json_put_string(p, out, "name", s);
     }
+    if (parse_parent(p, v, path, bodies, k, out) != 0) return -1;
 
     /* mass */
     if (json_member_number(p, v, path, "mass", REQUIRED, 0, &body->mass) != 0) return -1;
@@ -306,15 +412,18 @@ static int parse_bodies(parser *p, const cJSON *scene, cJSON *out_scene)
     j->bodies = json_alloc(p, (size_t)n, sizeof *j->bodies);
     j->joints = json_alloc(p, (size_t)n, sizeof *j->joints);
     j->independent = json_alloc(p, (size_t)n + 1, sizeof *j->independent);
-    if (j->bodies == NULL || j->joints == NULL || j->independent == NULL) return -1;
+    j->parent = json_alloc(p, (size_t)n, sizeof *j->parent);
+    if (j->bodies == NULL || j->joints == NULL || j->independent == NULL || j->parent == NULL)
+        return -1;
     j->spec.chain.nbodies = n;
     j->spec.chain.bodies = j->bodies;
     j->spec.chain.joints = j->joints;
+    j->spec.chain.parent = j->parent;
 
     cJSON *out = json_put(p, out_scene, "bodies", cJSON_CreateArray());
     int k = 0;
     for (const cJSON *b = v->child; b != NULL; b = b->next, k++) {
-        if (parse_body(p, b, k, out) != 0) return -1;
+        if (parse_body(p, v, b, k, out) != 0) return -1;
     }
     return 0;
 }
@@ -452,25 +561,23 @@ static int parse_stabilization(parser *p, const cJSON *loop, cJSON *out_loop)
 static const char *const loop_keys[] = {"joint",         "anchor",   "body",
                                         "stabilization", "cond_max", NULL};
 
-/* "scene.loop.body" (optional): the body the loop closes on, a whole number 0..n-2; absent, the
- * loop closes on the ground */
-static int parse_loop_body(parser *p, const cJSON *loop, cJSON *out_loop)
+/* "scene.loop.body" (optional): the body the loop closes on, before the tip (body n - 1), by its
+ * index or name as a body's parent (written as the index); absent, the loop closes on the
+ * ground */
+static int parse_loop_body(parser *p, const cJSON *scene, const cJSON *loop, cJSON *out_loop)
 {
     job *j = p->j;
-    int n = j->spec.chain.nbodies;
-    double b;
+    int n = j->spec.chain.nbodies, b;
+    char which[48];
     j->loop.on_body = 0;
     j->loop.body = 0;
-    if (json_member(loop, "body") == NULL) return 0;
-    if (json_member_number(p, loop, "scene.loop", "body", REQUIRED, 0, &b) != 0) return -1;
-    if (!(b >= 0 && b <= n - 2 && b == floor(b))) {
-        return json_error_at(p->err, JOB_INVALID_FIELD, "scene.loop.body",
-                             "must be the index of a body before the tip (body %d): a whole number "
-                             "from 0 to %d (got %g)",
-                             n - 1, n - 2, b);
-    }
+    const cJSON *v = json_member(loop, "body");
+    if (v == NULL) return 0;
+    snprintf(which, sizeof which, "the tip (body %d)", n - 1);
+    body_ref r = {json_member(scene, "bodies"), n - 1, which, 0};
+    if (parse_body_ref(p, v, "scene.loop.body", &r, &b) != 0) return -1;
     j->loop.on_body = 1;
-    j->loop.body = (int)b;
+    j->loop.body = b;
     json_put_number(p, out_loop, "body", b);
     return 0;
 }
@@ -510,7 +617,7 @@ static int parse_loop(parser *p, const cJSON *scene, cJSON *out_scene)
         return -1;
     }
     json_put_numbers(p, out, "anchor", j->loop.anchor, 3);
-    if (parse_loop_body(p, v, out) != 0 || parse_stabilization(p, v, out) != 0 ||
+    if (parse_loop_body(p, scene, v, out) != 0 || parse_stabilization(p, v, out) != 0 ||
         json_member_number(p, v, "scene.loop", "cond_max", OPTIONAL, CTC_SIM_DEFAULT_COND_MAX,
                            &s->loop_cond_max) != 0) {
         return -1;

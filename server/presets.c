@@ -60,6 +60,24 @@
  *    coupler along (0, 0.8, 0.6) (a quarter turn about (0, -0.6, 0.8), quaternion (1/sqrt 2)
  *    (1, 0, -0.6, 0.8)), the rocker parallel to the world (the inverse turn); v0 = 0, gravity
  *    -z, every joint dependent, no control, 5 s at rtol 1e-10, atol 1e-12.
+ * The trees (not in the paper; bodies that name their parent, job_json.h) track sines with PD
+ * (kp 100, kv 20), 5 s with dopri5 at rtol 1e-8, atol 1e-10, sampled every 0.01 s:
+ *  - planar Y: an arm, a uniform rod 1 m, 1 kg, hanging along -y at q = 0 from a revolute joint
+ *    about +z at the origin, and on its tip two double pendulums of uniform rods 0.5 m, 0.5 kg
+ *    (bodies "left upper", "left lower", then "right upper", which names "arm" as its parent,
+ *    and "right lower"); gravity -y; q0 = (pi/6, pi/3, 0, -pi/3, 0), v0 = 0; the arm follows
+ *    0.6 sin(2 pi t / 1.5), the upper links +-0.5 + 0.3 cos(2 pi t / 1.5) (the Y opens and
+ *    closes), the lower links 0.6 sin(2 pi t / 1.5); 0.2 N m on every joint, as the paper's;
+ *  - spatial hand: an aluminium (2700 kg/m^3) palm box 0.08 x 0.02 x 0.1 m hanging along -z
+ *    from a wrist about y at the origin, and on its far edge (x = -0.025, 0, 0.025 m) three
+ *    fingers of three square aluminium links 0.015 m across, 0.045, 0.03 and 0.025 m long, each
+ *    joint about the palm's x axis; masses density x volume, inertias from the box shapes;
+ *    gravity -z; q0 = 0, v0 = 0; the wrist follows 0.3 sin(2 pi t / 2), every finger joint
+ *    0.4 + 0.4 sin(2 pi t / 1.5 - 2 pi f / 3) for finger f = 0, 1, 2 (a wave);
+ *  - two-arm torso: a 25 kg torso box on a waist about z, two arms of three cylinders (the
+ *    numbers at two_arm_torso_pd below); gravity -z; q0 = 0, v0 = 0; the waist follows
+ *    0.4 sin(2 pi t / 3), each arm's shoulder 0.6 sin(2 pi t / 2 + phi), elbow 0.5 + 0.3
+ *    sin(...), wrist 0.3 sin(...), with phi = 0 on the left and pi on the right.
  *
  * Documents are built with cJSON. Every node is added through one helper that remembers a failed
  * allocation, so the builders read as the document they write and check for memory once, at the
@@ -707,6 +725,249 @@ static cJSON *rssr_passive(const cJSON *request, job_error *err)
     return finish(&b, doc, "rssr_passive", err);
 }
 
+/* ---- trees ---- */
+
+/* One sine (or cosine) of a tree preset's desired trajectory: q = offset + amplitude
+ * sin(2 pi t / period + phase). */
+typedef struct tree_sine {
+    const char *type; /* "sine" or "cosine" */
+    double amplitude, period, phase, offset;
+} tree_sine;
+
+/* the trajectory, one entry per coordinate, at the end of doc */
+static void put_sines(doc_builder *b, cJSON *doc, int n, const tree_sine *sines)
+{
+    cJSON *traj = put_array(b, doc, "trajectory");
+    for (int i = 0; i < n && !b->failed; i++) {
+        cJSON *tr = put_object(b, traj, NULL);
+        put_string(b, tr, "type", sines[i].type);
+        put_number(b, tr, "amplitude", sines[i].amplitude);
+        put_number(b, tr, "period", sines[i].period);
+        put_number(b, tr, "phase", sines[i].phase);
+        put_number(b, tr, "offset", sines[i].offset);
+    }
+}
+
+/* A body of a tree at the end of bodies: its name, its parent by name (NULL: the default, the
+ * previous body or the ground for the first), its mass, and a revolute joint about axis at
+ * location (parent's frame); its shape is added by the caller. Returns the body. */
+static cJSON *put_tree_body(doc_builder *b, cJSON *bodies, const char *name, const char *parent,
+                            double mass, const double axis[3], const double location[3])
+{
+    cJSON *body = put_object(b, bodies, NULL);
+    put_string(b, body, "name", name);
+    if (parent != NULL) put_string(b, body, "parent", parent);
+    put_number(b, body, "mass", mass);
+    put_revolute(b, body, axis, location);
+    return body;
+}
+
+/* a rod from the joint to end (body frame) as body's "shape" */
+static void put_rod_shape(doc_builder *b, cJSON *body, double x, double y, double z)
+{
+    cJSON *shape = put_object(b, body, "shape");
+    put_string(b, shape, "type", "rod");
+    put_vec3(b, shape, "end", x, y, z);
+}
+
+/* a box of size (along the body's x, y, z axes) centred at centre (body frame) as body's
+ * "shape" */
+static void put_box_shape(doc_builder *b, cJSON *body, const double size[3], const double centre[3])
+{
+    cJSON *shape = put_object(b, body, "shape");
+    put_string(b, shape, "type", "box");
+    put_vector(b, shape, "size", 3, size);
+    put_vector(b, shape, "centre", 3, centre);
+}
+
+/* a cylinder of radius r and length L along -z from the joint (body frame) as body's "shape" */
+static void put_hanging_cylinder(doc_builder *b, cJSON *body, double r, double length)
+{
+    cJSON *shape = put_object(b, body, "shape");
+    put_string(b, shape, "type", "cylinder");
+    put_number(b, shape, "radius", r);
+    put_number(b, shape, "length", length);
+    put_vec3(b, shape, "axis", 0, 0, 1);
+    put_vec3(b, shape, "centre", 0, 0, -length / 2);
+}
+
+/* the planar Y: an arm of 1 m, 1 kg, and on its tip two double pendulums of 0.5 m, 0.5 kg rods */
+#define Y_ARM 1.0
+#define Y_LINK 0.5
+#define Y_N 5
+
+/* Planar "Y" tree tracking sines: two double pendulums hanging from the tip of one arm. */
+static cJSON *y_pendulum_pd(const cJSON *request, job_error *err)
+{
+    static const double z_axis[3] = {0, 0, 1}, origin[3] = {0, 0, 0};
+    static const double arm_tip[3] = {0, -Y_ARM, 0}, link_tip[3] = {0, -Y_LINK, 0};
+    static const char *const names[Y_N] = {"arm", "left upper", "left lower", "right upper",
+                                           "right lower"};
+    /* the right branch names the arm; the others hang from the previous body (the default) */
+    static const char *const parents[Y_N] = {NULL, NULL, NULL, "arm", NULL};
+    const double pi = PRESETS_PI;
+    const double q0[Y_N] = {pi / 6, pi / 3, 0, -pi / 3, 0}, v0[Y_N] = {0, 0, 0, 0, 0};
+    /* the arm swings, the branches open and close about +-0.5 rad, the lower links swing */
+    const tree_sine sines[Y_N] = {
+        {"sine", 0.6, 1.5, 0, 0},      {"cosine", 0.3, 1.5, 0, 0.5}, {"sine", 0.6, 1.5, 0, 0},
+        {"cosine", 0.3, 1.5, 0, -0.5}, {"sine", 0.6, 1.5, 0, 0},
+    };
+    (void)request;
+    doc_builder b = {0};
+    cJSON *doc = cJSON_CreateObject();
+    put_string(&b, doc, "name", "Y pendulum, PD (planar tree: two double pendulums on an arm)");
+
+    cJSON *scene = put_object(&b, doc, "scene");
+    put_vec3(&b, scene, "gravity", 0, -9.81, 0);
+    cJSON *bodies = put_array(&b, scene, "bodies");
+    for (int k = 0; k < Y_N && !b.failed; k++) {
+        const double *at = k == 0 ? origin : k == 1 || k == 3 ? arm_tip : link_tip;
+        double length = k == 0 ? Y_ARM : Y_LINK;
+        cJSON *body = put_tree_body(&b, bodies, names[k], parents[k], k == 0 ? 1 : 0.5, z_axis, at);
+        put_rod_shape(&b, body, 0, -length, 0);
+    }
+    put_vector(&b, scene, "q0", Y_N, q0);
+    put_vector(&b, scene, "v0", Y_N, v0);
+    put_controller(&b, doc, PRESET_PD);
+    put_sines(&b, doc, Y_N, sines);
+    put_constant_disturbance(&b, doc, 0.2);
+    put_run_settings(&b, doc);
+    return finish(&b, doc, "y_pendulum_pd", err);
+}
+
+/* the spatial hand, hanging along -z from the wrist at the origin: an aluminium palm (2700
+ * kg/m^3) 0.08 wide (x), 0.02 thick (y), 0.1 m long (z); three fingers at x = -0.025, 0, 0.025
+ * on its far edge, each of three square links 0.015 m across, 0.045, 0.03 and 0.025 m long */
+#define HAND_DENSITY 2700.0 /* kg/m^3, aluminium */
+#define HAND_FINGERS 3
+#define HAND_LINKS 3
+#define HAND_N (1 + HAND_FINGERS * HAND_LINKS)
+#define HAND_FINGER_SIDE 0.015                                    /* m */
+static const double hand_palm[3] = {0.08, 0.02, 0.1};             /* m */
+static const double hand_link[HAND_LINKS] = {0.045, 0.03, 0.025}; /* m */
+static const double hand_finger_x[HAND_FINGERS] = {-0.025, 0, 0.025};
+
+/* Spatial hand tracking sines: a wrist (about y) driving a palm, three three-link fingers (each
+ * joint about the palm's x axis) curling in a wave. */
+static cJSON *spatial_hand_pd(const cJSON *request, job_error *err)
+{
+    static const double x_axis[3] = {1, 0, 0}, y_axis[3] = {0, 1, 0}, origin[3] = {0, 0, 0};
+    static const char *const finger[HAND_FINGERS] = {"index", "middle", "ring"};
+    static const char *const link[HAND_LINKS] = {"proximal", "middle", "distal"};
+    const double pi = PRESETS_PI;
+    double q0[HAND_N] = {0}, v0[HAND_N] = {0};
+    tree_sine sines[HAND_N];
+    (void)request;
+    doc_builder b = {0};
+    cJSON *doc = cJSON_CreateObject();
+    put_string(&b, doc, "name", "Spatial hand, PD (a palm on a wrist, three three-link fingers)");
+
+    cJSON *scene = put_object(&b, doc, "scene");
+    put_vec3(&b, scene, "gravity", 0, 0, -9.81);
+    cJSON *bodies = put_array(&b, scene, "bodies");
+
+    /* the palm on the wrist, swinging +-0.3 rad about y every 2 s */
+    const double palm_centre[3] = {0, 0, -hand_palm[2] / 2};
+    double palm_mass = printable(HAND_DENSITY * hand_palm[0] * hand_palm[1] * hand_palm[2]);
+    cJSON *palm = put_tree_body(&b, bodies, "palm", NULL, palm_mass, y_axis, origin);
+    put_box_shape(&b, palm, hand_palm, palm_centre);
+    sines[0] = (tree_sine){"sine", 0.3, 2, 0, 0};
+
+    /* each finger on the palm's far edge; its joints curl between 0 and 0.8 rad, each finger a
+       third of a period after the one before */
+    int k = 1;
+    for (int f = 0; f < HAND_FINGERS; f++) {
+        for (int l = 0; l < HAND_LINKS && !b.failed; l++, k++) {
+            char name[48];
+            snprintf(name, sizeof name, "%s %s", finger[f], link[l]);
+            const double base[3] = {hand_finger_x[f], 0, -hand_palm[2]};
+            const double prev[3] = {0, 0, l > 0 ? -hand_link[l - 1] : 0};
+            double len = hand_link[l];
+            double mass = printable(HAND_DENSITY * HAND_FINGER_SIDE * HAND_FINGER_SIDE * len);
+            cJSON *body = put_tree_body(&b, bodies, name, l == 0 ? "palm" : NULL, mass, x_axis,
+                                        l == 0 ? base : prev);
+            const double size[3] = {HAND_FINGER_SIDE, HAND_FINGER_SIDE, len};
+            const double centre[3] = {0, 0, -len / 2};
+            put_box_shape(&b, body, size, centre);
+            sines[k] = (tree_sine){"sine", 0.4, 1.5, printable(-2 * pi * f / HAND_FINGERS), 0.4};
+        }
+    }
+    put_vector(&b, scene, "q0", HAND_N, q0);
+    put_vector(&b, scene, "v0", HAND_N, v0);
+    put_controller(&b, doc, PRESET_PD);
+    put_sines(&b, doc, HAND_N, sines);
+    put_run_settings(&b, doc);
+    return finish(&b, doc, "spatial_hand_pd", err);
+}
+
+/* the two-arm torso, gravity -z: a torso box 0.3 wide (x), 0.2 deep (y), 0.5 m tall (z) on a
+ * waist about z at the origin, shoulders at (+-0.2, 0, 0.45) m; each arm an upper arm, a forearm
+ * and a hand, solid cylinders hanging along -z. Masses and lengths are Winter's anthropometric
+ * fractions (Biomechanics and Motor Control of Human Movement, 4th ed., 2009, Table 4.1) of a
+ * 70 kg, 1.75 m person, lengths to the centimetre: thorax and abdomen 0.355 M (25 kg); upper arm
+ * 0.028 M, 0.186 H; forearm 0.016 M, 0.146 H; hand 0.006 M, 0.108 H. Shoulder and elbow turn
+ * about x (swinging forward and back), the wrist about y. */
+#define TORSO_ARMS 2
+#define TORSO_LINKS 3
+#define TORSO_N (1 + TORSO_ARMS * TORSO_LINKS)
+#define TORSO_MASS 25.0                                               /* kg */
+static const double torso_size[3] = {0.3, 0.2, 0.5};                  /* m */
+static const double torso_link[TORSO_LINKS] = {0.33, 0.26, 0.19};     /* m */
+static const double torso_radius[TORSO_LINKS] = {0.045, 0.035, 0.03}; /* m */
+static const double torso_mass[TORSO_LINKS] = {1.96, 1.12, 0.42};     /* kg */
+
+/* Spatial torso on a waist with two three-link arms swinging in opposition, tracking sines. */
+static cJSON *two_arm_torso_pd(const cJSON *request, job_error *err)
+{
+    static const double x_axis[3] = {1, 0, 0}, y_axis[3] = {0, 1, 0}, z_axis[3] = {0, 0, 1};
+    static const double origin[3] = {0, 0, 0};
+    static const char *const side[TORSO_ARMS] = {"left", "right"};
+    static const char *const link[TORSO_LINKS] = {"upper arm", "forearm", "hand"};
+    const double pi = PRESETS_PI;
+    double q0[TORSO_N] = {0}, v0[TORSO_N] = {0};
+    tree_sine sines[TORSO_N];
+    (void)request;
+    doc_builder b = {0};
+    cJSON *doc = cJSON_CreateObject();
+    put_string(&b, doc, "name", "Two-arm torso, PD (a torso on a waist, two three-link arms)");
+
+    cJSON *scene = put_object(&b, doc, "scene");
+    put_vec3(&b, scene, "gravity", 0, 0, -9.81);
+    cJSON *bodies = put_array(&b, scene, "bodies");
+
+    /* the torso turns +-0.4 rad about the waist every 3 s */
+    const double torso_centre[3] = {0, 0, torso_size[2] / 2};
+    cJSON *torso = put_tree_body(&b, bodies, "torso", NULL, TORSO_MASS, z_axis, origin);
+    put_box_shape(&b, torso, torso_size, torso_centre);
+    sines[0] = (tree_sine){"sine", 0.4, 3, 0, 0};
+
+    /* the arms swing half a period apart: shoulders +-0.6 rad, elbows bent 0.5 +- 0.3 rad, the
+       wrists +-0.3 rad, every 2 s */
+    int k = 1;
+    for (int a = 0; a < TORSO_ARMS; a++) {
+        for (int l = 0; l < TORSO_LINKS && !b.failed; l++, k++) {
+            char name[48];
+            snprintf(name, sizeof name, "%s %s", side[a], link[l]);
+            const double shoulder[3] = {a == 0 ? 0.2 : -0.2, 0, 0.45};
+            const double prev[3] = {0, 0, l > 0 ? -torso_link[l - 1] : 0};
+            cJSON *body =
+                put_tree_body(&b, bodies, name, l == 0 ? "torso" : NULL, torso_mass[l],
+                              l == TORSO_LINKS - 1 ? y_axis : x_axis, l == 0 ? shoulder : prev);
+            put_hanging_cylinder(&b, body, torso_radius[l], torso_link[l]);
+            double phase = a == 0 ? 0 : printable(pi);
+            static const double amplitude[TORSO_LINKS] = {0.6, 0.3, 0.3};
+            static const double offset[TORSO_LINKS] = {0, 0.5, 0};
+            sines[k] = (tree_sine){"sine", amplitude[l], 2, phase, offset[l]};
+        }
+    }
+    put_vector(&b, scene, "q0", TORSO_N, q0);
+    put_vector(&b, scene, "v0", TORSO_N, v0);
+    put_controller(&b, doc, PRESET_PD);
+    put_sines(&b, doc, TORSO_N, sines);
+    put_run_settings(&b, doc);
+    return finish(&b, doc, "two_arm_torso_pd", err);
+}
+
 /* ---- the table ---- */
 
 /* build_SCENE_SUFFIX: the preset "SCENE_SUFFIX", made by the scene's builder SCENE(name, label,
@@ -786,6 +1047,18 @@ static const preset preset_table[] = {
      "Spatial RSSR linkage (crank about z, rocker about y) falling from rest, gravity -z, all "
      "joints passive",
      no_params, rssr_passive},
+    {"y_pendulum_pd",
+     "Planar Y tree: two double pendulums on the tip of an arm, tracking sines, " PD_GAINS
+     ", 0.2 N m",
+     no_params, y_pendulum_pd},
+    {"spatial_hand_pd",
+     "Spatial hand: a wrist driving a palm with three three-link fingers curling in a wave, "
+     "tracking sines, " PD_GAINS ", gravity -z",
+     no_params, spatial_hand_pd},
+    {"two_arm_torso_pd",
+     "Spatial torso on a waist with two three-link arms swinging in opposition, tracking "
+     "sines, " PD_GAINS ", gravity -z",
+     no_params, two_arm_torso_pd},
 };
 
 const preset *presets_list(int *count)

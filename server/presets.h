@@ -11,6 +11,9 @@
  *   five_bar_{pd,pid,poles,lqr}                  paper 7.2, Fig. 12: a planar closed chain
  *   four_bar_passive                             a planar four-bar crank-rocker, no control
  *   rssr_passive                                 a spatial RSSR linkage, no control (gravity -z)
+ *   y_pendulum_pd                                a planar Y tree: two double pendulums on an arm
+ *   spatial_hand_pd                              a wrist, a palm and three three-link fingers
+ *   two_arm_torso_pd                             a torso on a waist with two three-link arms
  * presets.c describes each scene's geometry and numbers.
  */
 #ifndef PRESETS_H

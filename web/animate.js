@@ -1,6 +1,10 @@
 /*
- * animate.js - the chain drawn on canvas#anim at the view's time cursor, and the player
+ * animate.js - the chain or tree drawn on canvas#anim at the view's time cursor, and the player
  * (button#play, select#speed) that moves the cursor in real time or slower.
+ *
+ * Each body is a segment from its joint to each of its children's joints (a body with several
+ * children, a palm or a torso, a fan of segments), or to its tip when it has none
+ * (kinematics.js chainLayout); the tree's shape is the spec's parents.
  *
  * Poses come from kinematics.js with q interpolated linearly between samples; the desired pose
  * (q_des, when the run had a controller) is drawn as a dashed orange ghost behind the actual
@@ -45,12 +49,13 @@ export function createAnimation(host, {spec, form, series, timeline}) {
   const loop = spec.scene.loop || null;
   const onBody = loop !== null && Number.isInteger(loop.body);
   const layout = chainLayout(bodies, loop);
+  const branched = layout.some((l) => l.ends.length > 1) || layout.filter((l) => l.parent < 0).length > 1;
   const ghost = loop ? null : series.q_des;
   const ts = series.t;
   const spatial = form !== "planar";
   const canvas = el("canvas", {id: "anim", tabindex: "0", "data-mode": spatial ? "spatial" : "planar",
     "data-time": "0", role: "img",
-    "aria-label": `animation of the ${loop ? "closed chain" : "chain"} (${spatial ? "3-D, drag or arrow keys to rotate" : "planar"}); ` +
+    "aria-label": `animation of the ${loop ? "closed chain" : branched ? "tree" : "chain"} (${spatial ? "3-D, drag or arrow keys to rotate" : "planar"}); ` +
       (ghost ? "blue: actual pose, dashed orange: desired pose" : "blue: actual pose")});
   host.append(el("div", {class: "anim-wrap"}, canvas),
     el("p", {class: "muted small"}, el("span", {class: "key-actual", text: "━ actual"}), "  ",
@@ -76,7 +81,7 @@ export function createAnimation(host, {spec, form, series, timeline}) {
     if (!rows) continue;
     for (let k = 0; k < ts.length; k += stride) {
       for (const b of chainPose(layout, (i) => (rows[i] ? rows[i][k] ?? 0 : 0))) {
-        reach = Math.max(reach, norm(b.origin), norm(b.end), norm(b.attach));
+        reach = Math.max(reach, norm(b.origin), norm(b.attach), ...b.ends.map(norm));
       }
     }
   }
@@ -91,11 +96,15 @@ export function createAnimation(host, {spec, form, series, timeline}) {
     g.lineCap = "round";
     g.setLineDash(dash);
     for (const b of poses) {
-      const [ax, ay] = toXY(b.attach), [ox, oy] = toXY(b.origin), [ex, ey] = toXY(b.end);
+      const [ax, ay] = toXY(b.attach), [ox, oy] = toXY(b.origin);
       if (Math.hypot(ax - ox, ay - oy) > 0.5) {
         g.lineWidth = 1.5; g.beginPath(); g.moveTo(ax, ay); g.lineTo(ox, oy); g.stroke();
       }
-      g.lineWidth = width; g.beginPath(); g.moveTo(ox, oy); g.lineTo(ex, ey); g.stroke();
+      g.lineWidth = width;
+      for (const e of b.ends) {
+        const [ex, ey] = toXY(e);
+        g.beginPath(); g.moveTo(ox, oy); g.lineTo(ex, ey); g.stroke();
+      }
     }
     g.setLineDash([]);
     g.lineWidth = 2;

@@ -1,7 +1,7 @@
 /*
  * jobform.js - the job form: fields for the parts of a job students change (name, duration,
- * output interval, controller and gains, trajectory, disturbance, integrator) drawn from a job
- * document and writing back into it.
+ * output interval, controller and gains, trajectory, disturbance, integrator, each body's
+ * parent) drawn from a job document and writing back into it.
  *
  * Every control's name is the JSON path it edits ("controller.kp", "trajectory[1].period"),
  * the same path the server names in its errors, so an error can be put next to its field; the
@@ -9,12 +9,15 @@
  * Choosing another controller type, trajectory or disturbance type or integrator method
  * replaces that object with the new type's defaults (as the server's preset overrides do) and
  * redraws the form; other fields change one key. The document is the truth: anything the form
- * does not show (bodies, the loop, per-joint gains, limits) is kept as it is. The trajectory and
- * the disturbance have an entry per controlled coordinate: every coordinate of an open chain,
- * the independent ones of a closed chain (scene.loop), the closing joint's last.
+ * does not show (the bodies' other keys, the loop, per-joint gains, limits) is kept as it is.
+ * The trajectory and the disturbance have an entry per controlled coordinate: every coordinate
+ * of an open chain, the independent ones of a closed chain (scene.loop), the closing joint's
+ * last. A body's parent is shown as the format reads it (kinematics.js chainParents: the previous
+ * body when none is given) and written as an index.
  */
 import {el} from "./dom.js";
 import {JOINT_NV as NV} from "./joints.js";
+import {chainParents} from "./kinematics.js";
 
 export const CONTROLLERS = {none: {}, pd: {kp: 100, kv: 20}, pid: {kp: 100, kv: 20, ki: 250},
   poles: {poles: [-2, -2.1, -2.2]}, lqr: {Q: [1, 1, 1], lambda: 0.01}};
@@ -25,6 +28,9 @@ export const TRAJECTORIES = {constant: {value: 0}, sine: {amplitude: 0.6, period
 export const DISTURBANCES = {none: {}, constant: {value: 0.2}, sine: {amplitude: 0.2, period: 1, phase: 0, offset: 0},
   step: {value: 0.2, time: 1}};
 export const INTEGRATORS = {dopri5: {rtol: 1e-8, atol: 1e-10}, bdf: {rtol: 1e-8, atol: 1e-10}, rk4: {step: 0.001}};
+/* bodies up to which the form shows a parent selector per body (each lists the bodies before
+ * it: quadratic in the count); longer scenes edit their parents in the JSON */
+export const MAX_PARENT_FIELDS = 64;
 const LISTS = new Set(["coefficients", "times", "values"]);
 const HINTS = {kp: "K_p, 1/s²", kv: "K_v, 1/s", ki: "K_i, 1/s³", zeta: "damping ratio ζ", tau: "time constant τ, s",
   period: "s", phase: "rad", amplitude: "rad or m", start: "s", end: "s", time: "s", step: "s",
@@ -163,6 +169,30 @@ export function jobForm(host, getDoc, edited) {
     return fs;
   }
 
+  /* the bodies' parents: per body a select of the ground and the bodies before it, showing the
+   * parent the format reads (the previous body when none is given); a choice writes the index */
+  function tree(bodies) {
+    const fs = el("fieldset", {name: "scene.bodies"}, el("legend", {text: "Bodies and their parents"}));
+    if (bodies.length > MAX_PARENT_FIELDS) {
+      fs.append(el("p", {class: "hint", text: `${bodies.length} bodies: edit their parents (scene.bodies[k].parent) in the JSON.`}));
+      return fs;
+    }
+    const parents = chainParents(bodies);
+    const named = (k) => `body ${k}${bodies[k]?.name ? ` (${bodies[k].name})` : ""}`;
+    const row = el("div", {class: "row"});
+    bodies.forEach((_, k) => {
+      const path = `scene.bodies[${k}].parent`;
+      const s = el("select", {name: path},
+        el("option", {value: "-1", text: "the ground"}),
+        ...Array.from({length: k}, (__, j) => el("option", {value: String(j), text: named(j)})));
+      s.value = String(parents[k]);
+      register(s, path, (x) => Number(x));
+      row.append(label(named(k), s, "hangs from"));
+    });
+    fs.append(row);
+    return fs;
+  }
+
   function sections(doc) {
     const out = [];
     out.push(el("fieldset", {name: "job"}, el("legend", {text: "Run"}),
@@ -211,6 +241,9 @@ export function jobForm(host, getDoc, edited) {
 
     if (type !== "none") out.push(perCoordinate(doc, "trajectory", "Desired trajectory", TRAJECTORIES));
     out.push(perCoordinate(doc, "disturbance", "Disturbance (added to the driving torque)", DISTURBANCES));
+
+    const bodies = doc.scene && Array.isArray(doc.scene.bodies) ? doc.scene.bodies : [];
+    if (bodies.length > 0) out.push(tree(bodies));
 
     const integ = doc.integrator || {};
     const ifs = el("fieldset", {name: "integrator"}, el("legend", {text: "Integrator"}));

@@ -1,10 +1,11 @@
 /*
- * kinematics.js - forward kinematics of a job's chain for the animation, from the normalised
- * spec's bodies and one sample of joint coordinates q.
+ * kinematics.js - forward kinematics of a job's chain or tree for the animation, from the
+ * normalised spec's bodies and one sample of joint coordinates q.
  *
  * Conventions (README "Conventions"): body k's frame has its origin at its inboard joint k and, at
  * q = 0, is parallel to the world; joint k's location and axis are given in the frame of its parent
- * p = parent[k] (chainParents; the world's for -1), which comes before it (p < k). Revolute:
+ * p = parent[k] (chainParents: the body's "parent"; the world's for -1), which comes before it
+ * (p < k). Revolute:
  * rotation by q about the axis; prismatic: translation by q along it; cylindrical: (angle,
  * displacement); spherical: unit quaternion (w, x, y, z), four entries of q; fixed: nothing. So R_k
  * = R_p Rot(axis, angle) and p_k = p_p + R_p (location + axis d), walking the parents as the
@@ -71,35 +72,47 @@ function tipOf(body) {
   return body.com ? scale(body.com, 2) : [0, 0, 0];
 }
 
-/* Each body's parent (-1: the ground), as ctc_model_build makes it from a job's scene: the
- * scene lists a chain, so body k hangs from body k - 1. A loop's closing joint is not an edge. */
+/* Each body's parent (-1: the ground), as the job format reads it (server/job_json.h): the
+ * body's "parent", an index (the normalised spec's form), a body's name or "ground"; absent,
+ * the previous body (the ground for the first). An entry that names no body before its child
+ * (a document the server would refuse) falls back to the previous body, so a drawing never
+ * loops. A loop's closing joint is not an edge. */
 export function chainParents(bodies) {
-  return bodies.map((b, k) => k - 1);
+  return bodies.map((b, k) => {
+    const p = b ? b.parent : undefined;
+    let i = k - 1;
+    if (p === "ground") i = -1;
+    else if (typeof p === "string") i = bodies.findIndex((o) => o && o.name === p);
+    else if (Number.isInteger(p)) i = p;
+    return i >= -1 && i < k ? i : k - 1;
+  });
 }
 
-/* The chain's constant part: per body its parent, its joint (type, unit axis, location), where
- * its coordinates start in q, and the point its drawn segment ends at (in its own frame): its
- * first child's joint centre, or for a body without children its tip, or on a loop's last body
- * the closing joint's centre. */
+/* The tree's constant part: per body its parent, its joint (type, unit axis, location), where
+ * its coordinates start in q, and the points its drawn segments end at (in its own frame):
+ * each child's joint centre (a palm with three fingers is drawn as a fan of three segments), or
+ * for a body without children its tip, or on a loop's last body the closing joint's centre;
+ * `end` is the first of them. */
 export function chainLayout(bodies, loop) {
   let qi = 0;
   const parents = chainParents(bodies);
   const last = loop ? (loop.joint && loop.joint.location) || [0, 0, 0] : null;
-  const child = bodies.map(() => -1); /* each body's first child */
-  for (let k = bodies.length - 1; k >= 0; k--) if (parents[k] >= 0) child[parents[k]] = k;
+  const children = bodies.map(() => []); /* each body's children, in order */
+  parents.forEach((p, k) => { if (p >= 0) children[p].push(k); });
   return bodies.map((b, k) => {
     const j = b.joint;
     const leafEnd = k === bodies.length - 1 && last ? last : tipOf(b);
+    const ends = children[k].length ? children[k].map((c) => bodies[c].joint.location || [0, 0, 0]) : [leafEnd];
     const link = {parent: parents[k], type: j.type, axis: j.axis ? unit(j.axis) : [0, 0, 1],
-      loc: j.location || [0, 0, 0], qi,
-      end: child[k] >= 0 ? (bodies[child[k]].joint.location || [0, 0, 0]) : leafEnd};
+      loc: j.location || [0, 0, 0], qi, end: ends[0], ends};
     qi += NQ[j.type] ?? 0;
     return link;
   });
 }
 
 /* World positions for one q (a function i -> q[i]): per body its joint origin, the point on
- * the parent where the joint sits (differs for prismatic and cylindrical) and its drawn end. */
+ * the parent where the joint sits (differs for prismatic and cylindrical) and its drawn ends
+ * (`ends`, one per segment of chainLayout; `end` the first). */
 export function chainPose(layout, q) {
   const pose = [];
   for (const l of layout) {
@@ -115,7 +128,8 @@ export function chainPose(layout, q) {
     else if (l.type === "spherical") Rj = rotQuat(q(l.qi), q(l.qi + 1), q(l.qi + 2), q(l.qi + 3));
     const origin = add(attach, scale(mulv(R, l.axis), slide));
     if (Rj) R = mul(R, Rj);
-    pose.push({attach, origin, end: add(origin, mulv(R, l.end)), rot: R});
+    const ends = (l.ends || [l.end]).map((e) => add(origin, mulv(R, e)));
+    pose.push({attach, origin, end: ends[0], ends, rot: R});
   }
   return pose;
 }

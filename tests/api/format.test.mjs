@@ -72,3 +72,28 @@ for (const s of SECTIONS) {
         else assert.ok(compared > 0, `no ${s.key} default compared`);
     });
 }
+
+/* The page reads a body's parent as the parser does (web/kinematics.js chainParents, which the
+ * form's parent selectors show): the previous body when none is given, and an index, a name or
+ * "ground" as the index the normalised job writes. */
+test("the page's parents are the parser's: the default and every way of naming one", async () => {
+    const kin = await import(pathToFileURL(path.join(ROOT, 'web', 'kinematics.js')).href);
+    const chain = JSON.parse((await runCli(['preset', 'n_link_pendulum', 'n=5'])).stdout);
+    const named = structuredClone(chain);
+    named.scene.bodies.forEach((b, k) => { b.name = `link${k}`; });
+    named.scene.bodies[0].parent = 'ground';
+    named.scene.bodies[2].parent = 'link1';
+    named.scene.bodies[3].parent = 2;
+    named.scene.bodies[4].parent = 3.0;
+    for (const doc of [chain, named]) {
+        const r = await runCli(['validate', '-'], { input: JSON.stringify(doc) });
+        assert.equal(r.code, 0, r.stderr);
+        const parsed = JSON.parse(r.stdout).scene.bodies.map((b) => b.parent);
+        assert.deepEqual(parsed, [-1, 0, 1, 2, 3]);
+        assert.deepEqual(kin.chainParents(doc.scene.bodies), parsed, 'the page reads other parents than the parser');
+    }
+    /* the schema lists the key, with no default: the parser's depends on the body's place */
+    const body = schema.$defs.body.properties.parent;
+    assert.ok(body && body.oneOf, 'the schema has scene.bodies[].parent');
+    assert.equal(body.default, undefined);
+});

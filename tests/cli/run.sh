@@ -144,6 +144,28 @@ echo '{"preset": "arm_four_bar_pd", "scene": {"loop": {"body": 3}}}' >"$tmp/arm_
 expect_exit 2 "a loop on the tip itself" "$CTCSIM" validate "$tmp/arm_bad.json"
 expect_grep "the body is named" "$tmp/err" "scene.loop.body: must be the index of a body before the tip"
 
+# bodies that name their parent: validate writes each parent as an index; a bad one is refused
+cat >"$tmp/named.json" <<'EOF'
+{"scene": {"bodies": [
+  {"name": "upper", "parent": "ground", "mass": 1, "shape": {"type": "rod", "end": [0, -1, 0]},
+   "joint": {"type": "revolute", "axis": [0, 0, 1]}},
+  {"name": "lower", "parent": "upper", "mass": 1, "shape": {"type": "rod", "end": [0, -1, 0]},
+   "joint": {"type": "revolute", "axis": [0, 0, 1], "location": [0, -1, 0]}}]},
+ "controller": {"type": "none"}, "duration": 0.1}
+EOF
+expect_exit 0 "validate parents given by name" "$CTCSIM" validate "$tmp/named.json"
+expect_grep "the first body's parent is the ground" "$tmp/out" '"parent":	-1,'
+expect_grep "the second body's parent is body 0" "$tmp/out" '"parent":	0,'
+sed 's/"parent": "upper"/"parent": "lower"/' "$tmp/named.json" >"$tmp/named_bad.json"
+expect_exit 2 "a body its own parent" "$CTCSIM" validate "$tmp/named_bad.json"
+expect_grep "the parent's field and reason" "$tmp/err" 'scene.bodies[1].parent: "lower" must name a body before body 1 (it names body 1)'
+
+# a tree preset: validate lists its parents (the Y's right branch on the arm, body 0)
+"$CTCSIM" preset y_pendulum_pd >"$tmp/y.json"
+expect_exit 0 "validate the Y tree" "$CTCSIM" validate "$tmp/y.json"
+expect_grep "validate lists a tree's parents" "$tmp/err" "valid (5 bodies in a tree, parents -1 0 1 0 3, 5 coordinates, controller pd)"
+expect_grep "the normalised Y's right branch hangs from the arm" "$tmp/out" '"parent":	0,'
+
 # every example job of the API documentation is valid
 for example in api/examples/*.json; do
     expect_exit 0 "validate $example" "$CTCSIM" validate "$example"

@@ -57,6 +57,17 @@
 #define LOOP_PASSIVE_JOB(extra) "{" LOOP_SCENE "," PASSIVE "," DUR extra "}"
 #define BAD_LOOP_JOB(loop) "{" LOOP_SCENE_WITH(loop) "," PASSIVE "," DUR "}"
 
+/* named bodies, hanging from the previous one or from parent; a chain arm, palm, tip whose tip
+ * names its parent */
+#define NAMED(name)                                                                                \
+    "{'name':'" name "','mass':1,'com':[0,-0.5,0],'inertia':[0.1,0.1,0.1],'joint':" REV "}"
+#define NAMED_ON(name, parent)                                                                     \
+    "{'name':'" name "','parent':" parent ",'mass':1,'com':[0,-0.5,0],'inertia':[0.1,0.1,0.1],"    \
+    "'joint':" REV "}"
+#define TREE_JOB(parent)                                                                           \
+    "{'scene':{'bodies':[" NAMED("arm") "," NAMED("palm") "," NAMED_ON(                            \
+        "tip", parent) "]}," PASSIVE "," DUR "}"
+
 /* text with every ' turned into " (malloc'd) */
 static char *json(const char *text)
 {
@@ -541,8 +552,55 @@ static const bad_job bad_jobs[] = {
     {"loop on a fractional body", BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'body':0.5}"), NULL,
      JOB_INVALID_FIELD, "scene.loop.body",
      "must be the index of a body before the tip (body 2): a whole number from 0 to 1 (got 0.5)"},
-    {"loop on a body named by a string", BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'body':'0'}"),
-     NULL, JOB_INVALID_FIELD, "scene.loop.body", "must be a number (got a string)"},
+    {"loop on a body named by an index string",
+     BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'body':'0'}"), NULL, JOB_INVALID_FIELD,
+     "scene.loop.body", "\"0\" names no body (give a body's \"name\" or index)"},
+    {"loop on a body given as true", BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'body':true}"),
+     NULL, JOB_INVALID_FIELD, "scene.loop.body", "must be a body's index or name (got a boolean)"},
+    {"loop on the ground by name", BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'body':'ground'}"),
+     NULL, JOB_INVALID_FIELD, "scene.loop.body",
+     "\"ground\" names no body (give a body's \"name\" or index)"},
+
+    /* parents: a body before the child, by index, unique name or the ground */
+    {"parent named by no body", TREE_JOB("'hand'"), NULL, JOB_INVALID_FIELD,
+     "scene.bodies[2].parent",
+     "\"hand\" names no body (give a body's \"name\" or index, or \"ground\")"},
+    {"parent the body itself by name", TREE_JOB("'tip'"), NULL, JOB_INVALID_FIELD,
+     "scene.bodies[2].parent", "\"tip\" must name a body before body 2 (it names body 2)"},
+    {"parent a later body by name",
+     "{'scene':{'bodies':[" NAMED("arm") "," NAMED_ON("palm", "'tip'") "," NAMED(
+         "tip") "]}," PASSIVE "," DUR "}",
+     NULL, JOB_INVALID_FIELD, "scene.bodies[1].parent",
+     "\"tip\" must name a body before body 1 (it names body 2)"},
+    {"parent by a name two bodies have",
+     "{'scene':{'bodies':[" NAMED("arm") "," NAMED("arm") "," NAMED_ON("tip", "'arm'") "]}," PASSIVE
+                                                                                       "," DUR "}",
+     NULL, JOB_INVALID_FIELD, "scene.bodies[2].parent",
+     "\"arm\" is the name of bodies 0 and 1: a name used to refer to a body must be unique"},
+    {"parent \"ground\" with a body named ground",
+     "{'scene':{'bodies':[" NAMED("ground") "," NAMED_ON("tip", "'ground'") "]}," PASSIVE "," DUR
+                                                                            "}",
+     NULL, JOB_INVALID_FIELD, "scene.bodies[1].parent",
+     "\"ground\" is the ground, but body 0 is named \"ground\" too: rename it, or refer to "
+     "bodies by index"},
+    {"parent index after the child", TREE_JOB("2"), NULL, JOB_INVALID_FIELD,
+     "scene.bodies[2].parent",
+     "must be -1 (the ground) or the index of a body before body 2: a whole number from -1 to 1 "
+     "(got 2)"},
+    {"parent index below the ground", TREE_JOB("-2"), NULL, JOB_INVALID_FIELD,
+     "scene.bodies[2].parent",
+     "must be -1 (the ground) or the index of a body before body 2: a whole number from -1 to 1 "
+     "(got -2)"},
+    {"fractional parent index", TREE_JOB("0.5"), NULL, JOB_INVALID_FIELD, "scene.bodies[2].parent",
+     "must be -1 (the ground) or the index of a body before body 2: a whole number from -1 to 1 "
+     "(got 0.5)"},
+    {"first body on a body", BODY_JOB(NAMED_ON("arm", "0")), NULL, JOB_INVALID_FIELD,
+     "scene.bodies[0].parent",
+     "must be -1 or \"ground\": nothing but the ground comes before body 0 (got 0)"},
+    {"parent an array", TREE_JOB("[1]"), NULL, JOB_INVALID_FIELD, "scene.bodies[2].parent",
+     "must be a body's index or name, or \"ground\" (got an array)"},
+    {"parent an empty name", TREE_JOB("''"), NULL, JOB_INVALID_FIELD, "scene.bodies[2].parent",
+     "\"\" names no body (give a body's \"name\" or index, or \"ground\")"},
     {"unknown stabilization",
      BAD_LOOP_JOB("{" CLOSING ",'anchor':[1,0,0],'stabilization':{'method':'projection'}}"), NULL,
      JOB_INVALID_FIELD, "scene.loop.stabilization.method",
@@ -1301,7 +1359,8 @@ Test(job_json, normalised_keys_come_in_canonical_order)
                       "'revolute'},'inertia':[1,1,1],'com':[0,0,0],'mass':1}]}}");
     char *text = cJSON_PrintUnformatted(j->normalised);
     char *want = json(
-        "{'name':'job','scene':{'gravity':[0,-9.81,0],'form':'auto','bodies':[{'mass':1,'com':[0,"
+        "{'name':'job','scene':{'gravity':[0,-9.81,0],'form':'auto','bodies':[{'parent':-1,'mass':"
+        "1,'com':[0,"
         "0,0],'inertia':[1,1,1],'joint':{'type':'revolute','axis':[0,0,1],'location':[0,0,0],"
         "'independent':true}}],"
         "'q0':[0],'v0':[1]},'controller':{'type':'none'},'disturbance':{'type':'none'},"
@@ -1313,6 +1372,59 @@ Test(job_json, normalised_keys_come_in_canonical_order)
     free(text);
     free(want);
     job_free(j);
+}
+
+/* the parents of job text's bodies, as parsed (spec.chain.parent) and as normalised */
+static void expect_parents(const char *text, const int *want, int n)
+{
+    job *j = parse_ok(text);
+    cr_assert_eq(j->spec.chain.nbodies, n);
+    cr_assert_eq(j->spec.chain.parent, j->parent);
+    const cJSON *bodies =
+        cJSON_GetObjectItem(cJSON_GetObjectItem(j->normalised, "scene"), "bodies");
+    for (int k = 0; k < n; k++) {
+        cr_expect_eq(j->parent[k], want[k], "body %d: parent %d, want %d", k, j->parent[k],
+                     want[k]);
+        const cJSON *p = cJSON_GetObjectItem(cJSON_GetArrayItem(bodies, k), "parent");
+        cr_assert(cJSON_IsNumber(p), "body %d: the normalised parent is not a number", k);
+        cr_expect_eq(p->valuedouble, want[k], "body %d: normalised parent %g", k, p->valuedouble);
+    }
+    job_free(j);
+}
+
+Test(job_json, parents_by_index_name_or_ground_are_written_as_indices)
+{
+    static const int chain[3] = {-1, 0, 1};
+    expect_parents(PASSIVE_JOB(""), chain, 2); /* the default: a chain */
+    expect_parents(TREE_JOB("'palm'"), chain, 3);
+    expect_parents(TREE_JOB("1"), chain, 3);
+    expect_parents(TREE_JOB("1.0"), chain, 3);
+    expect_parents("{'scene':{'bodies':[" NAMED_ON("arm", "'ground'") "," NAMED_ON(
+                       "palm", "'arm'") "," NAMED_ON("tip", "'palm'") "]}," PASSIVE "," DUR "}",
+                   chain, 3);
+    expect_parents("{'scene':{'bodies':[" NAMED_ON("arm", "-1") "]}," PASSIVE "," DUR "}", chain,
+                   1);
+
+    /* a name repeated among bodies no parent refers to is allowed */
+    expect_parents("{'scene':{'bodies':[" NAMED("arm") "," NAMED("x") "," NAMED("x") "]}," PASSIVE
+                                                                                     "," DUR "}",
+                   chain, 3);
+
+    /* a loop's body by name, written as its index: a square four-bar on the arm's tip, closed
+       on the arm (anchor (1, -1) in its frame) */
+    char *text = json("{'scene':{'bodies':[" NAMED("arm") "," BODY_AT(
+        "[0,-1,0]") "," DEP_BODY "," DEP_BODY "],'loop':{" CLOSING
+                    ",'anchor':[1,-1,0],'body':'arm'},'q0':[0,"
+                    "0,1.5707963267948966,1.5707963267948966]}," PASSIVE "," DUR "}");
+    job *j;
+    job_error err;
+    cr_assert_eq(job_parse(text, strlen(text), &j, &err), 0, "%s: %s", err.field, err.message);
+    cr_assert_eq(j->loop.on_body, 1);
+    cr_assert_eq(j->loop.body, 0);
+    const cJSON *loop = cJSON_GetObjectItem(cJSON_GetObjectItem(j->normalised, "scene"), "loop");
+    cr_assert_eq(cJSON_GetObjectItem(loop, "body")->valuedouble, 0);
+    job_free(j);
+    free(text);
 }
 
 Test(job_json, threads_are_the_runs_thread_count_also_over_a_preset)

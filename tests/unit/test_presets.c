@@ -17,7 +17,12 @@
  *  - the closure of the loop presets: the tip's closing point at q0, by forward kinematics
  *    worked here (planar) and by ctc_kinematics, against the anchor in the document, and the
  *    rotation of the RSSR's rocker about the closing axis; the mobility by Gruebler-Kutzbach
- *    counted here against the model's.
+ *    counted here against the model's;
+ *  - the trees: each body's parent written out here, against the job's and the model's; masses
+ *    from density x volume (the hand's aluminium) or Winter's anthropometric fractions (the
+ *    torso's arms), a box's or rod's inertia by its textbook formula; joints and tips posed by
+ *    ctc_kinematics against positions worked by hand (the Y's rods at the sum of their
+ *    ancestors' angles, a quarter turn of the wrist or the waist).
  * Positions are compared to 1e-12 m, numbers read back to 1e-15 relative.
  */
 #include <criterion/criterion.h>
@@ -55,6 +60,9 @@ static const char *const all_names[] = {
     "four_bar_passive",
     "arm_four_bar_pd",
     "rssr_passive",
+    "y_pendulum_pd",
+    "spatial_hand_pd",
+    "two_arm_torso_pd",
 };
 #define NPRESETS ((int)(sizeof all_names / sizeof all_names[0]))
 
@@ -84,6 +92,9 @@ static const struct preset_want {
     {0, 3, 3, 3, 1, 0, CTC_CTRL_NONE, 0, 10, 1e-10, 1e-12},
     {0, 4, 4, 4, 1, 2, CTC_CTRL_PD, 0, 10, 1e-8, 1e-10},
     {0, 3, 9, 7, 1, 0, CTC_CTRL_NONE, 0, 5, 1e-10, 1e-12},
+    {0, 5, 5, 5, 0, 5, CTC_CTRL_PD, 1, 5, 1e-8, 1e-10},
+    {0, 10, 10, 10, 0, 10, CTC_CTRL_PD, 0, 5, 1e-8, 1e-10},
+    {0, 7, 7, 7, 0, 7, CTC_CTRL_PD, 0, 5, 1e-8, 1e-10},
 };
 _Static_assert(sizeof preset_want / sizeof preset_want[0] == NPRESETS, "one row per preset");
 
@@ -929,6 +940,160 @@ Test(presets, rssr_rocker_turns_about_the_closing_axis_at_q0)
     double ra[3];
     for (int i = 0; i < 3; i++) ra[i] = r[3 * i] * a[0] + r[3 * i + 1] * a[1] + r[3 * i + 2] * a[2];
     expect_point(ra, a[0], a[1], a[2], "closing axis carried by the rocker");
+    pose_free(&p);
+    job_free(j);
+    cJSON_Delete(doc);
+}
+
+/* ---- trees ---- */
+
+/* The model of a tree preset's job, posed at q (nq) at rest, for any size. */
+static posed pose_tree(const job *j, const double *q)
+{
+    posed p;
+    char err[256] = "";
+    cr_assert_eq(ctc_model_build(&j->spec.chain, &p.m, err, sizeof err), CTC_OK,
+                 "ctc_model_build: %s", err);
+    p.d = ctc_data_new(p.m);
+    cr_assert_not_null(p.d);
+    double *v = calloc((size_t)p.m->nv, sizeof *v);
+    ctc_kinematics(p.m, p.d, q, v);
+    free(v);
+    return p;
+}
+
+/* the job's parents, and the model's, against want (n) */
+static void expect_parents(const job *j, const posed *p, const int *want, int n, const char *what)
+{
+    for (int k = 0; k < n; k++) {
+        cr_assert_eq(j->parent[k], want[k], "%s: body %d's parent in the job", what, k);
+        cr_assert_eq(p->m->body_parent[k], want[k], "%s: body %d's parent in the model", what, k);
+    }
+}
+
+Test(presets, y_pendulum_hangs_two_double_pendulums_from_the_arms_tip)
+{
+    static const int parent[5] = {-1, 0, 1, 0, 3};
+    static const double length[5] = {1, 0.5, 0.5, 0.5, 0.5}, mass[5] = {1, 0.5, 0.5, 0.5, 0.5};
+    cJSON *doc = build("y_pendulum_pd", NULL);
+    job *j = parse_doc(doc, "y_pendulum_pd");
+    posed p = pose_tree(j, j->q0);
+    cr_assert_eq(p.m->form, CTC_FORM_PLANAR, "the Y is planar");
+    expect_parents(j, &p, parent, 5, "y_pendulum_pd");
+
+    /* rods: mass and inertia m L^2 / 12 about the centre, along -y */
+    for (int k = 0; k < 5; k++) {
+        cr_assert_eq(j->bodies[k].mass, mass[k]);
+        expect_close(j->bodies[k].inertia[0], mass[k] * length[k] * length[k] / 12, 1e-15, "Ixx");
+        expect_close(j->bodies[k].com[1], -length[k] / 2, 1e-15, "com y");
+    }
+
+    /* at q0, rod k hangs at theta_k, the sum of its ancestors' angles and its own, from its
+       parent's tip */
+    double theta[5], tip[5][2];
+    for (int k = 0; k < 5; k++) {
+        int a = parent[k];
+        theta[k] = (a < 0 ? 0 : theta[a]) + j->q0[k];
+        tip[k][0] = (a < 0 ? 0 : tip[a][0]) + length[k] * sin(theta[k]);
+        tip[k][1] = (a < 0 ? 0 : tip[a][1]) - length[k] * cos(theta[k]);
+        const double end[3] = {0, -length[k], 0};
+        double got[3];
+        body_point(p.m, p.d, k, end, got);
+        expect_point(got, tip[k][0], tip[k][1], 0, "a rod's tip at q0");
+    }
+    pose_free(&p);
+    job_free(j);
+    cJSON_Delete(doc);
+}
+
+Test(presets, spatial_hand_is_aluminium_and_its_fingertips_hang_below_the_palm)
+{
+    static const int parent[10] = {-1, 0, 1, 2, 0, 4, 5, 0, 7, 8};
+    static const double link[3] = {0.045, 0.03, 0.025}, finger_x[3] = {-0.025, 0, 0.025};
+    const double rho = 2700, side = 0.015;
+    cJSON *doc = build("spatial_hand_pd", NULL);
+    job *j = parse_doc(doc, "spatial_hand_pd");
+    double q[10] = {0};
+    posed p = pose_tree(j, q);
+    cr_assert_eq(p.m->form, CTC_FORM_SPATIAL, "the hand is spatial");
+    expect_parents(j, &p, parent, 10, "spatial_hand_pd");
+
+    /* the palm: 0.08 x 0.02 x 0.1 m of aluminium, a box's inertia m (b^2 + c^2) / 12 */
+    double palm = rho * 0.08 * 0.02 * 0.1;
+    expect_close(j->bodies[0].mass, palm, 1e-14 * palm, "palm mass");
+    expect_close(j->bodies[0].inertia[0], palm * (0.02 * 0.02 + 0.1 * 0.1) / 12, 1e-15, "palm Ixx");
+    expect_close(j->bodies[0].inertia[8], palm * (0.08 * 0.08 + 0.02 * 0.02) / 12, 1e-15,
+                 "palm Izz");
+
+    /* q = 0: each finger's links straight down from the palm's far edge, its tip 0.2 m below the
+       wrist; each link's mass density x volume */
+    for (int f = 0; f < 3; f++) {
+        double z = -0.1;
+        for (int l = 0; l < 3; l++) {
+            int k = 1 + 3 * f + l;
+            double m = rho * side * side * link[l];
+            expect_close(j->bodies[k].mass, m, 1e-14 * m, "finger link mass");
+            double got[3];
+            const double origin[3] = {0, 0, 0}, end[3] = {0, 0, -link[l]};
+            body_point(p.m, p.d, k, origin, got);
+            expect_point(got, finger_x[f], 0, z, "a finger joint at q = 0");
+            z -= link[l];
+            body_point(p.m, p.d, k, end, got);
+            expect_point(got, finger_x[f], 0, z, "a finger link's end at q = 0");
+        }
+    }
+    pose_free(&p);
+
+    /* the wrist turned a quarter turn about y: the middle fingertip at (-0.2, 0, 0) */
+    q[0] = pi / 2;
+    p = pose_tree(j, q);
+    const double end[3] = {0, 0, -0.025};
+    double got[3];
+    body_point(p.m, p.d, 6, end, got);
+    expect_point(got, -0.2, 0, 0, "the middle fingertip after a quarter turn of the wrist");
+    pose_free(&p);
+    job_free(j);
+    cJSON_Delete(doc);
+}
+
+Test(presets, two_arm_torso_has_winters_segments_on_both_shoulders)
+{
+    static const int parent[7] = {-1, 0, 1, 2, 0, 4, 5};
+    /* Winter (2009) Table 4.1 for 70 kg, 1.75 m: mass fractions and length fractions */
+    static const double mfrac[3] = {0.028, 0.016, 0.006}, lfrac[3] = {0.186, 0.146, 0.108};
+    cJSON *doc = build("two_arm_torso_pd", NULL);
+    job *j = parse_doc(doc, "two_arm_torso_pd");
+    double q[7] = {0};
+    posed p = pose_tree(j, q);
+    cr_assert_eq(p.m->form, CTC_FORM_SPATIAL);
+    expect_parents(j, &p, parent, 7, "two_arm_torso_pd");
+    expect_close(j->bodies[0].mass, 0.355 * 70, 0.2, "torso mass (thorax and abdomen)");
+
+    /* q = 0: both arms straight down from (+-0.2, 0, 0.45); segment masses and lengths within
+       rounding of Winter's fractions */
+    for (int a = 0; a < 2; a++) {
+        double z = 0.45, x = a == 0 ? 0.2 : -0.2;
+        for (int l = 0; l < 3; l++) {
+            int k = 1 + 3 * a + l;
+            expect_close(j->bodies[k].mass, mfrac[l] * 70, 0.005, "segment mass");
+            double len = -2 * j->bodies[k].com[2]; /* a uniform cylinder: its centre halfway */
+            expect_close(len, lfrac[l] * 1.75, 0.005, "segment length");
+            double got[3];
+            const double origin[3] = {0, 0, 0};
+            body_point(p.m, p.d, k, origin, got);
+            expect_point(got, x, 0, z, "an arm joint at q = 0");
+            z -= len;
+        }
+    }
+    pose_free(&p);
+
+    /* the waist a quarter turn: the left shoulder at (0, 0.2, 0.45) */
+    q[0] = pi / 2;
+    p = pose_tree(j, q);
+    const double origin[3] = {0, 0, 0};
+    double got[3];
+    body_point(p.m, p.d, 1, origin, got);
+    expect_point(got, 0, 0.2, 0.45, "the left shoulder after a quarter turn of the waist");
     pose_free(&p);
     job_free(j);
     cJSON_Delete(doc);
