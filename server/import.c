@@ -27,6 +27,7 @@
  */
 #include "import.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -69,6 +70,26 @@ static void add_point_inertia(double J[9], double m, const double c[3])
         for (int j = 0; j < 3; j++) J[3 * i + j] += m * ((i == j ? cc : 0) - c[i] * c[j]);
 }
 
+/* x as cJSON prints and reads it back. cJSON 1.7 prints 15 significant digits whenever they read
+ * back within DBL_EPSILON relative, so a computed number may come back one unit in the last place
+ * off; replaced by that reading (a change within DBL_EPSILON relative), it prints and reads back
+ * exactly, and a printed job parses to the same spec. */
+static double printed(double x)
+{
+    char buf[32];
+    snprintf(buf, sizeof buf, "%1.15g", x);
+    double y = strtod(buf, NULL);
+    return fabs(y - x) <= fmax(fabs(x), fabs(y)) * DBL_EPSILON ? y : x;
+}
+
+/* cJSON array of the n numbers x, each printed() */
+static cJSON *numbers(const double *x, int n)
+{
+    double y[3];
+    for (int i = 0; i < n; i++) y[i] = printed(x[i]);
+    return cJSON_CreateDoubleArray(y, n);
+}
+
 /* a body being assembled: its links' mass properties about its origin */
 typedef struct body_acc {
     int link;   /* the link whose moving joint starts the body */
@@ -93,16 +114,16 @@ static cJSON *body_json(const body_acc *b, import_link *l)
     if (o == NULL) return NULL;
     int ok = cJSON_AddStringToObject(o, "name", l->name) != NULL &&
              cJSON_AddNumberToObject(o, "parent", b->parent) != NULL &&
-             cJSON_AddNumberToObject(o, "mass", b->m) != NULL &&
-             cJSON_AddItemToObject(o, "com", cJSON_CreateDoubleArray(c, 3));
+             cJSON_AddNumberToObject(o, "mass", printed(b->m)) != NULL &&
+             cJSON_AddItemToObject(o, "com", numbers(c, 3));
     cJSON *rows = cJSON_AddArrayToObject(o, "inertia");
     for (int i = 0; ok && rows != NULL && i < 3; i++)
-        ok = cJSON_AddItemToArray(rows, cJSON_CreateDoubleArray(&I[3 * i], 3));
+        ok = cJSON_AddItemToArray(rows, numbers(&I[3 * i], 3));
     cJSON *joint = cJSON_AddObjectToObject(o, "joint");
     ok = ok && rows != NULL && joint != NULL &&
          cJSON_AddStringToObject(joint, "type", ctc_joint_classes[l->type].name) != NULL &&
-         cJSON_AddItemToObject(joint, "axis", cJSON_CreateDoubleArray(b->axis, 3)) &&
-         cJSON_AddItemToObject(joint, "location", cJSON_CreateDoubleArray(b->location, 3));
+         cJSON_AddItemToObject(joint, "axis", numbers(b->axis, 3)) &&
+         cJSON_AddItemToObject(joint, "location", numbers(b->location, 3));
     while (ok && l->extra != NULL && l->extra->child != NULL) {
         cJSON *e = cJSON_DetachItemViaPointer(l->extra, l->extra->child);
         if (!cJSON_AddItemToObject(joint, e->string, e)) {

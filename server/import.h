@@ -42,7 +42,9 @@ typedef struct import_link {
  * the ground), "mass", "com", "inertia" (3 rows) and "joint" {"type", "axis", "location", and
  * the link's extra keys}. A fixed joint's child (and the root's fixed descendants, the ground) is
  * merged into the body it is fixed to: its mass, centre of mass and inertia added there (parallel
- * axis theorem), its children's joints re-placed in that body's frame. Returns the array (the
+ * axis theorem), its children's joints re-placed in that body's frame. Each number is the one
+ * cJSON prints and reads back (within DBL_EPSILON relative of the computed one), so a printed job
+ * parses to the same spec. Returns the array (the
  * caller owns it; the links' extra objects are moved into it or freed), or NULL with msg filled
  * ("line 40: <link name=\"wrist\">: ..."; NO_MEMORY: "out of memory") when a moving body has no
  * mass (massless bodies and point masses are not supported yet) or nothing moves. */

@@ -66,6 +66,7 @@
  * end.
  */
 #include "presets.h"
+#include "presets_robots.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -786,6 +787,11 @@ static const preset preset_table[] = {
      "Spatial RSSR linkage (crank about z, rocker about y) falling from rest, gravity -z, all "
      "joints passive",
      no_params, rssr_passive},
+    {"ur5_min_jerk", "UR5 (DH table) moving between two poses by minimum jerk, " PD_GAINS,
+     no_params, presets_ur5},
+    {"iiwa14_min_jerk",
+     "KUKA LBR iiwa 14 (URDF) moving between two poses by minimum jerk, " PD_GAINS, no_params,
+     presets_iiwa14},
 };
 
 const preset *presets_list(int *count)

@@ -11,6 +11,8 @@
  *   five_bar_{pd,pid,poles,lqr}                  paper 7.2, Fig. 12: a planar closed chain
  *   four_bar_passive                             a planar four-bar crank-rocker, no control
  *   rssr_passive                                 a spatial RSSR linkage, no control (gravity -z)
+ *   ur5_min_jerk, iiwa14_min_jerk                industrial arms from their DH table or URDF
+ *                                                (presets_robots.c), a minimum-jerk move, PD
  * presets.c describes each scene's geometry and numbers.
  */
 #ifndef PRESETS_H

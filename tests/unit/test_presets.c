@@ -55,6 +55,8 @@ static const char *const all_names[] = {
     "four_bar_passive",
     "arm_four_bar_pd",
     "rssr_passive",
+    "ur5_min_jerk",
+    "iiwa14_min_jerk",
 };
 #define NPRESETS ((int)(sizeof all_names / sizeof all_names[0]))
 
@@ -84,6 +86,8 @@ static const struct preset_want {
     {0, 3, 3, 3, 1, 0, CTC_CTRL_NONE, 0, 10, 1e-10, 1e-12},
     {0, 4, 4, 4, 1, 2, CTC_CTRL_PD, 0, 10, 1e-8, 1e-10},
     {0, 3, 9, 7, 1, 0, CTC_CTRL_NONE, 0, 5, 1e-10, 1e-12},
+    {0, 6, 6, 6, 0, 6, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
+    {0, 7, 7, 7, 0, 7, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
 };
 _Static_assert(sizeof preset_want / sizeof preset_want[0] == NPRESETS, "one row per preset");
 
@@ -277,7 +281,12 @@ Test(presets, every_preset_builds_a_complete_job_document)
         cr_assert_leq(strlen(name), JOB_MAX_NAME, "%s: name too long", all_names[i]);
         cr_assert_eq(strstr(name, "Kingsley et al. 2017") != NULL, w->paper,
                      "%s: name \"%s\" (cites the paper: %d)", all_names[i], name, w->paper);
-        cr_assert(cJSON_IsArray(at(doc, "scene.bodies")));
+        /* the bodies, or a robot's DH table or URDF that the job format converts into bodies */
+        const cJSON *scene = at(doc, "scene");
+        cr_assert(cJSON_IsArray(cJSON_GetObjectItemCaseSensitive(scene, "bodies")) ||
+                      cJSON_IsObject(cJSON_GetObjectItemCaseSensitive(scene, "dh")) ||
+                      cJSON_IsString(cJSON_GetObjectItemCaseSensitive(scene, "urdf")),
+                  "%s: no bodies, dh or urdf", all_names[i]);
         cr_assert(cJSON_IsArray(at(doc, "scene.gravity")));
         cr_assert(cJSON_IsArray(at(doc, "scene.q0")));
         cr_assert(cJSON_IsArray(at(doc, "scene.v0")));

@@ -24,7 +24,9 @@
  * hand xacro files (equal to Franka's modified DH table); its masses, centres of mass and
  * inertias here are illustrative. The two-link arm is the textbook planar arm (Spong, Hutchinson
  * and Vidyasagar, Robot Modeling and Control, section 7.3: l = 1 m, lc = 0.5 m, m = 1 kg) with a
- * slender-rod inertia m l^2 / 12 about the normal axes and a small one about the rod's.
+ * slender-rod inertia m l^2 / 12 about the normal axes and a small one about the rod's. The KUKA
+ * LBR iiwa 14 from Drake's iiwa14_no_collision.urdf (RobotLocomotion/drake, manipulation/models/
+ * iiwa_description), typed in here apart from its preset (server/presets_robots.c).
  */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -36,6 +38,8 @@
 #include "job_json.h"
 #include "model.h"
 #include "oracle.h"
+#include "presets.h"
+#include "sim.h"
 #include "urdf.h"
 
 #define DYN_TOL 1e-10
@@ -1064,4 +1068,139 @@ Test(urdf, scene_takes_one_of_bodies_urdf_and_dh)
     cr_assert_str_eq(err.message, "must be positive (got 0 kg; massless bodies and point masses "
                                   "are not supported yet)");
     free(doc);
+}
+
+/* ---- the robot presets ---- */
+
+/* Drake's iiwa14_no_collision.urdf, typed in again: the joints' rpy and xyz, the links' inertials
+ */
+static const tlink iiwa_links[] = {
+    {"base", 0, {0}, {0}, 0, {0}, T_FIXED, {0}, {0}, {0}},
+    {"iiwa_link_0",
+     1,
+     {-0.1, 0, 0.07},
+     {0},
+     5,
+     {0.05, 0.06, 0.03, 0, 0, 0},
+     T_FIXED,
+     {0},
+     {0},
+     {1, 0, 0}},
+    {"iiwa_link_1",
+     1,
+     {0, -0.03, 0.12},
+     {0},
+     5.76,
+     {0.033, 0.0333, 0.0123, 0, 0, 0},
+     T_REV,
+     {0, 0, 0.1575},
+     {0, 0, 0},
+     {0, 0, 1}},
+    {"iiwa_link_2",
+     1,
+     {0.0003, 0.059, 0.042},
+     {0},
+     6.35,
+     {0.0305, 0.0304, 0.011, 0, 0, 0},
+     T_REV,
+     {0, 0, 0.2025},
+     {PANDA_H, 0, 2 * PANDA_H},
+     {0, 0, 1}},
+    {"iiwa_link_3",
+     1,
+     {0, 0.03, 0.13},
+     {0},
+     3.5,
+     {0.025, 0.0238, 0.0076, 0, 0, 0},
+     T_REV,
+     {0, 0.2045, 0},
+     {PANDA_H, 0, 2 * PANDA_H},
+     {0, 0, 1}},
+    {"iiwa_link_4",
+     1,
+     {0, 0.067, 0.034},
+     {0},
+     3.5,
+     {0.017, 0.0164, 0.006, 0, 0, 0},
+     T_REV,
+     {0, 0, 0.2155},
+     {PANDA_H, 0, 0},
+     {0, 0, 1}},
+    {"iiwa_link_5",
+     1,
+     {0.0001, 0.021, 0.076},
+     {0},
+     3.5,
+     {0.01, 0.0087, 0.00449, 0, 0, 0},
+     T_REV,
+     {0, 0.1845, 0},
+     {-PANDA_H, 2 * PANDA_H, 0},
+     {0, 0, 1}},
+    {"iiwa_link_6",
+     1,
+     {0, 0.0006, 0.0004},
+     {0},
+     1.8,
+     {0.0049, 0.0047, 0.0036, 0, 0, 0},
+     T_REV,
+     {0, 0, 0.2155},
+     {PANDA_H, 0, 0},
+     {0, 0, 1}},
+    {"iiwa_link_7",
+     1,
+     {0, 0, 0.02},
+     {0},
+     1.2,
+     {0.001, 0.001, 0.001, 0, 0, 0},
+     T_REV,
+     {0, 0.081, 0},
+     {-PANDA_H, 2 * PANDA_H, 0},
+     {0, 0, 1}},
+};
+#define NIIWA ((int)(sizeof iiwa_links / sizeof iiwa_links[0]))
+
+/* the preset's parsed job, its run checked: done, with the exact model's error dynamics */
+static job *run_preset(const char *name)
+{
+    const preset *p = presets_find(name);
+    cr_assert_not_null(p, "no preset %s", name);
+    job_error err;
+    cJSON *doc = p->build(NULL, &err);
+    cr_assert_not_null(doc, "%s", err.message);
+    job *j = NULL;
+    cr_assert_eq(job_from_json(doc, &j, &err), 0, "%s: %s", err.field, err.message);
+    cJSON_Delete(doc);
+    ctc_sim_result *r = NULL;
+    char msg[256];
+    cr_assert_eq(ctc_sim_run(&j->spec, NULL, &r, msg, sizeof msg), CTC_OK, "%s", msg);
+    cr_assert_eq(r->status, CTC_RUN_DONE, "%s: %s", name, r->message);
+    /* started on the trajectory with the exact model: the error stays at the integrator's
+       tolerance (rtol 1e-8) */
+    cr_assert_leq(r->metrics.errdyn_dev, 1e-6, "%s: error-dynamics deviation %g", name,
+                  r->metrics.errdyn_dev);
+    for (int i = 0; i < r->metrics.nv; i++)
+        cr_assert_leq(r->metrics.e_max[i], 1e-6, "%s: |e[%d]| %g", name, i, r->metrics.e_max[i]);
+    ctc_sim_result_free(r);
+    return j;
+}
+
+Test(urdf, ur5_preset_tracks_exactly_and_holds_the_published_dynamics)
+{
+    tjoint J[6];
+    ur5_oracle(J);
+    job *j = run_preset("ur5_min_jerk");
+    cr_assert_eq(j->spec.chain.nbodies, 6);
+    cr_assert_eq(j->spec.chain.gravity[2], -9.81);
+    compare(j, J, 6);
+    job_free(j);
+}
+
+Test(urdf, iiwa14_preset_tracks_exactly_and_holds_the_published_dynamics)
+{
+    tjoint J[NIIWA];
+    int n = frames_oracle(iiwa_links, NIIWA, J);
+    job *j = run_preset("iiwa14_min_jerk");
+    cr_assert_eq(j->spec.chain.nbodies, 7);
+    compare(j, J, n);
+    job_free(j);
 }
