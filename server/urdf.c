@@ -210,8 +210,9 @@ static int keep_attrs(urdf_state *s, xmlNode *el, const char *const *attrs, cons
     cJSON *o = cJSON_CreateObject();
     if (o == NULL) goto oom;
     for (int i = 0; attrs[i] != NULL; i++) {
+        static const double none = 0; /* an absent attribute is left out (rc 1) */
         double x;
-        int rc = numbers_attr(s, el, attrs[i], 1, &x, &x);
+        int rc = numbers_attr(s, el, attrs[i], 1, &none, &x);
         if (rc < 0) {
             cJSON_Delete(o);
             return -1;

@@ -1204,3 +1204,98 @@ Test(urdf, iiwa14_preset_tracks_exactly_and_holds_the_published_dynamics)
     compare(j, J, n);
     job_free(j);
 }
+
+Test(urdf, joint_limit_and_dynamics_are_checked_and_kept)
+{
+    static const struct {
+        const char *joint, *field, *message;
+    } bad[] = {
+        {"'limit':{'effort':-1}", "scene.bodies[0].joint.limit.effort",
+         "must not be negative (got -1)"},
+        {"'limit':{'lower':1,'upper':0.5}", "scene.bodies[0].joint.limit.upper",
+         "must not be below lower (got 0.5 < 1)"},
+        {"'limit':{'torque':1}", "scene.bodies[0].joint.limit.torque", "unknown key \"torque\""},
+        {"'dynamics':{'damping':-0.1}", "scene.bodies[0].joint.dynamics.damping",
+         "must not be negative (got -0.1)"},
+        {"'dynamics':[]", "scene.bodies[0].joint.dynamics", "must be an object (got an array)"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char doc[512];
+        snprintf(doc, sizeof doc,
+                 "{'scene':{'bodies':[{'mass':1,'com':[0,-0.5,0],'inertia':[0.1,0.1,0.1],"
+                 "'joint':{'type':'revolute','axis':[0,0,1],%s}}]},'controller':{'type':'none'},"
+                 "'duration':0.1}",
+                 bad[i].joint);
+        for (char *c = doc; *c; c++)
+            if (*c == '\'') *c = '"';
+        job *j = NULL;
+        job_error err;
+        cr_assert_eq(job_parse(doc, strlen(doc), &j, &err), -1, "%s", bad[i].joint);
+        cr_assert_str_eq(err.field, bad[i].field);
+        cr_assert_str_eq(err.message, bad[i].message);
+    }
+    /* given ones are kept, in the format's order, whatever the document's */
+    const char *ok = "{\"scene\":{\"bodies\":[{\"mass\":1,\"com\":[0,-0.5,0],\"inertia\":[0.1,"
+                     "0.1,0.1],\"joint\":{\"type\":\"prismatic\",\"axis\":[1,0,0],\"limit\":{"
+                     "\"velocity\":0.5,\"upper\":0.3},\"dynamics\":{\"friction\":2}}}]},"
+                     "\"controller\":{\"type\":\"none\"},\"duration\":0.1}";
+    job *j = parse_ok(ok);
+    const cJSON *joint = cJSON_GetObjectItemCaseSensitive(
+        cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(
+                               cJSON_GetObjectItemCaseSensitive(j->normalised, "scene"), "bodies"),
+                           0),
+        "joint");
+    char *text = cJSON_PrintUnformatted(joint);
+    cr_assert_str_eq(text, "{\"type\":\"prismatic\",\"axis\":[1,0,0],\"location\":[0,0,0],"
+                           "\"independent\":true,\"limit\":{\"upper\":0.3,\"velocity\":0.5},"
+                           "\"dynamics\":{\"friction\":2}}");
+    free(text);
+    job_free(j);
+}
+
+Test(urdf, elements_and_attributes_not_modelled_are_ignored)
+{
+    /* the two-link arm dressed as robots come: namespaces, materials, visuals and collisions
+       with meshes, transmissions, Gazebo blocks, comments, an extra attribute on <limit> */
+    static const char dressed[] =
+        "<?xml version=\"1.0\"?>\n"
+        "<robot xmlns:drake=\"http://drake.mit.edu\" name=\"two_link\">\n"
+        "  <!-- a comment -->\n"
+        "  <material name=\"Grey\"><color rgba=\"0.4 0.4 0.4 1.0\"/></material>\n"
+        "  <link name=\"base\"><visual><geometry><box size=\"1 1 1\"/></geometry></visual></link>\n"
+        "  <link name=\"upper\">\n"
+        "    <inertial><origin xyz=\"0.5 0 0\"/><mass value=\"1\"/>\n"
+        "      <inertia ixx=\"1e-4\" iyy=\"0.0833333333333333\" izz=\"0.0833333333333333\"/>\n"
+        "    </inertial>\n"
+        "    <visual><origin xyz=\"0.5 0 0\"/><geometry><mesh filename=\"package://x/upper.obj\"/>"
+        "</geometry><material name=\"Grey\"/></visual>\n"
+        "    <collision><geometry><cylinder radius=\"0.05\" length=\"1\"/></geometry></collision>\n"
+        "  </link>\n"
+        "  <link name=\"fore\">\n"
+        "    <inertial><origin xyz=\"0.5 0 0\"/><mass value=\"1\"/>\n"
+        "      <inertia ixx=\"1e-4\" iyy=\"0.0833333333333333\" izz=\"0.0833333333333333\"/>\n"
+        "    </inertial>\n"
+        "  </link>\n"
+        "  <joint name=\"shoulder\" type=\"continuous\">\n"
+        "    <parent link=\"base\"/><child link=\"upper\"/><axis xyz=\"0 0 1\"/>\n"
+        "    <dynamics damping=\"0.05\" friction=\"0.01\"/>\n"
+        "    <safety_controller k_velocity=\"10\"/>\n"
+        "  </joint>\n"
+        "  <joint name=\"elbow\" type=\"revolute\">\n"
+        "    <parent link=\"upper\"/><child link=\"fore\"/><origin xyz=\"1 0 0\"/>\n"
+        "    <axis xyz=\"0 0 1\"/><limit drake:acceleration=\"8\" lower=\"-2.5\" upper=\"2.5\" "
+        "effort=\"20\" velocity=\"3\"/>\n"
+        "  </joint>\n"
+        "  <transmission name=\"t\"><type>SimpleTransmission</type><joint name=\"elbow\"/>"
+        "</transmission>\n"
+        "  <gazebo reference=\"upper\"><material>Gazebo/Grey</material></gazebo>\n"
+        "</robot>\n";
+    char msg[512];
+    cJSON *plain = urdf_to_bodies(two_link_urdf, strlen(two_link_urdf), NULL, 0, msg, sizeof msg);
+    cr_assert_not_null(plain, "%s", msg);
+    cJSON *dressed_bodies = urdf_to_bodies(dressed, strlen(dressed), NULL, 0, msg, sizeof msg);
+    cr_assert_not_null(dressed_bodies, "%s", msg);
+    cr_assert(cJSON_Compare(plain, dressed_bodies, 1));
+    cJSON_Delete(plain);
+    cJSON_Delete(dressed_bodies);
+}
