@@ -682,6 +682,22 @@ static int convert_robot(parser *p, const cJSON *scene, cJSON **converted)
 
 static int parse_scene_read(parser *p, const cJSON *v);
 
+/* An error about a body converted from a robot ("scene.bodies[K]..." or "body K: ...", paths and
+ * numbers the user never wrote) gets the body's name, its URDF link or DH row, appended. */
+static void name_converted_body(parser *p, const cJSON *converted)
+{
+    int k = -1;
+    if (sscanf(p->err->field, "scene.bodies[%d]", &k) != 1 &&
+        sscanf(p->err->message, "body %d:", &k) != 1)
+        return;
+    const cJSON *body = cJSON_GetArrayItem(json_member(converted, "bodies"), k);
+    const cJSON *name = json_member(body, "name");
+    if (!cJSON_IsString(name)) return;
+    size_t len = strlen(p->err->message);
+    snprintf(p->err->message + len, sizeof p->err->message - len, " (the robot's link \"%s\")",
+             name->valuestring);
+}
+
 int parse_scene(parser *p, const cJSON *doc)
 {
     const cJSON *v = json_required_member(p, doc, "", "scene", "");
@@ -693,6 +709,7 @@ int parse_scene(parser *p, const cJSON *doc)
     if (convert_robot(p, v, &converted) != 0) return -1;
     if (converted != NULL) v = converted;
     int rc = parse_scene_read(p, v);
+    if (rc != 0 && converted != NULL) name_converted_body(p, converted);
     cJSON_Delete(converted);
     return rc;
 }

@@ -1299,3 +1299,21 @@ Test(urdf, elements_and_attributes_not_modelled_are_ignored)
     cJSON_Delete(plain);
     cJSON_Delete(dressed_bodies);
 }
+
+Test(urdf, builder_errors_about_a_converted_body_name_its_link)
+{
+    /* fore's inertia breaks the triangle inequality: the builder's "body 1" is the link */
+    char *bad = strdup(two_link_urdf);
+    char *at = strstr(strstr(bad, "name=\"fore\""), "izz=\"");
+    memcpy(at, "izz=\"0.9999999999999999\"", strlen("izz=\"0.9999999999999999\""));
+    char *doc = urdf_job(bad);
+    job *j = NULL;
+    job_error err;
+    cr_assert_eq(job_parse(doc, strlen(doc), &j, &err), -1);
+    cr_assert_str_eq(err.field, "scene");
+    cr_assert(strncmp(err.message, "body 1: ", 8) == 0, "%s", err.message);
+    const char *tail = " (the robot's link \"fore\")";
+    cr_assert_str_eq(err.message + strlen(err.message) - strlen(tail), tail, "%s", err.message);
+    free(doc);
+    free(bad);
+}
