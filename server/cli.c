@@ -5,11 +5,12 @@
  *   ctcsim validate FILE|-
  *   ctcsim presets
  *   ctcsim preset NAME [KEY=VALUE ...]
+ *   ctcsim import FILE.urdf | --dh FILE.json
  *
  * It reads a job (job_json.h) from a file or standard input, runs it with the library in this
  * thread, and writes the series as CSV or one JSON object (result_out.h) to standard output or
  * OUT; a one-line summary goes to standard error. Exit codes:
- *   0  the run finished (status "done"), or the job is valid, or the listing was printed
+ *   0  the run finished (status "done"), or the job is valid, or the listing or job was printed
  *   1  usage error (unknown command or option)
  *   2  the job is invalid: "FILE: FIELD: MESSAGE" on standard error
  *   3  the run stopped early: diverged, integrator failure, timeout, or singular (a loop's
@@ -25,6 +26,7 @@
 #include "job_json.h"
 #include "presets.h"
 #include "result_out.h"
+#include "urdf.h"
 
 enum { EXIT_USAGE = 1, EXIT_INVALID = 2, EXIT_STOPPED = 3, EXIT_IO = 4 };
 
@@ -36,6 +38,7 @@ static const char usage[] =
     "       ctcsim validate FILE|-\n"
     "       ctcsim presets\n"
     "       ctcsim preset NAME [KEY=VALUE ...]\n"
+    "       ctcsim import FILE.urdf | --dh FILE.json\n"
     "\n"
     "  run       run a job (JSON, see api/job.schema.json) and write its series: CSV by\n"
     "            default, or with --format json one object with the normalised spec, the\n"
@@ -43,6 +46,9 @@ static const char usage[] =
     "  validate  check a job without running it; prints its normalised form\n"
     "  presets   list the ready-made jobs (the paper's scenes)\n"
     "  preset    print a preset's job; KEY=VALUE sets its parameters (e.g. n=16)\n"
+    "  import    print a complete job for a robot from a URDF file, or with --dh from a\n"
+    "            Denavit-Hartenberg table (JSON, the format's scene.dh): its bodies, a PD\n"
+    "            controller and a gentle minimum-jerk move of every joint, to edit and run\n"
     "\n"
     "  --channels LIST  comma-separated subset of q,qdot,q_des,qdot_des,e,tau,w,energy,loop\n"
     "  --every N        keep every N-th sample (and the last)\n"
@@ -318,6 +324,87 @@ static int cmd_preset(int argc, char **argv)
     return 0;
 }
 
+/* The job `ctcsim import` prints around a robot scene: a PD controller (zeta 1, tau 0.1 s: kp 100
+ * s^-2, kv 20 s^-1), every joint moving 0.2 rad (or m) from q = 0 by a minimum-jerk profile over
+ * 2 s, and 3 s simulated. */
+#define IMPORT_JOB_TAIL                                                                            \
+    "\"controller\": {\"type\": \"pd\", \"zeta\": 1, \"tau\": 0.1}, "                              \
+    "\"trajectory\": {\"type\": \"min_jerk\", \"from\": 0, \"to\": 0.2, \"start\": 0, "            \
+    "\"end\": 2}, \"duration\": 3"
+
+static int cmd_import(int argc, char **argv)
+{
+    int dh = argc == 2 && strcmp(argv[0], "--dh") == 0;
+    if (!(argc == 1 && argv[0][0] != '-') && !dh) {
+        fprintf(stderr, "ctcsim: import takes FILE.urdf or --dh FILE.json\n%s", usage);
+        return EXIT_USAGE;
+    }
+    const char *path = argv[argc - 1];
+    size_t len = 0;
+    const char *why = "";
+    char *text = read_input(path, &len, &why);
+    if (!text) {
+        fprintf(stderr, "ctcsim: %s: %s\n", path, why);
+        return EXIT_IO;
+    }
+    /* the job document: the robot as the scene's "urdf" or "dh", and the defaults above */
+    cJSON *doc = cJSON_Parse("{" IMPORT_JOB_TAIL "}");
+    cJSON *scene = cJSON_CreateObject(), *robot = NULL;
+    char name[JOB_MAX_NAME + 1] = "robot";
+    if (dh) {
+        robot = cJSON_ParseWithLength(text, len);
+        const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+        snprintf(name, sizeof name, "%.*s", (int)strcspn(base, "."), base);
+    } else {
+        char *z = realloc(text, len + 1);
+        if (z) {
+            text = z;
+            text[len] = '\0';
+            robot = cJSON_CreateString(text);
+            /* the robot's name, when it has one (errors are the job's to report) */
+            char msg[512], rname[JOB_MAX_NAME + 1];
+            cJSON_Delete(urdf_to_bodies(text, len, rname, sizeof rname, msg, sizeof msg));
+            if (rname[0]) snprintf(name, sizeof name, "%s", rname);
+        }
+    }
+    free(text);
+    if (!robot && dh) {
+        fprintf(stderr, "ctcsim: %s: not valid JSON (a DH table: {\"convention\", \"rows\"})\n",
+                path);
+        cJSON_Delete(doc);
+        cJSON_Delete(scene);
+        return EXIT_INVALID;
+    }
+    if (!doc || !scene || !robot || !name[0]) {
+        fprintf(stderr, "ctcsim: out of memory\n");
+        cJSON_Delete(doc);
+        cJSON_Delete(scene);
+        cJSON_Delete(robot);
+        return EXIT_IO;
+    }
+    cJSON_AddItemToObject(scene, dh ? "dh" : "urdf", robot);
+    cJSON_AddItemToObject(doc, "scene", scene);
+    cJSON_AddStringToObject(doc, "name", name);
+
+    job *j = NULL;
+    job_error err;
+    int rc = job_from_json(doc, &j, &err);
+    cJSON_Delete(doc);
+    if (rc != 0) {
+        fprintf(stderr, "ctcsim: %s: %s: %s\n", path, err.field, err.message);
+        return EXIT_INVALID;
+    }
+    char *out = cJSON_Print(j->normalised);
+    if (out) printf("%s\n", out);
+    fprintf(stderr,
+            "%s: %d bodies, %d coordinates: a PD controller moving each joint 0.2 from "
+            "q = 0 in 2 s\n",
+            path, j->spec.chain.nbodies, j->nv);
+    cJSON_free(out);
+    job_free(j);
+    return out ? 0 : EXIT_IO;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2 || strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0) {
@@ -329,6 +416,7 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "validate") == 0) return cmd_validate(argc - 2, argv + 2);
     if (strcmp(cmd, "presets") == 0 && argc == 2) return cmd_presets();
     if (strcmp(cmd, "preset") == 0) return cmd_preset(argc - 2, argv + 2);
+    if (strcmp(cmd, "import") == 0) return cmd_import(argc - 2, argv + 2);
     fprintf(stderr, "ctcsim: unknown command \"%s\"\n%s", cmd, usage);
     return EXIT_USAGE;
 }

@@ -38,7 +38,24 @@
  *                       frame (the world's for the first body; default [0,0,0]),
  *                       "independent": true (default) | false: actuated, or passive (its motion
  *                       follows from the loop); false only with a "loop" (an open chain is
- *                       fully actuated)}
+ *                       fully actuated),
+ *                       "limit": {"lower", "upper" (rad or m, lower <= upper), "effort" (N m or
+ *                       N), "velocity" (rad/s or m/s)} and "dynamics": {"damping", "friction"},
+ *                       optional, each key optional, magnitudes >= 0: kept in the job (a URDF
+ *                       gives them) for the lab plant; the simulation does not use them yet}
+ *       "urdf"      instead of "bodies": a URDF robot description, XML text (urdf.h), converted
+ *                   into bodies (import.h: frames rotated to be parallel to the world's at
+ *                   q = 0, fixed joints merged, the root link fixed to the world); the
+ *                   normalised document has the bodies. Errors at "scene.urdf", naming the
+ *                   element and its line
+ *       "dh"        instead of "bodies": a Denavit-Hartenberg table (dh.c), converted the same
+ *                   way: {"convention": "standard"|"modified", "rows": [1..JOB_MAX_BODIES rows
+ *                   {"name" (default "linkI"), "type": "revolute" (default)|"prismatic", "a" m,
+ *                   "alpha" rad, "d" m, "theta" rad (default 0), "mass" kg > 0, "com" [x,y,z] m
+ *                   and "inertia" (as a body's) in the row's DH frame}]}; q = 0 is the pose with
+ *                   each row's theta (or d), so q is the DH joint variable minus it
+ *                   With "urdf" or "dh" the default gravity is [0, 0, -9.81] (their z is up).
+ *                   Each converted body names its "parent" (a branched robot is a tree)
  *       "loop"      optional: closes the chain into one kinematic loop (model.h): a closing
  *                   joint from the last body (the tip) to a point fixed in the world, or in
  *                   an earlier body:

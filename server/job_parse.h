@@ -35,6 +35,11 @@ _Static_assert(sizeof(((job_error *)0)->field) == PATH_LEN, "paths are written i
     {                                                                                              \
         0, -9.81, 0                                                                                \
     } /* m/s^2 */
+/* the default gravity of a scene given as "urdf" or "dh": their z axis points up */
+#define ROBOT_GRAVITY                                                                              \
+    {                                                                                              \
+        0, 0, -9.81                                                                                \
+    } /* m/s^2 */
 
 /* rows of the format's tables (job_json.h): an object's keys; a default number, vector or JSON */
 #define FORMAT_KEYS(path, type_key, type, keys)                                                    \
@@ -97,6 +102,16 @@ int parse_scene(parser *p, const cJSON *doc);
  * loop "does not close" from q0, "scene.loop" for what the library says of the loop (its
  * mobility, the closing joint, a singular or over-constrained configuration), else "scene". */
 const char *loop_error_field(const char *msg);
+
+/* ---- a Denavit-Hartenberg table (dh.c) ---- */
+
+/* the keys of "scene.dh" and of each of its rows */
+extern const char *const dh_keys[];
+extern const char *const dh_row_keys[];
+
+/* "scene.dh" (the value dh): the table read and converted into *bodies, a new array of the job's
+ * bodies with "parent" indices (import.h; the caller frees it). Errors at "scene.dh...". */
+int parse_scene_dh(parser *p, const cJSON *dh, cJSON **bodies);
 
 /* ---- controller (job_json.c) ---- */
 

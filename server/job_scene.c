@@ -3,6 +3,10 @@
  * shapes or inertia and their inboard joints, the loop that may close the chain, and the
  * initial state.
  *
+ * A scene may give its robot as a URDF document ("urdf", urdf.h) or a Denavit-Hartenberg table
+ * ("dh", dh.c) instead of "bodies": convert_robot turns either into bodies first, and the rest
+ * of the parse reads those, so the normalised document holds the converted bodies.
+ *
  * The bodies are read first, then the loop (it needs their count and sets which coordinates are
  * controlled: nind), then ctc_model_build checks what only the library can (inertia tensors, the
  * plane of a planar chain, the loop's closing joint and mobility), and last q0 and v0, whose
@@ -19,6 +23,7 @@
 #include "data.h"
 #include "job_parse.h"
 #include "shapes.h"
+#include "urdf.h"
 
 #define AXIS_MIN_LENGTH 1e-12 /* as ctc_model_build */
 #define QUAT_UNIT_TOL 1e-6    /* |norm - 1| allowed of a quaternion in q0 */
@@ -104,16 +109,19 @@ static int parse_inertia(parser *p, const cJSON *v, const char *path, ctc_body_s
 }
 
 /* The joints' type names and keys, made from the joint table (model.h) once, by joint_format:
- * a joint of type t takes "type", "axis" when the row needs_axis, "location" and "independent";
- * a loop's closing joint is one of the loop_closing kinds, listed in table order. The rows of the
- * format's tables (job_scene_joint_objects) follow from the same lists. */
-#define JOINT_KEYS_MAX 5
+ * a joint of type t takes "type", "axis" when the row needs_axis, "location" and "independent",
+ * and a body's joint "limit" and "dynamics" too (kept for the lab plant); a loop's closing
+ * joint is one of the loop_closing kinds, listed in table order. The rows of the format's tables
+ * (job_scene_joint_objects) follow from the same lists. */
+#define JOINT_KEYS_MAX 7
 static struct {
     const char *names[CTC_JOINT_NTYPES]; /* by ctc_joint_type */
     const char *keys[CTC_JOINT_NTYPES][JOINT_KEYS_MAX];
     const char *const *by_type[CTC_JOINT_NTYPES];
     const char *all[JOINT_KEYS_MAX]; /* the keys of every type together */
-    int nloop;                       /* the closing joint's kinds: */
+    /* a closing joint's keys, by type */
+    const char *loop_keys[CTC_JOINT_NTYPES][JOINT_KEYS_MAX];
+    int nloop; /* the closing joint's kinds: */
     ctc_joint_type loop_types[CTC_JOINT_NTYPES];
     const char *loop_names[CTC_JOINT_NTYPES];
     const char *const *loop_by_type[CTC_JOINT_NTYPES];
@@ -122,14 +130,19 @@ static struct {
 static pthread_once_t joint_format_once = PTHREAD_ONCE_INIT;
 job_format_object job_scene_joint_objects[2 * CTC_JOINT_NTYPES + 3];
 
-/* keys of a joint (with an axis or not) into out, NULL-terminated */
-static void joint_keys_of(int axis, const char **out)
+/* keys of a joint (with an axis or not; a body's joint, with "limit" and "dynamics", or a
+ * loop's) into out, NULL-terminated */
+static void joint_keys_of(int axis, int body, const char **out)
 {
     int n = 0;
     out[n++] = "type";
     if (axis) out[n++] = "axis";
     out[n++] = "location";
     out[n++] = "independent";
+    if (body) {
+        out[n++] = "limit";
+        out[n++] = "dynamics";
+    }
     out[n] = NULL;
 }
 
@@ -139,17 +152,18 @@ static void build_joint_format(void)
     for (int t = 0; t < CTC_JOINT_NTYPES; t++) {
         const ctc_joint_class *c = &ctc_joint_classes[t];
         jf.names[t] = c->name;
-        joint_keys_of(c->needs_axis, jf.keys[t]);
+        joint_keys_of(c->needs_axis, 1, jf.keys[t]);
         jf.by_type[t] = jf.keys[t];
         any_axis |= c->needs_axis;
         if (!c->loop_closing) continue;
+        joint_keys_of(c->needs_axis, 0, jf.loop_keys[t]);
         jf.loop_types[jf.nloop] = (ctc_joint_type)t;
         jf.loop_names[jf.nloop] = c->name;
-        jf.loop_by_type[jf.nloop++] = jf.keys[t];
+        jf.loop_by_type[jf.nloop++] = jf.loop_keys[t];
         loop_axis |= c->needs_axis;
     }
-    joint_keys_of(any_axis, jf.all);
-    joint_keys_of(loop_axis, jf.loop_all);
+    joint_keys_of(any_axis, 1, jf.all);
+    joint_keys_of(loop_axis, 0, jf.loop_all);
 
     job_format_object *rows = job_scene_joint_objects;
     rows[r++] = (job_format_object)FORMAT_KEYS("scene.bodies[].joint", "type", NULL, jf.all);
@@ -210,6 +224,45 @@ static int parse_joint_rest(parser *p, const cJSON *v, const char *path, const c
     return 0;
 }
 
+static const char *const limit_keys[] = {"lower", "upper", "effort", "velocity", NULL};
+static const char *const dynamics_keys[] = {"damping", "friction", NULL};
+
+/* A joint's "limit" and "dynamics" (optional; joint v at path), kept in the document for the
+ * plant that will use them; each given number is checked and written to out. */
+static int parse_joint_extras(parser *p, const cJSON *v, const char *path, cJSON *out)
+{
+    static const char *const names[2] = {"limit", "dynamics"};
+    static const char *const *const keys[2] = {limit_keys, dynamics_keys};
+    char at[PATH_LEN], key_at[PATH_LEN];
+    for (int e = 0; e < 2; e++) {
+        const cJSON *x = json_member(v, names[e]);
+        if (x == NULL) continue;
+        json_key_path(at, path, names[e]);
+        if (json_object_at(p, x, at) != 0 || json_check_keys(p, x, at, keys[e], NULL, NULL) != 0)
+            return -1;
+        cJSON *o = json_put(p, out, names[e], cJSON_CreateObject());
+        double val[4];
+        int has[4] = {0};
+        for (int i = 0; keys[e][i] != NULL; i++) {
+            if (json_member(x, keys[e][i]) == NULL) continue;
+            if (json_member_number(p, x, at, keys[e][i], REQUIRED, 0, &val[i]) != 0) return -1;
+            has[i] = 1;
+            /* all but a limit's lower and upper are magnitudes */
+            if ((e == 1 || i >= 2) && val[i] < 0) {
+                return json_error_at(p->err, JOB_INVALID_FIELD,
+                                     json_key_path(key_at, at, keys[e][i]),
+                                     "must not be negative (got %g)", val[i]);
+            }
+            json_put_number(p, o, keys[e][i], val[i]);
+        }
+        if (e == 0 && has[0] && has[1] && !(val[0] <= val[1])) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(key_at, at, "upper"),
+                                 "must not be below lower (got %g < %g)", val[1], val[0]);
+        }
+    }
+    return 0;
+}
+
 /* body k's inboard joint */
 static int parse_joint(parser *p, const cJSON *body, const char *body_path, int k,
                        ctc_joint_spec *joint, cJSON *out_body)
@@ -229,7 +282,9 @@ static int parse_joint(parser *p, const cJSON *body, const char *body_path, int 
     if (ctc_joint_classes[type].needs_axis && parse_axis(p, v, path, joint->axis, out) != 0) {
         return -1;
     }
-    return parse_joint_rest(p, v, path, body_path, joint, 1, &p->j->independent[k], out);
+    if (parse_joint_rest(p, v, path, body_path, joint, 1, &p->j->independent[k], out) != 0)
+        return -1;
+    return parse_joint_extras(p, v, path, out);
 }
 
 /* A reference to a body (body_ref): the parent of a body, or the body a loop closes on. */
@@ -653,18 +708,106 @@ const char *loop_error_field(const char *msg)
     return "scene";
 }
 
-static const char *const scene_keys[] = {"gravity", "form", "bodies", "loop", "q0", "v0", NULL};
+static const char *const scene_keys[] = {"gravity", "form", "bodies", "urdf", "dh",
+                                         "loop",    "q0",   "v0",     NULL};
+
+/* A robot the scene carries as "urdf" (text) or "dh" (a table), instead of "bodies": *converted
+ * is a copy of the scene with the robot's bodies (import.h) in "bodies" and, unless the scene
+ * gives one, the gravity of a robot whose z axis is up; NULL when the scene has "bodies". Each
+ * converted body names its parent by index (a body before it, or -1 for the ground), so a
+ * branched robot (a gripper's two fingers) is a tree. */
+static int convert_robot(parser *p, const cJSON *scene, cJSON **converted)
+{
+    static const char *const kinds[2] = {"urdf", "dh"};
+    const cJSON *given[2] = {json_member(scene, "urdf"), json_member(scene, "dh")};
+    char msg[512];
+    *converted = NULL;
+    if (given[0] == NULL && given[1] == NULL) return 0;
+    int kind = given[0] != NULL ? 0 : 1;
+    const char *field = kind == 0 ? "scene.urdf" : "scene.dh";
+    if (given[1 - kind] != NULL || json_member(scene, "bodies") != NULL) {
+        const char *other = given[1 - kind] != NULL ? kinds[1 - kind] : "bodies";
+        return json_error_at(p->err, JOB_INVALID_FIELD, field,
+                             "not allowed with \"%s\" (give the robot one way)", other);
+    }
+    cJSON *bodies = NULL;
+    if (kind == 0) {
+        if (!cJSON_IsString(given[0])) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, field,
+                                 "must be a string, the URDF document (got %s)",
+                                 json_kind(given[0]));
+        }
+        const char *text = given[0]->valuestring;
+        bodies = urdf_to_bodies(text, strlen(text), NULL, 0, msg, sizeof msg);
+        if (bodies == NULL) {
+            if (strcmp(msg, "out of memory") == 0) return json_out_of_memory(p->err);
+            return json_error_at(p->err, JOB_INVALID_FIELD, field, "%s", msg);
+        }
+    } else if (parse_scene_dh(p, given[1], &bodies) != 0) {
+        return -1;
+    }
+    cJSON *copy = cJSON_Duplicate(scene, 1);
+    if (copy == NULL) {
+        cJSON_Delete(bodies);
+        return json_out_of_memory(p->err);
+    }
+    cJSON_DeleteItemFromObjectCaseSensitive(copy, kinds[kind]);
+    if (!cJSON_AddItemToObject(copy, "bodies", bodies)) {
+        cJSON_Delete(bodies);
+        cJSON_Delete(copy);
+        return json_out_of_memory(p->err);
+    }
+    if (json_member(copy, "gravity") == NULL) {
+        static const double z_up[3] = ROBOT_GRAVITY;
+        if (!cJSON_AddItemToObject(copy, "gravity", cJSON_CreateDoubleArray(z_up, 3))) {
+            cJSON_Delete(copy);
+            return json_out_of_memory(p->err);
+        }
+    }
+    *converted = copy;
+    return 0;
+}
+
+static int parse_scene_read(parser *p, const cJSON *v);
+
+/* An error about a body converted from a robot ("scene.bodies[K]..." or "body K: ...", paths and
+ * numbers the user never wrote) gets the body's name, its URDF link or DH row, appended. */
+static void name_converted_body(parser *p, const cJSON *converted)
+{
+    int k = -1;
+    if (sscanf(p->err->field, "scene.bodies[%d]", &k) != 1 &&
+        sscanf(p->err->message, "body %d:", &k) != 1)
+        return;
+    const cJSON *body = cJSON_GetArrayItem(json_member(converted, "bodies"), k);
+    const cJSON *name = json_member(body, "name");
+    if (!cJSON_IsString(name)) return;
+    size_t len = strlen(p->err->message);
+    snprintf(p->err->message + len, sizeof p->err->message - len, " (the robot's link \"%s\")",
+             name->valuestring);
+}
 
 int parse_scene(parser *p, const cJSON *doc)
 {
-    static const double gravity[3] = DEFAULT_GRAVITY;
-    job *j = p->j;
-    ctc_chain_spec *chain = &j->spec.chain;
     const cJSON *v = json_required_member(p, doc, "", "scene", "");
     if (v == NULL || json_object_at(p, v, "scene") != 0 ||
         json_check_keys(p, v, "scene", scene_keys, NULL, NULL) != 0) {
         return -1;
     }
+    cJSON *converted = NULL;
+    if (convert_robot(p, v, &converted) != 0) return -1;
+    if (converted != NULL) v = converted;
+    int rc = parse_scene_read(p, v);
+    if (rc != 0 && converted != NULL) name_converted_body(p, converted);
+    cJSON_Delete(converted);
+    return rc;
+}
+
+/* the scene v, with its bodies given as "bodies" */
+static int parse_scene_read(parser *p, const cJSON *v)
+{
+    static const double gravity[3] = DEFAULT_GRAVITY;
+    job *j = p->j;
+    ctc_chain_spec *chain = &j->spec.chain;
     cJSON *out = json_put(p, p->norm, "scene", cJSON_CreateObject());
 
     /* gravity and form */
@@ -714,6 +857,10 @@ const job_format_object job_scene_objects[] = {
     FORMAT_KEYS("scene.bodies[].shape", "type", "rod", shape_keys_rod),
     FORMAT_KEYS("scene.bodies[].shape", "type", "box", shape_keys_box),
     FORMAT_KEYS("scene.bodies[].shape", "type", "cylinder", shape_keys_cylinder),
+    FORMAT_KEYS("scene.bodies[].joint.limit", NULL, NULL, limit_keys),
+    FORMAT_KEYS("scene.bodies[].joint.dynamics", NULL, NULL, dynamics_keys),
+    FORMAT_KEYS("scene.dh", NULL, NULL, dh_keys),
+    FORMAT_KEYS("scene.dh.rows[]", NULL, NULL, dh_row_keys),
     FORMAT_KEYS("scene.loop", NULL, NULL, loop_keys),
     FORMAT_KEYS("scene.loop.stabilization", "method", NULL, stab_keys_all),
     FORMAT_KEYS("scene.loop.stabilization", "method", "project", stab_keys[CTC_LOOP_PROJECT]),

@@ -84,6 +84,7 @@
  * end.
  */
 #include "presets.h"
+#include "presets_robots.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -1059,6 +1060,11 @@ static const preset preset_table[] = {
      "Spatial torso on a waist with two three-link arms swinging in opposition, tracking "
      "sines, " PD_GAINS ", gravity -z",
      no_params, two_arm_torso_pd},
+    {"ur5_min_jerk", "UR5 (DH table) moving between two poses by minimum jerk, " PD_GAINS,
+     no_params, presets_ur5},
+    {"iiwa14_min_jerk",
+     "KUKA LBR iiwa 14 (URDF) moving between two poses by minimum jerk, " PD_GAINS, no_params,
+     presets_iiwa14},
 };
 
 const preset *presets_list(int *count)

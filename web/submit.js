@@ -1,7 +1,9 @@
 /*
  * submit.js - the job form (#/submit, #/submit?preset=NAME, #/submit?job=ID): start from a
  * preset or an earlier job, edit in the form or in the JSON beside it (the two kept in sync),
- * or upload a file; validate on the server, run, follow the progress, and open the job.
+ * or upload a file (a job, or a robot's URDF, which becomes the job `ctcsim import` prints: a PD
+ * controller moving every joint 0.2 from q = 0 by minimum jerk); validate on the server, run,
+ * follow the progress, and open the job.
  *
  * The textarea (textarea#job-json) holds the document that is sent. Form edits rewrite it;
  * typing in it redraws the form once it parses. A server error is shown next to the field
@@ -13,6 +15,20 @@ import {getJob, getPreset, listPresets, postJob, validateJob} from "./api.js";
 import {el, errorBox, isFinished, prettyJson, sleep} from "./dom.js";
 import {jobForm} from "./jobform.js";
 
+/* The job for a robot given as URDF text (the server converts it into bodies), as `ctcsim import`
+ * makes it: named after the robot (or the file), PD with zeta 1 and tau 0.1 s, every joint moving
+ * 0.2 rad or m from q = 0 by minimum jerk over 2 s, 3 s simulated. */
+function robotJob(urdf, fileName) {
+  const m = /<robot\b[^>]*\bname\s*=\s*"([^"]+)"/.exec(urdf);
+  return {
+    name: m ? m[1] : fileName.replace(/\.[^.]*$/, ""),
+    scene: {urdf},
+    controller: {type: "pd", zeta: 1, tau: 0.1},
+    trajectory: {type: "min_jerk", from: 0, to: 0.2, start: 0, end: 2},
+    duration: 3,
+  };
+}
+
 export async function submitView(root, ctx) {
   document.title = "New job - ctcsim";
   let doc = null;
@@ -20,7 +36,7 @@ export async function submitView(root, ctx) {
 
   const presetSel = el("select", {id: "preset"}, el("option", {value: "", text: "(none: edit or paste the JSON)"}));
   const params = el("span", {class: "preset-params"});
-  const file = el("input", {type: "file", id: "job-file", accept: ".json,application/json"});
+  const file = el("input", {type: "file", id: "job-file", accept: ".json,application/json,.urdf,.xml"});
   const formError = el("div", {id: "form-error", role: "alert"});
   const fields = el("div", {class: "form-sections"});
   const validateBtn = el("button", {type: "button", id: "validate-job", text: "Validate"});
@@ -35,7 +51,7 @@ export async function submitView(root, ctx) {
   root.append(el("h1", {text: "New job"}),
     el("p", {class: "lead", text: "Start from a preset (the paper's scenes), change the controller, trajectory, disturbance or integrator, and run. The JSON on the right is what is sent; edit it for anything the form does not show."}),
     el("div", {class: "toolbar"}, el("label", {}, "Preset ", presetSel), params,
-      el("label", {}, "or upload a job file ", file)),
+      el("label", {}, "or upload a job or a URDF file ", file)),
     formError,
     el("div", {class: "submit-grid"}, form,
       el("section", {class: "json-col"}, el("h2", {}, el("label", {for: "job-json", text: "Job JSON"})), textarea, jsonNote)));
@@ -122,9 +138,14 @@ export async function submitView(root, ctx) {
   file.addEventListener("change", async () => {
     const f = file.files[0];
     if (!f) return;
-    textarea.value = await f.text();
+    const text = await f.text();
     presetSel.value = "";
     showParams("");
+    if (/\.(urdf|xml)$/i.test(f.name) || text.trimStart().startsWith("<")) {
+      setDoc(robotJob(text, f.name));
+      return;
+    }
+    textarea.value = text;
     try { setDoc(JSON.parse(textarea.value), true); } catch (e) {
       clearErrors();
       formError.append(el("p", {class: "error", text: `${f.name} is not valid JSON: ${e.message}`}));

@@ -165,6 +165,59 @@ expect_grep "the parent's field and reason" "$tmp/err" 'scene.bodies[1].parent: 
 expect_exit 0 "validate the Y tree" "$CTCSIM" validate "$tmp/y.json"
 expect_grep "validate lists a tree's parents" "$tmp/err" "valid (5 bodies in a tree, parents -1 0 1 0 3, 5 coordinates, controller pd)"
 expect_grep "the normalised Y's right branch hangs from the arm" "$tmp/out" '"parent":	0,'
+# import: a URDF arm and a DH table become complete jobs that run; bad input exits 2 naming the
+# element and its line
+cat >"$tmp/arm.urdf" <<'EOF'
+<?xml version="1.0"?>
+<robot name="two_link_arm">
+  <link name="base"/>
+  <link name="upper">
+    <inertial><origin xyz="0.5 0 0"/><mass value="1"/>
+      <inertia ixx="1e-4" iyy="0.0833" izz="0.0833"/></inertial>
+  </link>
+  <link name="fore">
+    <inertial><origin xyz="0.5 0 0"/><mass value="1"/>
+      <inertia ixx="1e-4" iyy="0.0833" izz="0.0833"/></inertial>
+  </link>
+  <joint name="shoulder" type="continuous">
+    <parent link="base"/><child link="upper"/><axis xyz="0 0 1"/>
+  </joint>
+  <joint name="elbow" type="revolute">
+    <parent link="upper"/><child link="fore"/><origin xyz="1 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="30" velocity="3"/>
+  </joint>
+</robot>
+EOF
+expect_exit 0 "import a URDF" "$CTCSIM" import "$tmp/arm.urdf"
+cp "$tmp/out" "$tmp/arm_job.json"
+expect_grep "the imported job is named after the robot" "$tmp/arm_job.json" '"name":	"two_link_arm"'
+expect_grep "the imported job has its bodies" "$tmp/arm_job.json" '"name":	"fore"'
+expect_grep "the imported job keeps the joint limit" "$tmp/arm_job.json" '"effort":	30'
+expect_grep "the imported job has a minimum-jerk move" "$tmp/arm_job.json" '"type":	"min_jerk"'
+expect_exit 0 "the imported job runs" "$CTCSIM" run "$tmp/arm_job.json" -o "$tmp/arm_run.csv"
+expect_grep "the imported job runs with PD" "$tmp/err" "two_link_arm: done, spatial pd"
+cat >"$tmp/dh.json" <<'EOF'
+{"convention": "standard", "rows": [
+  {"a": 0.5, "alpha": 1.5707963267948966, "d": 0.3, "mass": 2, "com": [-0.25, 0, 0],
+   "inertia": [0.002, 0.04, 0.04]},
+  {"type": "prismatic", "a": 0, "alpha": 0, "d": 0.2, "theta": 0.3, "mass": 1,
+   "com": [0, 0, -0.1], "inertia": [0.01, 0.01, 0.001]}]}
+EOF
+expect_exit 0 "import a DH table" "$CTCSIM" import --dh "$tmp/dh.json"
+cp "$tmp/out" "$tmp/dh_job.json"
+expect_exit 0 "the imported DH job runs" "$CTCSIM" run "$tmp/dh_job.json" -o "$tmp/dh_run.csv"
+expect_grep "the DH job is named after its file" "$tmp/err" "dh: done, spatial pd"
+printf '<robot name="r">\n<link name="a">\n</robot>\n' >"$tmp/unclosed.urdf"
+expect_exit 2 "import an unclosed tag" "$CTCSIM" import "$tmp/unclosed.urdf"
+expect_grep "the unclosed tag is named with its line" "$tmp/err" "unclosed.urdf: scene.urdf: line 3: not well-formed XML: Opening and ending tag mismatch: link line 2 and robot"
+sed 's/type="continuous"/type="floating"/' "$tmp/arm.urdf" >"$tmp/floating.urdf"
+expect_exit 2 "import a floating joint" "$CTCSIM" import "$tmp/floating.urdf"
+expect_grep "the floating joint is named with its line" "$tmp/err" 'floating.urdf: scene.urdf: line 12: <joint name="shoulder">: type "floating" is not supported'
+echo '{"convention": "craig", "rows": []}' >"$tmp/dh_bad.json"
+expect_exit 2 "import a bad DH table" "$CTCSIM" import --dh "$tmp/dh_bad.json"
+expect_grep "the DH field is named" "$tmp/err" "dh_bad.json: scene.dh.convention: "
+expect_exit 1 "import without a file" "$CTCSIM" import
+expect_exit 4 "import a missing file" "$CTCSIM" import "$tmp/nope.urdf"
 
 # every example job of the API documentation is valid
 for example in api/examples/*.json; do

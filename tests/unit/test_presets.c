@@ -63,6 +63,8 @@ static const char *const all_names[] = {
     "y_pendulum_pd",
     "spatial_hand_pd",
     "two_arm_torso_pd",
+    "ur5_min_jerk",
+    "iiwa14_min_jerk",
 };
 #define NPRESETS ((int)(sizeof all_names / sizeof all_names[0]))
 
@@ -95,6 +97,8 @@ static const struct preset_want {
     {0, 5, 5, 5, 0, 5, CTC_CTRL_PD, 1, 5, 1e-8, 1e-10},
     {0, 10, 10, 10, 0, 10, CTC_CTRL_PD, 0, 5, 1e-8, 1e-10},
     {0, 7, 7, 7, 0, 7, CTC_CTRL_PD, 0, 5, 1e-8, 1e-10},
+    {0, 6, 6, 6, 0, 6, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
+    {0, 7, 7, 7, 0, 7, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
 };
 _Static_assert(sizeof preset_want / sizeof preset_want[0] == NPRESETS, "one row per preset");
 
@@ -288,7 +292,12 @@ Test(presets, every_preset_builds_a_complete_job_document)
         cr_assert_leq(strlen(name), JOB_MAX_NAME, "%s: name too long", all_names[i]);
         cr_assert_eq(strstr(name, "Kingsley et al. 2017") != NULL, w->paper,
                      "%s: name \"%s\" (cites the paper: %d)", all_names[i], name, w->paper);
-        cr_assert(cJSON_IsArray(at(doc, "scene.bodies")));
+        /* the bodies, or a robot's DH table or URDF that the job format converts into bodies */
+        const cJSON *scene = at(doc, "scene");
+        cr_assert(cJSON_IsArray(cJSON_GetObjectItemCaseSensitive(scene, "bodies")) ||
+                      cJSON_IsObject(cJSON_GetObjectItemCaseSensitive(scene, "dh")) ||
+                      cJSON_IsString(cJSON_GetObjectItemCaseSensitive(scene, "urdf")),
+                  "%s: no bodies, dh or urdf", all_names[i]);
         cr_assert(cJSON_IsArray(at(doc, "scene.gravity")));
         cr_assert(cJSON_IsArray(at(doc, "scene.q0")));
         cr_assert(cJSON_IsArray(at(doc, "scene.v0")));

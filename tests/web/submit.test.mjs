@@ -2,7 +2,9 @@
  * submit.test.mjs - the job form (#/submit): the presets of GET /api/presets, a preset filling the
  * form and the JSON, the two kept in sync both ways, a preset submitted from the form showing its
  * progress and ending on the job's view with the job as entered, the server's validation errors
- * shown at their fields (and nothing queued), a job uploaded from a file, and the keyboard.
+ * shown at their fields (and nothing queued), a job uploaded from a file, a robot uploaded as a
+ * URDF file (the job `ctcsim import` makes, run with the bodies the server converted), and the
+ * keyboard.
  */
 import assert from 'node:assert/strict';
 import { readFile, writeFile } from 'node:fs/promises';
@@ -224,6 +226,38 @@ test('a job uploaded from a file fills the JSON and the form, and runs as the fi
         assert.deepEqual(job.spec.controller, doc.controller, 'controller (per-joint poles, model error) as in the file');
         assert.deepEqual(job.spec.trajectory, doc.trajectory, 'the splines as in the file');
         assert.equal(job.spec.duration, doc.duration);
+    });
+});
+
+test('a URDF file uploaded becomes a robot job that runs with its converted bodies', async () => {
+    const urdf = `<?xml version="1.0"?>
+<robot name="web_arm">
+  <link name="base"/>
+  <link name="upper"><inertial><origin xyz="0.5 0 0"/><mass value="1"/>
+    <inertia ixx="1e-4" iyy="0.0833" izz="0.0833"/></inertial></link>
+  <link name="fore"><inertial><origin xyz="0.5 0 0"/><mass value="1"/>
+    <inertia ixx="1e-4" iyy="0.0833" izz="0.0833"/></inertial></link>
+  <joint name="shoulder" type="continuous"><parent link="base"/><child link="upper"/><axis xyz="0 0 1"/></joint>
+  <joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/><origin xyz="1 0 0"/><axis xyz="0 1 0"/></joint>
+</robot>
+`;
+    const file = path.join(tempDir('ctcsim-web-urdf-'), 'arm.urdf');
+    await writeFile(file, urdf);
+    await withView(browser, srv, '#/submit', 'submit-urdf', async (page) => {
+        await page.locator('input#job-file').setInputFiles(file);
+        await pollValue(() => jobJson(page), (d) => d.name === 'web_arm', 'textarea#job-json after the URDF upload');
+        const doc = await jobJson(page);
+        assert.equal(doc.scene.urdf, urdf);
+        assert.deepEqual(doc.trajectory, { type: 'min_jerk', from: 0, to: 0.2, start: 0, end: 2 });
+        await page.locator('button#submit-job').click();
+        await poll(() => page.evaluate(() => /^#\/jobs\/[0-9]+$/.test(location.hash)), 'the address #/jobs/ID after submitting', 30000);
+        const hash = await page.evaluate(() => location.hash);
+        await waitView(page, hash);
+        const job = await apiJob(srv, Number(hash.split('/')[2]));
+        assert.equal(job.name, 'web_arm');
+        assert.equal(job.status, 'done');
+        assert.deepEqual(job.spec.scene.bodies.map((b) => b.name), ['upper', 'fore']);
+        assert.equal(job.spec.scene.urdf, undefined);
     });
 });
 

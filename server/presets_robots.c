@@ -1,0 +1,222 @@
+/*
+ * presets_robots.c - industrial arms as ready-made jobs (presets.h), each given in its published
+ * form, a DH table or a URDF document, which the job format converts into bodies (dh.c, urdf.c),
+ * and each tracking a minimum-jerk move between two poses with CTC (PD, kp 100 s^-2, kv 20 s^-1):
+ * the move takes 2 s from the start pose, which is q0, so with the exact model the tracking
+ * error stays at the integrator's tolerance; 3 s at dopri5 rtol 1e-8, atol 1e-10, sampled every
+ * 0.01 s; gravity -z.
+ *
+ *  - UR5 (standard DH): a, d and alpha, the link masses and the centres of mass in the DH frames
+ *    from Universal Robots, "Parameters for calculations of kinematics and dynamics"
+ *    (universal-robots.com, UR5 column); the link inertias, principal about the centres of mass,
+ *    those of ur_description's ur5 (cylinder approximations), as Lynch and Park, Modern Robotics
+ *    (2017), list them (G1..G6). Move: from (0, -pi/2, 0, -pi/2, 0, 0) to (pi/3, -pi/3, pi/3,
+ *    -pi/2, -pi/2, pi/4).
+ *  - KUKA LBR iiwa 14 (URDF): the joint origins and axes, the link masses, centres of mass and
+ *    inertias, and the joints' limits and damping of Drake's iiwa14_no_collision.urdf
+ *    (RobotLocomotion/drake, manipulation/models/iiwa_description); link 0 is fixed to the world
+ *    and the end-effector frames are massless, so 7 bodies. Move: from 0 to (0.5, 0.6, 0, -1.2,
+ *    0, 0.8, 0).
+ * The Puma 560 is not here: Armstrong, Khatib and Burdick's parameters (Corke's mdl_puma560akb)
+ * give link 1 a zero mass with an inertia about its axis, a body ctc_model_build refuses (mass
+ * > 0) until massless bodies are supported.
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "presets_robots.h"
+
+#define HALF_PI 1.5707963267948966
+#define MOVE_END 2.0 /* s */
+#define DURATION 3.0 /* s */
+#define KP 100.0     /* s^-2 */
+#define KV 20.0      /* s^-1 */
+
+/* Adds a PD controller, a minimum-jerk move of each of n coordinates from[i] -> to[i] over
+ * [0, MOVE_END], q0 = from, v0 = 0, and the run settings to doc (whose "scene" exists). Returns
+ * doc, or NULL (doc deleted) with err filled when an allocation failed. */
+static cJSON *finish_robot(cJSON *doc, int n, const double *from, const double *to,
+                           const char *preset_name, job_error *err)
+{
+    static const double zero[16] = {0};
+    cJSON *scene = cJSON_GetObjectItemCaseSensitive(doc, "scene");
+    cJSON *ctrl = cJSON_AddObjectToObject(doc, "controller");
+    cJSON *traj = cJSON_AddArrayToObject(doc, "trajectory");
+    cJSON *integ = cJSON_AddObjectToObject(doc, "integrator");
+    cJSON *out = cJSON_AddObjectToObject(doc, "output");
+    int ok = scene != NULL && ctrl != NULL && traj != NULL && integ != NULL && out != NULL &&
+             cJSON_AddItemToObject(scene, "q0", cJSON_CreateDoubleArray(from, n)) &&
+             cJSON_AddItemToObject(scene, "v0", cJSON_CreateDoubleArray(zero, n)) &&
+             cJSON_AddStringToObject(ctrl, "type", "pd") &&
+             cJSON_AddNumberToObject(ctrl, "kp", KP) && cJSON_AddNumberToObject(ctrl, "kv", KV);
+    for (int i = 0; ok && i < n; i++) {
+        cJSON *t = cJSON_CreateObject();
+        ok = cJSON_AddItemToArray(traj, t) && cJSON_AddStringToObject(t, "type", "min_jerk") &&
+             cJSON_AddNumberToObject(t, "from", from[i]) &&
+             cJSON_AddNumberToObject(t, "to", to[i]) && cJSON_AddNumberToObject(t, "start", 0) &&
+             cJSON_AddNumberToObject(t, "end", MOVE_END);
+    }
+    ok = ok && cJSON_AddStringToObject(integ, "method", "dopri5") &&
+         cJSON_AddNumberToObject(integ, "rtol", 1e-8) &&
+         cJSON_AddNumberToObject(integ, "atol", 1e-10) &&
+         cJSON_AddNumberToObject(doc, "duration", DURATION) &&
+         cJSON_AddNumberToObject(out, "interval", 0.01);
+    if (ok) return doc;
+    cJSON_Delete(doc);
+    err->code = JOB_NO_MEMORY;
+    err->field[0] = '\0';
+    snprintf(err->message, sizeof err->message, "out of memory building preset %s", preset_name);
+    return NULL;
+}
+
+/* ---- UR5 ---- */
+
+static const double ur5_a[6] = {0, -0.425, -0.39225, 0, 0, 0};
+static const double ur5_d[6] = {0.089159, 0, 0, 0.10915, 0.09465, 0.0823};
+static const double ur5_alpha[6] = {HALF_PI, 0, 0, HALF_PI, -HALF_PI, 0};
+static const double ur5_mass[6] = {3.7, 8.393, 2.33, 1.219, 1.219, 0.1879};
+static const double ur5_com[6][3] = {{0, -0.02561, 0.00193}, {0.2125, 0, 0.11336},
+                                     {0.15, 0, 0.0265},      {0, -0.0018, 0.01634},
+                                     {0, 0.0018, 0.01634},   {0, 0, -0.001159}};
+static const double ur5_inertia[6][3] = {
+    {0.010267495893, 0.010267495893, 0.00666},  {0.22689067591, 0.22689067591, 0.0151074},
+    {0.049443313556, 0.049443313556, 0.004095}, {0.111172755531, 0.111172755531, 0.21942},
+    {0.111172755531, 0.111172755531, 0.21942},  {0.0171364731454, 0.0171364731454, 0.033822}};
+static const char *const ur5_names[6] = {"shoulder", "upper_arm", "forearm",
+                                         "wrist_1",  "wrist_2",   "wrist_3"};
+
+cJSON *presets_ur5(const cJSON *request, job_error *err)
+{
+    (void)request;
+    static const double from[6] = {0, -HALF_PI, 0, -HALF_PI, 0, 0};
+    static const double to[6] = {1.0471975511965976, -1.0471975511965976,
+                                 1.0471975511965976, -HALF_PI,
+                                 -HALF_PI,           0.78539816339744831};
+    static const double gravity[3] = {0, 0, -9.81};
+    cJSON *doc = cJSON_CreateObject();
+    cJSON *scene = cJSON_AddObjectToObject(doc, "scene");
+    cJSON *dh = cJSON_AddObjectToObject(scene, "dh");
+    cJSON *rows = cJSON_AddArrayToObject(dh, "rows");
+    int ok = cJSON_AddStringToObject(doc, "name",
+                                     "UR5 minimum-jerk move, PD (DH, masses and centres of mass of "
+                                     "Universal Robots; inertias of ur_description)") &&
+             cJSON_AddItemToObject(scene, "gravity", cJSON_CreateDoubleArray(gravity, 3)) &&
+             cJSON_AddStringToObject(dh, "convention", "standard") && rows != NULL;
+    for (int i = 0; ok && i < 6; i++) {
+        cJSON *r = cJSON_CreateObject();
+        ok = cJSON_AddItemToArray(rows, r) && cJSON_AddStringToObject(r, "name", ur5_names[i]) &&
+             cJSON_AddNumberToObject(r, "a", ur5_a[i]) &&
+             cJSON_AddNumberToObject(r, "alpha", ur5_alpha[i]) &&
+             cJSON_AddNumberToObject(r, "d", ur5_d[i]) &&
+             cJSON_AddNumberToObject(r, "mass", ur5_mass[i]) &&
+             cJSON_AddItemToObject(r, "com", cJSON_CreateDoubleArray(ur5_com[i], 3)) &&
+             cJSON_AddItemToObject(r, "inertia", cJSON_CreateDoubleArray(ur5_inertia[i], 3));
+    }
+    if (!ok) {
+        cJSON_Delete(doc);
+        err->code = JOB_NO_MEMORY;
+        err->field[0] = '\0';
+        snprintf(err->message, sizeof err->message, "out of memory building preset ur5_min_jerk");
+        return NULL;
+    }
+    return finish_robot(doc, 6, from, to, "ur5_min_jerk", err);
+}
+
+/* ---- KUKA LBR iiwa 14 ---- */
+
+/* Drake's iiwa14_no_collision.urdf, its links' inertials and its joints (origins, axes, limits,
+ * damping); visuals, materials, Gazebo and transmission elements left out. The head of the
+ * document: */
+static const char iiwa14_urdf[] =
+    "<?xml version=\"1.0\"?>\n"
+    "<robot name=\"iiwa14\">\n"
+    "  <link name=\"base\"/>\n"
+    "  <joint name=\"iiwa_base_joint\" type=\"fixed\">\n"
+    "    <parent link=\"base\"/><child link=\"iiwa_link_0\"/>\n"
+    "  </joint>\n"
+    "  <link name=\"iiwa_link_0\"><inertial><origin xyz=\"-0.1 0 0.07\"/><mass value=\"5\"/>\n"
+    "    <inertia ixx=\"0.05\" iyy=\"0.06\" izz=\"0.03\"/></inertial></link>\n";
+
+/* joint i (from 1) from link i-1 to link i, and link i's inertial: the rest of the document */
+typedef struct iiwa_joint {
+    const char *rpy, *xyz, *effort, *limit, *velocity;
+    const char *com, *mass, *ixx, *iyy, *izz;
+} iiwa_joint;
+
+static const iiwa_joint iiwa14[7] = {
+    {"0 0 0", "0 0 0.1575", "320", "2.96705972839", "1.4835298641951802", "0 -0.03 0.12", "5.76",
+     "0.033", "0.0333", "0.0123"},
+    {"1.570796326794897 0 3.141592653589793", "0 0 0.2025", "320", "2.09439510239",
+     "1.4835298641951802", "0.0003 0.059 0.042", "6.35", "0.0305", "0.0304", "0.011"},
+    {"1.570796326794897 0 3.141592653589793", "0 0.2045 0", "176", "2.96705972839",
+     "1.7453292519943295", "0 0.03 0.13", "3.5", "0.025", "0.0238", "0.0076"},
+    {"1.570796326794897 0 0", "0 0 0.2155", "176", "2.09439510239", "1.3089969389957472",
+     "0 0.067 0.034", "3.5", "0.017", "0.0164", "0.006"},
+    {"-1.570796326794897 3.141592653589793 0", "0 0.1845 0", "110", "2.96705972839",
+     "2.2689280275926285", "0.0001 0.021 0.076", "3.5", "0.01", "0.0087", "0.00449"},
+    {"1.570796326794897 0 0", "0 0 0.2155", "40", "2.09439510239", "2.356194490192345",
+     "0 0.0006 0.0004", "1.8", "0.0049", "0.0047", "0.0036"},
+    {"-1.570796326794897 3.141592653589793 0", "0 0.081 0", "40", "3.05432619099",
+     "2.356194490192345", "0 0 0.02", "1.2", "0.001", "0.001", "0.001"},
+};
+
+/* the URDF text into buf (len bytes); -1 when it does not fit */
+static int iiwa14_text(char *buf, size_t len)
+{
+    size_t n = 0;
+    int k = snprintf(buf, len, "%s", iiwa14_urdf);
+    if (k < 0 || (size_t)k >= len) return -1;
+    n = (size_t)k;
+    for (int i = 0; i < 7; i++) {
+        const iiwa_joint *j = &iiwa14[i];
+        k = snprintf(buf + n, len - n,
+                     "  <joint name=\"iiwa_joint_%d\" type=\"revolute\">\n"
+                     "    <parent link=\"iiwa_link_%d\"/><child link=\"iiwa_link_%d\"/>\n"
+                     "    <origin rpy=\"%s\" xyz=\"%s\"/><axis xyz=\"0 0 1\"/>\n"
+                     "    <limit effort=\"%s\" lower=\"-%s\" upper=\"%s\" velocity=\"%s\"/>\n"
+                     "    <dynamics damping=\"0.5\"/>\n"
+                     "  </joint>\n"
+                     "  <link name=\"iiwa_link_%d\"><inertial><origin xyz=\"%s\"/>"
+                     "<mass value=\"%s\"/>\n"
+                     "    <inertia ixx=\"%s\" iyy=\"%s\" izz=\"%s\"/></inertial></link>\n",
+                     i + 1, i, i + 1, j->rpy, j->xyz, j->effort, j->limit, j->limit, j->velocity,
+                     i + 1, j->com, j->mass, j->ixx, j->iyy, j->izz);
+        if (k < 0 || (size_t)k >= len - n) return -1;
+        n += (size_t)k;
+    }
+    k = snprintf(buf + n, len - n,
+                 "  <joint name=\"iiwa_joint_ee\" type=\"fixed\">\n"
+                 "    <parent link=\"iiwa_link_7\"/><child link=\"iiwa_link_ee\"/>\n"
+                 "    <origin rpy=\"0 -1.570796326794897 0\" xyz=\"0 0 0.045\"/>\n"
+                 "  </joint>\n"
+                 "  <link name=\"iiwa_link_ee\"/>\n"
+                 "</robot>\n");
+    return k < 0 || (size_t)k >= len - n ? -1 : 0;
+}
+
+cJSON *presets_iiwa14(const cJSON *request, job_error *err)
+{
+    (void)request;
+    static const double from[7] = {0, 0, 0, 0, 0, 0, 0};
+    static const double to[7] = {0.5, 0.6, 0, -1.2, 0, 0.8, 0};
+    static const double gravity[3] = {0, 0, -9.81};
+    char text[8192];
+    cJSON *doc = NULL;
+    if (iiwa14_text(text, sizeof text) == 0) doc = cJSON_CreateObject();
+    cJSON *scene = cJSON_AddObjectToObject(doc, "scene");
+    int ok = doc != NULL &&
+             cJSON_AddStringToObject(doc, "name",
+                                     "KUKA LBR iiwa 14 minimum-jerk move, PD (URDF of Drake's "
+                                     "iiwa14_no_collision.urdf)") &&
+             cJSON_AddItemToObject(scene, "gravity", cJSON_CreateDoubleArray(gravity, 3)) &&
+             cJSON_AddStringToObject(scene, "urdf", text);
+    if (!ok) {
+        cJSON_Delete(doc);
+        err->code = JOB_NO_MEMORY;
+        err->field[0] = '\0';
+        snprintf(err->message, sizeof err->message,
+                 "out of memory building preset iiwa14_min_jerk");
+        return NULL;
+    }
+    return finish_robot(doc, 7, from, to, "iiwa14_min_jerk", err);
+}
