@@ -3,17 +3,17 @@
  * job's normalised document.
  *
  * One pass walks the document in the format's order: name, scene, controller, trajectory,
- * disturbance, integrator, duration, output, limits, threads. Each object's keys are checked before
- * any of its values is read, so a misspelt key is reported as unknown (with the nearest valid key)
- * rather than as the required key it was meant to be; a typed object ({"type": ...}) is checked
- * twice, against every key of its kind and then against the keys of its type. Types, finiteness
- * and the ranges the format owns (positive masses, non-zero axes, array lengths, the limits) are
- * checked here, and each error names the JSON path of the offending value. What the library owns
- * is checked by the library and reported at the nearest path with its message: a controller's
- * stability ("controller" or "controller.joints[i]", ctrl.h), a trajectory's, disturbance's or
- * integrator's parameters, a shape's dimensions, and what only ctc_model_build sees - inertia
- * tensors, a planar form asked of a spatial chain - at "scene". ctc_sim_check runs last as a
- * safety net (field "").
+ * disturbance, plant, integrator, duration, output, limits, threads. Each object's keys are checked
+ * before any of its values is read, so a misspelt key is reported as unknown (with the nearest
+ * valid key) rather than as the required key it was meant to be; a typed object ({"type": ...}) is
+ * checked twice, against every key of its kind and then against the keys of its type. Types,
+ * finiteness and the ranges the format owns (positive masses, non-zero axes, array lengths, the
+ * limits) are checked here, and each error names the JSON path of the offending value. What the
+ * library owns is checked by the library and reported at the nearest path with its message: a
+ * controller's stability ("controller" or "controller.joints[i]", ctrl.h), a trajectory's,
+ * disturbance's or integrator's parameters, a shape's dimensions, and what only ctc_model_build
+ * sees - inertia tensors, a planar form asked of a spatial chain - at "scene". ctc_sim_check runs
+ * last as a safety net (field "").
  *
  * A loop ("scene.loop", read after the bodies) changes the sizes that follow: the controller's
  * per-coordinate arrays and channels cover the nind independent coordinates, counted here from
@@ -84,8 +84,9 @@ typedef struct gain_params {
 enum {
     G_PAIR_KP = CTC_CP_KP | CTC_CP_KV,
     G_PAIR_ZETA = CTC_CP_ZETA | CTC_CP_TAU,
-    /* the longest key list: "type", every parameter, "joints", "model" and the terminator */
-    KEYS_MAX = CTC_CP_COUNT + 4,
+    /* the longest key list: "type", every parameter, "joints", "model", "sample_period",
+       "sample_delay", "seed" and the terminator */
+    KEYS_MAX = CTC_CP_COUNT + 7,
 };
 
 /* NULL-terminated into out: first (if not NULL), the parameter keys of the bits in params, then
@@ -121,7 +122,8 @@ static pthread_once_t ctrl_format_once = PTHREAD_ONCE_INIT;
 
 static void build_ctrl_format(void)
 {
-    static const char *const shared_keys[] = {"joints", "model", NULL};
+    static const char *const shared_keys[] = {"joints",       "model", "sample_period",
+                                              "sample_delay", "seed",  NULL};
     int n = 0;
     param_keys("type", ALL_PARAMS, shared_keys, ctrl_format.all);
     param_keys(NULL, ALL_PARAMS, NULL, ctrl_format.joint_all);
@@ -400,6 +402,46 @@ static int parse_ctrl_model(parser *p, const cJSON *ctrl, cJSON *out_ctrl)
     return 0;
 }
 
+/* "controller.sample_period" (s >= 0, 0 = continuous) and "controller.sample_delay" (whole
+ * samples >= 0, only with a period), at most JOB_MAX_CONTROL_SAMPLES samples in the run */
+static int parse_sampling(parser *p, const cJSON *ctrl, cJSON *out_ctrl)
+{
+    ctc_sim_spec *s = &p->j->spec;
+    double delay;
+    if (json_member_number(p, ctrl, "controller", "sample_period", OPTIONAL, 0,
+                           &s->sample_period) != 0 ||
+        json_member_number(p, ctrl, "controller", "sample_delay", OPTIONAL, 0, &delay) != 0) {
+        return -1;
+    }
+    if (!(s->sample_period >= 0)) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "controller.sample_period",
+                             "must be non-negative (got %g s; 0 = a continuous controller)",
+                             s->sample_period);
+    }
+    if (!(delay >= 0 && delay <= CTC_SIM_MAX_DELAY && delay == floor(delay))) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "controller.sample_delay",
+                             "must be a whole number of samples from 0 to %d (got %g)",
+                             CTC_SIM_MAX_DELAY, delay);
+    }
+    if (delay > 0 && s->sample_period == 0) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "controller.sample_delay",
+                             "needs \"sample_period\" (a continuous controller has no samples to "
+                             "delay)");
+    }
+    s->sample_delay = (int)delay;
+    double seed;
+    if (json_member_number(p, ctrl, "controller", "seed", OPTIONAL, 0, &seed) != 0) return -1;
+    if (!(seed >= 0 && seed <= 9007199254740992.0 && seed == floor(seed))) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "controller.seed",
+                             "must be a whole number from 0 to 2^53 (got %g)", seed);
+    }
+    s->seed = (unsigned long long)seed;
+    json_put_number(p, out_ctrl, "sample_period", s->sample_period);
+    json_put_number(p, out_ctrl, "sample_delay", delay);
+    json_put_number(p, out_ctrl, "seed", seed);
+    return 0;
+}
+
 static int parse_controller(parser *p, const cJSON *doc)
 {
     job *j = p->j;
@@ -438,6 +480,13 @@ static int parse_controller(parser *p, const cJSON *doc)
                              p->undriven, ctc_joint_classes[p->undriven_type].undriven, allowed);
     }
 
+    if (cls->force != CTC_FORCE_COMPUTED_TORQUE && j->spec.chain.loop != NULL) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "controller.type",
+                             "\"%s\" needs an open chain (its model's desired or resting state is "
+                             "not defined for a loop's dependent joints)",
+                             names[type]);
+    }
+
     /* the gains the coordinates share, designed once */
     gain_params shared = {0};
     ctc_gains gains = {0};
@@ -459,14 +508,15 @@ static int parse_controller(parser *p, const cJSON *doc)
     if (joints != NULL && parse_gain_overrides(p, joints, cls, &shared, context, out) != 0) {
         return -1;
     }
-    return parse_ctrl_model(p, v, out);
+    if (parse_ctrl_model(p, v, out) != 0) return -1;
+    return parse_sampling(p, v, out);
 }
 
 /* ---- the document ---- */
 
-static const char *const job_keys[] = {"name",        "scene",      "controller", "trajectory",
-                                       "disturbance", "integrator", "duration",   "output",
-                                       "limits",      "threads",    NULL};
+static const char *const job_keys[] = {"name",        "scene",  "controller", "trajectory",
+                                       "disturbance", "plant",  "integrator", "duration",
+                                       "output",      "limits", "threads",    NULL};
 
 /* ---- the controller's and the document's keys and defaults, as data (job_json.h) ---- */
 
@@ -482,21 +532,46 @@ static const job_format_default doc_defaults[] = {
     DEFAULT_JSON("", NULL, "name", "\"" DEFAULT_NAME "\""),
     DEFAULT_NUMBER("controller.model", NULL, "mass_scale", 1),
     DEFAULT_NUMBER("controller.model", NULL, "inertia_scale", 1),
+    DEFAULT_NUMBER("controller", "pd", "sample_period", 0),
+    DEFAULT_NUMBER("controller", "pd", "sample_delay", 0),
+    DEFAULT_NUMBER("controller", "pid", "sample_period", 0),
+    DEFAULT_NUMBER("controller", "pid", "sample_delay", 0),
+    DEFAULT_NUMBER("controller", "poles", "sample_period", 0),
+    DEFAULT_NUMBER("controller", "poles", "sample_delay", 0),
+    DEFAULT_NUMBER("controller", "lqr", "sample_period", 0),
+    DEFAULT_NUMBER("controller", "lqr", "sample_delay", 0),
+    DEFAULT_NUMBER("controller", "joint_pd", "sample_period", 0),
+    DEFAULT_NUMBER("controller", "joint_pd", "sample_delay", 0),
+    DEFAULT_NUMBER("controller", "pd_gravity", "sample_period", 0),
+    DEFAULT_NUMBER("controller", "pd_gravity", "sample_delay", 0),
+    DEFAULT_NUMBER("controller", "feedforward", "sample_period", 0),
+    DEFAULT_NUMBER("controller", "feedforward", "sample_delay", 0),
+    DEFAULT_NUMBER("controller", "pd", "seed", 0),
+    DEFAULT_NUMBER("controller", "pid", "seed", 0),
+    DEFAULT_NUMBER("controller", "poles", "seed", 0),
+    DEFAULT_NUMBER("controller", "lqr", "seed", 0),
+    DEFAULT_NUMBER("controller", "joint_pd", "seed", 0),
+    DEFAULT_NUMBER("controller", "pd_gravity", "seed", 0),
+    DEFAULT_NUMBER("controller", "feedforward", "seed", 0),
     DEFAULT_END,
 };
 
 const job_format_object *const *job_format_object_tables(void)
 {
-    static const job_format_object *const tables[] = {doc_objects,       ctrl_format.rows,
-                                                      job_scene_objects, job_scene_joint_objects,
-                                                      job_run_objects,   NULL};
+    static const job_format_object *const tables[] = {doc_objects,
+                                                      ctrl_format.rows,
+                                                      job_scene_objects,
+                                                      job_scene_joint_objects,
+                                                      job_run_objects,
+                                                      job_plant_objects,
+                                                      NULL};
     pthread_once(&ctrl_format_once, build_ctrl_format);
     job_scene_joint_format();
     return tables;
 }
 
-const job_format_default *const job_format_defaults[] = {doc_defaults, job_scene_defaults,
-                                                         job_run_defaults, NULL};
+const job_format_default *const job_format_defaults[] = {
+    doc_defaults, job_scene_defaults, job_run_defaults, job_plant_defaults, NULL};
 
 /* the whole check of the spec by the library, after the format's own; what it finds wrong with
  * a loop (the mobility, the configuration at q0) is reported at the loop or at q0 */
@@ -526,9 +601,10 @@ static int parse_job(const cJSON *doc, const char *default_name, job **out, job_
     if (p.norm == NULL || json_check_keys(&p, doc, "", job_keys, NULL, NULL) != 0 ||
         parse_name(&p, doc, default_name) != 0 || parse_scene(&p, doc) != 0 ||
         parse_controller(&p, doc) != 0 || parse_trajectory(&p, doc) != 0 ||
-        parse_disturbance(&p, doc) != 0 || parse_integrator(&p, doc) != 0 ||
-        parse_duration(&p, doc) != 0 || parse_output(&p, doc) != 0 || parse_limits(&p, doc) != 0 ||
-        parse_threads(&p, doc) != 0 || check_spec(&p) != 0) {
+        parse_disturbance(&p, doc) != 0 || parse_plant(&p, doc) != 0 ||
+        parse_integrator(&p, doc) != 0 || parse_duration(&p, doc) != 0 ||
+        parse_output(&p, doc) != 0 || parse_limits(&p, doc) != 0 || parse_threads(&p, doc) != 0 ||
+        check_spec(&p) != 0) {
         if (p.norm == NULL) json_out_of_memory(err);
         job_free(j);
         return -1;
@@ -539,17 +615,22 @@ static int parse_job(const cJSON *doc, const char *default_name, job **out, job_
 
 /* ---- presets ---- */
 
-/* the names of the presets, comma-separated, into buf */
+/* the names of the presets, comma-separated, into buf; names that do not fit whole are left
+ * out and the list ends with ", ..." */
 static void list_presets(char *buf, size_t len)
 {
+    static const char more[] = ", ...";
     int count;
     const preset *list = presets_list(&count);
     size_t used = 0;
     buf[0] = '\0';
     for (int i = 0; i < count; i++) {
-        int w = snprintf(buf + used, len - used, "%s%s", i > 0 ? ", " : "", list[i].name);
-        if (w < 0 || (size_t)w >= len - used) break;
-        used += (size_t)w;
+        size_t need = (i > 0 ? 2 : 0) + strlen(list[i].name);
+        if (used + need + sizeof more > len) { /* keep room for ", ..." and the NUL */
+            memcpy(buf + used, more, sizeof more);
+            return;
+        }
+        used += (size_t)snprintf(buf + used, len - used, "%s%s", i > 0 ? ", " : "", list[i].name);
     }
 }
 
@@ -564,7 +645,7 @@ static int expand_preset(const cJSON *request, cJSON **out, const preset **used,
     }
     const preset *pr = presets_find(name->valuestring);
     if (pr == NULL) {
-        char names[400];
+        char names[960]; /* within err->message with the rest of the sentence */
         list_presets(names, sizeof names);
         return json_error_at(err, JOB_UNKNOWN_PRESET, "preset",
                              "unknown preset \"%s\" (the presets are: %s)", name->valuestring,
@@ -727,6 +808,7 @@ void job_free(job *j)
     for (int i = 0; j->traj != NULL && i < j->nind; i++) ctc_traj_free(&j->traj[i]);
     free(j->traj);
     free(j->disturb);
+    free(j->plant);
     free(j->gains);
     free(j->q0);
     free(j->v0);

@@ -88,17 +88,26 @@
  *       "v0"        array of nv numbers (default: all zero); with a loop the dependent joints'
  *                   velocities are replaced by the ones that keep the loop closed
  *   "controller"  object, required:
- *       "type"      "none" | "pd" | "pid" | "poles" | "lqr"
+ *       "type"      "none" | "pd" | "pid" | "poles" | "lqr" (computed torque) | "joint_pd" |
+ *                   "pd_gravity" | "feedforward" (the baselines, ctrl.h ctc_ctrl_force; open
+ *                   chains only)
  *       pd:    "kp", "kv"                   or "zeta", "tau"
  *       pid:   "kp", "kv", "ki"             or "zeta", "tau", "ki"
  *       poles: "poles": three entries, each a number (real pole) or {"re": x, "im": y} (both)
  *       lqr:   "Q": 3x3 array of rows or [q1, q2, q3] (diagonal), "lambda": number > 0
+ *       joint_pd, pd_gravity, feedforward: "kp" (N m/rad, N/m) and "kv" (N m s/rad, N s/m)
  *       "joints"  optional array of nind objects, one per coordinate, each with any of the type's
  *                 gain keys above to override them for that coordinate ({} keeps them); for pd
  *                 and pid, an override that names the other pair ("zeta"/"tau" where the
  *                 controller has "kp"/"kv", or the reverse) replaces the pair and must give both
  *       "model"   optional {"mass_scale": s > 0, "inertia_scale": s > 0}, default 1 and 1:
  *                 the controller's model of the plant (model error)
+ *       "sample_period"  s >= 0, default 0 (the paper's continuous controller): a sampled
+ *                 controller with zero-order hold, its command computed at t = k T and held
+ *                 (sim.h); at most JOB_MAX_CONTROL_SAMPLES instants in the run
+ *       "sample_delay"   whole samples 0..CTC_SIM_MAX_DELAY, default 0: the command computed at
+ *                 t_k is applied from t_k+d on (0 before); only with a sample_period
+ *       "seed"    whole number 0..2^53, default 0: the sensors' noise generator's (plant.h)
  *     "none" allows only "type"; other types need a trajectory, and no independent spherical
  *     joint (error at "controller.type": a quaternion error is not a per-coordinate error).
  *     The controlled coordinates (nind of them) are every coordinate of an open chain (nind = nv)
@@ -117,6 +126,21 @@
  *       {"type": "none"} | {"type": "constant", "value": z}
  *       | {"type": "sine", "amplitude", "period", "phase" (0), "offset" (0)}
  *       | {"type": "step", "value": z, "time": t}
+ *   "plant"       optional (default {}: the paper's ideal plant), one object for every coordinate
+ *                 or an array of nind objects; each term is off unless given (plant.h):
+ *       "torque_limit"  N m (N for a prismatic coordinate) > 0: the actuator delivers the
+ *                 controller's force clipped to +-torque_limit (the disturbance is added after);
+ *                 the integral state of pid and the other kinds is clamped while clipped
+ *                 (anti-windup). Needs a controller.
+ *       "viscous"  N m s/rad or N s/m >= 0: the joint force -viscous v (a damper)
+ *       "coulomb"  N m or N >= 0, with "coulomb_velocity" v_s > 0 (required with it): the
+ *                 regularised friction -coulomb tanh(v / v_s)
+ *       "spring"   N m/rad or N/m >= 0, with "spring_rest" (rad or m, 0 when left out): the joint
+ *                 force -spring (q - spring_rest)
+ *       "known"    true | false (when left out): the controller compensates the joint forces
+ *       "noise_q", "noise_v"  standard deviations >= 0 (rad or m, rad/s or m/s) of the Gaussian
+ *                 noise on what a sampled controller measures; "resolution" >= 0 (rad or m):
+ *                 its encoder's count. Need "controller.sample_period" and an open chain.
  *   "integrator"  optional, default {"method": "dopri5", "rtol": 1e-8, "atol": 1e-10}:
  *       {"method": "rk4", "step": h}      (default step 1e-3 s; the step is shortened so that it
  *                                          divides the output interval)
@@ -185,6 +209,9 @@
    (a 64-link pendulum, 10^4 steps in 0.28 s), so about what the server's default time limit of
    600 s lets a job do; spatial chains cost more per body-step */
 #define JOB_MAX_WORK 1e9
+/* a sampled controller's instants (duration / sample_period) at most: each restarts the
+   integrator */
+#define JOB_MAX_CONTROL_SAMPLES 1e7
 
 /* Error codes, stable for clients (the service returns them as error.code). */
 typedef enum job_error_code {
@@ -201,7 +228,7 @@ typedef enum job_error_code {
 typedef struct job_error {
     job_error_code code;
     char field[256];   /* JSON path, e.g. "scene.bodies[2].mass"; "" for the whole document */
-    char message[512]; /* the reason, e.g. "must be positive (got -1 kg)" */
+    char message[1024]; /* the reason, e.g. "must be positive (got -1 kg)" */
 } job_error;
 
 /* A parsed job: the spec points into the arrays this struct owns. */
@@ -222,6 +249,7 @@ typedef struct job {
     ctc_gains *gains;           /* (nind) designed gains, NULL when passive */
     ctc_traj *traj;             /* (nind) NULL when passive */
     ctc_disturb *disturb;       /* (nind) NULL when none */
+    ctc_plant_coord *plant;     /* (nind) NULL when the plant is the ideal one */
     cJSON *normalised; /* the job with the preset expanded and every default filled in; itself
                           a valid job document. Owned. */
 } job;

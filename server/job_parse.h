@@ -10,6 +10,7 @@
  *   job_json.c     "name", "controller", and the entry points (presets, the whole document)
  *   job_run.c      "trajectory", "disturbance", "integrator", "duration", "output", "limits",
  *                  "threads"
+ *   job_plant.c    "plant" (read after the disturbance)
  * The parts run in that order and may read what earlier parts left in p and p->j (the sizes,
  * nind, the loop, p->ctrl). Each returns 0, or -1 with p->err filled.
  */
@@ -133,6 +134,15 @@ int parse_trajectory(parser *p, const cJSON *doc);
  * every coordinate. */
 int parse_disturbance(parser *p, const cJSON *doc);
 
+/* Reads one item v (at path) for coordinates first .. first + count - 1, writing its normalised
+ * form into out. */
+typedef int (*coord_item_parser)(parser *p, const cJSON *v, const char *path, int first, int count,
+                                 cJSON *out);
+
+/* doc's key v: one object for every coordinate, or an array of nind of them, each read by item
+ * and written under key in the normalised document. */
+int parse_per_coordinate(parser *p, const cJSON *v, const char *key, coord_item_parser item);
+
 /* "integrator", default dopri5: checked by ctc_integ_check (errors at "integrator"). */
 int parse_integrator(parser *p, const cJSON *doc);
 
@@ -148,5 +158,14 @@ int parse_limits(parser *p, const cJSON *doc);
 
 /* "threads": a whole number 1..CTC_MAX_THREADS, default 1. */
 int parse_threads(parser *p, const cJSON *doc);
+
+/* ---- the plant (job_plant.c) ---- */
+
+extern const job_format_object job_plant_objects[];
+extern const job_format_default job_plant_defaults[];
+
+/* "plant", default {} (the ideal plant): one object for every coordinate or an array of nind.
+ * Fills p->j->plant; spec.plant stays NULL when no coordinate has a term. */
+int parse_plant(parser *p, const cJSON *doc);
 
 #endif

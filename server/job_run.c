@@ -21,13 +21,8 @@
 
 /* ---- trajectory and disturbance: one object for every coordinate, or one per coordinate ---- */
 
-/* Reads one item v (at path) for coordinates first .. first + count - 1, writing its normalised
- * form into out. */
-typedef int (*coord_item_parser)(parser *p, const cJSON *v, const char *path, int first, int count,
-                                 cJSON *out);
-
 /* v (the document's key): one object for every coordinate, or an array of nind of them */
-static int parse_per_coordinate(parser *p, const cJSON *v, const char *key, coord_item_parser item)
+int parse_per_coordinate(parser *p, const cJSON *v, const char *key, coord_item_parser item)
 {
     int nind = p->j->nind;
     if (cJSON_IsObject(v)) {
@@ -400,6 +395,14 @@ int parse_duration(parser *p, const cJSON *doc)
                                  "fewer bodies (got %g s for %g s)",
                                  steps, nbodies, steps * nbodies, JOB_MAX_WORK, s->step, *d);
         }
+    }
+    /* a sampled controller restarts the integrator at each of its instants */
+    const double period = p->j->spec.sample_period;
+    if (period > 0 && !(*d / period <= JOB_MAX_CONTROL_SAMPLES)) {
+        return json_error_at(p->err, JOB_LIMIT_EXCEEDED, "controller.sample_period",
+                             "duration / sample_period = %.3g instants exceeds %.0e: use a longer "
+                             "period or a shorter duration (got %g s for %g s)",
+                             *d / period, JOB_MAX_CONTROL_SAMPLES, period, *d);
     }
     return 0;
 }

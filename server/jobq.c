@@ -322,7 +322,7 @@ static worker_outcome run_job(jobq_worker *w, int64_t id)
     job_error jerr;
     const char *spec = row.spec ? row.spec : "";
     if (job_parse(spec, strlen(spec), &j, &jerr) != 0) {
-        snprintf(why, sizeof why, "the stored job no longer parses: %s%s%s", jerr.field,
+        snprintf(why, sizeof why, "the stored job no longer parses: %s%s%.600s", jerr.field,
                  jerr.field[0] ? ": " : "", jerr.message);
         outcome = finish(w, id, STORE_FAILED, why, NULL, NULL);
         goto cleanup;

@@ -969,6 +969,47 @@ static cJSON *two_arm_torso_pd(const cJSON *request, job_error *err)
     return finish(&b, doc, "two_arm_torso_pd", err);
 }
 
+/* ---- the paper's triple pendulum as it is in a lab (issue 21) ---- */
+
+/* The triple pendulum with PID, changed after it is built: its controller sampled every period
+ * s with zero-order hold (0: continuous), its actuators limited to +-limit N m (0: none), and
+ * the integrator's method (NULL: the paper's dopri5). */
+static cJSON *lab_triple_pendulum(const char *preset_name, const char *name, double period,
+                                  double limit, const char *method, job_error *err)
+{
+    cJSON *doc = triple_pendulum(preset_name, name, PRESET_PID, err);
+    if (doc == NULL) return NULL;
+    doc_builder b = {0};
+    if (period > 0)
+        put_number(&b, cJSON_GetObjectItemCaseSensitive(doc, "controller"), "sample_period",
+                   period);
+    if (limit > 0) put_number(&b, put_object(&b, doc, "plant"), "torque_limit", limit);
+    if (method != NULL) {
+        cJSON *integ = cJSON_GetObjectItemCaseSensitive(doc, "integrator");
+        cJSON *m = cJSON_CreateString(method);
+        if (m == NULL || !cJSON_ReplaceItemInObjectCaseSensitive(integ, "method", m)) {
+            cJSON_Delete(m);
+            b.failed = 1;
+        }
+    }
+    return finish(&b, doc, preset_name, err);
+}
+
+#define LAB_TRIPLE(fn, period, limit, method, label)                                               \
+    static cJSON *fn(const cJSON *request, job_error *err)                                         \
+    {                                                                                              \
+        (void)request;                                                                             \
+        return lab_triple_pendulum(#fn, label, period, limit, method, err);                        \
+    }
+LAB_TRIPLE(triple_pendulum_pid_1khz, 1e-3, 0, NULL,
+           "Triple pendulum, PID sampled at 1 kHz (scene of " PAPER ", sec. 7.1)")
+LAB_TRIPLE(triple_pendulum_pid_200hz, 5e-3, 0, NULL,
+           "Triple pendulum, PID sampled at 200 Hz (scene of " PAPER ", sec. 7.1)")
+LAB_TRIPLE(triple_pendulum_pid_50hz, 2e-2, 0, NULL,
+           "Triple pendulum, PID sampled at 50 Hz (scene of " PAPER ", sec. 7.1)")
+LAB_TRIPLE(triple_pendulum_pid_limited, 0, 50, "bdf",
+           "Triple pendulum, PID with +-50 N m actuators (scene of " PAPER ", sec. 7.1)")
+
 /* ---- the table ---- */
 
 /* build_SCENE_SUFFIX: the preset "SCENE_SUFFIX", made by the scene's builder SCENE(name, label,
@@ -1065,6 +1106,15 @@ static const preset preset_table[] = {
     {"iiwa14_min_jerk",
      "KUKA LBR iiwa 14 (URDF) moving between two poses by minimum jerk, " PD_GAINS, no_params,
      presets_iiwa14},
+    {"triple_pendulum_pid_1khz", TRIPLE_SUMMARY(PID_GAINS " sampled at 1 kHz (zero-order hold)"),
+     no_params, triple_pendulum_pid_1khz},
+    {"triple_pendulum_pid_200hz", TRIPLE_SUMMARY(PID_GAINS " sampled at 200 Hz (zero-order hold)"),
+     no_params, triple_pendulum_pid_200hz},
+    {"triple_pendulum_pid_50hz", TRIPLE_SUMMARY(PID_GAINS " sampled at 50 Hz (zero-order hold)"),
+     no_params, triple_pendulum_pid_50hz},
+    {"triple_pendulum_pid_limited",
+     TRIPLE_SUMMARY(PID_GAINS " with +-50 N m actuators (anti-windup; bdf)"), no_params,
+     triple_pendulum_pid_limited},
 };
 
 const preset *presets_list(int *count)
@@ -1088,8 +1138,14 @@ const preset *presets_find(const char *name)
 static const char *controller_label(const char *type)
 {
     static const char *const labels[][2] = {
-        {"none", "passive"},         {"pd", "PD"},   {"pid", "PID"},
-        {"poles", "pole placement"}, {"lqr", "LQR"},
+        {"none", "passive"},
+        {"pd", "PD"},
+        {"pid", "PID"},
+        {"poles", "pole placement"},
+        {"lqr", "LQR"},
+        {"joint_pd", "joint PD"},
+        {"pd_gravity", "PD with gravity compensation"},
+        {"feedforward", "feedforward"},
     };
     for (size_t i = 0; i < sizeof labels / sizeof labels[0]; i++) {
         if (strcmp(labels[i][0], type) == 0) return labels[i][1];

@@ -86,6 +86,9 @@ cJSON *result_metrics_json(const ctc_sim_result *r, const job *j)
     cJSON_AddItemToObject(o, "e_max", array_or_null(m->e_max, m->nv));
     cJSON_AddItemToObject(o, "e_rms", array_or_null(m->e_rms, m->nv));
     cJSON_AddItemToObject(o, "e_final", array_or_null(m->e_final, m->nv));
+    cJSON_AddItemToObject(o, "tau_peak", array_or_null(m->tau_peak, m->nv));
+    cJSON_AddItemToObject(o, "tau_rms", array_or_null(m->tau_rms, m->nv));
+    cJSON_AddItemToObject(o, "sat_fraction", array_or_null(m->sat_fraction, m->nv));
     cJSON_AddItemToObject(o, "errdyn_dev", number_or_null(m->errdyn_dev));
     cJSON_AddItemToObject(o, "energy_drift", number_or_null(m->energy_drift));
     cJSON_AddItemToObject(o, "err_estimate", number_or_null(m->err_estimate));

@@ -34,6 +34,11 @@ export function metricsList(m) {
     add("RMS e", fmtList(m.e_rms));
     add("final e", fmtList(m.e_final));
   }
+  if (m.tau_peak) {
+    add("actuator peak |τ|", fmtList(m.tau_peak));
+    add("actuator RMS τ", fmtList(m.tau_rms));
+  }
+  if (m.sat_fraction) add("fraction of samples at the torque limit", fmtList(m.sat_fraction));
   if (loop) {
     add("loop residual max", `${fmtNum(loop.residual_max)} (position), ${fmtNum(loop.velocity_residual_max)} (velocity)`);
     add("loop condition max", fmtNum(loop.cond_max));

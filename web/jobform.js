@@ -20,7 +20,10 @@ import {JOINT_NV as NV} from "./joints.js";
 import {chainParents} from "./kinematics.js";
 
 export const CONTROLLERS = {none: {}, pd: {kp: 100, kv: 20}, pid: {kp: 100, kv: 20, ki: 250},
-  poles: {poles: [-2, -2.1, -2.2]}, lqr: {Q: [1, 1, 1], lambda: 0.01}};
+  poles: {poles: [-2, -2.1, -2.2]}, lqr: {Q: [1, 1, 1], lambda: 0.01},
+  joint_pd: {kp: 100, kv: 20}, pd_gravity: {kp: 100, kv: 20}, feedforward: {kp: 100, kv: 20}};
+/* the baselines: their PD gives forces, in N m/rad and N m s/rad (ctrl.h ctc_ctrl_force) */
+const BASELINES = new Set(["joint_pd", "pd_gravity", "feedforward"]);
 export const TRAJECTORIES = {constant: {value: 0}, sine: {amplitude: 0.6, period: 1.5, phase: 0, offset: 0},
   cosine: {amplitude: 0.6, period: 1.5, phase: 0, offset: 0}, polynomial: {coefficients: [0, 0.1]},
   min_jerk: {from: 0, to: 1, start: 0, end: 1},
@@ -226,6 +229,8 @@ export function jobForm(host, getDoc, edited) {
       if (type === "pid") row.append(number(doc, "controller.ki", "K_i"));
     } else if (type === "poles") {
       row.append(text(doc, "controller.poles", "poles", parsePoles, showPoles, "three, e.g. -2, -2.1, -2.2 or -2, -1+2i, -1-2i"));
+    } else if (BASELINES.has(type)) {
+      row.append(number(doc, "controller.kp", "K_p", "N m/rad"), number(doc, "controller.kv", "K_v", "N m s/rad"));
     } else if (type === "lqr") {
       row.append(text(doc, "controller.Q", "Q", parseQ, showQ, "diagonal q1, q2, q3 or rows separated by ;"),
         number(doc, "controller.lambda", "λ", "control weight, > 0"));

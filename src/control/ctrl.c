@@ -16,15 +16,21 @@
 #include <string.h>
 
 extern const ctc_ctrl_class ctc_ctrl_class_pd, ctc_ctrl_class_pid, ctc_ctrl_class_poles,
-    ctc_ctrl_class_lqr;
+    ctc_ctrl_class_lqr, ctc_ctrl_class_joint_pd, ctc_ctrl_class_pd_gravity,
+    ctc_ctrl_class_feedforward;
 
 /* passive: no law, no gains, no state */
 static const ctc_ctrl_class ctc_ctrl_class_none = {.name = "none"};
 
 const ctc_ctrl_class *const ctc_ctrl_classes[CTC_CTRL_NTYPES] = {
-    [CTC_CTRL_NONE] = &ctc_ctrl_class_none, [CTC_CTRL_PD] = &ctc_ctrl_class_pd,
-    [CTC_CTRL_PID] = &ctc_ctrl_class_pid,   [CTC_CTRL_POLES] = &ctc_ctrl_class_poles,
+    [CTC_CTRL_NONE] = &ctc_ctrl_class_none,
+    [CTC_CTRL_PD] = &ctc_ctrl_class_pd,
+    [CTC_CTRL_PID] = &ctc_ctrl_class_pid,
+    [CTC_CTRL_POLES] = &ctc_ctrl_class_poles,
     [CTC_CTRL_LQR] = &ctc_ctrl_class_lqr,
+    [CTC_CTRL_JOINT_PD] = &ctc_ctrl_class_joint_pd,
+    [CTC_CTRL_PD_GRAVITY] = &ctc_ctrl_class_pd_gravity,
+    [CTC_CTRL_FEEDFORWARD] = &ctc_ctrl_class_feedforward,
 };
 
 const ctc_ctrl_class *ctc_ctrl_class_of(ctc_ctrl_type t)

@@ -42,6 +42,9 @@ typedef enum ctc_ctrl_type {
     CTC_CTRL_PID,
     CTC_CTRL_POLES,
     CTC_CTRL_LQR,
+    CTC_CTRL_JOINT_PD,    /* baselines (ctc_ctrl_force): independent joint PD, */
+    CTC_CTRL_PD_GRAVITY,  /* PD with gravity compensation, */
+    CTC_CTRL_FEEDFORWARD, /* inverse dynamics at the desired state plus PD */
 } ctc_ctrl_type;
 
 /* The feedback gains of one coordinate: w = ki int(e) + kp e + kv de/dt. */
@@ -105,7 +108,8 @@ void ctc_ctrl_closed_loop_poles(const ctc_gains *g, double re[3], double im[3]);
  * A kind of controller is one ctc_ctrl_class: its name, the design parameters it takes and how
  * it turns them into gains, its law, the size of its own state and its metrics hook. Each lives
  * in its own file (ctrl_pid.c: pd and pid; ctrl_poles.c; ctrl_lqr.c; ctrl.c: none and the linear
- * law they share) and is one row of ctc_ctrl_classes; the job parser (server/job_json.c) and the
+ * law they share; ctrl_joint_pd.c, ctrl_pd_gravity.c, ctrl_feedforward.c: the baselines) and is
+ * one row of ctc_ctrl_classes; the job parser (server/job_json.c) and the
  * run (sim.h) read everything else from the row. A controller of the caller's own, linear or
  * not, is a class passed in ctc_sim_spec.ctrl_class without a row.
  *
@@ -153,6 +157,24 @@ typedef struct ctc_ctrl_eval {
     const void *params;     /* ctc_sim_spec.ctrl_params, the caller's own; may be NULL */
 } ctc_ctrl_eval;
 
+/* How the run turns a class's output w into the driving forces f, with ID(q, v, a) the inverse
+ * dynamics of the controller's model (iGDCA). Computed torque is the paper's controller; the
+ * others are the baselines it is compared with in class, whose w is a force (N m, N) and whose
+ * gains are then in N m/rad and N m s/rad (N/m, N s/m):
+ *   CTC_FORCE_COMPUTED_TORQUE  f = ID(q, v, qdd_d + w)                (w an acceleration)
+ *   CTC_FORCE_DIRECT           f = w                                  independent joint control
+ *   CTC_FORCE_GRAVITY          f = ID(q, 0, 0) + w                    gravity compensation
+ *   CTC_FORCE_FEEDFORWARD      f = ID(q_d, qd_d, qdd_d) + w           the desired motion's forces
+ * With an exact model, PD with gravity compensation holds any pose q_d at rest exactly (f is
+ * the gravity load there), and the feedforward started on the desired motion stays on it (f is
+ * exactly the motion's forces, w = 0). The baselines need an open chain (sim.h). */
+typedef enum ctc_ctrl_force {
+    CTC_FORCE_COMPUTED_TORQUE = 0,
+    CTC_FORCE_DIRECT,
+    CTC_FORCE_GRAVITY,
+    CTC_FORCE_FEEDFORWARD,
+} ctc_ctrl_force;
+
 typedef struct ctc_ctrl_class {
     const char *name;  /* the job's "controller.type": lowercase, unique in ctc_ctrl_classes */
     unsigned params;   /* CTC_CP_* bits the kind accepts (also in "controller.joints" entries) */
@@ -176,10 +198,11 @@ typedef struct ctc_ctrl_class {
      * the error dynamics of an exact model against expm(Ac t) E(0) (sim.h errdyn_dev). Such a
      * class needs gains, checked for stability, and nstate 1. NULL: no such reference. */
     void (*closed_loop)(const ctc_gains *g, double a[9]);
+    ctc_ctrl_force force; /* how w becomes forces (above); 0 = computed torque */
 } ctc_ctrl_class;
 
 /* The built-in kinds, indexed by ctc_ctrl_type; the one list that names them. */
-#define CTC_CTRL_NTYPES 5
+#define CTC_CTRL_NTYPES 8
 extern const ctc_ctrl_class *const ctc_ctrl_classes[CTC_CTRL_NTYPES];
 
 /* The class of a built-in kind; NULL for a value out of range. */
@@ -191,6 +214,10 @@ int ctc_ctrl_type_of(const char *name);
 /* The linear state feedback the built-in kinds share:
  * w_i = ki_i xi_i + kp_i (q_d,i - qi_i) + kv_i (qd_d,i - vi_i), with in->gains (nind). */
 void ctc_ctrl_linear_law(const ctc_ctrl_eval *in, double *w);
+
+/* The baselines' law, a PD on forces without integral state:
+ * w_i = kp_i (q_d,i - qi_i) + kv_i (qd_d,i - vi_i), with in->gains (nind) in N m/rad, N m s/rad. */
+void ctc_ctrl_pd_force_law(const ctc_ctrl_eval *in, double *w);
 
 /* Its closed-loop matrix: Ac = [[0, 1, 0], [0, 0, 1], [-ki, -kp, -kv]] (ctrl.h's header). */
 void ctc_ctrl_linear_closed_loop(const ctc_gains *g, double a[9]);

@@ -5,7 +5,9 @@
  * At each evaluation of the right-hand side, for the state y = (q, v, int e):
  *   e = q_d - q, de = qd_d - v, w = law(t, q, v, q_d, int e), u = qdd_d + w   (per coordinate)
  *   f = iGDCA_controller(q, v, u)              driving forces from the controller's model
- *   qdd = GDCA_plant(q, v, f + z(t))           forward dynamics of the plant, disturbance added
+ *   qdd = GDCA_plant(q, v, sat(f) + z(t))      forward dynamics of the plant, disturbance added
+ * where sat clips each actuator at its limit when spec.plant gives one (plant.h; the integral
+ * state is then kept from winding up by clamping), and is the identity otherwise.
  * The controller's model is the plant unless mass or inertia scale factors are given. With
  * controller NONE the run is passive: f = 0 and the plant moves under gravity and z(t) alone.
  * The law is the controller class's (ctrl.h): for the built-in kinds the linear feedback
@@ -45,6 +47,7 @@
 #include "integrator.h"
 #include "loop.h"
 #include "model.h"
+#include "plant.h"
 #include "status.h"
 #include "traj.h"
 
@@ -57,7 +60,7 @@ typedef enum ctc_channel {
     CTC_CH_Q_DES,  /* q_des: desired positions */
     CTC_CH_QD_DES, /* qdot_des: desired velocities */
     CTC_CH_E,      /* e: tracking error q_des - q */
-    CTC_CH_TAU,    /* tau: applied driving force f + z (N m, N) */
+    CTC_CH_TAU,    /* tau: applied driving force sat(f) + z (N m, N) */
     CTC_CH_W,      /* w: controller output (commanded minus desired acceleration) */
     CTC_CH_ENERGY, /* energy: kinetic and potential (J); potential is zero at the world origin */
     CTC_CH_LOOP,   /* loop: position and velocity residual max-norms of the closure (m or rad,
@@ -82,15 +85,26 @@ typedef struct ctc_sim_spec {
     ctc_ctrl_type controller;         /* NONE = passive; ignored when ctrl_class is set */
     const ctc_ctrl_class *ctrl_class; /* NULL = ctc_ctrl_classes[controller]; else a class of the
                                          caller's own (ctrl.h), which must outlive the run */
-    const void *ctrl_params;    /* passed to the class's law as ctc_ctrl_eval.params; NULL ok */
-    const ctc_gains *gains;     /* (nind) designed gains per coordinate (ctrl.h): required by a
-                                   class with closed_loop (every built-in active kind), optional
-                                   for others (then passed to the law as given); unused if
-                                   passive */
-    double model_mass_scale;    /* controller's model: every mass times this (> 0; 1 = exact) */
-    double model_inertia_scale; /* controller's model: every inertia about the CoM times this */
-    const ctc_traj *traj;       /* (nind) desired trajectory per coordinate; unused if NONE */
-    const ctc_disturb *disturb; /* (nind) disturbance per coordinate; NULL = none */
+    const void *ctrl_params;      /* passed to the class's law as ctc_ctrl_eval.params; NULL ok */
+    const ctc_gains *gains;       /* (nind) designed gains per coordinate (ctrl.h): required by a
+                                     class with closed_loop (every built-in active kind), optional
+                                     for others (then passed to the law as given); unused if
+                                     passive */
+    double model_mass_scale;      /* controller's model: every mass times this (> 0; 1 = exact) */
+    double model_inertia_scale;   /* controller's model: every inertia about the CoM times this */
+    const ctc_traj *traj;         /* (nind) desired trajectory per coordinate; unused if NONE */
+    const ctc_disturb *disturb;   /* (nind) disturbance per coordinate; NULL = none */
+    const ctc_plant_coord *plant; /* (nind) the actuator limit per coordinate (plant.h); NULL =
+                                     the ideal plant of the paper. Limits need a controller */
+    /* a sampled controller (sim.c): 0 = the paper's continuous law, evaluated in every
+       right-hand side. sample_period > 0: the controller measures the state at t_k = k T,
+       computes its force there, and the actuator holds it (zero-order hold) until t_k+1; the
+       integrator restarts at every t_k, and the integral state is the discrete sum
+       xi_k+1 = xi_k + T e_k (clamped as plant.h says). sample_delay d: the force computed at
+       t_k is applied from t_k+d on; before t_d the actuator gives 0. */
+    double sample_period; /* s, >= 0 */
+    int sample_delay;     /* whole samples, >= 0; > 0 only with sample_period > 0 */
+    unsigned long long seed; /* the sensors' noise generator's seed (plant.h) */
     ctc_integ_spec integrator;
     double duration;        /* s, > 0 */
     double output_interval; /* s, > 0: samples at t = 0, dt, 2 dt, ... and at duration */
@@ -115,6 +129,9 @@ typedef struct ctc_sim_spec {
     int threads;
 } ctc_sim_spec;
 
+/* the longest delay of a sampled controller, in samples */
+#define CTC_SIM_MAX_DELAY 10000
+
 /* The defaults of loop_tol (the residual, m or rad, or its rate, m/s or rad/s, that triggers a
  * projection, and the Newton tolerance) and of baumgarte's a and b (1/s) */
 #define CTC_SIM_DEFAULT_LOOP_TOL 1e-12
@@ -138,16 +155,22 @@ typedef enum ctc_run_status {
 } ctc_run_status;
 
 typedef struct ctc_sim_metrics {
-    ctc_form form;       /* the model form the plant was computed in */
-    int nv;              /* length of the per-coordinate arrays below (nind) */
-    double *e_max;       /* (nv) max |e| over the samples; NULL when passive */
-    double *e_rms;       /* (nv) RMS of e over the samples; NULL when passive */
-    double *e_final;     /* (nv) e at the last sample; NULL when passive */
-    double energy_drift; /* passive, no disturbance: max |E(t) - E(0)| / max(|E(0)|, KE scale);
-                            NaN otherwise */
-    double errdyn_dev;   /* exact model, no disturbance: max over samples and coordinates of
-                            |E(t) - expm(Ac t) E(0)| for the error state (int e, e, de), the
-                            deviation from the linear error dynamics; NaN otherwise */
+    ctc_form form;        /* the model form the plant was computed in */
+    int nv;               /* length of the per-coordinate arrays below (nind) */
+    double *e_max;        /* (nv) max |e| over the samples; NULL when passive */
+    double *e_rms;        /* (nv) RMS of e over the samples; NULL when passive */
+    double *e_final;      /* (nv) e at the last sample; NULL when passive */
+    double *tau_peak;     /* (nv) max |sat(f)| over the samples, the actuator's force without the
+                             disturbance (N m, N); NULL when passive */
+    double *tau_rms;      /* (nv) RMS of sat(f) over the samples; NULL when passive */
+    double *sat_fraction; /* (nv) the fraction of the samples at which the actuator was clipped
+                             (|f| > limit); NULL without limits */
+    double energy_drift;  /* passive, no disturbance: max |E(t) - E(0)| / max(|E(0)|, KE scale);
+                             NaN otherwise */
+    double errdyn_dev;    /* continuous controller, exact model, no disturbance, no limit, no
+                             unknown joint force: max over samples and coordinates of
+                             |E(t) - expm(Ac t) E(0)| for the error state (int e, e, de), the
+                             deviation from the linear error dynamics; NaN otherwise */
     long steps, rejected;
     long rhs_evals;       /* evaluations of the dynamics with the forward pass: the integrator's
                              right-hand sides and, for a loop model, one per sample not at a

@@ -8,13 +8,13 @@
  *     set up: scratch, the result sized for every sample, the metrics' references
  *     start: the integrator at the initial state, put onto a loop's closure; sample t = 0
  *     step, one accepted step at a time, until the last sample:
- *         step to the next discontinuity (a disturbance's step time, a spline's end), or for rk4
- *         to the next sample time; stop on the integrator's failure, a singular loop or a
- *         diverged state (non-finite, or a speed beyond the bound)
- *         record the samples inside the step from the integrator's dense output
- *         restart at a discontinuity; on a loop model, measure the drift and project back onto
- *         the closure (rk4 and dopri5 here, bdf inside its steps, sim_rhs.c)
- *         poll for cancellation and the wall-time limit
+ *         step to the next discontinuity (a disturbance's step time, a spline's end, a sampled
+ *         controller's instant), or for rk4 to the next sample time; stop on the integrator's
+ * failure, a singular loop or a diverged state (non-finite, or a speed beyond the bound) record the
+ * samples inside the step from the integrator's dense output a sampled controller: at its instant,
+ * a new command and the integral's sum (sim_rhs.c) restart at a discontinuity or a sampled
+ * controller's instant; on a loop model, measure the drift and project back onto the closure (rk4
+ * and dopri5 here, bdf inside its steps, sim_rhs.c) poll for cancellation and the wall-time limit
  *     finish the metrics
  *
  * Everything is allocated before the first step. A run stopped early keeps its samples and says
@@ -137,6 +137,9 @@ static void ctx_free(sim_ctx *c)
     free(c->qn);
     free(c->u);
     free(c->y_eval);
+    free(c->ring);
+    free(c->ym);
+    free(c->xq);
 }
 
 /* The message of a run stopped as singular at time t, why saying what stopped it; the estimate
@@ -211,26 +214,46 @@ static ctc_status setup_context(sim_ctx *c, char *err, size_t errlen)
     }
     size_t nq = (size_t)c->nq, nv = (size_t)c->nind + 1, nvx = (size_t)c->nvx + 1;
     c->dp = ctc_data_new(plant);
-    c->dc = c->ctrl_model ? ctc_data_new(c->ctrl_model) : c->dp;
+    /* a baseline's model passes run at another state than the plant's: data of their own */
+    const int own = c->active && c->cls->force != CTC_FORCE_COMPUTED_TORQUE;
+    c->dc = c->ctrl_model ? ctc_data_new(c->ctrl_model) : own ? ctc_data_new(plant) : c->dp;
+    c->xq = malloc((nq + nv + (size_t)c->nv + 1) * sizeof(double));
     c->qn = malloc((nq + 1) * sizeof(double));
-    c->u = malloc((nvx * 4 + nv * 6) * sizeof(double));
+    c->u = malloc((nvx * 5 + nv * 7) * sizeof(double));
     c->y_eval = malloc((size_t)(c->ny + 1) * sizeof(double));
-    if (!c->dp || !c->dc || !c->qn || !c->u || !c->y_eval)
+    if (!c->dp || !c->dc || !c->qn || !c->u || !c->y_eval || !c->xq)
         return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     if (spec->threads > 1) { /* one set of workers for both models */
         ctc_status st = ctc_data_set_threads(c->dp, spec->threads, err, errlen);
         if (st != CTC_OK) return st;
         ctc_data_share_pool(c->dc, c->dp);
     }
-    c->f = c->u + nvx, c->fz = c->f + nvx, c->acc = c->fz + nvx, c->w = c->acc + nvx;
-    c->des = c->w + nv, c->qi = c->des + 3 * nv, c->vi = c->qi + nv;
-    memset(c->w, 0, nv * 6 * sizeof(double));
+    c->f = c->u + nvx, c->fz = c->f + nvx, c->acc = c->fz + nvx, c->fp = c->acc + nvx;
+    c->w = c->fp + nvx;
+    c->des = c->w + nv, c->qi = c->des + 3 * nv, c->vi = c->qi + nv, c->clip = c->vi + nv;
+    memset(c->w, 0, nv * 7 * sizeof(double));
+    c->jknown = 1;
+    for (int i = 0; spec->plant && i < c->nind; i++) {
+        c->limited |= spec->plant[i].torque_limit > 0;
+        c->sensed |= ctc_plant_has_sensor_error(&spec->plant[i]);
+        if (ctc_plant_has_joint_force(&spec->plant[i])) {
+            c->jforces = 1;
+            c->jknown &= spec->plant[i].known != 0;
+        }
+    }
     c->law_in = (ctc_ctrl_eval){.nind = c->nind,
                                 .qi = c->qi,
                                 .vi = c->vi,
                                 .des = c->des,
                                 .gains = spec->gains,
                                 .params = spec->ctrl_params};
+    if (c->active && spec->sample_period > 0) { /* the commands' ring and the zero command */
+        c->sampled = 1, c->delay = spec->sample_delay;
+        c->ring = calloc((size_t)(c->delay + 2) * (nvx + 2 * nv), sizeof(double));
+        c->ym = malloc(((size_t)c->ny + 1) * sizeof(double));
+        c->rng = spec->seed;
+        if (!c->ring || !c->ym) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    }
     if (plant->has_loop) {
         ctc_loop_stab stab = spec->loop_stab;
         double a = spec->baumgarte[0], b = spec->baumgarte[1];
@@ -299,9 +322,10 @@ static ctc_status setup_stepper(sim_ctx *c, sim_stepper *sp, double dt, char *er
 
 /* The start at y0: the integrator's start evaluates f there, and the first sample reuses that
  * evaluation. Returns how the run stands. */
-static ctc_run_status start(sim_ctx *c, sim_stepper *sp, recorder *rec, const double *y0)
+static ctc_run_status start(sim_ctx *c, sim_stepper *sp, recorder *rec, double *y0)
 {
     ctc_sim_result *r = rec->r;
+    if (c->sampled) sim_control_sample(c, 0, y0); /* the first command, held from t = 0 */
     int rc0 = ctc_integrator_reset(sp->integ, 0, y0);
     if (rc0 == SIM_RHS_SINGULAR) {
         singular_limit(r, 0, c);
@@ -352,6 +376,21 @@ static ctc_run_status keep_closure(sim_ctx *c, const sim_stepper *sp, recorder *
     return CTC_RUN_DONE;
 }
 
+/* The output samples up to time tmax (inclusive or not) from the last step's dense output. */
+static void record_samples(sim_ctx *c, sim_stepper *sp, recorder *rec, const ctc_sim_hooks *hooks,
+                           double tmax, int inclusive)
+{
+    const ctc_sim_spec *spec = c->spec;
+    while (rec->next < rec->count) {
+        double ts = sim_sample_time(rec->next, rec->count, spec->duration, rec->dt);
+        if (ts > tmax || (!inclusive && ts == tmax)) break;
+        ctc_integrator_dense(sp->integ, ts, rec->ysample);
+        sim_record_sample(c, rec, ts, rec->ysample);
+        rec->next++;
+        if (hooks->progress) hooks->progress(hooks->ctx, ts / spec->duration);
+    }
+}
+
 /* One accepted step, its samples, the restart after it; *t receives the time reached. Returns
  * how the run stands (the message set when it stopped). */
 static ctc_run_status advance(sim_ctx *c, sim_stepper *sp, recorder *rec, double *yproj,
@@ -366,6 +405,8 @@ static ctc_run_status advance(sim_ctx *c, sim_stepper *sp, recorder *rec, double
        than interpolate at a time a few ulps off the accumulated step ends */
     if (sp->is.method == CTC_INTEG_RK4)
         tstop = fmin(tstop, sim_sample_time(rec->next, rec->count, spec->duration, rec->dt));
+    const double t_ctrl = c->sampled ? (double)c->k_ctrl * spec->sample_period : INFINITY;
+    tstop = fmin(tstop, t_ctrl);
     long proj_calls = c->proj_calls;
     int rc = ctc_integrator_step(sp->integ, tstop, why, sizeof why);
     *t = ctc_integrator_time(sp->integ);
@@ -385,15 +426,10 @@ static ctc_run_status advance(sim_ctx *c, sim_stepper *sp, recorder *rec, double
     if (diverged(c, *t, y, sp->bound, r))
         return singular_divergence(c, *t, sp->bound, r) ? CTC_RUN_SINGULAR : CTC_RUN_DIVERGED;
 
-    /* the samples inside this step */
-    while (rec->next < rec->count) {
-        double ts = sim_sample_time(rec->next, rec->count, spec->duration, rec->dt);
-        if (ts > *t) break;
-        ctc_integrator_dense(sp->integ, ts, rec->ysample);
-        sim_record_sample(c, rec, ts, rec->ysample);
-        rec->next++;
-        if (hooks->progress) hooks->progress(hooks->ctx, ts / spec->duration);
-    }
+    /* the samples inside this step; at a sampled controller's instant, the one there after its
+       new command */
+    const int control = *t >= t_ctrl;
+    record_samples(c, sp, rec, hooks, *t, !control);
     int restart = 0;
     if (sp->ib < sp->nbreaks && *t >= sp->breaks[sp->ib]) {
         while (sp->ib < sp->nbreaks && sp->breaks[sp->ib] <= *t) sp->ib++;
@@ -402,6 +438,19 @@ static ctc_run_status advance(sim_ctx *c, sim_stepper *sp, recorder *rec, double
     if (c->plant->has_loop) {
         ctc_run_status st = keep_closure(c, sp, rec, *t, &y, yproj, proj_calls, &restart);
         if (st != CTC_RUN_DONE) return st;
+    }
+    if (control) {
+        if (y != yproj) memcpy(yproj, y, (size_t)c->ny * sizeof *y);
+        sim_control_sample(c, *t, yproj);
+        y = yproj;
+        restart = 1;
+        if (rec->next < rec->count &&
+            sim_sample_time(rec->next, rec->count, spec->duration, rec->dt) == *t) {
+            memcpy(rec->ysample, y, (size_t)c->ny * sizeof *y);
+            sim_record_sample(c, rec, *t, rec->ysample);
+            rec->next++;
+            if (hooks->progress) hooks->progress(hooks->ctx, *t / spec->duration);
+        }
     }
     if (restart) {
         int rcr = ctc_integrator_reset(sp->integ, *t, y);

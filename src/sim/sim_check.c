@@ -1,8 +1,8 @@
 /*
  * sim_check.c - the checks of a simulation spec (sim.h ctc_sim_check; sim_internal.h): those that
  * need no model, those of the per-coordinate arrays against the built model (the controller
- * class's gains and their stability, trajectories, disturbances), and the initial state put onto
- * a loop's closure (loop.h ctc_loop_assemble).
+ * class's gains and their stability, trajectories, disturbances, the plant's terms), and the
+ * initial state put onto a loop's closure (loop.h ctc_loop_assemble).
  *
  * Every message names the item and the value ("duration must be positive and finite (got -1 s)",
  * "coordinate 2: gains (...) make the error dynamics unstable (pole at 0.5)"). Gains are checked
@@ -69,6 +69,20 @@ ctc_status sim_check_run(const ctc_sim_spec *s, char *err, size_t errlen)
                         "state (nstate 1)",
                         cls->name);
     const int active = cls->law != NULL;
+    if (!(s->sample_period >= 0) || isinf(s->sample_period))
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "sample_period must be >= 0 and finite (got %g s; 0 = continuous)",
+                        s->sample_period);
+    if (s->sample_delay < 0 || s->sample_delay > CTC_SIM_MAX_DELAY)
+        return ctc_fail(CTC_EINVAL, err, errlen, "sample_delay must be 0 to %d samples (got %d)",
+                        CTC_SIM_MAX_DELAY, s->sample_delay);
+    if (s->sample_delay > 0 && s->sample_period == 0)
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "sample_delay needs a sample_period (a continuous controller has no "
+                        "samples to delay)");
+    if (s->sample_period > 0 && !active)
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "sample_period needs a controller (this run is passive)");
     unsigned bad = s->channels & ~sim_channels_applicable(active) & ~CTC_CH_BIT(CTC_CH_LOOP);
     if (s->channels & ~CTC_CH_ALL)
         return ctc_fail(CTC_EINVAL, err, errlen, "unknown output channel bits 0x%x",
@@ -171,6 +185,64 @@ ctc_status sim_check_with_model(const ctc_sim_spec *s, const ctc_model *m, char 
     for (int i = 0; s->disturb && i < m->nind; i++)
         if (ctc_disturb_check(&s->disturb[i], why, sizeof why) != CTC_OK)
             return ctc_fail(CTC_EINVAL, err, errlen, "coordinate %d: disturbance: %s", i, why);
+    if (active && cls->force != CTC_FORCE_COMPUTED_TORQUE && m->has_loop)
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "controller \"%s\" needs an open chain (its model's desired or resting "
+                        "state is not defined for the loop's dependent joints)",
+                        cls->name);
+    if ((unsigned)cls->force > CTC_FORCE_FEEDFORWARD)
+        return ctc_fail(CTC_EINVAL, err, errlen, "controller \"%s\": unknown force mode %d",
+                        cls->name, (int)cls->force);
+    for (int i = 0; s->plant && i < m->nind; i++) {
+        double lim = s->plant[i].torque_limit;
+        if (!(lim >= 0) || isinf(lim))
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "coordinate %d: torque_limit must be positive and finite, or 0 for "
+                            "none (got %g)",
+                            i, lim);
+        const ctc_plant_coord *pc = &s->plant[i];
+        const struct {
+            const char *name;
+            double x;
+        } nonneg[] = {{"viscous", pc->viscous}, {"coulomb", pc->coulomb}, {"spring", pc->spring}};
+        for (int k = 0; k < 3; k++)
+            if (!(nonneg[k].x >= 0) || isinf(nonneg[k].x))
+                return ctc_fail(CTC_EINVAL, err, errlen,
+                                "coordinate %d: %s must be non-negative and finite (got %g)", i,
+                                nonneg[k].name, nonneg[k].x);
+        if (pc->coulomb > 0 && (!(pc->coulomb_velocity > 0) || isinf(pc->coulomb_velocity)))
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "coordinate %d: coulomb_velocity must be positive and finite with "
+                            "coulomb friction (got %g)",
+                            i, pc->coulomb_velocity);
+        const struct {
+            const char *name;
+            double x;
+        } sensor[] = {{"noise_q", pc->noise_q},
+                      {"noise_v", pc->noise_v},
+                      {"resolution", pc->resolution}};
+        for (int k = 0; k < 3; k++) {
+            if (!(sensor[k].x >= 0) || isinf(sensor[k].x))
+                return ctc_fail(CTC_EINVAL, err, errlen,
+                                "coordinate %d: %s must be non-negative and finite (got %g)", i,
+                                sensor[k].name, sensor[k].x);
+            if (sensor[k].x > 0 && !(s->sample_period > 0 && active))
+                return ctc_fail(CTC_EINVAL, err, errlen,
+                                "coordinate %d: %s needs a sampled controller (sample_period)", i,
+                                sensor[k].name);
+            if (sensor[k].x > 0 && m->has_loop)
+                return ctc_fail(CTC_EINVAL, err, errlen,
+                                "coordinate %d: %s needs an open chain", i, sensor[k].name);
+        }
+        if (!isfinite(pc->spring_rest))
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "coordinate %d: spring_rest must be finite (got %g)", i,
+                            pc->spring_rest);
+        if (lim > 0 && !active)
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "coordinate %d: torque_limit needs a controller (this run is passive)",
+                            i);
+    }
     return CTC_OK;
 }
 

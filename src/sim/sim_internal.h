@@ -5,10 +5,9 @@
  * The run (sim.c) is a recipe of stages, one file each:
  *   sim_check.c    the spec's checks, with and without a model, and the initial state
  *   sim_rhs.c      one evaluation: state -> desired motion -> controller law -> iGDCA forces ->
- *                  disturbance -> GDCA accelerations; the integrator's right-hand side and bdf's
- *                  in-step projection
- *   sim_record.c   the result's arrays and one output sample's channels
- *   sim_metrics.c  the accuracy and tracking figures gathered at the samples and at the end
+ *                  saturation -> disturbance -> GDCA accelerations; the integrator's right-hand
+ * side and bdf's in-step projection sim_record.c   the result's arrays and one output sample's
+ * channels sim_metrics.c  the accuracy and tracking figures gathered at the samples and at the end
  * Everything a run touches is allocated in sim.c before its first step.
  */
 #ifndef CTC_SIM_INTERNAL_H
@@ -41,6 +40,23 @@ typedef struct sim_ctx {
     double *w;       /* (nind) controller output */
     double *des;     /* (nind x 3) desired q, qd, qdd */
     double *qi, *vi; /* (nind) the controlled coordinates' positions and rates */
+    double *clip;    /* (nind) f - sat(f) of the last evaluation with forces: 0 when the
+                        actuator was within its limit (plant.h) */
+    int limited;     /* some coordinate has a limit (spec.plant) */
+    int jforces;     /* some coordinate has a joint force (plant.h) */
+    int jknown;      /* every coordinate's joint force is known to the controller */
+    double *fp;      /* (nvx) what the forward pass receives: fz plus the joint forces */
+    double *xq;      /* (nq + nv) a baseline controller's model state (sim_rhs.c) */
+    /* a sampled controller (sim.h sample_period): the commands of the last delay + 1 samples,
+       each (nvx) f, (nind) w, (nind) clip, in a ring, and a zero command */
+    int sampled, delay;
+    int sampling_now;     /* sim_evaluate computes the controller (at a sample instant) */
+    long k_ctrl;          /* the next sample's index */
+    double *ring;         /* (delay + 2) commands; the last is zero */
+    const double *held;   /* the command being applied: one of ring's */
+    int sensed;               /* some coordinate's sensors are not exact (plant.h) */
+    unsigned long long rng;   /* the sensors' noise generator's state */
+    double *ym;               /* (ny) the state as the sampled controller measures it */
     ctc_ctrl_eval law_in; /* the law's input: the arrays above, t, q, v and xi set per call */
     double cond_max;      /* loop models: singular beyond this condition estimate */
     double cond;  /* loop models: the last evaluation's condition estimate (max of passes) */
@@ -68,10 +84,12 @@ typedef struct recorder {
     double *loop_max; /* loop models: the max residuals (position, velocity) so far */
     /* error-dynamics reference (exact model, no disturbance, a class with closed_loop) */
     int track_errdyn;
-    double *phi;  /* (nind x 9) transition matrix over one interval */
-    double *eref; /* (nind x 3) reference error state at the last sample */
-    double t_ref; /* time of eref */
-    double *e_sq; /* (nind) sum of e^2 */
+    double *phi;    /* (nind x 9) transition matrix over one interval */
+    double *eref;   /* (nind x 3) reference error state at the last sample */
+    double t_ref;   /* time of eref */
+    double *e_sq;   /* (nind) sum of e^2 */
+    double *tau_sq; /* (nind) sum of sat(f)^2 */
+    double *sat_n;  /* (nind) samples at which the actuator was clipped */
     /* energy reference (passive, no disturbance) */
     int track_energy;
     double e0, ke_max, drift;
@@ -120,6 +138,11 @@ int sim_evaluate(sim_ctx *c, double t, const double *y, unsigned what);
 
 /* the integrator's right-hand side (integrator.h ctc_ode_rhs); ctx is the sim_ctx */
 int sim_rhs(double t, const double *y, double *ydot, void *ctx);
+
+/* The sampled controller at sample instant t (sim.h sample_period): measures y, computes and
+ * stores the command, makes the command of delay samples ago the held one, and advances the
+ * discrete integral state in y. */
+void sim_control_sample(sim_ctx *c, double t, double *y);
 
 /* bdf's in-step projection onto a loop's closure (integrator.h ctc_ode_project): 0, or
  * SIM_PROJ_FAILED with the reason in c->proj_why */

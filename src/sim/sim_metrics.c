@@ -8,8 +8,11 @@
  * error state E = (int e, e, de) obey dE/dt = Ac E exactly, so E(t) = expm(Ac t) E(0). The
  * reference is propagated from sample to sample with the 3x3 transition matrix of one output
  * interval (a shorter last interval gets its own), and errdyn_dev is the largest deviation of e
- * from it. The energy reference: passive, no disturbance, E = KE + PE is conserved, and
- * energy_drift is max |E(t) - E(0)| relative to max(|E(0)|, the largest KE).
+ * from it; saturation (plant.h) breaks the linear law, so a run with limits has no such reference.
+ * The actuators' figures are those of sat(f), the force the actuator delivers, at the samples:
+ * the peak and RMS, and the fraction of the samples at which it was clipped. The energy reference:
+ * passive, no disturbance, E = KE + PE is conserved, and energy_drift is max |E(t) - E(0)| relative
+ * to max(|E(0)|, the largest KE).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -62,12 +65,13 @@ static void expm3(const double a[9], double t, double out[9])
 ctc_status sim_metrics_init(const sim_ctx *c, recorder *rec, int exact, size_t nv)
 {
     const ctc_sim_spec *spec = c->spec;
-    rec->track_energy = !c->active && !has_disturbance(spec, c->nind);
-    rec->track_errdyn =
-        c->active && exact && c->cls->closed_loop && !has_disturbance(spec, c->nind);
-    rec->e_sq = calloc(nv, sizeof(double));
+    rec->track_energy = !c->active && !has_disturbance(spec, c->nind) && !c->jforces;
+    rec->track_errdyn = c->active && exact && c->cls->closed_loop &&
+                        !has_disturbance(spec, c->nind) && !c->limited && c->jknown && !c->sampled;
+    rec->e_sq = calloc(nv * 3, sizeof(double));
     rec->phi = calloc(nv * 12, sizeof(double));
     if (!rec->e_sq || !rec->phi) return CTC_ENOMEM;
+    rec->tau_sq = rec->e_sq + nv, rec->sat_n = rec->tau_sq + nv;
     rec->eref = rec->phi + 9 * nv;
     if (rec->track_errdyn) {
         for (int i = 0; i < c->nind; i++) {
@@ -90,6 +94,10 @@ void sim_metrics_sample(const sim_ctx *c, recorder *rec, long j, double t, const
             mt->e_max[i] = fmax(mt->e_max[i], fabs(e));
             rec->e_sq[i] += e * e;
             mt->e_final[i] = e;
+            double f = c->f[c->plant->ind_coord[i]];
+            mt->tau_peak[i] = fmax(mt->tau_peak[i], fabs(f));
+            rec->tau_sq[i] += f * f;
+            if (c->limited && c->clip[i] != 0) rec->sat_n[i]++;
         }
     }
     if (rec->track_energy) {
@@ -132,8 +140,12 @@ void sim_metrics_finish(const sim_ctx *c, const recorder *rec, const ctc_integ_s
     mt->rejected = stats->rejected;
     mt->rhs_evals = c->evals;
     mt->err_estimate = stats->err_estimate;
-    for (int i = 0; c->active && i < c->nind; i++)
-        mt->e_rms[i] = r->nsamples ? sqrt(rec->e_sq[i] / (double)r->nsamples) : 0;
+    const double n = (double)r->nsamples;
+    for (int i = 0; c->active && i < c->nind; i++) {
+        mt->e_rms[i] = r->nsamples ? sqrt(rec->e_sq[i] / n) : 0;
+        mt->tau_rms[i] = r->nsamples ? sqrt(rec->tau_sq[i] / n) : 0;
+        if (c->limited) mt->sat_fraction[i] = r->nsamples ? rec->sat_n[i] / n : 0;
+    }
     if (c->plant->has_loop) {
         mt->loop_res_max = rec->loop_max[0];
         mt->loop_vres_max = rec->loop_max[1];
@@ -147,5 +159,5 @@ void sim_metrics_free(recorder *rec)
 {
     free(rec->e_sq);
     free(rec->phi);
-    rec->e_sq = rec->phi = NULL;
+    rec->e_sq = rec->phi = rec->tau_sq = rec->sat_n = NULL;
 }

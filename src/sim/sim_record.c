@@ -31,7 +31,8 @@ double sim_sample_time(long j, long count, double duration, double dt)
 }
 
 /* What a sample needs of an evaluation at its state. Its outputs are q, v, the desired motion,
- * e and w (no pass needed); the driving forces (the inverse pass, with a controller); the energy
+ * e and w (no pass needed); the driving forces (the inverse pass, with a controller: the tau
+ * channel, the force metrics and the saturation); the energy
  * (the kinematics). A loop model's sample takes a full evaluation: the forward pass's boundary
  * solve has its own condition estimate, which metrics.loop_cond_max reports at the samples. No
  * sample needs the forward pass's accelerations otherwise. */
@@ -40,7 +41,7 @@ unsigned sim_sample_needs(const sim_ctx *c, const recorder *rec)
     const ctc_sim_result *r = rec->r;
     if (c->plant->has_loop) return SIM_EVAL_FULL;
     unsigned what = 0;
-    if (r->ch[CTC_CH_TAU] && c->active) what |= SIM_EVAL_FORCES;
+    if (c->active) what |= SIM_EVAL_FORCES; /* the tau channel and metrics, the clipping */
     if (r->ch[CTC_CH_ENERGY] || rec->track_energy) what |= SIM_EVAL_KIN;
     return what;
 }
@@ -143,7 +144,14 @@ ctc_status sim_alloc_result(const sim_ctx *c, unsigned channels, long count, ctc
         mt->e_max = calloc((size_t)c->nind + 1, sizeof(double));
         mt->e_rms = calloc((size_t)c->nind + 1, sizeof(double));
         mt->e_final = calloc((size_t)c->nind + 1, sizeof(double));
-        if (!mt->e_max || !mt->e_rms || !mt->e_final) return CTC_ENOMEM;
+        mt->tau_peak = calloc((size_t)c->nind + 1, sizeof(double));
+        mt->tau_rms = calloc((size_t)c->nind + 1, sizeof(double));
+        if (!mt->e_max || !mt->e_rms || !mt->e_final || !mt->tau_peak || !mt->tau_rms)
+            return CTC_ENOMEM;
+    }
+    if (c->limited) {
+        mt->sat_fraction = calloc((size_t)c->nind + 1, sizeof(double));
+        if (!mt->sat_fraction) return CTC_ENOMEM;
     }
     return CTC_OK;
 }
@@ -156,5 +164,8 @@ void ctc_sim_result_free(ctc_sim_result *r)
     free(r->metrics.e_max);
     free(r->metrics.e_rms);
     free(r->metrics.e_final);
+    free(r->metrics.tau_peak);
+    free(r->metrics.tau_rms);
+    free(r->metrics.sat_fraction);
     free(r);
 }

@@ -7,15 +7,20 @@
  *     kinematics and body handle equations of the plant at (q, v)           (DESIGN.md 3)
  *     desired motion (q_d, qd_d, qdd_d)_i = traj_i(t)                       (traj.h)
  *     w = law(t, q, v, q_d, xi), u_i = qdd_d,i + w_i                         (ctrl.h, paper Eq. 18)
- *     f = iGDCA(controller model; q, v, u)                                   (paper Eq. 70)
- *     f + z(t), the disturbance added to the applied forces                  (disturb.h)
- *     qdd = GDCA(plant; q, v, f + z)                                         (paper section 3)
- *     dy/dt = (qdot(q, v), qdd, e)
- * With an exact controller model the plant and the controller share one ctc_data, so the
- * kinematics and the body handle equations are computed once per evaluation (Eq. 42-43).
- * Spherical joints (passive runs only) are integrated as quaternions; the evaluation reads a
- * normalised copy. The law is called once per evaluation through the class's pointer, for all
- * coordinates at once; nothing here allocates.
+ *     f = iGDCA(controller model; q, v, u) (a baseline class: w, plus the inverse dynamics at
+ *         (q, 0, 0) or at the desired state; ctrl.h ctc_ctrl_force), minus the joint forces tau_j
+ * where the controller knows them                                          (paper Eq. 70) sat(f),
+ * each actuator clipped at its limit when it has one             (plant.h) sat(f) + z(t), the
+ * disturbance added to the applied forces             (disturb.h) qdd = GDCA(plant; q, v, sat(f) +
+ * z + tau_j(q, v))                      (paper section 3) dy/dt = (qdot(q, v), qdd, e), with d/dt
+ * int(e_i) = 0 while coordinate i is clipped and e_i pushes further into the limit (clamping
+ * anti-windup, plant.h) A sampled controller (sim.h sample_period) runs the controller's part only
+ * at its sample instants (sim_control_sample, from sim.c); in between, the evaluation applies the
+ * held command and the integral state does not move. With an exact controller model the plant and
+ * the controller share one ctc_data, so the kinematics and the body handle equations are computed
+ * once per evaluation (Eq. 42-43). Spherical joints (passive runs only) are integrated as
+ * quaternions; the evaluation reads a normalised copy. The law is called once per evaluation
+ * through the class's pointer, for all coordinates at once; nothing here allocates.
  *
  * Loop models: the controller's coordinates are the independent ones (the closing joint's
  * position and rate come from the loop kinematics), the forces and accelerations of the passes
@@ -49,6 +54,36 @@ static void controlled_coords(const sim_ctx *c, const double *q, const double *v
     }
 }
 
+/* The forces of a baseline controller (ctrl.h ctc_ctrl_force) into c->f (nvx), from c->w and
+ * the desired motion c->des, at positions q: w alone; or w plus the controller model's inverse
+ * dynamics at (q, 0, 0), gravity; or at the desired state (q_d, qd_d, qdd_d), the feedforward.
+ * The model's passes run on c->dc, the controller's own data (sim.c), so the plant's kinematics
+ * in c->dp stay those of (q, v). Open chains only (sim_check.c): every coordinate is
+ * controlled, so the desired state is whole. */
+static void baseline_forces(sim_ctx *c, const double *q)
+{
+    const ctc_model *m = c->plant, *cm = c->ctrl_model ? c->ctrl_model : m;
+    memset(c->u, 0, (size_t)c->nvx * sizeof *c->u);
+    memset(c->f, 0, (size_t)c->nvx * sizeof *c->f);
+    if (c->cls->force != CTC_FORCE_DIRECT) {
+        double *qm = c->xq, *vm = c->xq + c->nq;
+        memcpy(qm, q, (size_t)c->nq * sizeof *qm);
+        memset(vm, 0, (size_t)c->nv * sizeof *vm);
+        if (c->cls->force == CTC_FORCE_FEEDFORWARD) {
+            for (int i = 0; i < c->nind; i++) {
+                int k = m->ind_joint[i], off = m->ind_coord[i] - m->jnt_vadr[k];
+                qm[m->jnt_qadr[k] + off] = c->des[3 * i];
+                vm[m->ind_coord[i]] = c->des[3 * i + 1];
+                c->u[m->ind_coord[i]] = c->des[3 * i + 2];
+            }
+        }
+        ctc_kinematics(cm, c->dc, qm, vm);
+        ctc_handles(cm, c->dc);
+        ctc_gdca_inverse(cm, c->dc, c->u, c->f);
+    }
+    for (int i = 0; i < c->nind; i++) c->f[m->ind_coord[i]] += c->w[i];
+}
+
 /* Driving forces and accelerations of state (q, v, ie) at time t, as far as `what` asks: fills
  * ctx's arrays (the force arrays and c->acc (nvx) when asked for) and dp's kinematics. A loop
  * model always gets its kinematics (the closing joint's coordinates come from them). Returns 0,
@@ -72,8 +107,14 @@ int sim_evaluate(sim_ctx *c, double t, const double *y, unsigned what)
     controlled_coords(c, q, v);
     c->cond = 1;
 
-    /* controller: the desired motion, w = law(...), u = qdd_d + w, f = iGDCA(u) */
-    if (c->active) {
+    /* a sampled controller between its samples: the held command */
+    if (c->active && c->sampled && !c->sampling_now) {
+        for (int i = 0; i < c->nind; i++) ctc_traj_eval(&s->traj[i], t, c->des + 3 * i);
+        memcpy(c->f, c->held, (size_t)c->nvx * sizeof *c->f);
+        memcpy(c->w, c->held + c->nvx, (size_t)c->nind * sizeof *c->w);
+        memcpy(c->clip, c->held + c->nvx + c->nind, (size_t)c->nind * sizeof *c->clip);
+    } else if (c->active) {
+        /* controller: the desired motion, w = law(...), u = qdd_d + w, f = iGDCA(u) */
         if (forces) memset(c->u, 0, (size_t)c->nvx * sizeof *c->u);
         for (int i = 0; i < c->nind; i++) ctc_traj_eval(&s->traj[i], t, c->des + 3 * i);
         c->law_in.t = t;
@@ -81,25 +122,48 @@ int sim_evaluate(sim_ctx *c, double t, const double *y, unsigned what)
         c->law_in.v = v;
         c->law_in.xi = c->nx ? y + c->nq + c->nv : NULL;
         c->cls->law(&c->law_in, c->w);
-        for (int i = 0; i < c->nind; i++) c->u[m->ind_coord[i]] = c->des[3 * i + 2] + c->w[i];
-        if (forces && c->ctrl_model) {
-            ctc_kinematics(c->ctrl_model, c->dc, q, v);
-            ctc_handles(c->ctrl_model, c->dc);
-            ctc_gdca_inverse(c->ctrl_model, c->dc, c->u, c->f);
-        } else if (forces) {
-            ctc_gdca_inverse(m, c->dp, c->u, c->f);
+        if (c->cls->force != CTC_FORCE_COMPUTED_TORQUE) {
+            if (forces) baseline_forces(c, q);
+        } else {
+            for (int i = 0; i < c->nind; i++) c->u[m->ind_coord[i]] = c->des[3 * i + 2] + c->w[i];
+            if (forces && c->ctrl_model) {
+                ctc_kinematics(c->ctrl_model, c->dc, q, v);
+                ctc_handles(c->ctrl_model, c->dc);
+                ctc_gdca_inverse(c->ctrl_model, c->dc, c->u, c->f);
+            } else if (forces) {
+                ctc_gdca_inverse(m, c->dp, c->u, c->f);
+            }
         }
         if (forces && m->has_loop) c->cond = c->dc->loop_cond;
+        for (int i = 0; forces && c->jforces && i < c->nind; i++)
+            if (s->plant[i].known)
+                c->f[m->ind_coord[i]] -= ctc_plant_joint_force(&s->plant[i], c->qi[i], c->vi[i]);
+        /* the actuators' limits: f becomes sat(f), and clip keeps what was cut off */
+        for (int i = 0; forces && c->limited && i < c->nind; i++) {
+            double lim = s->plant[i].torque_limit, *fi = &c->f[m->ind_coord[i]];
+            double sat = lim > 0 ? fmin(fmax(*fi, -lim), lim) : *fi;
+            c->clip[i] = *fi - sat;
+            *fi = sat;
+        }
     } else {
         memset(c->f, 0, (size_t)c->nvx * sizeof *c->f);
     }
 
-    /* plant: qdd = GDCA(f + z) */
+    /* plant: qdd = GDCA(sat(f) + z) */
     memcpy(c->fz, c->f, (size_t)c->nvx * sizeof *c->fz);
     for (int i = 0; s->disturb && i < c->nind; i++)
         c->fz[m->ind_coord[i]] += ctc_disturb_eval(&s->disturb[i], t);
     if (!(what & SIM_EVAL_ACC)) return 0;
-    ctc_gdca_forward(m, c->dp, c->fz, c->acc);
+
+    /* the joints' own forces, which the plant feels and the tau channel does not show */
+    const double *fwd = c->fz;
+    if (c->jforces) {
+        memcpy(c->fp, c->fz, (size_t)c->nvx * sizeof *c->fp);
+        for (int i = 0; i < c->nind; i++)
+            c->fp[m->ind_coord[i]] += ctc_plant_joint_force(&s->plant[i], c->qi[i], c->vi[i]);
+        fwd = c->fp;
+    }
+    ctc_gdca_forward(m, c->dp, fwd, c->acc);
     c->evals++;
     c->eval_valid = 1;
     c->t_eval = t;
@@ -117,9 +181,50 @@ int sim_rhs(double t, const double *y, double *ydot, void *ctx)
     int rc = sim_evaluate(c, t, y, SIM_EVAL_FULL);
     memcpy(ydot + c->nq, c->acc, (size_t)c->nv * sizeof *ydot);
     ctc_model_q_rate(c->plant, c->has_quat ? c->qn : y, y + c->nq, ydot);
-    if (c->nx)
-        for (int i = 0; i < c->nind; i++) ydot[c->nq + c->nv + i] = c->des[3 * i] - c->qi[i];
+    for (int i = 0; i < c->nx; i++) {
+        double e = c->des[3 * i] - c->qi[i];
+        ydot[c->nq + c->nv + i] = c->sampled || (c->limited && e * c->clip[i] > 0) ? 0 : e;
+    }
     return rc;
+}
+
+/* the state y as the sensors give it (plant.h), into c->ym: an open chain's controlled
+   coordinates with noise and the encoder's counts, one draw per noisy term in coordinate order */
+static const double *measure(sim_ctx *c, const double *y)
+{
+    const ctc_model *m = c->plant;
+    memcpy(c->ym, y, (size_t)c->ny * sizeof *y);
+    for (int i = 0; i < c->nind; i++) {
+        const ctc_plant_coord *p = &c->spec->plant[i];
+        int k = m->ind_joint[i], off = m->ind_coord[i] - m->jnt_vadr[k];
+        double *q = &c->ym[m->jnt_qadr[k] + off], *v = &c->ym[c->nq + m->ind_coord[i]];
+        if (p->noise_q > 0) *q += p->noise_q * ctc_plant_normal(&c->rng);
+        if (p->noise_v > 0) *v += p->noise_v * ctc_plant_normal(&c->rng);
+        if (p->resolution > 0) *q = p->resolution * round(*q / p->resolution);
+    }
+    return c->ym;
+}
+
+void sim_control_sample(sim_ctx *c, double t, double *y)
+{
+    const size_t width = (size_t)c->nvx + 2 * (size_t)c->nind;
+    double *slot = c->ring + (size_t)(c->k_ctrl % (c->delay + 1)) * width;
+    c->sampling_now = 1;
+    sim_evaluate(c, t, c->sensed ? measure(c, y) : y, SIM_EVAL_FORCES);
+    c->sampling_now = 0;
+    memcpy(slot, c->f, (size_t)c->nvx * sizeof *slot);
+    memcpy(slot + c->nvx, c->w, (size_t)c->nind * sizeof *slot);
+    memcpy(slot + c->nvx + c->nind, c->clip, (size_t)c->nind * sizeof *slot);
+    c->held = c->k_ctrl >= c->delay
+                  ? c->ring + (size_t)((c->k_ctrl - c->delay) % (c->delay + 1)) * width
+                  : c->ring + (size_t)(c->delay + 1) * width;
+    /* xi_k+1 = xi_k + T e_k (e as measured), held while the command is clipped and e pushes into
+       the limit */
+    for (int i = 0; i < c->nx; i++) {
+        double e = c->des[3 * i] - c->qi[i];
+        if (!(c->limited && e * c->clip[i] > 0)) y[c->nq + c->nv + i] += c->spec->sample_period * e;
+    }
+    c->k_ctrl++;
 }
 
 /* The projection CVODE calls inside each bdf step (integrator.h ctc_ode_project): the residuals

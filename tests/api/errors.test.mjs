@@ -78,7 +78,7 @@ const CASES = [
     { name: 'unknown joint type', json: bodyJob(unitBody({ joint: { type: 'hinge' } })), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].joint.type', message: 'must be one of "revolute", "prismatic", "cylindrical", "spherical", "fixed" (got "hinge")' },
     { name: 'no controller', json: { scene: SCENE1, duration: 1 }, status: 400, code: 'MISSING_FIELD', field: 'controller', message: 'is required ({"type": "none"} for a passive run)' },
     { name: 'no duration', json: { scene: SCENE1, controller: PASSIVE }, status: 400, code: 'MISSING_FIELD', field: 'duration', message: 'is required' },
-    { name: 'unknown controller type', json: ctrlJob({ type: 'pdd' }), status: 400, code: 'INVALID_FIELD', field: 'controller.type', message: 'must be one of "none", "pd", "pid", "poles", "lqr" (got "pdd")' },
+    { name: 'unknown controller type', json: ctrlJob({ type: 'pdd' }), status: 400, code: 'INVALID_FIELD', field: 'controller.type', message: 'must be one of "none", "pd", "pid", "poles", "lqr", "joint_pd", "pd_gravity", "feedforward" (got "pdd")' },
     { name: 'kp without kv', json: ctrlJob({ type: 'pd', kp: 100 }), status: 400, code: 'MISSING_FIELD', field: 'controller.kv', message: 'is required with "kp"' },
     { name: 'unstable pid', json: ctrlJob({ type: 'pid', kp: 100, kv: 20, ki: 2000 }), status: 400, code: 'INVALID_FIELD', field: 'controller', message: 'ki = 2000 must be below kv*kp = 2000 (Routh-Hurwitz: the closed-loop error dynamics would be unstable)' },
     { name: 'controller without a trajectory', json: { scene: SCENE2, controller: PD, duration: 1 }, status: 400, code: 'MISSING_FIELD', field: 'trajectory', message: 'is required with controller "pd"' },
@@ -92,7 +92,7 @@ const CASES = [
     { name: 'too many bodies (4097)', server: 'B', headers: { 'content-type': J, authorization: `Bearer ${TOKEN}` }, body: tooManyBodies(), status: 400, code: 'LIMIT_EXCEEDED', field: 'scene.bodies', message: 'has 4097 bodies; the limit is 4096' },
 
     /* presets in a body */
-    { name: 'unknown preset', json: { preset: 'nope' }, status: 400, code: 'UNKNOWN_PRESET', field: 'preset', message: /^unknown preset "nope" \(the presets are: triple_pendulum_pd, .*n_link_pendulum, five_bar_pd, .*rssr_passive, y_pendulum_pd, spatial_hand_pd, two_arm_torso_pd, ur5_min_jerk, iiwa14_min_jerk\)$/ },
+    { name: 'unknown preset', json: { preset: 'nope' }, status: 400, code: 'UNKNOWN_PRESET', field: 'preset', message: /^unknown preset "nope" \(the presets are: triple_pendulum_pd, .*n_link_pendulum, five_bar_pd, .*rssr_passive, y_pendulum_pd, spatial_hand_pd, two_arm_torso_pd, ur5_min_jerk, iiwa14_min_jerk, .*triple_pendulum_pid_limited\)$/ },
     { name: 'preset not a string', json: { preset: 5 }, status: 400, code: 'INVALID_FIELD', field: 'preset', message: 'must be a string (got a number)' },
     { name: 'preset parameter out of range', json: { preset: 'n_link_pendulum', n: 1 }, status: 400, code: 'INVALID_FIELD', field: 'n', message: 'must be an integer from 2 to 4096 (got 1)' },
     { name: 'validate: negative mass', path: '/api/validate', json: bodyJob(unitBody({ mass: -1 })), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].mass', message: 'must be positive (got -1 kg)' },

@@ -369,6 +369,12 @@ static const struct {
     {"integrator", "rk4", "{\"method\": \"rk4\"}"},
     {"integrator", "dopri5", "{\"method\": \"dopri5\"}"},
     {"integrator", "bdf", "{\"method\": \"bdf\"}"},
+    {"controller", "pid", "{\"type\": \"pid\", \"kp\": 100, \"kv\": 20, \"ki\": 250}"},
+    {"controller", "poles", "{\"type\": \"poles\", \"poles\": [-2, -2.1, -2.2]}"},
+    {"controller", "lqr", "{\"type\": \"lqr\", \"Q\": [1, 1, 1], \"lambda\": 0.01}"},
+    {"controller", "joint_pd", "{\"type\": \"joint_pd\", \"kp\": 100, \"kv\": 20}"},
+    {"controller", "pd_gravity", "{\"type\": \"pd_gravity\", \"kp\": 100, \"kv\": 20}"},
+    {"controller", "feedforward", "{\"type\": \"feedforward\", \"kp\": 100, \"kv\": 20}"},
 };
 
 /* the object at a table path in doc ("[]" and a per-coordinate array: entry 0), or NULL */

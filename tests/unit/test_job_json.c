@@ -37,6 +37,7 @@
 /* a valid job around one changed part */
 #define PASSIVE_JOB(extra) "{" SCENE2 "," PASSIVE "," DUR extra "}"
 #define PD_JOB(extra) "{" SCENE2 "," PD "," HOLD "," DUR extra "}"
+#define PD_JOB_CTRL(keys) CTRL_JOB("{'type':'pd','kp':100,'kv':20," keys "}")
 #define CTRL_JOB(ctrl) "{" SCENE2 ",'controller':" ctrl "," HOLD "," DUR "}"
 #define TRAJ_JOB(traj) "{" SCENE2 "," PD ",'trajectory':" traj "," DUR "}"
 #define BODY_JOB(body) "{'scene':{'bodies':[" body "]}," PASSIVE "," DUR "}"
@@ -314,7 +315,8 @@ static const bad_job bad_jobs[] = {
      JOB_MISSING_FIELD, "controller.type", "is required"},
     {"unknown controller type", CTRL_JOB("{'type':'pdd'}"), NULL, JOB_INVALID_FIELD,
      "controller.type",
-     "must be one of \"none\", \"pd\", \"pid\", \"poles\", \"lqr\" (got \"pdd\")"},
+     "must be one of \"none\", \"pd\", \"pid\", \"poles\", \"lqr\", \"joint_pd\", "
+     "\"pd_gravity\", \"feedforward\" (got \"pdd\")"},
     {"gains of no controller", "{" SCENE2 ",'controller':{'type':'none','kp':1}," DUR "}", NULL,
      JOB_UNKNOWN_FIELD, "controller.kp", "key \"kp\" does not apply to controller type \"none\""},
     {"pd without gains", CTRL_JOB("{'type':'pd'}"), NULL, JOB_MISSING_FIELD, "controller.kp",
@@ -406,6 +408,71 @@ static const bad_job bad_jobs[] = {
     {"misspelt trajectory key", TRAJ_JOB("{'type':'sine','amplitud':1,'period':1}"), NULL,
      JOB_UNKNOWN_FIELD, "trajectory.amplitud",
      "unknown key \"amplitud\" (did you mean \"amplitude\"?)"},
+
+    /* the baselines */
+    {"baseline on a loop",
+     "{" LOOP_SCENE ",'controller':{'type':'pd_gravity','kp':10,'kv':5}," HOLD "," DUR "}", NULL,
+     JOB_INVALID_FIELD, "controller.type",
+     "\"pd_gravity\" needs an open chain (its model's desired or resting state is not defined for "
+     "a loop's dependent joints)"},
+    {"baseline without kv", CTRL_JOB("{'type':'feedforward','kp':10}"), NULL, JOB_MISSING_FIELD,
+     "controller.kv", "is required"},
+    {"baseline with zeta", CTRL_JOB("{'type':'joint_pd','kp':10,'kv':5,'zeta':1}"), NULL,
+     JOB_UNKNOWN_FIELD, "controller.zeta",
+     "key \"zeta\" does not apply to controller type \"joint_pd\""},
+
+    /* a sampled controller */
+    {"delay without a period", PD_JOB_CTRL("'sample_delay':2"), NULL, JOB_INVALID_FIELD,
+     "controller.sample_delay",
+     "needs \"sample_period\" (a continuous controller has no samples to delay)"},
+    {"negative sample period", PD_JOB_CTRL("'sample_period':-0.001"), NULL, JOB_INVALID_FIELD,
+     "controller.sample_period",
+     "must be non-negative (got -0.001 s; 0 = a continuous controller)"},
+    {"fractional delay", PD_JOB_CTRL("'sample_period':0.001,'sample_delay':1.5"), NULL,
+     JOB_INVALID_FIELD, "controller.sample_delay",
+     "must be a whole number of samples from 0 to 10000 (got 1.5)"},
+    {"sample period of a passive run", CTRL_JOB("{'type':'none','sample_period':0.01}"), NULL,
+     JOB_UNKNOWN_FIELD, "controller.sample_period",
+     "key \"sample_period\" does not apply to controller type \"none\""},
+    {"too many control instants", PD_JOB_CTRL("'sample_period':1e-9"), NULL, JOB_LIMIT_EXCEEDED,
+     "controller.sample_period",
+     "duration / sample_period = 1e+09 instants exceeds 1e+07: use a longer period or a shorter "
+     "duration (got 1e-09 s for 1 s)"},
+
+    /* the sensors */
+    {"noise without a sampled controller", PD_JOB(",'plant':{'noise_q':0.001}"), NULL,
+     JOB_INVALID_FIELD, "plant.noise_q",
+     "needs a sampled controller (\"controller.sample_period\"): the sensors are read at its "
+     "instants"},
+    {"negative rate noise", PD_JOB_CTRL("'sample_period':0.001},'plant':{'noise_v':-1"), NULL,
+     JOB_INVALID_FIELD, "plant.noise_v", "must be non-negative (got -1)"},
+    {"fractional seed", PD_JOB_CTRL("'sample_period':0.001,'seed':1.5"), NULL, JOB_INVALID_FIELD,
+     "controller.seed", "must be a whole number from 0 to 2^53 (got 1.5)"},
+
+    /* the plant */
+    {"negative torque limit", PD_JOB(",'plant':{'torque_limit':-1}"), NULL, JOB_INVALID_FIELD,
+     "plant.torque_limit", "must be positive (got -1)"},
+    {"zero torque limit of one coordinate", PD_JOB(",'plant':[{},{'torque_limit':0}]"), NULL,
+     JOB_INVALID_FIELD, "plant[1].torque_limit", "must be positive (got 0)"},
+    {"torque limit of a passive run", PASSIVE_JOB(",'plant':{'torque_limit':5}"), NULL,
+     JOB_INVALID_FIELD, "plant.torque_limit",
+     "needs a controller: it clips the controller's force (this run is passive)"},
+    {"plant array of the wrong length", PD_JOB(",'plant':[{}]"), NULL, JOB_INVALID_FIELD, "plant",
+     "must have 2 entries, one per coordinate (got 1)"},
+    {"coulomb without its velocity", PD_JOB(",'plant':{'coulomb':1}"), NULL, JOB_MISSING_FIELD,
+     "plant.coulomb_velocity",
+     "is required with \"coulomb\" (the regularisation's speed scale, rad/s or m/s: smaller is "
+     "more accurate and stiffer)"},
+    {"negative viscous friction", PD_JOB(",'plant':[{},{'viscous':-2}]"), NULL, JOB_INVALID_FIELD,
+     "plant[1].viscous", "must be non-negative (got -2)"},
+    {"zero coulomb velocity", PD_JOB(",'plant':{'coulomb':1,'coulomb_velocity':0}"), NULL,
+     JOB_INVALID_FIELD, "plant.coulomb_velocity", "must be positive (got 0)"},
+    {"spring rest without a spring", PASSIVE_JOB(",'plant':{'spring_rest':1}"), NULL,
+     JOB_INVALID_FIELD, "plant.spring_rest", "applies only with \"spring\""},
+    {"known not a boolean", PD_JOB(",'plant':{'viscous':1,'known':1}"), NULL, JOB_INVALID_FIELD,
+     "plant.known", "must be true or false (got a number)"},
+    {"misspelt plant key", PD_JOB(",'plant':{'torque_limt':5}"), NULL, JOB_UNKNOWN_FIELD,
+     "plant.torque_limt", "unknown key \"torque_limt\" (did you mean \"torque_limit\"?)"},
 
     /* the disturbance */
     {"disturbance of negative period",
@@ -694,7 +761,7 @@ Test(job_json, unknown_preset_lists_every_preset)
 {
     int count;
     const preset *list = presets_list(&count);
-    char want[512];
+    char want[1024];
     size_t used = (size_t)snprintf(want, sizeof want, "unknown preset \"nope\" (the presets are: ");
     for (int i = 0; i < count; i++) {
         used +=
@@ -1034,6 +1101,27 @@ Test(job_json, one_trajectory_object_serves_every_coordinate)
     job_free(j);
 }
 
+Test(job_json, plant_terms_reach_the_spec_and_an_ideal_plant_leaves_none)
+{
+    job *j = parse_ok(PD_JOB(",'plant':[{'torque_limit':50},{}]"));
+    cr_assert_not_null(j->spec.plant);
+    cr_expect_eq(j->spec.plant[0].torque_limit, 50);
+    cr_expect_eq(j->spec.plant[1].torque_limit, 0, "no key: no limit");
+    job_free(j);
+    j = parse_ok(PD_JOB(",'plant':[{},{}]"));
+    cr_expect_null(j->spec.plant, "a plant with no term is the ideal one");
+    job_free(j);
+    j = parse_ok(PASSIVE_JOB(",'plant':{'viscous':0.5,'coulomb':2,'coulomb_velocity':0.01,"
+                             "'spring':3,'spring_rest':-0.1,'known':true}"));
+    cr_assert_not_null(j->spec.plant, "joint forces apply to a passive run too");
+    for (int i = 0; i < 2; i++) {
+        const ctc_plant_coord *pc = &j->spec.plant[i];
+        cr_expect(pc->viscous == 0.5 && pc->coulomb == 2 && pc->coulomb_velocity == 0.01 &&
+                  pc->spring == 3 && pc->spring_rest == -0.1 && pc->known == 1);
+    }
+    job_free(j);
+}
+
 Test(job_json, a_disturbance_that_is_none_everywhere_leaves_none)
 {
     job *j = parse_ok(PASSIVE_JOB(",'disturbance':[{'type':'none'},{'type':'none'}]"));
@@ -1363,7 +1451,7 @@ Test(job_json, normalised_keys_come_in_canonical_order)
         "1,'com':[0,"
         "0,0],'inertia':[1,1,1],'joint':{'type':'revolute','axis':[0,0,1],'location':[0,0,0],"
         "'independent':true}}],"
-        "'q0':[0],'v0':[1]},'controller':{'type':'none'},'disturbance':{'type':'none'},"
+        "'q0':[0],'v0':[1]},'controller':{'type':'none'},'disturbance':{'type':'none'},'plant':{},"
         "'integrator':{'method':'dopri5','rtol':1e-08,'atol':1e-10,'initial_step':0,'max_step':0,"
         "'min_step':0,'max_steps':10000000},'duration':1,'output':{'interval':0.01,'channels':['q',"
         "'qdot']},"

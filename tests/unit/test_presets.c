@@ -65,6 +65,10 @@ static const char *const all_names[] = {
     "two_arm_torso_pd",
     "ur5_min_jerk",
     "iiwa14_min_jerk",
+    "triple_pendulum_pid_1khz",
+    "triple_pendulum_pid_200hz",
+    "triple_pendulum_pid_50hz",
+    "triple_pendulum_pid_limited",
 };
 #define NPRESETS ((int)(sizeof all_names / sizeof all_names[0]))
 
@@ -99,6 +103,10 @@ static const struct preset_want {
     {0, 7, 7, 7, 0, 7, CTC_CTRL_PD, 0, 5, 1e-8, 1e-10},
     {0, 6, 6, 6, 0, 6, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
     {0, 7, 7, 7, 0, 7, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
+    {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
+    {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
+    {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
+    {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
 };
 _Static_assert(sizeof preset_want / sizeof preset_want[0] == NPRESETS, "one row per preset");
 
@@ -305,7 +313,9 @@ Test(presets, every_preset_builds_a_complete_job_document)
         cr_assert_eq(cJSON_GetObjectItemCaseSensitive(at(doc, "scene"), "loop") != NULL, w->loop,
                      "%s: loop", all_names[i]);
         cr_assert_eq(number_at(doc, "duration"), w->duration, "%s: duration", all_names[i]);
-        cr_assert_str_eq(string_at(doc, "integrator.method"), "dopri5");
+        /* the limited triple pendulum's clipping is stiff for dopri5 (presets.c) */
+        const int bdf = strcmp(all_names[i], "triple_pendulum_pid_limited") == 0;
+        cr_assert_str_eq(string_at(doc, "integrator.method"), bdf ? "bdf" : "dopri5");
         cr_assert_eq(number_at(doc, "integrator.rtol"), w->rtol, "%s: rtol", all_names[i]);
         cr_assert_eq(number_at(doc, "integrator.atol"), w->atol, "%s: atol", all_names[i]);
         cr_assert_eq(number_at(doc, "output.interval"), 0.01);
@@ -365,7 +375,10 @@ Test(presets, every_preset_parses_as_a_job)
             }
             cr_assert_eq(p->spec.duration, want[i].duration);
             cr_assert_eq(p->spec.output_interval, 0.01);
-            cr_assert_eq(p->spec.integrator.method, CTC_INTEG_DOPRI5);
+            cr_assert_eq(p->spec.integrator.method,
+                         strcmp(all_names[i], "triple_pendulum_pid_limited") == 0
+                             ? CTC_INTEG_BDF
+                             : CTC_INTEG_DOPRI5);
             cr_assert_eq(p->spec.integrator.rtol, want[i].rtol);
             cr_assert_eq(p->spec.integrator.atol, want[i].atol);
             cr_assert_not_null(p->normalised);
@@ -1106,4 +1119,36 @@ Test(presets, two_arm_torso_has_winters_segments_on_both_shoulders)
     pose_free(&p);
     job_free(j);
     cJSON_Delete(doc);
+}
+
+/* the lab's triple pendulum: the paper's PID scene with its controller sampled at 1 kHz, 200 Hz
+   and 50 Hz, or its actuators limited to +-50 N m (integrated by bdf) */
+Test(presets, lab_triple_pendulums_are_the_papers_scene_sampled_or_limited)
+{
+    const char *names[4] = {"triple_pendulum_pid_1khz", "triple_pendulum_pid_200hz",
+                            "triple_pendulum_pid_50hz", "triple_pendulum_pid_limited"};
+    const double period[4] = {1e-3, 5e-3, 2e-2, 0};
+    for (int i = 0; i < 4; i++) {
+        char text[128];
+        job *j = NULL;
+        job_error err;
+        snprintf(text, sizeof text, "{\"preset\": \"%s\"}", names[i]);
+        cr_assert_eq(job_parse(text, strlen(text), &j, &err), 0, "%s: %s: %s", names[i], err.field,
+                     err.message);
+        const ctc_sim_spec *s = &j->spec;
+        cr_expect_eq(s->controller, CTC_CTRL_PID, "%s", names[i]);
+        cr_expect(s->gains[0].kp == 100 && s->gains[0].kv == 20 && s->gains[0].ki == 250);
+        cr_expect_eq(s->sample_period, period[i], "%s", names[i]);
+        cr_expect_eq(s->sample_delay, 0);
+        cr_expect_eq(s->disturb[2].value, 0.2);
+        if (i == 3) {
+            cr_assert_not_null(s->plant);
+            for (int k = 0; k < 3; k++) cr_expect_eq(s->plant[k].torque_limit, 50);
+            cr_expect_eq(s->integrator.method, CTC_INTEG_BDF);
+        } else {
+            cr_expect_null(s->plant, "%s: the ideal plant", names[i]);
+            cr_expect_eq(s->integrator.method, CTC_INTEG_DOPRI5);
+        }
+        job_free(j);
+    }
 }
