@@ -15,8 +15,7 @@ const KNOWN = [
     'spatial_double_pendulum_poles', 'spatial_double_pendulum_lqr', 'n_link_pendulum',
     'five_bar_pd', 'five_bar_pid', 'five_bar_poles', 'five_bar_lqr', 'four_bar_passive',
     'arm_four_bar_pd', 'rssr_passive', 'y_pendulum_pd', 'spatial_hand_pd', 'two_arm_torso_pd',
-    'ur5_min_jerk', 'iiwa14_min_jerk',
-    'arm_four_bar_pd', 'rssr_passive', 'triple_pendulum_pid_1khz', 'triple_pendulum_pid_200hz',
+    'ur5_min_jerk', 'iiwa14_min_jerk', 'triple_pendulum_pid_1khz', 'triple_pendulum_pid_200hz',
     'triple_pendulum_pid_50hz', 'triple_pendulum_pid_limited',
 ];
 /* bodies of each preset's chain (n_link_pendulum with n = 4) */
