@@ -222,7 +222,7 @@ async function call(kind, method, urlPath, body) {
 
 /* ---- what the clients know of the jobs ---- */
 
-const jobs = new Map(); /* id -> {kind, status, deleted, cancel} */
+const jobs = new Map(); /* id -> {kind, status, deleted, cancel, target, deleteUnanswered} */
 let pending = 0; /* accepted, not final, not deleted */
 
 function setStatus(id, status) {
