@@ -16,6 +16,9 @@
 #   make install install the library (libctcsim.a, include/ctcsim/, ctcsim.pc), the ctcsim and
 #                ctcsim-server programs, and the page and API files (share/ctcsim/) under
 #                PREFIX (/usr/local), staged under DESTDIR when set; make uninstall removes them
+#   make fuzz    build the libFuzzer harnesses of the job parser (fuzz/) with SAN_CC and run each
+#                for FUZZ_TIME seconds (60); fails on a crash, leak, timeout or broken contract and
+#                leaves the reproducer in build/fuzz/ (fuzz/README.md; not part of make test)
 #   make clean   remove build/
 #
 # Overridable: CC, SAN_CC, OPT (optimisation flags), BUILD (output folder), EXTRA_CFLAGS,
@@ -101,9 +104,16 @@ SUPPORT_SRC := $(wildcard tests/support/*.c)
 SUPPORT_OBJ := $(SUPPORT_SRC:tests/support/%.c=$(BUILD)/obj/support/%.o)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
+# fuzz/: the harnesses, each built two ways (fuzz/README.md): NAME_fuzzer with libFuzzer (make
+# fuzz, in its own build folder FUZZ_BUILD) and NAME_seeds with seed_driver.c (make check runs the
+# seeds through it, in the suite's build); and job_dict, the dictionary's generator
+FUZZ_NAMES := fuzz_job fuzz_merge
+FUZZ_SEEDS := $(FUZZ_NAMES:%=$(BUILD)/fuzzers/%_seeds) $(BUILD)/fuzzers/job_dict
+FUZZ_BUILD := build/fuzz
+FUZZ_TIME ?= 60
 
 .PHONY: all deps deps-run bench-deps install-packages npm-deps web run test test-container check \
-	check-build check-asan bench clean install uninstall FORCE
+	check-build check-asan check-fuzz-seeds fuzz fuzz-dict bench clean install uninstall FORCE
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -160,6 +170,20 @@ $(BUILD)/bench/%: bench/%.c $(SUPPORT_OBJ) $(APP_LIB) $(LIB) $(FLAGS_STAMP)
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) -Itests/support -Iserver -MMD -MP $< $(SUPPORT_OBJ) $(APP_LIB) $(LIB) -o $@ \
 		$(LDFLAGS) $(BENCH_LDLIBS) $(SERVER_LDLIBS) $(LDLIBS)
+
+$(BUILD)/fuzzers/%_seeds: fuzz/%.c fuzz/seed_driver.c $(APP_LIB) $(LIB) $(FLAGS_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -Iserver $< fuzz/seed_driver.c $(APP_LIB) $(LIB) -o $@ $(LDFLAGS) \
+		$(SERVER_LDLIBS) $(LDLIBS)
+
+$(BUILD)/fuzzers/%_fuzzer: fuzz/%.c $(APP_LIB) $(LIB) $(FLAGS_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -Iserver -fsanitize=fuzzer $< $(APP_LIB) $(LIB) -o $@ $(LDFLAGS) \
+		-fsanitize=fuzzer $(SERVER_LDLIBS) $(LDLIBS)
+
+$(BUILD)/fuzzers/job_dict: fuzz/job_dict.c $(APP_LIB) $(LIB) $(FLAGS_STAMP)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -Iserver $< $(APP_LIB) $(LIB) -o $@ $(LDFLAGS) $(SERVER_LDLIBS) $(LDLIBS)
 
 # install what is missing: apt-get as root (updating the package lists first when there are
 # none, or when a package is not found), otherwise print the command to run as root and fail
@@ -218,17 +242,37 @@ tests/web/node_modules/.package-lock.json: tests/web/package.json tests/web/pack
 	cd tests/web && $(NPM_CI)
 
 # builds everything the suite needs, in parallel, then runs it as built in $(BUILD)
-CHECK_DEPS := $(TEST_BIN) $(CLI) $(SERVER) web tests/web/node_modules/.package-lock.json
+CHECK_DEPS := $(TEST_BIN) $(CLI) $(SERVER) $(FUZZ_SEEDS) web tests/web/node_modules/.package-lock.json
 check-build: $(CHECK_DEPS)
 
 check:
 	@$(MAKE) --no-print-directory $(JOBS) check-build
 	@sh tests/run.sh $(TEST_BIN)
+	@$(MAKE) --no-print-directory check-fuzz-seeds
 	@CTCSIM=$(CLI) sh tests/cli/run.sh
 	@CTCSIM=$(CLI) sh tests/cli/readme.sh
 	@MAKE="$(MAKE)" CC="$(CC)" EXAMPLE_FLAGS="$(LDFLAGS)" sh tests/cli/install.sh
 	@CTCSIM=$(CLI) CTCSIM_SERVER=$(SERVER) sh tests/api/run.sh
 	@CTCSIM_SERVER=$(SERVER) WEB_ROOT=$(WEB_OUT) API_DIR=api sh tests/web/run.sh
+
+# the harnesses cannot rot: each runs its seeds once (a few seconds), and the committed dictionary
+# is what the format's tables make now
+check-fuzz-seeds: $(FUZZ_SEEDS) $(CLI)
+	@sh fuzz/corpus.sh $(CLI) $(BUILD)/fuzzers/seeds >/dev/null
+	@for h in $(FUZZ_NAMES); do $(BUILD)/fuzzers/$${h}_seeds $(BUILD)/fuzzers/seeds/$$h || exit 1; done
+	@$(BUILD)/fuzzers/job_dict | diff -u fuzz/job.dict - \
+		|| { echo "fuzz/job.dict is stale: make fuzz-dict rewrites it"; exit 1; }
+
+fuzz-dict: $(BUILD)/fuzzers/job_dict
+	$(BUILD)/fuzzers/job_dict >fuzz/job.dict
+
+# libFuzzer needs the code under test instrumented for coverage (-fsanitize=fuzzer-no-link) and
+# its own main: a build folder of its own, with ASan + UBSan
+fuzz:
+	@$(MAKE) --no-print-directory $(JOBS) BUILD=$(FUZZ_BUILD) SANITIZE=1 OPT=-O1 CC=$(SAN_CC) \
+		EXTRA_CFLAGS=-fsanitize=fuzzer-no-link \
+		$(FUZZ_NAMES:%=$(FUZZ_BUILD)/fuzzers/%_fuzzer) $(FUZZ_BUILD)/ctcsim
+	@FUZZ_TIME=$(FUZZ_TIME) sh fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_NAMES)
 
 check-asan:
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan SANITIZE=1 OPT=-O1 CC=$(SAN_CC) check

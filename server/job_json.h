@@ -169,9 +169,10 @@
  * parameters (presets.h, e.g. "n" of n_link_pendulum) are taken out, the preset's job document
  * is built, and the remaining keys are applied to it as a JSON merge patch (RFC 7386: objects
  * merge key by key, null removes a key, anything else replaces), with one refinement: an object
- * whose "type" or "method" the patch changes is replaced whole, so {"integrator": {"method":
- * "rk4", "step": 0.001}} or {"controller": {"type": "pd", "kp": 50, "kv": 10}} over a preset
- * does not inherit the old method's rtol or the old controller's ki.
+ * whose "type" or "method" the patch changes is replaced whole (by the patch's object, its nulls
+ * dropped), so {"integrator": {"method": "rk4", "step": 0.001}} or {"controller": {"type": "pd",
+ * "kp": 50, "kv": 10}} over a preset does not inherit the old method's rtol or the old
+ * controller's ki, and {"controller": {"type": "pd", "kp": 50, "kv": 10, "ki": null}} is the same.
  *
  * Errors. A key repeated in one object is an error. Numbers must be finite (1e999 reads as
  * infinity and is rejected). What the library checks is reported with the library's message at

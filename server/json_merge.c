@@ -120,9 +120,11 @@ static cJSON *merge_members(cJSON *target, const cJSON *patch, size_t *compares)
         return NULL;
     }
     if (changes_kind(&idx, patch)) {
+        /* made again from the patch alone, MergePatch({}, patch): its nulls remove nothing and
+           are dropped, as RFC 7386 drops them wherever a patch replaces a non-object */
         free(idx.slots);
         cJSON_Delete(target);
-        return cJSON_Duplicate(patch, 1);
+        return merge(NULL, patch, compares);
     }
     for (const cJSON *m = patch->child; m != NULL; m = m->next) {
         uint64_t h = fnv1a(m->string);

@@ -10,8 +10,10 @@
  * Semantics (RFC 7386 section 2, with one refinement of the job format): a patch that is not an
  * object replaces the target; null deletes a key; an object merges key by key, recursively; a key
  * the target lacks is added. The refinement: an object whose "type" or "method" the patch changes
- * (both strings, different) is replaced whole by the patch, so that the old kind's keys (a PID's
- * "ki", dopri5's "rtol") do not carry over to the new kind. Key order: keys the patch does not
+ * (both strings, different) is replaced whole: made from the patch alone as MergePatch({}, patch),
+ * so that the old kind's keys (a PID's "ki", dopri5's "rtol") do not carry over to the new kind,
+ * and the patch's nulls are dropped (a "ki": null that removes the old kind's key is not left in
+ * the result). Key order: keys the patch does not
  * name keep their place; a key the patch names is (re)added after them, in the patch's order.
  */
 #ifndef JSON_MERGE_H

@@ -1259,6 +1259,15 @@ Test(job_json, preset_overrides_are_an_rfc7386_merge_patch)
     cr_assert_eq(j->spec.max_speed, 100);
     cr_assert_eq(j->spec.wall_limit, 0);
     job_free(j);
+
+    /* a changed controller type or method replaces the object, and the nulls that remove the old
+       kind's keys are dropped with it rather than read as the new kind's keys */
+    j = parse_ok("{'preset':'triple_pendulum_pid','controller':{'type':'pd','kp':50,'kv':10,"
+                 "'ki':null},'integrator':{'method':'rk4','step':0.001,'rtol':null}}");
+    cr_assert_eq(j->spec.controller, CTC_CTRL_PD);
+    expect_gains(&j->gains[0], 0, 50, 10, 0, "the pd of the patch, no ki");
+    cr_assert_eq(j->spec.integrator.method, CTC_INTEG_RK4);
+    job_free(j);
 }
 
 /* ---- the normalised document ---- */

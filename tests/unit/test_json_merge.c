@@ -76,6 +76,12 @@ Test(json_merge, a_changed_type_or_method_replaces_the_object)
                  "{'c':{'type':'pd','kv':3}}");
     expect_merge("{'i':{'method':'dopri5','rtol':1e-6}}", "{'i':{'method':'rk4'}}",
                  "{'i':{'method':'rk4'}}");
+    /* the replacement is MergePatch({}, patch): the patch's nulls, at any depth, are dropped */
+    expect_merge("{'c':{'type':'pid','kp':1,'ki':2}}", "{'c':{'type':'pd','kv':3,'ki':null}}",
+                 "{'c':{'type':'pd','kv':3}}");
+    expect_merge("{'i':{'method':'dopri5','rtol':1e-6}}",
+                 "{'i':{'method':'rk4','rtol':null,'x':{'y':null,'z':1}}}",
+                 "{'i':{'method':'rk4','x':{'z':1}}}");
     /* the same type, or a type given where the target has none, merges */
     expect_merge("{'c':{'type':'pid','kp':1,'ki':2}}", "{'c':{'type':'pid','kp':5}}",
                  "{'c':{'ki':2,'type':'pid','kp':5}}");
