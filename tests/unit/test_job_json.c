@@ -694,7 +694,7 @@ Test(job_json, unknown_preset_lists_every_preset)
 {
     int count;
     const preset *list = presets_list(&count);
-    char want[512];
+    char want[1024];
     size_t used = (size_t)snprintf(want, sizeof want, "unknown preset \"nope\" (the presets are: ");
     for (int i = 0; i < count; i++) {
         used +=
