@@ -228,7 +228,7 @@ typedef enum job_error_code {
 
 typedef struct job_error {
     job_error_code code;
-    char field[256];   /* JSON path, e.g. "scene.bodies[2].mass"; "" for the whole document */
+    char field[256];    /* JSON path, e.g. "scene.bodies[2].mass"; "" for the whole document */
     char message[1024]; /* the reason, e.g. "must be positive (got -1 kg)" */
 } job_error;
 

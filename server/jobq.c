@@ -295,7 +295,7 @@ static worker_outcome finish(jobq_worker *w, int64_t id, store_status status, co
 static worker_outcome run_job(jobq_worker *w, int64_t id)
 {
     jobq *q = w->q;
-    char err[512], why[1024];
+    char err[512], why[1600];
     store_job row = {0};
     job *j = NULL;
     ctc_sim_result *r = NULL;

@@ -836,6 +836,77 @@ static cJSON *y_pendulum_pd(const cJSON *request, job_error *err)
     return finish(&b, doc, "y_pendulum_pd", err);
 }
 
+/* the Y whose one branch is a four-bar: arm_four_bar_pd's arm (1.5 m) carrying at its end the
+ * four-bar's crank and coupler and, beside them, a double pendulum of 0.5 m rods; the rocker
+ * last (the loop's tip), pinned to the arm 1 m in from its end */
+#define Y_FOUR_BAR_N 6
+
+/* A planar Y tree whose one branch is a four-bar closing on the arm (a loop on a tree): PD drives
+ * the arm along a sine about +x, the crank round at 1 turn per 2 s and the double pendulum's two
+ * joints along sines; the coupler, the rocker and the closing joint follow. */
+static cJSON *y_four_bar_pd(const cJSON *request, job_error *err)
+{
+    static const double z_axis[3] = {0, 0, 1};
+    static const char *const names[Y_FOUR_BAR_N] = {"arm",        "crank",      "coupler",
+                                                    "upper link", "lower link", "rocker"};
+    /* the crank and the upper link hang from the arm's end, the rocker from the coupler's */
+    static const char *const parents[Y_FOUR_BAR_N] = {NULL, NULL, NULL, "arm", NULL, "coupler"};
+    const double *len = arm_four_bar_length;
+    const double length[Y_FOUR_BAR_N] = {len[0], len[1], len[2], Y_LINK, Y_LINK, len[3]};
+    const double at[Y_FOUR_BAR_N][3] = {{0, 0, 0},       {0, -len[0], 0}, {0, -len[1], 0},
+                                        {0, -len[0], 0}, {0, -Y_LINK, 0}, {0, -len[2], 0}};
+    static const int independent[Y_FOUR_BAR_N] = {1, 1, 0, 1, 1, 0};
+    const double anchor[3] = {0, -(ARM_LENGTH - FOUR_BAR_GROUND), 0}; /* in the arm's frame */
+    const double rocker_end[3] = {0, -len[3], 0};
+    const double v0[Y_FOUR_BAR_N] = {0, 0, 0, 0, 0, 0};
+    double fb[ARM_FOUR_BAR_N];
+    (void)request;
+    arm_four_bar_q0(fb);
+    /* the double pendulum hangs down from the horizontal arm: -pi/2 relative to it, then 0.3 */
+    const double q0[Y_FOUR_BAR_N] = {fb[0], fb[1], fb[2], printable(-PRESETS_PI / 2 + 0.3),
+                                     0.2,   fb[3]};
+    doc_builder b = {0};
+    cJSON *doc = cJSON_CreateObject();
+    put_string(&b, doc, "name", "Y with a four-bar branch, PD (a loop on a planar tree)");
+
+    /* rods of 1 kg/m, gravity -y */
+    cJSON *scene = put_object(&b, doc, "scene");
+    put_vec3(&b, scene, "gravity", 0, -9.81, 0);
+    cJSON *bodies = put_array(&b, scene, "bodies");
+    for (int k = 0; k < Y_FOUR_BAR_N && !b.failed; k++) {
+        cJSON *body = put_tree_body(&b, bodies, names[k], parents[k], length[k], z_axis, at[k]);
+        put_rod_shape(&b, body, 0, -length[k], 0);
+        cJSON *joint = cJSON_GetObjectItemCaseSensitive(body, "joint");
+        if (joint != NULL) put(&b, joint, "independent", cJSON_CreateBool(independent[k]));
+    }
+    put_loop(&b, scene, "revolute", z_axis, rocker_end, anchor, 0);
+    put_vector(&b, scene, "q0", Y_FOUR_BAR_N, q0);
+    put_vector(&b, scene, "v0", Y_FOUR_BAR_N, v0);
+
+    /* the arm: q0 + 0.3 sin(2 pi t / 4); the crank: q0 + pi t; the pendulum's joints: sines */
+    put_controller(&b, doc, PRESET_PD);
+    cJSON *traj = put_array(&b, doc, "trajectory");
+    cJSON *arm = put_object(&b, traj, NULL);
+    put_string(&b, arm, "type", "sine");
+    put_number(&b, arm, "amplitude", 0.3);
+    put_number(&b, arm, "period", 4);
+    put_number(&b, arm, "offset", q0[0]);
+    cJSON *crank = put_object(&b, traj, NULL);
+    put_string(&b, crank, "type", "polynomial");
+    const double coef[2] = {q0[1], printable(PRESETS_PI)};
+    put_vector(&b, crank, "coefficients", 2, coef);
+    for (int i = 3; i <= 4 && !b.failed; i++) {
+        cJSON *tr = put_object(&b, traj, NULL);
+        put_string(&b, tr, "type", "sine");
+        put_number(&b, tr, "amplitude", 0.4);
+        put_number(&b, tr, "period", 1.5);
+        put_number(&b, tr, "phase", 0);
+        put_number(&b, tr, "offset", q0[i]);
+    }
+    put_run_settings_of(&b, doc, 10, 1e-8, 1e-10);
+    return finish(&b, doc, "y_four_bar_pd", err);
+}
+
 /* the spatial hand, hanging along -z from the wrist at the origin: an aluminium palm (2700
  * kg/m^3) 0.08 wide (x), 0.02 thick (y), 0.1 m long (z); three fingers at x = -0.025, 0, 0.025
  * on its far edge, each of three square links 0.015 m across, 0.045, 0.03 and 0.025 m long */
@@ -1093,6 +1164,10 @@ static const preset preset_table[] = {
      "Planar Y tree: two double pendulums on the tip of an arm, tracking sines, " PD_GAINS
      ", 0.2 N m",
      no_params, y_pendulum_pd},
+    {"y_four_bar_pd",
+     "Planar Y whose one branch is a four-bar closing on the arm (a loop on a tree), beside a "
+     "double pendulum: the arm swings, the crank turns, " PD_GAINS,
+     no_params, y_four_bar_pd},
     {"spatial_hand_pd",
      "Spatial hand: a wrist driving a palm with three three-link fingers curling in a wave, "
      "tracking sines, " PD_GAINS ", gravity -z",

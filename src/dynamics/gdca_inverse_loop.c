@@ -108,7 +108,7 @@ void gdca_inverse_closing_accel(const ctc_model *m, const ctc_data *d, double *r
     gdca_inverse_handle2_accel(m, d, m->nbodies - 1, at);
     if (m->loop_body >= 0) { /* the child's acceleration at p_t, from its handle 2's */
         double a1[CTC_DENSE_MAX];
-        gdca_inverse_handle2_accel(m, d, m->loop_body, a1);
+        gdca_inverse_handle2_accel(m, d, m->loop_body_asm, a1);
         gdca_loop_shift_accel(dim, d->loop_r, d->loop_gam, a1, ab);
     }
     for (int r = 0; r < dim; r++) rel[r] = ab[r] - at[r];
@@ -189,7 +189,7 @@ void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double 
         double s[CTC_DENSE_MAX] = {0, 0, 0, 0, 0, 0};
         if (k == n) {
             memcpy(s, load, (size_t)dim * sizeof *load);
-        } else if (k >= m->loop_first) {
+        } else if (m->jnt_loop[k]) {
             double *lk = d->jnt_load_inv + dim * k, r[3];
             for (int a = 0; a < 3; a++) r[a] = d->loop_pt[a] - d->xpos[3 * k + a];
             ctc_transfer_force(dim, r, load, s);

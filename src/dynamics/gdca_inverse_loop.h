@@ -13,7 +13,7 @@
  *   closure     A_t(qdd) + P_n qdd_n + beta_n = A_b(qdd)    (A_b: the child's acceleration at
  *                                                              p_t, zero on the ground; dim
  *                                                              equations)
- *   balance     f_k = tau_k + J_k^T F (the loop's joints k >= b + 1),  f_n = P_n^T F,
+ *   balance     f_k = tau_k + J_k^T F (the loop's joints, model.h jnt_loop),  f_n = P_n^T F,
  *               f_k = tau_k (joints 0..b, which F and -F load alike)
  *
  * With every independent coordinate commanded (qdd = u there) and every dependent one unforced
@@ -44,7 +44,8 @@ void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double 
  * M(q) u + N(q, v) for u (nv), free tip; for a loop model the closing joint is ignored. */
 void gdca_inverse_composite(const ctc_model *m, ctc_data *d, const double *u, double *f);
 
-/* Body k's classical acceleration at its handle 2 (dim) after the last gdca_inverse_composite. */
+/* The classical acceleration at its handle 2 (dim) of the body that assembly index k stands for
+ * (a body, or its RAKE node: model.h loop_body_asm) after the last gdca_inverse_composite. */
 void gdca_inverse_handle2_accel(const ctc_model *m, const ctc_data *d, int k, double *a);
 
 /* rel (dim) = A_child - A_t after the last gdca_inverse_composite of a loop model: the closing

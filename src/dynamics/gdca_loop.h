@@ -4,8 +4,10 @@
  * reference [48]).
  *
  * After the assembly the loop's bodies are one record R: handle 1 at its first joint j (joint 0
- * of a loop on the ground, joint b+1 of a loop on body b), handle 2 at the closing joint's point
- * p2 = d->loop_pt on the tip. A loop on body b has a second record L, bodies 0..b: handle 1 at
+ * of a loop on the ground, joint b+1 of a loop on body b, or on a tree the spine's body after b:
+ * model.h loop_first), handle 2 at the closing joint's point p2 = d->loop_pt on the tip; a tree's
+ * branches off the spine are raked into the records' bodies. A loop on body b has a second record
+ * L, bodies 0..b (the spine's up to b): handle 1 at
  * joint 0, handle 2 at joint j's centre p1 on body b (model.h: the tree's root splits at j). The
  * joints that bound them, each written as "parent -> child" with F the load on the child at the
  * joint (the parent bears -F) and A the classical accelerations of the two sides there:

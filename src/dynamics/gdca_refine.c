@@ -37,7 +37,7 @@ void gdca_refine_residual(const ctc_model *m, ctc_data *d, const double *f, doub
         for (int c = 0; c < m->jnt_nv[k]; c++) {
             const int i = m->jnt_vadr[k] + c;
             double s = f[i] - r[i];
-            if (k >= m->loop_first) {
+            if (m->jnt_loop[k]) {
                 double tw[CTC_DENSE_MAX];
                 ctc_loop_coord_twist(m, d, k, c, tw);
                 for (int a = 0; a < dim; a++) s -= tw[a] * load[a];

@@ -29,8 +29,9 @@
  * chain's state, not integrated.
  *
  * Loop Jacobian: the relative twist at p_t is V_t - V_a = sum_k J_k v_k over the loop's chain
- * coordinates (joints loop_first..n-1; the joints 0..b before a loop on body b move the tip and
- * the child alike), J_k their unit twists moved to p_t; the closure's Jacobian is
+ * coordinates (model.h jnt_loop: joints loop_first..n-1 on a chain, the spine's after b on a
+ * tree; the joints from the ground to b move the tip and the child alike, and a branch off the
+ * spine moves neither), J_k their unit twists moved to p_t; the closure's Jacobian is
  * G = -D_n^T J (nc x nv). Newton's method on the dependent coordinates uses G restricted to them.
  */
 #ifndef CTC_LOOP_H
@@ -53,7 +54,7 @@ void ctc_loop_kinematics(const ctc_model *m, ctc_data *d);
 /* The unit twist tw (dim) of chain coordinate c of joint k (k < n) at the closing joint's point
  * on the tip, d->loop_pt: the tip's velocity there per unit rate of that coordinate, and (its
  * transpose) the coordinate's generalised force per unit load at that point. For a joint of the
- * loop (k >= m->loop_first) it is also the twist relative to the closing joint's child. Needs the
+ * loop (m->jnt_loop[k]) it is also the twist relative to the closing joint's child. Needs the
  * state's ctc_kinematics. */
 void ctc_loop_coord_twist(const ctc_model *m, const ctc_data *d, int k, int c, double *tw);
 

@@ -45,6 +45,11 @@
  *    chain's (loop.h). The child's side of the joint is the anchor, a point fixed in the world
  *    (ground) or in body b's frame; when the loop is closed the anchor coincides with the
  *    closing joint's centre on the tip.
+ *    On a branched tree the loop lies on the spine, the path from the ground to the tip: b must
+ *    be an ancestor of the tip (or the loop closes on the ground) and the tree must have one body
+ *    on the ground; the loop's joints are then the spine's after b and the closing joint
+ *    (jnt_loop), not b+1..n, and every other joint is outside the loop. A loop between two
+ *    branches is refused.
  *  - Independent and dependent joints: in a loop model each joint, the closing one included, is
  *    independent (actuated: a controller drives its coordinates along a trajectory) or dependent
  *    (passive: no driving force; its motion follows from the loop). An open chain's joints are
@@ -156,8 +161,8 @@ typedef struct ctc_joint_spec {
     double location[3]; /* m, the joint's centre in the parent frame (world for joint 0) */
 } ctc_joint_spec;
 
-/* The closing joint of a loop from the tip body n-1 to the ground or to body `body`. A zeroed
- * spec closes on the ground. */
+/* The closing joint of a loop from the tip body n-1 to the ground or to body `body` (on a tree,
+ * an ancestor of the tip). A zeroed spec closes on the ground. */
 typedef struct ctc_loop_spec {
     ctc_joint_spec joint; /* REVOLUTE, PRISMATIC or SPHERICAL; axis and location (the joint's
                              centre) in the tip body's frame */
@@ -249,9 +254,11 @@ typedef struct ctc_model {
        ground) are listed in increasing order by body_child and body_sibling. A loop's closing
        joint is not a tree edge: it appears in none of these arrays (loop_body, loop.h). Every
        pass finds a parent or a child here. A chain is the tree whose body_parent[k] = k - 1
-       (chain = 1); a loop is accepted on chains only.
+       (chain = 1).
        The heavy child of a body is its child with the largest subtree (ties: the lowest index);
-       the heavy children split the tree into paths, each a chain that the two-handle GDCA
+       in a loop model the spine's bodies' heavy children are forced along the spine (the tip's
+       path), so that the loop's bodies lie on one path. The heavy children split the tree into
+       paths, each a chain that the two-handle GDCA
        assembles, and a body's handle 2 is its heavy child's joint. Its other ("light") children's
        subtrees are raked into it as articulated bodies (model.c, "the plan of a branched tree";
        gdca_rake.h). A chain has one path and no light children. */
@@ -282,8 +289,14 @@ typedef struct ctc_model {
     int nvx;                     /* nv + the closing joint's nv: the length of extended vectors */
     int loop_body;               /* the closing joint's child: -1 the ground (and open chains), else
                                     a body 0..n-2 */
-    int loop_first;              /* loop_body + 1: the loop's first joint (its joints are
-                                    loop_first..n); the tree's root splits at it when > 0 */
+    int loop_first;              /* the loop's first joint: the spine's body after loop_body
+                                    (loop_body + 1 on a chain, whose loop joints are
+                                    loop_first..n); the plan's root splits at it when > 0 */
+    unsigned char *jnt_loop;     /* (njoints) 1: the joint is in the loop (on the spine after
+                                    loop_body, or the closing joint); open chains: all 0 */
+    int loop_body_asm;           /* the assembly index that stands for loop_body in its path:
+                                    the body, or its RAKE node when it has light children (whose
+                                    record and terminal loads are then the body's); -1: ground */
     double loop_anchor[3];       /* m, world (ground) or body loop_body's frame */
     ctc_planar_body loop_planar; /* form PLANAR: the closing joint's loc (on the tip), axis, sign */
     double loop_anchor2[2];      /* form PLANAR: the anchor in plane coordinates (its frame's) */

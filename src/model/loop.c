@@ -103,7 +103,7 @@ static void loop_shift(const ctc_model *m, ctc_data *d)
     if (m->loop_body < 0) return;
     const double *w = d->omega + 3 * m->loop_body;
     double t[3], g[3];
-    ctc_v3_sub(d->loop_r, d->loop_pt, d->xpos + 3 * m->body_child[m->loop_body]);
+    ctc_v3_sub(d->loop_r, d->loop_pt, d->xpos + 3 * m->loop_first);
     ctc_v3_cross(t, w, d->loop_r);
     ctc_v3_cross(g, w, t);
     memcpy(d->loop_gam + (m->dim == 3 ? 1 : 3), g, (size_t)(m->dim == 3 ? 2 : 3) * sizeof *g);
@@ -324,7 +324,7 @@ static int dependent_gram(const ctc_model *m, const ctc_data *d, double *gram)
     const int nc = loop_nc(m);
     memset(gram, 0, (size_t)nc * nc * sizeof *gram);
     for (int k = m->loop_first; k < m->nbodies; k++) {
-        if (m->jnt_indep[k]) continue;
+        if (m->jnt_indep[k] || !m->jnt_loop[k]) continue;
         for (int c = 0; c < m->jnt_nv[k]; c++) {
             double g[CTC_DENSE_MAX];
             loop_column(m, d, k, c, g);
@@ -352,7 +352,7 @@ static double dependent_step(const ctc_model *m, const ctc_data *d, const double
     ctc_dense_ltsolve(nc, chol, y);
     memset(dv, 0, (size_t)m->nv * sizeof *dv);
     for (int k = m->loop_first; k < m->nbodies; k++) {
-        if (m->jnt_indep[k]) continue;
+        if (m->jnt_indep[k] || !m->jnt_loop[k]) continue;
         for (int c = 0; c < m->jnt_nv[k]; c++) {
             double g[CTC_DENSE_MAX], s = 0;
             loop_column(m, d, k, c, g);
@@ -441,6 +441,7 @@ static ctc_status twist_svd(const ctc_model *m, const ctc_data *d, int dep_only,
     const int dim = m->dim, n = m->nbodies;
     double len = 0;
     for (int k = m->loop_first; k < n; k++) {
+        if (!m->jnt_loop[k]) continue;
         double r[3];
         ctc_v3_sub(r, d->xpos + 3 * k, d->loop_pt);
         len = fmax(len, ctc_v3_norm(r));
@@ -448,14 +449,14 @@ static ctc_status twist_svd(const ctc_model *m, const ctc_data *d, int dep_only,
     len = fmax(len, 1e-6);
     int cols = 0;
     for (int k = m->loop_first; k <= n; k++)
-        if (!dep_only || !m->jnt_indep[k]) cols += m->jnt_nv[k];
+        if (m->jnt_loop[k] && (!dep_only || !m->jnt_indep[k])) cols += m->jnt_nv[k];
     *ncols = cols;
     if (cols == 0) return CTC_OK;
     double *a = malloc((size_t)dim * cols * sizeof *a), superb[CTC_DENSE_MAX];
     if (!a) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     int col = 0;
     for (int k = m->loop_first; k <= n; k++) {
-        if (dep_only && m->jnt_indep[k]) continue;
+        if (!m->jnt_loop[k] || (dep_only && m->jnt_indep[k])) continue;
         for (int c = 0; c < m->jnt_nv[k]; c++, col++) {
             double tw[CTC_DENSE_MAX];
             if (k < n) {

@@ -12,7 +12,9 @@
  * split at the middle, depth ceil(log2 n); a loop closed on body b splits the root at joint b + 1
  * instead (at most one level more), so that the loop's bodies form one subtree. A branched tree's
  * plan joins each heavy path as a chain and rakes the light subtrees into their parents ("the
- * plan of a branched tree" below); loops are accepted on chains only.
+ * plan of a branched tree" below). A loop on a tree lies on the spine, the path from the ground to
+ * the tip: its heavy children are forced along it and the root path's top node splits at the
+ * loop's first joint, so the loop's bodies form one subtree as on a chain.
  */
 #include "model.h"
 
@@ -361,6 +363,8 @@ typedef struct plan_ctx {
     int *seg;       /* scratch (2n + 1): the assembly indices of the leaves or operands in hand */
     int *segb;      /* their bodies (a path's) or light children (a rake's) */
     long long *pre; /* prefix sums of their weights */
+    int split;      /* a loop's first joint (model.h loop_first) where the spine's top node splits;
+                       -1 once split, or none */
 } plan_ctx;
 
 static int plan_height(const plan_ctx *p, int a)
@@ -401,6 +405,12 @@ static int plan_join(plan_ctx *p, int lo, int hi)
 {
     if (lo == hi) return p->seg[lo];
     int mid = plan_split(p, lo, hi);
+    if (p->split > 0 && p->segb[lo] == p->m->ground_child) { /* the spine's top: split there */
+        for (int i = lo + 1; i <= hi; i++) {
+            if (p->segb[i] == p->split) mid = i;
+        }
+        p->split = -1;
+    }
     int left = plan_join(p, lo, mid - 1), right = plan_join(p, mid, hi);
     ctc_tree_node node = {.left = left,
                           .right = right,
@@ -518,6 +528,10 @@ static void plan_heavy(ctc_model *m, int *size)
         }
         if (m->body_parent[k] >= 0) size[m->body_parent[k]] += size[k];
     }
+    /* a loop's spine is one path, so that the loop's bodies assemble as a chain's (model.h) */
+    for (int k = n - 1; m->has_loop && m->body_parent[k] >= 0; k = m->body_parent[k]) {
+        m->body_heavy[m->body_parent[k]] = k;
+    }
 }
 
 /* Lays out the plan with nodes sorted by height (stable), children before parents: a chain's
@@ -548,7 +562,7 @@ static ctc_status build_tree(ctc_model *m, char *err, size_t errlen)
         return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     }
     int count = 0, root;
-    plan_ctx p = {m, tmp, 0, scratch, scratch + n, scratch + 3 * n + 1, pre};
+    plan_ctx p = {m, tmp, 0, scratch, scratch + n, scratch + 3 * n + 1, pre, m->loop_first};
     plan_heavy(m, p.size);
     if (m->chain) {
         root = build_subtree(m, tmp, &count, 0, n - 1, m->loop_first);
@@ -609,6 +623,11 @@ static ctc_status build_tree(ctc_model *m, char *err, size_t errlen)
     m->root = root < n ? root : n + where[root - n];
     for (int i = 0; i < nroots; i++) {
         if (m->root_asm[i] >= n) m->root_asm[i] = n + where[m->root_asm[i] - n];
+    }
+    m->loop_body_asm = m->loop_body;
+    for (int i = 0; m->loop_body >= 0 && i < count; i++) {
+        const ctc_tree_node *node = &m->tree[i];
+        if (node->kind == CTC_NODE_RAKE && node->body == m->loop_body) m->loop_body_asm = n + i;
     }
     free(fill);
     free(tmp);
@@ -702,6 +721,7 @@ static ctc_model *model_alloc(const ctc_chain_spec *spec)
     m->jnt_nq = malloc((size_t)nj * sizeof(int));
     m->jnt_nv = malloc((size_t)nj * sizeof(int));
     m->jnt_indep = malloc((size_t)nj);
+    m->jnt_loop = calloc((size_t)nj, 1);
     m->body_inertia_inv = calloc((size_t)n * 9, sizeof(double));
     m->jnt_perp = calloc((size_t)nj * 6, sizeof(double));
     m->body_parent = malloc((size_t)n * sizeof(int));
@@ -710,14 +730,40 @@ static ctc_model *model_alloc(const ctc_chain_spec *spec)
     m->body_heavy = malloc((size_t)n * sizeof(int));
     if (m->body_heavy == NULL || m->bodies == NULL || m->joints == NULL || m->jnt_qadr == NULL ||
         m->jnt_vadr == NULL || m->jnt_nq == NULL || m->jnt_nv == NULL || m->jnt_indep == NULL ||
-        m->body_inertia_inv == NULL || m->jnt_perp == NULL || m->body_parent == NULL ||
-        m->body_child == NULL || m->body_sibling == NULL) {
+        m->jnt_loop == NULL || m->body_inertia_inv == NULL || m->jnt_perp == NULL ||
+        m->body_parent == NULL || m->body_child == NULL || m->body_sibling == NULL) {
         ctc_model_free(m);
         return NULL;
     }
     memcpy(m->bodies, spec->bodies, (size_t)n * sizeof *m->bodies);
     memcpy(m->joints, spec->joints, (size_t)n * sizeof *m->joints);
     return m;
+}
+
+/* the loop's spine (model.h): the path from the ground to the tip, which must pass through the
+ * body the loop closes on; marks the loop's joints (jnt_loop: those on the spine after
+ * loop_body, and the closing joint) and sets loop_first, the spine's body after loop_body */
+static ctc_status setup_spine(ctc_model *m, char *err, size_t errlen)
+{
+    const int n = m->nbodies, b = m->loop_body;
+    int k = n - 1;
+    m->jnt_loop[n] = 1;
+    for (; k >= 0 && m->body_parent[k] != b; k = m->body_parent[k]) m->jnt_loop[k] = 1;
+    if (k < 0) {
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "loop: body %d is not on the path from the ground to the tip (body %d); "
+                        "a loop between two branches is not supported yet",
+                        b, n - 1);
+    }
+    m->jnt_loop[k] = 1;
+    m->loop_first = k;
+    if (m->ground_child >= 0 && m->body_sibling[m->ground_child] >= 0) {
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "loop: a loop on a tree with several bodies on the ground (bodies %d and "
+                        "%d) is not supported yet",
+                        m->ground_child, m->body_sibling[m->ground_child]);
+    }
+    return CTC_OK;
 }
 
 /* the closing joint of a loop model: its kind, anchor and the body it closes on */
@@ -746,8 +792,7 @@ static ctc_status setup_loop(ctc_model *m, const ctc_loop_spec *lp, char *err, s
         }
         m->loop_body = lp->body;
     }
-    m->loop_first = m->loop_body + 1;
-    return CTC_OK;
+    return setup_spine(m, err, errlen);
 }
 
 /* which joints are independent (driven): all of an open chain's; on a loop, every joint outside
@@ -766,13 +811,15 @@ static ctc_status setup_actuation(ctc_model *m, const unsigned char *independent
                             k);
         }
     }
-    for (int k = 0; any_indep && m->has_loop && k < m->loop_first; k++) {
-        if (!m->jnt_indep[k]) {
+    for (int k = 0; any_indep && m->has_loop && k < m->nbodies; k++) {
+        if (!m->jnt_indep[k] && !m->jnt_loop[k]) {
+            char where[48] = "the ground";
+            if (m->loop_body >= 0) snprintf(where, sizeof where, "body %d", m->loop_body);
             return ctc_fail(CTC_EINVAL, err, errlen,
-                            "loop: joint %d is outside the loop (which closes on body %d), so "
+                            "loop: joint %d is outside the loop (which closes on %s), so "
                             "nothing determines its motion: mark it independent (or every joint "
                             "dependent, for a passive run)",
-                            k, m->loop_body);
+                            k, where);
         }
     }
     return CTC_OK;
@@ -895,12 +942,6 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
         m->body_parent[k] = spec->parent != NULL ? spec->parent[k] : k - 1;
         m->chain &= m->body_parent[k] == k - 1;
     }
-    if (spec->loop != NULL && !m->chain) {
-        st = ctc_fail(CTC_EINVAL, err, errlen,
-                      "loop: a loop on a branched tree is not supported yet (the bodies must "
-                      "form a chain, each body's parent the one before it)");
-        goto fail;
-    }
     build_topology(m);
     if (m->has_loop && (st = setup_loop(m, spec->loop, err, errlen)) != CTC_OK) goto fail;
     if ((st = setup_actuation(m, spec->independent, err, errlen)) != CTC_OK) goto fail;
@@ -940,6 +981,7 @@ void ctc_model_free(ctc_model *m)
     free(m->tree);
     free(m->height_start);
     free(m->jnt_indep);
+    free(m->jnt_loop);
     free(m->ind_joint);
     free(m->ind_coord);
     free(m->inv_need);

@@ -2,12 +2,14 @@
  * loop_oracle.c - closed-chain dynamics by redundant coordinates and Lagrange multipliers, for
  * tests (loop_oracle.h has the formulation).
  *
- * The chain's kinematics are recomputed here from the spec with 3x3 rotations; the mass matrix
- * and the bias forces come from the library's open-chain oracle (Featherstone's CRBA and RNEA,
- * oracle.h) on an open-chain model built from the same spec without its loop. Dense systems are
- * solved by LU with partial pivoting. Sizes are small (tests), so clarity wins over speed.
- * The file ends with the test loops (five-bar, four-bars, slider-crank, RSSR, spatial 8R), each
- * built so that its q0 closes the loop exactly.
+ * The chain's (or tree's: each body from its spec parent) kinematics are recomputed here from
+ * the spec with 3x3 rotations, a point's Jacobian over the joints from the ground to its body;
+ * the mass matrix and the bias forces come from the library's open-chain oracle (Featherstone's
+ * CRBA and RNEA, oracle.h) on an open model built from the same spec without its loop. Dense
+ * systems are solved by LU with partial pivoting. Sizes are small (tests), so clarity wins over
+ * speed. The file ends with the test loops (five-bar, four-bars, slider-crank, RSSR, spatial 8R),
+ * each built so that its q0 closes the loop exactly, and loop_scene_branch, which hangs branches
+ * off a loop's spine.
  */
 #include "loop_oracle.h"
 
@@ -38,6 +40,7 @@ struct loop_oracle {
     double gravity[3];
     unsigned char *indep; /* (n + 1) */
     int *qadr, *vadr;     /* (n + 1) */
+    int *parent;          /* (n) each body's parent, -1 the ground (the spec's, or k - 1) */
     lo_row rows[LO_MAX_ROWS];
 
     ctc_model *open; /* the chain without its loop, for the library's oracle */
@@ -290,7 +293,9 @@ loop_oracle *loop_oracle_new(const ctc_chain_spec *spec)
     o->indep = calloc((size_t)n + 1, 1);
     o->qadr = calloc((size_t)n + 1, sizeof(int));
     o->vadr = calloc((size_t)n + 1, sizeof(int));
-    if (!o->bodies || !o->joints || !o->indep || !o->qadr || !o->vadr) goto fail;
+    o->parent = calloc((size_t)n, sizeof(int));
+    if (!o->bodies || !o->joints || !o->indep || !o->qadr || !o->vadr || !o->parent) goto fail;
+    for (int k = 0; k < n; k++) o->parent[k] = spec->parent ? spec->parent[k] : k - 1;
     memcpy(o->bodies, spec->bodies, (size_t)n * sizeof *o->bodies);
     memcpy(o->joints, spec->joints, (size_t)n * sizeof *o->joints);
     o->joints[n] = spec->loop->joint;
@@ -358,6 +363,7 @@ void loop_oracle_free(loop_oracle *o)
     ctc_oracle_free(o->rb);
     ctc_model_free(o->open);
     free(o->bodies), free(o->joints), free(o->indep), free(o->qadr), free(o->vadr);
+    free(o->parent);
     free(o->rot), free(o->pos), free(o->axis), free(o->omega), free(o->vel);
     free(o->alpha0), free(o->acc0), free(o->jac), free(o->jacb), free(o->mass), free(o->h),
         free(o->g);
@@ -372,13 +378,14 @@ const loop_oracle_dims *loop_oracle_get_dims(const loop_oracle *o)
 
 /* ---- kinematics ---- */
 
-/* jac (6 x nv): the unit twists at the point p of the coordinates of joints 0..last (zero
- * columns for the others), from the kinematics in o */
+/* jac (6 x nv): the unit twists at the point p of the coordinates of the joints from the ground
+ * to body last (body last's and its ancestors'; zero columns for the others), from the
+ * kinematics in o */
 static void point_jacobian(const loop_oracle *o, int last, const double p[3], double *jac)
 {
     int nv = o->dims.nv;
     memset(jac, 0, (size_t)6 * nv * sizeof(double));
-    for (int k = 0; k <= last; k++) {
+    for (int k = last; k >= 0; k = o->parent[k]) {
         const ctc_joint_spec *j = &o->joints[k];
         const double *uk = o->axis + 3 * k, *pk = o->pos + 3 * k, *rk = o->rot + 9 * k;
         double d[3] = {p[0] - pk[0], p[1] - pk[1], p[2] - pk[2]}, lin[3];
@@ -423,12 +430,13 @@ static void kinematics(loop_oracle *o, const double *q, const double *v)
         const ctc_joint_spec *j = &o->joints[k];
         const double *qk = q + o->qadr[k];
         const double *vk = v ? v + o->vadr[k] : NULL;
-        const double *rp = k ? o->rot + 9 * (k - 1) : ident;
-        const double *pp = k ? o->pos + 3 * (k - 1) : zero;
-        const double *wp = k ? o->omega + 3 * (k - 1) : zero;
-        const double *vp = k ? o->vel + 3 * (k - 1) : zero;
-        const double *ap = k ? o->alpha0 + 3 * (k - 1) : zero;
-        const double *lp = k ? o->acc0 + 3 * (k - 1) : zero;
+        const int pa = o->parent[k];
+        const double *rp = pa >= 0 ? o->rot + 9 * pa : ident;
+        const double *pp = pa >= 0 ? o->pos + 3 * pa : zero;
+        const double *wp = pa >= 0 ? o->omega + 3 * pa : zero;
+        const double *vp = pa >= 0 ? o->vel + 3 * pa : zero;
+        const double *ap = pa >= 0 ? o->alpha0 + 3 * pa : zero;
+        const double *lp = pa >= 0 ? o->acc0 + 3 * pa : zero;
         double *rk = o->rot + 9 * k, *pk = o->pos + 3 * k, *uk = o->axis + 3 * k;
         double *wk = o->omega + 3 * k, *vel = o->vel + 3 * k;
         double *ak = o->alpha0 + 3 * k, *lk = o->acc0 + 3 * k;
@@ -966,6 +974,8 @@ static loop_scene *scene_alloc(int n, double gx, double gy, double gz, ctc_form 
     s->spec.joints = s->joints;
     s->spec.loop = &s->loop;
     s->spec.independent = s->independent;
+    s->spec.parent = s->parent;
+    for (int k = 0; k < n; k++) s->parent[k] = k - 1;
     s->spec.gravity[0] = gx, s->spec.gravity[1] = gy, s->spec.gravity[2] = gz;
     s->spec.form = form;
     return s;
@@ -1180,4 +1190,40 @@ void loop_scene_close_on(loop_scene *s, int body)
     s->loop.on_body = 1;
     s->loop.body = body;
     loop_oracle_free(o);
+}
+
+void loop_scene_branch(loop_scene *s, int nb, const loop_branch *br)
+{
+    const int n = s->spec.nbodies, nt = n + nb, tip = nt - 1;
+    if (nt > LOOP_SCENE_MAX) abort();
+    int qtip = 0;
+    for (int k = 0; k < n - 1; k++) qtip += type_nq(s->joints[k].type);
+    const int nqtip = type_nq(s->joints[n - 1].type);
+    double qt[4];
+    memcpy(qt, s->q0 + qtip, (size_t)nqtip * sizeof *qt);
+    unsigned char indep_tip = s->independent[n - 1], indep_close = s->independent[n];
+
+    /* the tip and the closing joint move to the end */
+    s->bodies[tip] = s->bodies[n - 1];
+    s->joints[tip] = s->joints[n - 1];
+    s->parent[tip] = n - 2;
+    int q = qtip;
+    for (int e = 0; e < nb; e++) {
+        const int k = n - 1 + e;
+        const loop_branch *b = &br[e];
+        double size[3] = {0.1, 0.4, 0.12}, com[3] = {0, -0.2, 0};
+        if (ctc_shape_box(0.6, size, com, &s->bodies[k], NULL, 0) != CTC_OK) abort();
+        s->joints[k] = (ctc_joint_spec){.type = b->type};
+        memcpy(s->joints[k].axis, b->axis, sizeof b->axis);
+        memcpy(s->joints[k].location, b->location, sizeof b->location);
+        s->parent[k] = b->parent >= 0 ? b->parent : n - 1 + (-2 - b->parent);
+        s->independent[k] = 1;
+        memcpy(s->q0 + q, b->q0, (size_t)type_nq(b->type) * sizeof *s->q0);
+        q += type_nq(b->type);
+    }
+    memcpy(s->q0 + q, qt, (size_t)nqtip * sizeof *qt);
+    s->independent[tip] = indep_tip;
+    s->independent[nt] = indep_close;
+    s->spec.nbodies = nt;
+    scene_count(s);
 }

@@ -185,6 +185,7 @@ typedef struct loop_scene {
     ctc_joint_spec joints[LOOP_SCENE_MAX];
     ctc_loop_spec loop;
     unsigned char independent[LOOP_SCENE_MAX + 1];
+    int parent[LOOP_SCENE_MAX]; /* spec.parent: each body's parent (a chain: k - 1) */
     int nq, nv;
     double q0[4 * LOOP_SCENE_MAX];
 } loop_scene;
@@ -239,5 +240,23 @@ loop_scene *loop_scene_spatial(int n, ctc_joint_type closing, unsigned long long
  * orientation needs the tip's and the body's frames to differ by a rotation about the closing
  * joint's axis at q0, as they do in every scene above (planar, or spatial ones at q0 = 0). */
 void loop_scene_close_on(loop_scene *s, int body);
+
+/* One body added to a loop scene as a branch off its loop's spine (loop_scene_branch). */
+typedef struct loop_branch {
+    int parent;          /* a body of the scene before the tip (0..n-2), or -2 - e for the
+                            branch body e added before this one */
+    ctc_joint_type type; /* REVOLUTE, PRISMATIC or SPHERICAL */
+    double axis[3];      /* the joint's axis, parent frame */
+    double location[3];  /* m, the joint's centre, parent frame */
+    double q0[4];        /* its coordinates in q0 (a spherical joint's unit quaternion) */
+} loop_branch;
+
+/* Makes s (a scene whose bodies form a chain) a branched tree: the nb branch bodies are
+ * inserted after the bodies 0..n-2 and before the tip, which keeps its parent (body n - 2), so
+ * the bodies renumber as 0..n-2, the branches n-1..n+nb-2 in the order given, the tip
+ * n + nb - 1; q0 gets each branch joint's coordinates before the tip's; the branch joints are
+ * independent. The branch bodies are 0.6 kg boxes 0.1 x 0.4 x 0.12 m hanging along -y from their
+ * joint centre. The loop's closure at q0 does not change (a branch does not move the spine). */
+void loop_scene_branch(loop_scene *s, int nb, const loop_branch *br);
 
 #endif

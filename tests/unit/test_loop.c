@@ -18,12 +18,17 @@
  * disassembly changing nothing, loop assembly, the error messages of bad loops, and simulations:
  * a passive four-bar's energy and loop residual, honest residuals without stabilisation,
  * Baumgarte stabilisation, and the exact-model PD error of the five-bar against its closed form.
+ * Last, a loop on a branched tree (loop_scene_branch hangs branches off a loop's spine): the same
+ * checks against the oracle on planar and spatial trees closing on the ground or on an ancestor of
+ * the tip, bitwise equal results at 1, 2 and 8 threads, and the exact PD error on a hand.
  *
  * Measured (this oracle against the library): torques and accelerations agree to <= 3e-12
  * relative, the round trip to <= 5e-12, the early stop changes nothing (bit-identical), the
  * five-bar's PD error matches its closed form to 1.3e-11; a passive four-bar over 10 s at rtol
  * 1e-10 drifts 6.8e-10 in energy with loop residual 3.9e-11 (projection), 3.6e-11 (Baumgarte)
- * and 7.9e-9 (none).
+ * and 7.9e-9 (none). Loops on branched trees (the planar Y, the planar hand, two spatial trees):
+ * forward <= 7.5e-14, torques <= 1.5e-13, round trip <= 1.1e-12 and dependent accelerations
+ * <= 4.6e-13 relative to the oracle; the early stop changes nothing (bit-identical).
  */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -1118,5 +1123,243 @@ Test(loop, a_singular_start_is_reported_not_simulated)
         cr_expect_eq(st, CTC_EINVAL);
         cr_expect(strstr(err, "singular") != NULL, "%s", err);
     }
+    run_free(r);
+}
+
+/* ---- a loop on a branched tree ---- */
+
+/* The planar Y: a crank-rocker four-bar closing on the ground (bodies 0, 1 and the tip 4), with
+ * a double pendulum (bodies 2, 3) hanging from the crank's end. Joints 0, 2, 3 independent. */
+static loop_scene *tree_y(void)
+{
+    loop_scene *s = loop_scene_four_bar(1.0, 0);
+    const loop_branch br[] = {
+        {.parent = 0,
+         .type = CTC_JOINT_REVOLUTE,
+         .axis = {0, 0, 1},
+         .location = {0, -0.5, 0},
+         .q0 = {0.4}},
+        {.parent = -2,
+         .type = CTC_JOINT_REVOLUTE,
+         .axis = {0, 0, 1},
+         .location = {0, -0.4, 0},
+         .q0 = {-0.7}},
+    };
+    loop_scene_branch(s, 2, br);
+    set_independent(s, (const int[]){0, 2, 3, -1});
+    return s;
+}
+
+/* The planar hand: the paper's five-bar closed on body 0 (the palm), so bodies 1-3 and the tip
+ * 8 make a four-bar finger closing on the palm; a two-link finger (4, 5) and a one-link finger
+ * (6) on the palm, and a link (7) on body 2 inside the loop. Joints 0-2 and the branches
+ * independent. */
+static loop_scene *tree_hand(void)
+{
+    loop_scene *s = loop_scene_five_bar();
+    loop_scene_close_on(s, 0);
+    const loop_branch br[] = {
+        {.parent = 0,
+         .type = CTC_JOINT_REVOLUTE,
+         .axis = {0, 0, 1},
+         .location = {0.1, -0.6, 0},
+         .q0 = {0.5}},
+        {.parent = -2,
+         .type = CTC_JOINT_REVOLUTE,
+         .axis = {0, 0, -1},
+         .location = {0, -0.4, 0},
+         .q0 = {0.3}},
+        {.parent = 0,
+         .type = CTC_JOINT_PRISMATIC,
+         .axis = {1, -1, 0},
+         .location = {0, -0.3, 0},
+         .q0 = {0.1}},
+        {.parent = 2,
+         .type = CTC_JOINT_REVOLUTE,
+         .axis = {0, 0, 1},
+         .location = {0, -0.25, 0},
+         .q0 = {-0.6}},
+    };
+    loop_scene_branch(s, 4, br);
+    set_independent(s, (const int[]){0, 1, 2, 4, 5, 6, 7, -1});
+    return s;
+}
+
+/* A spatial tree: the random 8R loop closed on body 0 (joints 1-6 and the closing joint 10 in
+ * the loop), with a spherical joint on body 0 outside the loop, a revolute link on body 3 and a
+ * prismatic one under it, and a revolute link on body 5. Joints 0, 6-9 and 11 independent. */
+static loop_scene *tree_spatial(void)
+{
+    loop_scene *s = loop_scene_spatial(7, CTC_JOINT_REVOLUTE, 7);
+    loop_scene_close_on(s, 0);
+    const loop_branch br[] = {
+        {.parent = 0,
+         .type = CTC_JOINT_SPHERICAL,
+         .location = {0.1, 0.2, -0.1},
+         .q0 = {0.9, 0.3, -0.2, 0.1}},
+        {.parent = 3,
+         .type = CTC_JOINT_REVOLUTE,
+         .axis = {0.3, 1, -0.2},
+         .location = {0.05, 0, 0.1},
+         .q0 = {0.8}},
+        {.parent = -3,
+         .type = CTC_JOINT_PRISMATIC,
+         .axis = {1, 0.2, 0.4},
+         .location = {0, -0.4, 0},
+         .q0 = {0.15}},
+        {.parent = 5,
+         .type = CTC_JOINT_REVOLUTE,
+         .axis = {-0.5, 0.1, 1},
+         .location = {0, 0.1, 0},
+         .q0 = {-0.4}},
+    };
+    double nrm = sqrt(0.81 + 0.09 + 0.04 + 0.01);
+    loop_branch b0 = br[0];
+    for (int i = 0; i < 4; i++) b0.q0[i] /= nrm;
+    loop_branch all[4] = {b0, br[1], br[2], br[3]};
+    loop_scene_branch(s, 4, all);
+    set_independent(s, (const int[]){0, 6, 7, 8, 9, 11, -1});
+    return s;
+}
+
+/* A spatial tree closing on the ground: the 6R+S loop (spherical closing joint) with a revolute
+ * link on body 1 and a spherical one on body 3. Joints 0, 2, 4 and the branches 5, 6
+ * independent. */
+static loop_scene *tree_spatial_ground(void)
+{
+    loop_scene *s = loop_scene_spatial(6, CTC_JOINT_SPHERICAL, 13);
+    const loop_branch br[] = {
+        {.parent = 1,
+         .type = CTC_JOINT_REVOLUTE,
+         .axis = {0, 1, 0.3},
+         .location = {0, 0, 0.1},
+         .q0 = {0.6}},
+        {.parent = 3, .type = CTC_JOINT_SPHERICAL, .location = {0.1, 0, 0}, .q0 = {1, 0, 0, 0}},
+    };
+    loop_scene_branch(s, 2, br);
+    set_independent(s, (const int[]){0, 2, 4, 5, 6, -1});
+    return s;
+}
+
+Test(loop, a_loop_on_a_branched_tree_plans_its_spine_as_one_path)
+{
+    fixture f = fx_make(tree_hand());
+    const ctc_model *m = f.m;
+    cr_assert_eq(m->chain, 0);
+    cr_assert_eq(m->loop_body, 0);
+    cr_assert_eq(m->loop_first, 1);
+    /* the spine 0-1-2-3-8 is one path whatever the subtree sizes */
+    const int spine[] = {0, 1, 2, 3, 8};
+    for (int i = 0; i + 1 < 5; i++) cr_expect_eq(m->body_heavy[spine[i]], spine[i + 1]);
+    const unsigned char in_loop[10] = {0, 1, 1, 1, 0, 0, 0, 0, 1, 1};
+    for (int k = 0; k < m->njoints; k++) cr_expect_eq(m->jnt_loop[k], in_loop[k], "joint %d", k);
+    /* the top node splits the spine at the loop's first joint */
+    const ctc_tree_node *top = &m->tree[m->ntree - 1];
+    cr_expect_eq(top->kind, CTC_NODE_JOIN);
+    cr_expect_eq(top->joint, 1);
+    cr_expect_eq(m->height_start[m->height] - m->height_start[m->height - 1], 1);
+    cr_expect_eq(m->mobility, 3 + 4);
+    cr_expect_eq(m->nind, 7);
+    fx_free(&f);
+}
+
+/* Forward GDCA, both inverse forms and the round trip on loops closed on the ground or on an
+ * ancestor of the tip of branched trees, planar and spatial, against the oracle. */
+Test(loop, a_loop_on_a_branched_tree_matches_the_oracle)
+{
+    loop_case cases[] = {
+        {tree_y(), NULL, "planar Y, one branch a four-bar on the ground"},
+        {tree_hand(), NULL, "planar hand, a four-bar finger closing on the palm"},
+        {tree_spatial(), NULL, "spatial tree, 8R loop on body 0"},
+        {tree_spatial_ground(), NULL, "spatial tree, 6R+S loop on the ground"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        fixture f = fx_make(cases[i].s);
+        f.what = cases[i].what;
+        cr_assert_eq(f.m->chain, 0, "%s", f.what);
+        char err[512] = "";
+        cr_assert_eq(ctc_loop_check(f.m, f.d, f.s->q0, NULL, err, sizeof err), CTC_OK, "%s: %s",
+                     f.what, err);
+        double passive = check_forward(&f, 240 + i, 4, 0),
+               driven = check_forward(&f, 250 + i, 4, 1);
+        cr_expect_leq(passive, 1e-10, "%s, forward, passive: %g", f.what, passive);
+        cr_expect_leq(driven, 1e-10, "%s, forward, driven: %g", f.what, driven);
+        inverse_errors e = check_inverse(&f, 260 + i, 4, 0.2);
+        cr_expect_leq(e.torque, 1e-10, "%s: torques vs oracle %g", f.what, e.torque);
+        cr_expect_leq(e.full, 1e-12, "%s: early stop vs full %g", f.what, e.full);
+        cr_expect_leq(e.round, 1e-10, "%s: round trip %g", f.what, e.round);
+        cr_expect_leq(e.dependent, 1e-10, "%s: dependent accelerations %g", f.what, e.dependent);
+        fx_free(&f);
+    }
+}
+
+/* Forward and both inverse forms of a loop on a tree at 1, 2 and 8 threads, split at every
+ * height (grain 1): bitwise equal. */
+Test(loop, a_loop_on_a_branched_tree_gives_bitwise_equal_results_on_threads)
+{
+    loop_scene *(*make[])(void) = {tree_hand, tree_spatial};
+    for (int c = 0; c < 2; c++) {
+        fixture f = fx_make(make[c]());
+        f.what = c ? "spatial tree" : "planar hand";
+        uint64_t rng = 300 + c;
+        const int nvx = f.m->nvx;
+        double q[MAXX], v[MAXX], force[MAXX], u[MAXX], a[3][MAXX], fi[3][MAXX], fm[3][MAXX];
+        random_state(&f, &rng, 0.2, 1.5, q, v);
+        for (int i = 0; i < nvx; i++) {
+            force[i] = coord_independent(&f, i) ? test_uniform(&rng, -5, 5) : 0;
+            u[i] = coord_independent(&f, i) ? test_uniform(&rng, -5, 5) : 0;
+        }
+        const int threads[3] = {1, 2, 8};
+        for (int t = 0; t < 3; t++) {
+            cr_assert_eq(ctc_data_set_threads(f.d, threads[t], NULL, 0), CTC_OK);
+            f.d->opt.par_grain = 1;
+            library_forward(&f, q, v, force, a[t]);
+            library_inverse(&f, q, v, u, 0, fi[t]);
+            library_inverse(&f, q, v, u, 1, fm[t]);
+        }
+        for (int t = 1; t < 3; t++) {
+            cr_expect_eq(memcmp(a[t], a[0], (size_t)nvx * sizeof **a), 0, "%s: forward, %d threads",
+                         f.what, threads[t]);
+            cr_expect_eq(memcmp(fi[t], fi[0], (size_t)nvx * sizeof **fi), 0,
+                         "%s: inverse, %d threads", f.what, threads[t]);
+            cr_expect_eq(memcmp(fm[t], fm[0], (size_t)nvx * sizeof **fm), 0,
+                         "%s: mobility inverse, %d threads", f.what, threads[t]);
+        }
+        fx_free(&f);
+    }
+}
+
+/* Exact-model PD on the planar hand: the four-bar finger on the palm driven by joints 1 and 2,
+ * the palm and the open fingers by theirs; each independent error follows the critically
+ * damped closed form e(t) = e0 (1 + wn t) exp(-wn t) from rest. */
+Test(loop, exact_pd_error_on_a_loop_tree_follows_the_closed_form)
+{
+    loop_run *r = run_new(tree_hand(), 4);
+    ctc_model *m = build(&r->s->spec);
+    const int nind = m->nind;
+    const double wn = 5;
+    double move[MAXX];
+    r->spec.controller = CTC_CTRL_PD;
+    for (int i = 0; i < nind; i++) {
+        move[i] = 0.2 * (i % 2 ? -1 : 1) * (1 + 0.1 * i);
+        r->gains[i] = (ctc_gains){.kp = wn * wn, .kv = 2 * wn};
+        r->traj[i] = (ctc_traj){.type = CTC_TRAJ_CONSTANT,
+                                .value = r->s->q0[m->jnt_qadr[m->ind_joint[i]]] + move[i]};
+    }
+    ctc_model_free(m);
+    ctc_sim_result *res = run(r);
+    cr_assert_eq(res->status, CTC_RUN_DONE, "%s", res->message);
+    cr_assert_eq(res->nind, nind);
+    double dev = 0;
+    for (int i = 0; i < nind; i++) {
+        for (int j = 0; j < res->nsamples; j++) {
+            double t = res->t[j], ref = move[i] * (1 + wn * t) * exp(-wn * t);
+            dev = fmax(dev, fabs(res->ch[CTC_CH_E][(size_t)nind * j + i] - ref));
+        }
+    }
+    cr_expect_leq(dev, 1e-6, "PD on a loop tree: |e - closed form| = %g", dev);
+    cr_expect_leq(res->metrics.errdyn_dev, 1e-6, "errdyn_dev %g", res->metrics.errdyn_dev);
+    cr_expect_leq(res->metrics.loop_res_max, 1e-10, "loop residual %g", res->metrics.loop_res_max);
+    ctc_sim_result_free(res);
     run_free(r);
 }

@@ -450,25 +450,48 @@ Test(model, rejects_parents_that_are_not_earlier_bodies)
     test_chain_free(c);
 }
 
-Test(model, refuses_a_loop_on_a_branched_tree_and_keeps_it_on_a_chain)
+Test(model, a_loop_on_a_tree_must_close_on_the_tips_path_from_one_ground_body)
 {
     test_chain *c = test_chain_rod_pendulum(5, 1.0, 1.0);
     ctc_loop_spec loop = {0};
     loop.joint.type = CTC_JOINT_REVOLUTE;
     ctc_v3_set(loop.joint.axis, 0, 0, 1);
     ctc_v3_set(loop.anchor, 1.0, 0, 0);
-    unsigned char indep[6] = {1, 1, 0, 0, 0, 0};
-    int parent[5] = {-1, 0, 1, 1, 3};
+    unsigned char indep[6] = {1, 1, 1, 0, 0, 0};
+    int parent[5] = {-1, 0, 1, 1, 3}; /* the spine 0-1-3-4; body 2 a branch on body 1 */
     c->spec.loop = &loop;
     c->spec.independent = indep;
     c->spec.parent = parent;
-    expect_error(&c->spec, "loop: a loop on a branched tree is not supported yet (the bodies must "
-                           "form a chain, each body's parent the one before it)");
+    loop.on_body = 1;
+    loop.body = 2;
+    expect_error(&c->spec, "loop: body 2 is not on the path from the ground to the tip (body 4); "
+                           "a loop between two branches is not supported yet");
+    loop.body = 1; /* an ancestor of the tip: the loop's joints are 3, 4 and the closing one */
+    ctc_model *m = build(&c->spec);
+    cr_assert_eq(m->chain, 0);
+    cr_assert_eq(m->loop_first, 3);
+    const unsigned char in_loop[6] = {0, 0, 0, 1, 1, 1};
+    for (int k = 0; k < 6; k++) cr_expect_eq(m->jnt_loop[k], in_loop[k], "joint %d", k);
+    cr_expect_eq(m->body_heavy[1], 3);
+    ctc_model_free(m);
+    indep[2] = 0; /* joint 2 is off the loop: nothing would determine its motion */
+    expect_error(&c->spec, "loop: joint 2 is outside the loop (which closes on body 1), so nothing "
+                           "determines its motion: mark it independent (or every joint "
+                           "dependent, for a passive run)");
+    loop.on_body = 0;
+    expect_error(&c->spec, "loop: joint 2 is outside the loop (which closes on the ground), so "
+                           "nothing determines its motion: mark it independent (or every joint "
+                           "dependent, for a passive run)");
+    int forest[5] = {-1, 0, -1, 1, 3}; /* two bodies on the ground */
+    c->spec.parent = forest;
+    expect_error(&c->spec, "loop: a loop on a tree with several bodies on the ground (bodies 0 and "
+                           "2) is not supported yet");
     int chain[5] = {-1, 0, 1, 2, 3}; /* a chain given by its parents is a chain */
     c->spec.parent = chain;
-    ctc_model *m = build(&c->spec);
+    m = build(&c->spec);
     cr_assert_eq(m->chain, 1);
     cr_assert_eq(m->has_loop, 1);
+    cr_assert_eq(m->loop_first, 0);
     ctc_model_free(m);
     test_chain_free(c);
 }

@@ -61,6 +61,7 @@ static const char *const all_names[] = {
     "arm_four_bar_pd",
     "rssr_passive",
     "y_pendulum_pd",
+    "y_four_bar_pd",
     "spatial_hand_pd",
     "two_arm_torso_pd",
     "ur5_min_jerk",
@@ -99,6 +100,7 @@ static const struct preset_want {
     {0, 4, 4, 4, 1, 2, CTC_CTRL_PD, 0, 10, 1e-8, 1e-10},
     {0, 3, 9, 7, 1, 0, CTC_CTRL_NONE, 0, 5, 1e-10, 1e-12},
     {0, 5, 5, 5, 0, 5, CTC_CTRL_PD, 1, 5, 1e-8, 1e-10},
+    {0, 6, 6, 6, 1, 4, CTC_CTRL_PD, 0, 10, 1e-8, 1e-10},
     {0, 10, 10, 10, 0, 10, CTC_CTRL_PD, 0, 5, 1e-8, 1e-10},
     {0, 7, 7, 7, 0, 7, CTC_CTRL_PD, 0, 5, 1e-8, 1e-10},
     {0, 6, 6, 6, 0, 6, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
@@ -758,6 +760,7 @@ static const struct {
     {"four_bar_passive", 2, CTC_FORM_PLANAR, 4, 3, 0, -1},
     {"arm_four_bar_pd", 3, CTC_FORM_PLANAR, 5, 3, 2, 0},
     {"rssr_passive", 2, CTC_FORM_SPATIAL, 8, 6, 0, -1},
+    {"y_four_bar_pd", 5, CTC_FORM_PLANAR, 7, 3, 4, 0},
 };
 
 /* element i of the array at path as a 3-vector */
@@ -1151,4 +1154,29 @@ Test(presets, lab_triple_pendulums_are_the_papers_scene_sampled_or_limited)
         }
         job_free(j);
     }
+}
+
+Test(presets, y_four_bar_closes_its_four_bar_branch_on_the_arm)
+{
+    static const int parent[6] = {-1, 0, 1, 0, 3, 2};
+    cJSON *doc = build("y_four_bar_pd", NULL);
+    job *j = parse_doc(doc, "y_four_bar_pd");
+    posed p = pose_tree(j, j->q0);
+    expect_parents(j, &p, parent, 6, "y_four_bar_pd");
+    cr_assert_eq(p.m->chain, 0);
+    cr_assert_eq(p.m->form, CTC_FORM_PLANAR);
+    /* the spine arm-crank-coupler-rocker is the root path; the loop's joints are 1, 2, 5 and the
+       closing one, the double pendulum's 3, 4 are outside it and driven */
+    cr_assert_eq(p.m->body_heavy[0], 1);
+    cr_assert_eq(p.m->body_heavy[2], 5);
+    const unsigned char in_loop[7] = {0, 1, 1, 0, 0, 1, 1}, indep[7] = {1, 1, 0, 1, 1, 0, 0};
+    for (int k = 0; k < 7; k++) {
+        cr_expect_eq(p.m->jnt_loop[k], in_loop[k], "joint %d in the loop", k);
+        cr_expect_eq(p.m->jnt_indep[k], indep[k], "joint %d independent", k);
+    }
+    /* the trajectory: one entry per independent coordinate, starting at q0 */
+    cr_assert_eq(cJSON_GetArraySize(at(doc, "trajectory")), 4);
+    pose_free(&p);
+    job_free(j);
+    cJSON_Delete(doc);
 }

@@ -4,7 +4,8 @@
  * for the driven joints, animates the chain between its two ground pivots, lists the loop's
  * metrics; a run that stopped as singular says so in its status; a passive four-bar (every joint
  * dependent) has no torque plot; a four-bar closed on an arm (a loop closed on a body) draws its
- * pivot on the arm, where the tip's closing point is at every sample.
+ * pivot on the arm, where the tip's closing point is at every sample; so does a loop on a tree
+ * (y_four_bar_pd: the four-bar on the arm beside a double pendulum).
  */
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
@@ -17,6 +18,7 @@ let five; /* five-bar PD, 1 s */
 let singular; /* five-bar driven out of reach: stops as singular (job status failed) */
 let four; /* passive four-bar, 1 s */
 let arm; /* four-bar on an arm, PD, 2 s */
+let yfour; /* a loop on a tree: the four-bar on the arm beside a double pendulum, PD, 2 s */
 
 before(async () => {
     srv = await startWebServer();
@@ -33,6 +35,7 @@ before(async () => {
     });
     four = await post({ preset: 'four_bar_passive', duration: 1 });
     arm = await post({ preset: 'arm_four_bar_pd', duration: 2 });
+    yfour = await post({ preset: 'y_four_bar_pd', duration: 2 });
 });
 
 after(async () => {
@@ -132,5 +135,38 @@ test('a loop closed on a body: its pivot is drawn on the body, where the tip clo
         assert.ok(gaps.onBody < 1e-6, `tip to the anchor on the arm: ${gaps.onBody} m`);
         assert.ok(gaps.inWorld > 0.1, `the anchor read as a world point would close it: ${gaps.inWorld} m`);
         await screenshot(page, 'loop-arm-four-bar.png');
+    });
+});
+
+test('a loop on a tree: the branch is drawn and the tip meets its pivot on the arm', async () => {
+    assert.equal(yfour.status, 'done', yfour.message);
+    await withView(browser, srv, `#/jobs/${yfour.id}`, 'loop-y-four-bar', async (page) => {
+        const channels = (await plots(page)).map((p) => p.channel);
+        for (const ch of ['q', 'e', 'tau', 'loop']) assert.ok(channels.includes(ch), `no ${ch} plot: ${channels}`);
+        assert.match(await text(page, 'div.anim-wrap + p'), /pivot on a body/);
+        const img = await animImage(page);
+        assert.notEqual(img.image, img.blank, 'canvas#anim is blank');
+
+        /* the page's kinematics on the tree: the arm's end is drawn as a fan (the crank and the
+           pendulum hang from it), and the tip's closing point meets the anchor on the arm */
+        const got = await page.evaluate(async (id) => {
+            const kin = await import('/kinematics.js');
+            const job = await (await fetch(`/api/jobs/${id}`)).json();
+            const series = await (await fetch(`/api/jobs/${id}/series?format=json&channels=q`)).json();
+            const loop = job.spec.scene.loop;
+            const layout = kin.chainLayout(job.spec.scene.bodies, loop);
+            const q = series.q;
+            let gap = 0;
+            for (let k = 0; k < series.t.length; k++) {
+                const pose = kin.chainPose(layout, (i) => q[i][k]);
+                const end = pose[pose.length - 1].end, a = kin.loopAnchor(loop, pose);
+                gap = Math.max(gap, Math.hypot(end[0] - a[0], end[1] - a[1], end[2] - a[2]));
+            }
+            return { gap, parents: layout.map((l) => l.parent), armEnds: layout[0].ends.length };
+        }, yfour.id);
+        assert.deepEqual(got.parents, [-1, 0, 1, 0, 3, 2]);
+        assert.equal(got.armEnds, 2, 'the arm ends in two segments, to the crank and the pendulum');
+        assert.ok(got.gap < 1e-6, `tip to the anchor on the arm: ${got.gap} m`);
+        await screenshot(page, 'loop-y-four-bar.png');
     });
 });
