@@ -1065,6 +1065,10 @@ static const preset preset_table[] = {
     {"iiwa14_min_jerk",
      "KUKA LBR iiwa 14 (URDF) moving between two poses by minimum jerk, " PD_GAINS, no_params,
      presets_iiwa14},
+    {"panda_min_jerk",
+     "Franka Emika Panda (URDF) moving between two poses by minimum jerk while its two fingers "
+     "open, " PD_GAINS,
+     no_params, presets_panda},
 };
 
 const preset *presets_list(int *count)

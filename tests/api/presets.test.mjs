@@ -15,10 +15,10 @@ const KNOWN = [
     'spatial_double_pendulum_poles', 'spatial_double_pendulum_lqr', 'n_link_pendulum',
     'five_bar_pd', 'five_bar_pid', 'five_bar_poles', 'five_bar_lqr', 'four_bar_passive',
     'arm_four_bar_pd', 'rssr_passive', 'y_pendulum_pd', 'spatial_hand_pd', 'two_arm_torso_pd',
-    'ur5_min_jerk', 'iiwa14_min_jerk',
+    'ur5_min_jerk', 'iiwa14_min_jerk', 'panda_min_jerk',
 ];
 /* bodies of each preset's chain (n_link_pendulum with n = 4) */
-const TREE_BODIES = { y_pendulum_pd: 5, spatial_hand_pd: 10, two_arm_torso_pd: 7 };
+const TREE_BODIES = { y_pendulum_pd: 5, spatial_hand_pd: 10, two_arm_torso_pd: 7, panda_min_jerk: 9 };
 const BODIES = (name) =>
     TREE_BODIES[name] ?? (name === 'n_link_pendulum' ? 4 : name.startsWith('five_bar') ? 5 : name.startsWith('spatial') ? 2 :
         name === 'arm_four_bar_pd' ? 4 : name === 'ur5_min_jerk' ? 6 : name === 'iiwa14_min_jerk' ? 7 : 3);

@@ -33,7 +33,7 @@
  * 7.3: l = 1 m, lc = 0.5 m, m = 1 kg) with a slender-rod inertia m l^2 / 12 about the normal axes
  * and a small one about the rod's. The KUKA LBR iiwa 14 from Drake's iiwa14_no_collision.urdf
  * (RobotLocomotion/drake, manipulation/models/iiwa_description), typed in here apart from its
- * preset (server/presets_robots.c).
+ * preset (server/presets_robots.c); so is the Panda's.
  */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -1439,6 +1439,19 @@ Test(urdf, iiwa14_preset_tracks_exactly_and_holds_the_published_dynamics)
     job *j = run_preset("iiwa14_min_jerk");
     cr_assert_eq(j->spec.chain.nbodies, 7);
     compare(j, J, n);
+    job_free(j);
+}
+
+Test(urdf, panda_preset_tracks_exactly_and_holds_the_published_dynamics)
+{
+    tjoint J[NPANDA + 2];
+    int par[NPANDA + 2];
+    int n = panda_oracle(T_PRI, J, par);
+    job *j = run_preset("panda_min_jerk");
+    static const int parents[9] = {-1, 0, 1, 2, 3, 4, 5, 6, 6};
+    cr_assert_eq(j->spec.chain.nbodies, 9);
+    for (int k = 0; k < 9; k++) cr_assert_eq(j->spec.chain.parent[k], parents[k], "body %d", k);
+    compare_tree(j, J, par, n, NULL);
     job_free(j);
 }
 
