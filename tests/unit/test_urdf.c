@@ -25,7 +25,8 @@
  * franka_hand xacro files (frankaemika/franka_ros; equal to Franka's modified DH table); its arm
  * links' masses, centres of mass and inertias identified by Gaz, Cognetti, Oliva, Robuffo
  * Giordano and De Luca (IEEE RA-L 2019), and the hand's and fingers', as franka_description's
- * robots/common/inertial.yaml lists them. The Panda with prismatic fingers and the gripper on an
+ * robots/common/inertial.yaml lists them; its arm also as Franka's modified DH table
+ * (frankaemika.github.io), which must give the URDF's dynamics. The Panda with prismatic fingers and the gripper on an
  * arm written for the test are trees: a link's Jacobian has columns only for the joints on its
  * path to the ground. On them, and on every robot here, GDCA's forward accelerations must also
  * equal the oracle's M^-1 (tau - c - G), solved densely in the test. The two-link arm is the
@@ -1060,6 +1061,45 @@ Test(urdf, panda_arm_with_fixed_fingers_matches_jacobian_dynamics)
     compare_tree(j, J, par, n, NULL);
     job_free(j);
     free(doc);
+}
+
+/* Franka's modified (Craig) DH table of the Panda (frankaemika.github.io, "Denavit-Hartenberg
+ * parameters"): row i holds a_(i-1), alpha_(i-1) and d_i */
+static const double panda_dh_a[7] = {0, 0, 0, 0.0825, -0.0825, 0, 0.088};
+static const double panda_dh_d[7] = {0.333, 0, 0.316, 0, 0.384, 0, 0};
+static const double panda_dh_alpha[7] = {0, -PANDA_H, PANDA_H, PANDA_H, -PANDA_H, PANDA_H, PANDA_H};
+
+Test(urdf, panda_arm_urdf_and_frankas_modified_dh_table_give_the_same_dynamics)
+{
+    /* the arm alone (links 0..7): the URDF's link frames are the DH frames, so each row takes
+       the link's inertial as it is */
+    buf b = {.n = 0};
+    frames_urdf(&b, "panda_arm", panda_links, 8);
+    char *doc_urdf = urdf_job(b.s);
+    b.n = 0;
+    put(&b, "{\"dh\": {\"convention\": \"modified\", \"rows\": [");
+    for (int i = 0; i < 7; i++) {
+        const tlink *l = &panda_links[i + 1];
+        put(&b,
+            "%s{\"a\": %.17g, \"alpha\": %.17g, \"d\": %.17g, \"mass\": %.17g, \"com\": "
+            "[%.17g, %.17g, %.17g], \"inertia\": [[%.17g, %.17g, %.17g], [%.17g, %.17g, %.17g], "
+            "[%.17g, %.17g, %.17g]]}",
+            i ? ", " : "", panda_dh_a[i], panda_dh_alpha[i], panda_dh_d[i], l->mass, l->ixyz[0],
+            l->ixyz[1], l->ixyz[2], l->in[0], l->in[3], l->in[4], l->in[3], l->in[1], l->in[5],
+            l->in[4], l->in[5], l->in[2]);
+    }
+    put(&b, "]}}");
+    char *doc_dh = job_text(b.s);
+    job *ju = parse_ok(doc_urdf), *jd = parse_ok(doc_dh);
+    cr_assert_eq(jd->spec.chain.nbodies, 7);
+    compare_jobs(ju, jd);
+    tjoint J[8];
+    int n = frames_oracle(panda_links, 8, J);
+    compare(jd, J, n);
+    job_free(ju);
+    job_free(jd);
+    free(doc_urdf);
+    free(doc_dh);
 }
 
 /* ---- a two-finger gripper on a three-joint arm, written for this test ---- */
