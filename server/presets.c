@@ -1190,6 +1190,10 @@ static const preset preset_table[] = {
     {"triple_pendulum_pid_limited",
      TRIPLE_SUMMARY(PID_GAINS " with +-50 N m actuators (anti-windup; bdf)"), no_params,
      triple_pendulum_pid_limited},
+    {"panda_min_jerk",
+     "Franka Emika Panda (URDF) moving between two poses by minimum jerk while its two fingers "
+     "open, " PD_GAINS,
+     no_params, presets_panda},
 };
 
 const preset *presets_list(int *count)

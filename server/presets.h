@@ -14,8 +14,10 @@
  *   y_pendulum_pd                                a planar Y tree: two double pendulums on an arm
  *   spatial_hand_pd                              a wrist, a palm and three three-link fingers
  *   two_arm_torso_pd                             a torso on a waist with two three-link arms
- *   ur5_min_jerk, iiwa14_min_jerk                industrial arms from their DH table or URDF
- *                                                (presets_robots.c), a minimum-jerk move, PD
+ *   ur5_min_jerk, iiwa14_min_jerk, panda_min_jerk
+ *                                                industrial arms from their DH table or URDF
+ *                                                (presets_robots.c), a minimum-jerk move, PD;
+ *                                                the Panda's two fingers make it a tree
  * presets.c describes each scene's geometry and numbers.
  */
 #ifndef PRESETS_H

@@ -17,6 +17,24 @@
  *    (RobotLocomotion/drake, manipulation/models/iiwa_description); link 0 is fixed to the world
  *    and the end-effector frames are massless, so 7 bodies. Move: from 0 to (0.5, 0.6, 0, -1.2,
  *    0, 0.8, 0).
+ *  - Franka Emika Panda with its two fingers (URDF, a tree of 9 bodies): the joint origins, axes,
+ *    limits and the hand's and fingers' joints of franka_description (frankaemika/franka_ros,
+ *    robots/common/franka_arm.xacro and franka_hand.xacro, equal to Franka's modified DH table);
+ *    the arm links' masses, centres of mass and inertias (link frames) identified by Gaz,
+ *    Cognetti, Oliva, Robuffo Giordano and De Luca, "Dynamic Identification of the Franka Emika
+ *    Panda Robot With Retrieval of Feasible Parameters Using Penalty-Based Optimization", IEEE
+ *    RA-L 4(4), 2019, as franka_description's robots/common/inertial.yaml lists them; the hand's
+ *    and fingers' values from that same file (franka_description's, not identified). Link 1's
+ *    centre-of-mass height and its inertia about x and y do not act on a link turning about the
+ *    vertical and are not identifiable; the file's values are kept. All values pass the model's
+ *    checks as published (link 1's principal moments, about 0.7034, 0.7071 and 0.0085 kg m^2,
+ *    satisfy the triangle inequality). The real gripper couples its fingers with <mimic>, which
+ *    the importer refuses: here each finger has its own prismatic joint and trajectory, as in
+ *    Drake's franka_description. Link 0 is fixed to the world (its inertial plays no part), the
+ *    flange (link 8) is massless and the hand is fixed to it, so the hand is part of link 7's
+ *    body and the fingers hang from that body. Move: from Franka's ready pose (0, -pi/4, 0,
+ *    -3pi/4, 0, pi/2, pi/4) to (0.6, -0.2, -0.4, -2.0, 0.3, 2.0, 1.2), inside the joint limits,
+ *    while both fingers open from 0.01 m to 0.04 m.
  * The Puma 560 is not here: Armstrong, Khatib and Burdick's parameters (Corke's mdl_puma560akb)
  * give link 1 a zero mass with an inertia about its axis, a body ctc_model_build refuses (mass
  * > 0) until massless bodies are supported.
@@ -219,4 +237,138 @@ cJSON *presets_iiwa14(const cJSON *request, job_error *err)
         return NULL;
     }
     return finish_robot(doc, 7, from, to, "iiwa14_min_jerk", err);
+}
+
+/* ---- Franka Emika Panda with its fingers ---- */
+
+/* joint i (from 1) from panda_link(i-1) to panda_link(i): franka_arm.xacro's origin and limits;
+ * link i's inertial: inertial.yaml's (Gaz et al. 2019) */
+typedef struct panda_joint {
+    const char *xyz, *rpy, *lower, *upper, *effort, *velocity;
+    const char *com, *mass, *ixx, *iyy, *izz, *ixy, *ixz, *iyz;
+} panda_joint;
+
+#define PANDA_RPY_PLUS "1.5707963267948966 0 0"
+#define PANDA_RPY_MINUS "-1.5707963267948966 0 0"
+
+static const panda_joint panda[7] = {
+    {"0 0 0.333", "0 0 0", "-2.8973", "2.8973", "87", "2.1750", "0.003875 0.002081 -0.04762",
+     "4.970684", "0.70337", "0.70661", "0.0091170", "-0.00013900", "0.0067720", "0.019169"},
+    {"0 0 0", PANDA_RPY_MINUS, "-1.7628", "1.7628", "87", "2.1750", "-0.003141 -0.02872 0.003495",
+     "0.646926", "0.0079620", "2.8110e-02", "2.5995e-02", "-3.9250e-3", "1.0254e-02",
+     "7.0400e-04"},
+    {"0 -0.316 0", PANDA_RPY_PLUS, "-2.8973", "2.8973", "87", "2.1750",
+     "2.7518e-02 3.9252e-02 -6.6502e-02", "3.228604", "3.7242e-02", "3.6155e-02", "1.0830e-02",
+     "-4.7610e-03", "-1.1396e-02", "-1.2805e-02"},
+    {"0.0825 0 0", PANDA_RPY_PLUS, "-3.0718", "-0.0698", "87", "2.1750",
+     "-5.317e-02 1.04419e-01 2.7454e-02", "3.587895", "2.5853e-02", "1.9552e-02", "2.8323e-02",
+     "7.7960e-03", "-1.3320e-03", "8.6410e-03"},
+    {"-0.0825 0.384 0", PANDA_RPY_MINUS, "-2.8973", "2.8973", "12", "2.6100",
+     "-1.1953e-02 4.1065e-02 -3.8437e-02", "1.225946", "3.5549e-02", "2.9474e-02", "8.6270e-03",
+     "-2.1170e-03", "-4.0370e-03", "2.2900e-04"},
+    {"0 0 0", PANDA_RPY_PLUS, "-0.0175", "3.7525", "12", "2.6100",
+     "6.0149e-02 -1.4117e-02 -1.0517e-02", "1.666555", "1.9640e-03", "4.3540e-03", "5.4330e-03",
+     "1.0900e-04", "-1.1580e-03", "3.4100e-04"},
+    {"0.088 0 0", PANDA_RPY_PLUS, "-2.8973", "2.8973", "12", "2.6100",
+     "1.0517e-02 -4.252e-03 6.1597e-02", "7.35522e-01", "1.2516e-02", "1.0027e-02", "4.8150e-03",
+     "-4.2800e-04", "-1.1960e-03", "-7.4100e-04"},
+};
+
+/* the arm's base (link 0 and its inertial), before the joints */
+static const char panda_urdf_head[] =
+    "<?xml version=\"1.0\"?>\n"
+    "<robot name=\"panda\">\n"
+    "  <link name=\"panda_link0\"><inertial><origin xyz=\"-0.041018 -0.00014 0.049974\"/>"
+    "<mass value=\"0.629769\"/>\n"
+    "    <inertia ixx=\"0.00315\" iyy=\"0.00388\" izz=\"0.004285\" ixy=\"8.2904E-07\" "
+    "ixz=\"0.00015\" iyz=\"8.2299E-06\"/></inertial></link>\n";
+
+/* the flange (link 8), the hand on it and the two fingers on the hand, after the joints */
+static const char panda_urdf_tail[] =
+    "  <joint name=\"panda_joint8\" type=\"fixed\">\n"
+    "    <parent link=\"panda_link7\"/><child link=\"panda_link8\"/>"
+    "<origin xyz=\"0 0 0.107\" rpy=\"0 0 0\"/>\n"
+    "  </joint>\n"
+    "  <link name=\"panda_link8\"/>\n"
+    "  <joint name=\"panda_hand_joint\" type=\"fixed\">\n"
+    "    <parent link=\"panda_link8\"/><child link=\"panda_hand\"/>"
+    "<origin xyz=\"0 0 0\" rpy=\"0 0 -0.7853981633974483\"/>\n"
+    "  </joint>\n"
+    "  <link name=\"panda_hand\"><inertial><origin xyz=\"-0.01 0 0.03\"/>"
+    "<mass value=\"0.73\"/>\n"
+    "    <inertia ixx=\"0.001\" iyy=\"0.0025\" izz=\"0.0017\"/></inertial></link>\n"
+    "  <joint name=\"panda_finger_joint1\" type=\"prismatic\">\n"
+    "    <parent link=\"panda_hand\"/><child link=\"panda_leftfinger\"/>"
+    "<origin xyz=\"0 0 0.0584\" rpy=\"0 0 0\"/><axis xyz=\"0 1 0\"/>\n"
+    "    <limit effort=\"100\" lower=\"0.0\" upper=\"0.04\" velocity=\"0.2\"/>"
+    "<dynamics damping=\"0.3\"/>\n"
+    "  </joint>\n"
+    "  <link name=\"panda_leftfinger\"><inertial><origin xyz=\"0 0 0\"/>"
+    "<mass value=\"0.015\"/>\n"
+    "    <inertia ixx=\"2.375e-06\" iyy=\"2.375e-06\" izz=\"7.5e-07\"/></inertial></link>\n"
+    "  <joint name=\"panda_finger_joint2\" type=\"prismatic\">\n"
+    "    <parent link=\"panda_hand\"/><child link=\"panda_rightfinger\"/>"
+    "<origin xyz=\"0 0 0.0584\" rpy=\"0 0 0\"/><axis xyz=\"0 -1 0\"/>\n"
+    "    <limit effort=\"100\" lower=\"0.0\" upper=\"0.04\" velocity=\"0.2\"/>"
+    "<dynamics damping=\"0.3\"/>\n"
+    "  </joint>\n"
+    "  <link name=\"panda_rightfinger\"><inertial><origin xyz=\"0 0 0\"/>"
+    "<mass value=\"0.015\"/>\n"
+    "    <inertia ixx=\"2.375e-06\" iyy=\"2.375e-06\" izz=\"7.5e-07\"/></inertial></link>\n"
+    "</robot>\n";
+
+/* the URDF text into buf (len bytes); -1 when it does not fit */
+static int panda_text(char *buf, size_t len)
+{
+    size_t n = 0;
+    int k = snprintf(buf, len, "%s", panda_urdf_head);
+    if (k < 0 || (size_t)k >= len) return -1;
+    n = (size_t)k;
+    for (int i = 0; i < 7; i++) {
+        const panda_joint *j = &panda[i];
+        k = snprintf(buf + n, len - n,
+                     "  <joint name=\"panda_joint%d\" type=\"revolute\">\n"
+                     "    <parent link=\"panda_link%d\"/><child link=\"panda_link%d\"/>\n"
+                     "    <origin xyz=\"%s\" rpy=\"%s\"/><axis xyz=\"0 0 1\"/>\n"
+                     "    <limit effort=\"%s\" lower=\"%s\" upper=\"%s\" velocity=\"%s\"/>\n"
+                     "  </joint>\n"
+                     "  <link name=\"panda_link%d\"><inertial><origin xyz=\"%s\"/>"
+                     "<mass value=\"%s\"/>\n"
+                     "    <inertia ixx=\"%s\" iyy=\"%s\" izz=\"%s\" ixy=\"%s\" ixz=\"%s\" "
+                     "iyz=\"%s\"/></inertial></link>\n",
+                     i + 1, i, i + 1, j->xyz, j->rpy, j->effort, j->lower, j->upper, j->velocity,
+                     i + 1, j->com, j->mass, j->ixx, j->iyy, j->izz, j->ixy, j->ixz, j->iyz);
+        if (k < 0 || (size_t)k >= len - n) return -1;
+        n += (size_t)k;
+    }
+    k = snprintf(buf + n, len - n, "%s", panda_urdf_tail);
+    return k < 0 || (size_t)k >= len - n ? -1 : 0;
+}
+
+cJSON *presets_panda(const cJSON *request, job_error *err)
+{
+    (void)request;
+    static const double from[9] = {0, -0.78539816339744831, 0, -2.3561944901923448, 0, HALF_PI,
+                                   0.78539816339744831, 0.01, 0.01};
+    static const double to[9] = {0.6, -0.2, -0.4, -2.0, 0.3, 2.0, 1.2, 0.04, 0.04};
+    static const double gravity[3] = {0, 0, -9.81};
+    char text[12288];
+    cJSON *doc = NULL;
+    if (panda_text(text, sizeof text) == 0) doc = cJSON_CreateObject();
+    cJSON *scene = cJSON_AddObjectToObject(doc, "scene");
+    int ok = doc != NULL &&
+             cJSON_AddStringToObject(doc, "name",
+                                     "Franka Emika Panda minimum-jerk move opening its fingers, PD "
+                                     "(URDF of franka_description; link inertials of Gaz et al. "
+                                     "2019)") &&
+             cJSON_AddItemToObject(scene, "gravity", cJSON_CreateDoubleArray(gravity, 3)) &&
+             cJSON_AddStringToObject(scene, "urdf", text);
+    if (!ok) {
+        cJSON_Delete(doc);
+        err->code = JOB_NO_MEMORY;
+        err->field[0] = '\0';
+        snprintf(err->message, sizeof err->message, "out of memory building preset panda_min_jerk");
+        return NULL;
+    }
+    return finish_robot(doc, 9, from, to, "panda_min_jerk", err);
 }

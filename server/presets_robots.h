@@ -17,4 +17,8 @@ cJSON *presets_ur5(const cJSON *request, job_error *err);
 /* The KUKA LBR iiwa 14 from its URDF (Drake's). As presets_ur5. */
 cJSON *presets_iiwa14(const cJSON *request, job_error *err);
 
+/* The Franka Emika Panda with its two fingers from its URDF (franka_description, with Gaz et al.'s
+ * identified link inertials): a tree, both fingers hanging from the hand. As presets_ur5. */
+cJSON *presets_panda(const cJSON *request, job_error *err);
+
 #endif

@@ -4,9 +4,11 @@
  * channels, joints and every.
  */
 import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
+import path from 'node:path';
 import test from 'node:test';
 
-import { cliCsv, parseCsv, runCli, startServer, submit, waitJob, idOf } from './lib.mjs';
+import { cliCsv, parseCsv, runCli, startServer, submit, waitJob, idOf, ROOT } from './lib.mjs';
 
 const DURATION = 0.3;
 const KNOWN = [
@@ -16,10 +18,11 @@ const KNOWN = [
     'five_bar_pd', 'five_bar_pid', 'five_bar_poles', 'five_bar_lqr', 'four_bar_passive',
     'arm_four_bar_pd', 'rssr_passive', 'y_pendulum_pd', 'y_four_bar_pd', 'spatial_hand_pd',
     'two_arm_torso_pd', 'ur5_min_jerk', 'iiwa14_min_jerk', 'triple_pendulum_pid_1khz',
-    'triple_pendulum_pid_200hz', 'triple_pendulum_pid_50hz', 'triple_pendulum_pid_limited',
+    'triple_pendulum_pid_200hz', 'triple_pendulum_pid_50hz', 'triple_pendulum_pid_limited', 'panda_min_jerk',
 ];
 /* bodies of each preset's chain (n_link_pendulum with n = 4) */
-const TREE_BODIES = { y_pendulum_pd: 5, y_four_bar_pd: 6, spatial_hand_pd: 10, two_arm_torso_pd: 7 };
+const TREE_BODIES = { y_pendulum_pd: 5, y_four_bar_pd: 6, spatial_hand_pd: 10, two_arm_torso_pd: 7,
+    panda_min_jerk: 9 };
 const BODIES = (name) =>
     TREE_BODIES[name] ?? (name === 'n_link_pendulum' ? 4 : name.startsWith('five_bar') ? 5 : name.startsWith('spatial') ? 2 :
         name === 'arm_four_bar_pd' ? 4 : name === 'ur5_min_jerk' ? 6 : name === 'iiwa14_min_jerk' ? 7 : 3);
@@ -52,6 +55,23 @@ test('GET /api/presets lists every preset with a summary and its params', async 
     const cli = await runCli(['presets']);
     assert.equal(cli.code, 0);
     assert.deepEqual(cli.stdout.trim().split('\n').map((l) => l.split(/\s+/)[0]), KNOWN);
+});
+
+test('the job schema names every preset, and no other', () => {
+    const schema = JSON.parse(readFileSync(path.join(ROOT, 'api', 'job.schema.json'), 'utf8'));
+    /* the "preset" property's enum, wherever the schema keeps it */
+    const find = (node) => {
+        if (node === null || typeof node !== 'object') return null;
+        if (Array.isArray(node.properties?.preset?.enum)) return node.properties.preset.enum;
+        for (const v of Object.values(node)) {
+            const got = find(v);
+            if (got) return got;
+        }
+        return null;
+    };
+    const names = find(schema);
+    assert.ok(names, 'no enum of preset names in api/job.schema.json');
+    assert.deepEqual([...names].sort(), [...KNOWN].sort());
 });
 
 test('GET /api/presets/{name} is the document `ctcsim preset NAME` prints', async () => {

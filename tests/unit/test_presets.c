@@ -22,7 +22,10 @@
  *    from density x volume (the hand's aluminium) or Winter's anthropometric fractions (the
  *    torso's arms), a box's or rod's inertia by its textbook formula; joints and tips posed by
  *    ctc_kinematics against positions worked by hand (the Y's rods at the sum of their
- *    ancestors' angles, a quarter turn of the wrist or the waist).
+ *    ancestors' angles, a quarter turn of the wrist or the waist);
+ *  - the Panda: Franka's ready pose and joint limits (franka_description's franka_arm and
+ *    franka_hand xacro files) typed in here, against the document's moves and the limits its
+ *    URDF carries; its exact tracking and published dynamics are checked in test_urdf.c.
  * Positions are compared to 1e-12 m, numbers read back to 1e-15 relative.
  */
 #include <criterion/criterion.h>
@@ -36,6 +39,7 @@
 #include "kinematics.h"
 #include "model.h"
 #include "presets.h"
+#include "urdf.h"
 
 #define POS_TOL 1e-12  /* m */
 #define READ_TOL 1e-15 /* relative */
@@ -70,6 +74,7 @@ static const char *const all_names[] = {
     "triple_pendulum_pid_200hz",
     "triple_pendulum_pid_50hz",
     "triple_pendulum_pid_limited",
+    "panda_min_jerk",
 };
 #define NPRESETS ((int)(sizeof all_names / sizeof all_names[0]))
 
@@ -109,6 +114,7 @@ static const struct preset_want {
     {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
     {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
     {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
+    {0, 9, 9, 9, 0, 9, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
 };
 _Static_assert(sizeof preset_want / sizeof preset_want[0] == NPRESETS, "one row per preset");
 
@@ -1177,6 +1183,56 @@ Test(presets, y_four_bar_closes_its_four_bar_branch_on_the_arm)
     /* the trajectory: one entry per independent coordinate, starting at q0 */
     cr_assert_eq(cJSON_GetArraySize(at(doc, "trajectory")), 4);
     pose_free(&p);
+}
+
+Test(presets, panda_moves_inside_frankas_joint_limits_and_opens_both_fingers)
+{
+    /* franka_arm.xacro's limits (rad) and franka_hand.xacro's (m) */
+    static const double lower[9] = {-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973,
+                                    0, 0};
+    static const double upper[9] = {2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973,
+                                    0.04, 0.04};
+    /* Franka's ready pose, then both fingers from 1 cm to 4 cm open */
+    const double ready[9] = {0, -pi / 4, 0, -3 * pi / 4, 0, pi / 2, pi / 4, 0.01, 0.01};
+    static const int parents[9] = {-1, 0, 1, 2, 3, 4, 5, 6, 6};
+    cJSON *doc = build("panda_min_jerk", NULL);
+    const cJSON *traj = cJSON_GetObjectItemCaseSensitive(doc, "trajectory");
+    const cJSON *q0 = cJSON_GetObjectItemCaseSensitive(
+        cJSON_GetObjectItemCaseSensitive(doc, "scene"), "q0");
+    cr_assert_eq(cJSON_GetArraySize(traj), 9);
+    for (int i = 0; i < 9; i++) {
+        const cJSON *t = cJSON_GetArrayItem(traj, i);
+        double from = cJSON_GetObjectItemCaseSensitive(t, "from")->valuedouble;
+        double to = cJSON_GetObjectItemCaseSensitive(t, "to")->valuedouble;
+        cr_assert_str_eq(cJSON_GetObjectItemCaseSensitive(t, "type")->valuestring, "min_jerk");
+        cr_assert_float_eq(from, ready[i], READ_TOL, "joint %d starts at %g", i, from);
+        cr_assert_eq(cJSON_GetArrayItem(q0, i)->valuedouble, from, "q0[%d]", i);
+        cr_assert(from >= lower[i] && from <= upper[i] && to >= lower[i] && to <= upper[i],
+                  "joint %d: %g -> %g leaves [%g, %g]", i, from, to, lower[i], upper[i]);
+        if (i >= 7) cr_assert_eq(to, 0.04, "finger %d opens to 4 cm", i - 7);
+    }
+    /* the URDF carries the same limits, and both fingers hang from the hand (link 7) */
+    const char *text = cJSON_GetObjectItemCaseSensitive(
+                           cJSON_GetObjectItemCaseSensitive(doc, "scene"), "urdf")
+                           ->valuestring;
+    char msg[256];
+    cJSON *bodies = urdf_to_bodies(text, strlen(text), NULL, 0, msg, sizeof msg);
+    cr_assert_not_null(bodies, "%s", msg);
+    cr_assert_eq(cJSON_GetArraySize(bodies), 9);
+    for (int i = 0; i < 9; i++) {
+        const cJSON *b = cJSON_GetArrayItem(bodies, i);
+        const cJSON *limit = cJSON_GetObjectItemCaseSensitive(
+            cJSON_GetObjectItemCaseSensitive(b, "joint"), "limit");
+        cr_assert_eq(cJSON_GetObjectItemCaseSensitive(b, "parent")->valuedouble, parents[i]);
+        cr_assert_eq(cJSON_GetObjectItemCaseSensitive(limit, "lower")->valuedouble, lower[i],
+                     "body %d", i);
+        cr_assert_eq(cJSON_GetObjectItemCaseSensitive(limit, "upper")->valuedouble, upper[i],
+                     "body %d", i);
+    }
+    cJSON_Delete(bodies);
+    job *j = parse_doc(doc, "panda_min_jerk");
+    cr_assert_eq(j->spec.chain.nbodies, 9);
+    for (int i = 0; i < 9; i++) cr_assert_eq(j->spec.chain.parent[i], parents[i], "body %d", i);
     job_free(j);
     cJSON_Delete(doc);
 }

@@ -5,13 +5,14 @@
  *
  * Oracle: the dynamics of each robot computed here by a separate route from the published
  * numbers, with no use of ctcsim's frames: forward kinematics of the original description (DH's
- * or URDF's chain of transforms F_i = F_(i-1) A_i Mot(axis_i, q_i) B_i, with the inertial data in
- * F_i), then the textbook Jacobians (revolute: Jv_j = z_j x (p_c - o_j), Jw_j = z_j; prismatic:
- * Jv_j = z_j, Jw_j = 0) and
+ * or URDF's transforms F_i = F_p(i) A_i Mot(axis_i, q_i) B_i, p(i) the link joint i hangs from,
+ * with the inertial data in F_i), then the textbook Jacobians, with a column for each joint j on
+ * link i's path to the ground and zero columns for the others (revolute: Jv_j = z_j x (p_c - o_j),
+ * Jw_j = z_j; prismatic: Jv_j = z_j, Jw_j = 0) and
  *     M(q)    = sum_i m_i Jv_i^T Jv_i + Jw_i^T R_i I_i R_i^T Jw_i,
  *     G(q)    = -sum_i m_i Jv_i^T g,
  *     c(q, v) = sum_i m_i Jv_i^T (dJv_i v) + Jw_i^T (I_w (dJw_i v) + w_i x I_w w_i),
- * with dJ v from the axes' rates dz_j = w_(j-1) x z_j and the joint points' velocities. ctcsim's
+ * with dJ v from the axes' rates dz_j = w_p(j) x z_j and the joint points' velocities. ctcsim's
  * side is the model built from the converted job and the library's independent oracle
  * (oracle.h: composite-rigid-body M, Newton-Euler c + G). They must agree to 1e-10 at several
  * poses and velocities.
@@ -20,13 +21,20 @@
  * "Parameters for calculations of kinematics and dynamics" (universal-robots.com, UR5 column);
  * its link inertias (about the centres of mass, principal, in the DH frames) from ur_description's
  * ur5 cylinder approximations as Lynch and Park, Modern Robotics (2017), list them for the UR5
- * (G1..G6). The Panda's joint origins and finger joints from franka_description's panda_arm and
- * hand xacro files (equal to Franka's modified DH table); its masses, centres of mass and
- * inertias here are illustrative. The two-link arm is the textbook planar arm (Spong, Hutchinson
- * and Vidyasagar, Robot Modeling and Control, section 7.3: l = 1 m, lc = 0.5 m, m = 1 kg) with a
- * slender-rod inertia m l^2 / 12 about the normal axes and a small one about the rod's. The KUKA
- * LBR iiwa 14 from Drake's iiwa14_no_collision.urdf (RobotLocomotion/drake, manipulation/models/
- * iiwa_description), typed in here apart from its preset (server/presets_robots.c).
+ * (G1..G6). The Panda's joint origins and finger joints from franka_description's franka_arm and
+ * franka_hand xacro files (frankaemika/franka_ros; equal to Franka's modified DH table); its arm
+ * links' masses, centres of mass and inertias identified by Gaz, Cognetti, Oliva, Robuffo
+ * Giordano and De Luca (IEEE RA-L 2019), and the hand's and fingers', as franka_description's
+ * robots/common/inertial.yaml lists them; its arm also as Franka's modified DH table
+ * (frankaemika.github.io), which must give the URDF's dynamics. The Panda with prismatic fingers and the gripper on an
+ * arm written for the test are trees: a link's Jacobian has columns only for the joints on its
+ * path to the ground. On them, and on every robot here, GDCA's forward accelerations must also
+ * equal the oracle's M^-1 (tau - c - G), solved densely in the test. The two-link arm is the
+ * textbook planar arm (Spong, Hutchinson and Vidyasagar, Robot Modeling and Control, section
+ * 7.3: l = 1 m, lc = 0.5 m, m = 1 kg) with a slender-rod inertia m l^2 / 12 about the normal axes
+ * and a small one about the rod's. The KUKA LBR iiwa 14 from Drake's iiwa14_no_collision.urdf
+ * (RobotLocomotion/drake, manipulation/models/iiwa_description), typed in here apart from its
+ * preset (server/presets_robots.c); so is the Panda's.
  */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -35,6 +43,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ctc.h"
 #include "job_json.h"
 #include "model.h"
 #include "oracle.h"
@@ -128,15 +137,27 @@ static xf dh_standard(double a, double alpha, double d, double theta)
     return xf_mul(rz, tx);
 }
 
-/* the chain's M (nv x nv), G and c at q, v; gravity g */
-static int oracle_dynamics(const tjoint *J, int n, const double *g, const double *q,
-                           const double *v, double *M, double *G, double *c)
+/* 1 when joint j is joint i or one of its ancestors; par[i] is joint i's parent joint (-1: the
+ * ground), or par is NULL for a serial chain (parent i - 1) */
+static int on_path(const int *par, int j, int i)
+{
+    if (par == NULL) return j <= i;
+    for (; i >= 0; i = par[i])
+        if (i == j) return 1;
+    return 0;
+}
+
+/* the tree's M (nv x nv), G and c at q, v; gravity g. Joint i moves link i from the link of
+ * joint par[i] (par NULL: a serial chain), par[i] < i. */
+static int oracle_dynamics(const tjoint *J, const int *par, int n, const double *g,
+                           const double *q, const double *v, double *M, double *G, double *c)
 {
     double z[MAXJ][3], o[MAXJ][3], Rl[MAXJ][9], pl[MAXJ][3];
     int col[MAXJ], nv = 0;
-    xf T = xf_id();
+    xf Tl[MAXJ];
     for (int i = 0; i < n; i++) {
-        xf Tj = xf_mul(T, J[i].A);
+        int p = par == NULL ? i - 1 : par[i];
+        xf Tj = xf_mul(p < 0 ? xf_id() : Tl[p], J[i].A);
         double u[3], len = sqrt(J[i].axis[0] * J[i].axis[0] + J[i].axis[1] * J[i].axis[1] +
                                 J[i].axis[2] * J[i].axis[2]);
         for (int k = 0; k < 3; k++) u[k] = J[i].axis[k] / len;
@@ -147,19 +168,19 @@ static int oracle_dynamics(const tjoint *J, int n, const double *g, const double
         if (J[i].type == T_REV) rot_axis(u, q[col[i]], mot.R);
         if (J[i].type == T_PRI)
             for (int k = 0; k < 3; k++) mot.p[k] = q[col[i]] * u[k];
-        T = xf_mul(xf_mul(Tj, mot), J[i].B);
-        memcpy(Rl[i], T.R, sizeof T.R);
-        memcpy(pl[i], T.p, sizeof T.p);
+        Tl[i] = xf_mul(xf_mul(Tj, mot), J[i].B);
+        memcpy(Rl[i], Tl[i].R, sizeof Tl[i].R);
+        memcpy(pl[i], Tl[i].p, sizeof Tl[i].p);
     }
-    /* angular velocity of link i, and of the link before joint i */
-    double w[MAXJ][3], wb[MAXJ][3], ob[MAXJ][3];
-    double wa[3] = {0, 0, 0};
+    /* angular velocity of link i, and of the link before joint i (its parent) */
+    double w[MAXJ][3] = {{0}}, wb[MAXJ][3], ob[MAXJ][3];
     for (int i = 0; i < n; i++) {
-        memcpy(wb[i], wa, sizeof wa);
-        /* velocity of the point o_i, fixed in the link before joint i */
+        int p = par == NULL ? i - 1 : par[i];
+        for (int k = 0; k < 3; k++) wb[i][k] = p < 0 ? 0 : w[p][k];
+        /* velocity of the point o_i, fixed in the link before joint i: its ancestors' joints */
         for (int k = 0; k < 3; k++) ob[i][k] = 0;
         for (int j = 0; j < i; j++) {
-            if (col[j] < 0) continue;
+            if (col[j] < 0 || !on_path(par, j, p)) continue;
             double t[3], r[3];
             if (J[j].type == T_REV) {
                 for (int k = 0; k < 3; k++) r[k] = o[i][k] - o[j][k];
@@ -169,9 +190,9 @@ static int oracle_dynamics(const tjoint *J, int n, const double *g, const double
             }
             for (int k = 0; k < 3; k++) ob[i][k] += t[k] * v[col[j]];
         }
+        memcpy(w[i], wb[i], sizeof w[i]);
         if (J[i].type == T_REV)
-            for (int k = 0; k < 3; k++) wa[k] += z[i][k] * v[col[i]];
-        memcpy(w[i], wa, sizeof wa);
+            for (int k = 0; k < 3; k++) w[i][k] += z[i][k] * v[col[i]];
     }
     memset(M, 0, (size_t)(nv * nv) * sizeof *M);
     memset(G, 0, (size_t)nv * sizeof *G);
@@ -188,7 +209,7 @@ static int oracle_dynamics(const tjoint *J, int n, const double *g, const double
         double Jv[MAXJ][3] = {{0}}, Jw[MAXJ][3] = {{0}};
         double vc[3] = {0, 0, 0};
         for (int j = 0; j <= i; j++) {
-            if (col[j] < 0) continue;
+            if (col[j] < 0 || !on_path(par, j, i)) continue;
             if (J[j].type == T_REV) {
                 double r[3];
                 for (int k = 0; k < 3; k++) r[k] = pc[k] - o[j][k];
@@ -202,7 +223,7 @@ static int oracle_dynamics(const tjoint *J, int n, const double *g, const double
         /* dJv v and dJw v */
         double av[3] = {0, 0, 0}, aw[3] = {0, 0, 0};
         for (int j = 0; j <= i; j++) {
-            if (col[j] < 0) continue;
+            if (col[j] < 0 || !on_path(par, j, i)) continue;
             double dz[3], t1[3], t2[3], r[3], dr[3];
             cross(wb[j], z[j], dz);
             if (J[j].type == T_REV) {
@@ -280,28 +301,63 @@ static void pose(int k, int nv, double *q, double *v)
     }
 }
 
-/* the job's M, c and G against the oracle's at 5 poses; returns the largest difference */
-static double compare(const job *j, const tjoint *J, int n)
+/* x = A^-1 b for a symmetric positive definite A (n x n), by Cholesky, written here */
+static void spd_solve(const double *A, int n, const double *b, double *x)
+{
+    double L[MAXJ * MAXJ] = {0}, y[MAXJ];
+    for (int i = 0; i < n; i++) {
+        for (int j = 0; j <= i; j++) {
+            double t = A[i * n + j];
+            for (int k = 0; k < j; k++) t -= L[i * n + k] * L[j * n + k];
+            if (i == j) {
+                cr_assert_gt(t, 0, "the oracle's M is not positive definite");
+                L[i * n + i] = sqrt(t);
+            } else {
+                L[i * n + j] = t / L[j * n + j];
+            }
+        }
+    }
+    for (int i = 0; i < n; i++) {
+        double t = b[i];
+        for (int k = 0; k < i; k++) t -= L[i * n + k] * y[k];
+        y[i] = t / L[i * n + i];
+    }
+    for (int i = n - 1; i >= 0; i--) {
+        double t = y[i];
+        for (int k = i + 1; k < n; k++) t -= L[k * n + i] * x[k];
+        x[i] = t / L[i * n + i];
+    }
+}
+
+/* the job's model against the oracle's tree (par as oracle_dynamics) at 5 poses: M from the
+ * composite-rigid-body oracle, c and G from Newton-Euler, each to DYN_TOL, and GDCA's forward
+ * accelerations against the oracle's qacc = M^-1 (tau - c - G), solved densely here, to DYN_TOL
+ * relative to the largest. Returns the largest difference of M, c and G; the largest relative
+ * difference of the accelerations into acc_err (may be NULL). */
+static double compare_tree(const job *j, const tjoint *J, const int *par, int n, double *acc_err)
 {
     ctc_model *m = NULL;
     char msg[256];
     cr_assert_eq(ctc_model_build(&j->spec.chain, &m, msg, sizeof msg), CTC_OK, "%s", msg);
     ctc_oracle *o = ctc_oracle_new(m);
+    ctc_data *d = ctc_data_new(m);
+    cr_assert(o != NULL && d != NULL);
     int nv = m->nv;
     double q[MAXJ], v[MAXJ], zero[MAXJ] = {0}, M[MAXJ * MAXJ], G[MAXJ], c[MAXJ];
-    double Mc[MAXJ * MAXJ], tv[MAXJ], t0[MAXJ], worst = 0;
+    double Mc[MAXJ * MAXJ], tv[MAXJ], t0[MAXJ], worst = 0, worst_acc = 0;
+    double tau[MAXJ], rhs[MAXJ], acc[MAXJ], acc_gdca[MAXJ];
     for (int k = 0; k < 5; k++) {
         pose(k, nv, q, v);
-        cr_assert_eq(oracle_dynamics(J, n, m->gravity, q, v, M, G, c), nv);
+        cr_assert_eq(oracle_dynamics(J, par, n, m->gravity, q, v, M, G, c), nv);
         ctc_oracle_mass_matrix(m, o, q, Mc);
         ctc_oracle_rnea(m, o, q, v, zero, tv);
         ctc_oracle_rnea(m, o, q, zero, zero, t0);
         for (int a = 0; a < nv; a++) {
             for (int b = 0; b < nv; b++) {
-                double d = fabs(M[a * nv + b] - Mc[a * nv + b]);
-                cr_assert_leq(d, DYN_TOL, "pose %d: M[%d][%d] %.17g vs ctcsim %.17g", k, a, b,
+                double e = fabs(M[a * nv + b] - Mc[a * nv + b]);
+                cr_assert_leq(e, DYN_TOL, "pose %d: M[%d][%d] %.17g vs ctcsim %.17g", k, a, b,
                               M[a * nv + b], Mc[a * nv + b]);
-                worst = fmax(worst, d);
+                worst = fmax(worst, e);
             }
             double dg = fabs(G[a] - t0[a]), dc = fabs(c[a] - (tv[a] - t0[a]));
             cr_assert_leq(dg, DYN_TOL, "pose %d: G[%d] %.17g vs ctcsim %.17g", k, a, G[a], t0[a]);
@@ -309,10 +365,37 @@ static double compare(const job *j, const tjoint *J, int n)
                           tv[a] - t0[a]);
             worst = fmax(worst, fmax(dg, dc));
         }
+        /* forward dynamics under driving forces of a few N m (N) */
+        for (int a = 0; a < nv; a++) {
+            tau[a] = 2 * sin(0.9 * k + 1.1 * a);
+            rhs[a] = tau[a] - c[a] - G[a];
+        }
+        spd_solve(M, nv, rhs, acc);
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        ctc_gdca_forward(m, d, tau, acc_gdca);
+        cr_assert_eq(d->singular_joint, -1, "pose %d", k);
+        double scale = 0, e = 0;
+        for (int a = 0; a < nv; a++) {
+            scale = fmax(scale, fabs(acc[a]));
+            e = fmax(e, fabs(acc[a] - acc_gdca[a]));
+        }
+        for (int a = 0; a < nv; a++)
+            cr_assert_leq(fabs(acc[a] - acc_gdca[a]), DYN_TOL * scale,
+                          "pose %d: qacc[%d] %.17g vs GDCA %.17g", k, a, acc[a], acc_gdca[a]);
+        worst_acc = fmax(worst_acc, e / scale);
     }
+    ctc_data_free(d);
     ctc_oracle_free(o);
     ctc_model_free(m);
+    if (acc_err != NULL) *acc_err = worst_acc;
     return worst;
+}
+
+/* compare_tree for a serial chain */
+static double compare(const job *j, const tjoint *J, int n)
+{
+    return compare_tree(j, J, NULL, n, NULL);
 }
 
 /* two models' M, c + G agree at 5 poses */
@@ -676,22 +759,27 @@ static const tlink frames_links[] = {
 };
 #define NFRAMES ((int)(sizeof frames_links / sizeof frames_links[0]))
 
-static void frames_urdf(buf *b, const char *robot, const tlink *L, int n)
+/* the links L[0..n-1] as a URDF document, the joints first, then the links in reverse order
+ * (reversed = 1) or in order; link i hangs from link par[i] (par NULL: i - 1). The importer
+ * orders a link's children as their <link> elements come in the document (urdf.c), so a tree's
+ * bodies follow L's order only when its links are written in order. */
+static void frames_urdf_tree(buf *b, const char *robot, const tlink *L, const int *par, int n,
+                             int reversed)
 {
     static const char *const types[] = {"revolute", "prismatic", "fixed"};
     put(b, "<robot name=\"%s\">\n", robot);
-    /* joints first, links in reverse: the document's order must not matter */
     for (int i = 1; i < n; i++) {
         const tlink *l = &L[i];
         put(b,
             "  <joint name=\"j_%s\" type=\"%s\"><parent link=\"%s\"/><child link=\"%s\"/>"
             "<origin xyz=\"%.17g %.17g %.17g\" rpy=\"%.17g %.17g %.17g\"/>"
             "<axis xyz=\"%.17g %.17g %.17g\"/></joint>\n",
-            l->name, types[l->type], L[i - 1].name, l->name, l->xyz[0], l->xyz[1], l->xyz[2],
-            l->rpy[0], l->rpy[1], l->rpy[2], l->axis[0], l->axis[1], l->axis[2]);
+            l->name, types[l->type], L[par == NULL ? i - 1 : par[i]].name, l->name, l->xyz[0],
+            l->xyz[1], l->xyz[2], l->rpy[0], l->rpy[1], l->rpy[2], l->axis[0], l->axis[1],
+            l->axis[2]);
     }
-    for (int i = n - 1; i >= 0; i--) {
-        const tlink *l = &L[i];
+    for (int k = 0; k < n; k++) {
+        const tlink *l = &L[reversed ? n - 1 - k : k];
         if (!l->inertial) {
             put(b, "  <link name=\"%s\"/>\n", l->name);
             continue;
@@ -704,6 +792,12 @@ static void frames_urdf(buf *b, const char *robot, const tlink *L, int n)
             l->mass, l->in[0], l->in[1], l->in[2], l->in[3], l->in[4], l->in[5]);
     }
     put(b, "</robot>\n");
+}
+
+/* a chain's document, its links in reverse: the document's order must not matter */
+static void frames_urdf(buf *b, const char *robot, const tlink *L, int n)
+{
+    frames_urdf_tree(b, robot, L, NULL, n, 1);
 }
 
 /* the oracle's chain from the links: joint origin as A, the inertial frame's data rotated into
@@ -749,76 +843,78 @@ Test(urdf, rpy_on_every_axis_fixed_joints_and_a_massless_link_match_jacobian_dyn
 
 /* ---- the Panda: a tree (two fingers on the hand) ---- */
 
-/* franka_description's panda_arm and hand: joint origins (xyz, rpy) and axes */
+/* franka_description's franka_arm and franka_hand xacro files: joint origins (xyz, rpy) and axes;
+ * the arm links' inertials identified by Gaz et al. (RA-L 2019) and the hand's, as
+ * franka_description's robots/common/inertial.yaml lists them (ixx iyy izz ixy ixz iyz) */
 #define PANDA_H 1.57079632679489662
 static const tlink panda_links[] = {
     {"panda_link0", 0, {0}, {0}, 0, {0}, T_FIXED, {0}, {0}, {0}},
     {"panda_link1",
      1,
-     {0, -0.03, -0.1},
+     {0.003875, 0.002081, -0.04762},
      {0},
-     4.97,
-     {0.7, 0.7, 0.01, 0, 0, 0.02},
+     4.970684,
+     {0.70337, 0.70661, 0.009117, -0.000139, 0.006772, 0.019169},
      T_REV,
      {0, 0, 0.333},
      {0, 0, 0},
      {0, 0, 1}},
     {"panda_link2",
      1,
-     {0, -0.07, 0.03},
+     {-0.003141, -0.02872, 0.003495},
      {0},
-     0.65,
-     {0.008, 0.03, 0.03, 0, 0, 0},
+     0.646926,
+     {0.007962, 0.02811, 0.025995, -0.003925, 0.010254, 0.000704},
      T_REV,
      {0, 0, 0},
      {-PANDA_H, 0, 0},
      {0, 0, 1}},
     {"panda_link3",
      1,
-     {0.04, 0.03, -0.07},
+     {0.027518, 0.039252, -0.066502},
      {0},
-     3.23,
-     {0.04, 0.04, 0.01, 0, 0, 0},
+     3.228604,
+     {0.037242, 0.036155, 0.01083, -0.004761, -0.011396, -0.012805},
      T_REV,
      {0, -0.316, 0},
      {PANDA_H, 0, 0},
      {0, 0, 1}},
     {"panda_link4",
      1,
-     {-0.05, 0.1, 0.03},
+     {-0.05317, 0.104419, 0.027454},
      {0},
-     3.59,
-     {0.03, 0.03, 0.01, 0, 0, 0},
+     3.587895,
+     {0.025853, 0.019552, 0.028323, 0.007796, -0.001332, 0.008641},
      T_REV,
      {0.0825, 0, 0},
      {PANDA_H, 0, 0},
      {0, 0, 1}},
     {"panda_link5",
      1,
-     {-0.01, 0.04, -0.11},
+     {-0.011953, 0.041065, -0.038437},
      {0},
-     1.23,
-     {0.04, 0.04, 0.005, 0, 0, 0},
+     1.225946,
+     {0.035549, 0.029474, 0.008627, -0.002117, -0.004037, 0.000229},
      T_REV,
      {-0.0825, 0.384, 0},
      {-PANDA_H, 0, 0},
      {0, 0, 1}},
     {"panda_link6",
      1,
-     {0.06, -0.01, 0.01},
+     {0.060149, -0.014117, -0.010517},
      {0},
-     1.67,
-     {0.002, 0.004, 0.005, 0, 0, 0},
+     1.666555,
+     {0.001964, 0.004354, 0.005433, 0.000109, -0.001158, 0.000341},
      T_REV,
      {0, 0, 0},
      {PANDA_H, 0, 0},
      {0, 0, 1}},
     {"panda_link7",
      1,
-     {0.01, 0.01, 0.08},
+     {0.010517, -0.004252, 0.061597},
      {0},
-     0.74,
-     {0.01, 0.01, 0.005, 0, 0, 0},
+     0.735522,
+     {0.012516, 0.010027, 0.004815, -0.000428, -0.001196, -0.000741},
      T_REV,
      {0.088, 0, 0},
      {PANDA_H, 0, 0},
@@ -826,10 +922,10 @@ static const tlink panda_links[] = {
     {"panda_link8", 0, {0}, {0}, 0, {0}, T_FIXED, {0, 0, 0.107}, {0, 0, 0}, {1, 0, 0}},
     {"panda_hand",
      1,
-     {0, 0, 0.04},
+     {-0.01, 0, 0.03},
      {0},
      0.73,
-     {0.0025, 0.0005, 0.0018, 0, 0, 0},
+     {0.001, 0.0025, 0.0017, 0, 0, 0},
      T_FIXED,
      {0, 0, 0},
      {0, 0, -0.785398163397448},
@@ -837,23 +933,50 @@ static const tlink panda_links[] = {
 };
 #define NPANDA ((int)(sizeof panda_links / sizeof panda_links[0]))
 
+/* franka_hand.xacro's fingers: both at 0.0584 m along the hand's z, sliding along +y (left) and
+ * -y (right); inertial.yaml's finger: 0.015 kg at the joint frame's origin */
+#define FINGER_Z 0.0584
+#define FINGER_MASS 0.015
+#define FINGER_IXX 2.375e-6
+#define FINGER_IZZ 7.5e-7
+
 static void panda_urdf(buf *b, const char *finger_type)
 {
     frames_urdf(b, "panda", panda_links, NPANDA);
     b->n -= strlen("</robot>\n");
     for (int f = 0; f < 2; f++) {
         put(b,
-            "  <link name=\"panda_%sfinger\"><inertial><origin xyz=\"0 %s0.01 0.02\"/>"
-            "<mass value=\"0.015\"/><inertia ixx=\"2.4e-6\" iyy=\"2.4e-6\" izz=\"7.5e-7\"/>"
+            "  <link name=\"panda_%sfinger\"><inertial><origin xyz=\"0 0 0\"/>"
+            "<mass value=\"%.17g\"/><inertia ixx=\"%.17g\" iyy=\"%.17g\" izz=\"%.17g\"/>"
             "</inertial></link>\n"
             "  <joint name=\"panda_finger_joint%d\" type=\"%s\"><parent link=\"panda_hand\"/>"
-            "<child link=\"panda_%sfinger\"/><origin xyz=\"0 0 0.0584\" rpy=\"0 0 0\"/>"
-            "<axis xyz=\"0 %s1 0\"/><limit effort=\"20\" lower=\"0.0\" upper=\"0.04\" "
-            "velocity=\"0.2\"/></joint>\n",
-            f ? "right" : "left", f ? "-" : "", f + 1, finger_type, f ? "right" : "left",
-            f ? "-" : "");
+            "<child link=\"panda_%sfinger\"/><origin xyz=\"0 0 %.17g\" rpy=\"0 0 0\"/>"
+            "<axis xyz=\"0 %s1 0\"/><limit effort=\"100\" lower=\"0.0\" upper=\"0.04\" "
+            "velocity=\"0.2\"/><dynamics damping=\"0.3\"/></joint>\n",
+            f ? "right" : "left", FINGER_MASS, FINGER_IXX, FINGER_IXX, FINGER_IZZ, f + 1,
+            finger_type, f ? "right" : "left", FINGER_Z, f ? "-" : "");
     }
     put(b, "</robot>\n");
+}
+
+/* the oracle's Panda: the arm's chain (link 1 .. the hand, J[0..NPANDA-2]) and the two fingers,
+ * each a joint of type finger_type hanging from the hand; the joints' parents into par. Returns
+ * the number of joints. */
+static int panda_oracle(int finger_type, tjoint *J, int *par)
+{
+    int n = frames_oracle(panda_links, NPANDA, J);
+    for (int i = 0; i < n; i++) par[i] = i - 1;
+    int hand = n - 1;
+    for (int f = 0; f < 2; f++) {
+        par[n] = hand;
+        J[n++] = (tjoint){.type = finger_type,
+                          .A = xf_rpy(0, 0, FINGER_Z, 0, 0, 0),
+                          .B = xf_id(),
+                          .axis = {0, f ? -1 : 1, 0},
+                          .mass = FINGER_MASS,
+                          .I = {FINGER_IXX, 0, 0, 0, FINGER_IXX, 0, 0, 0, FINGER_IZZ}};
+    }
+    return n;
 }
 
 Test(urdf, panda_with_fingers_converts_to_a_tree_of_nine_bodies)
@@ -909,30 +1032,185 @@ Test(urdf, panda_with_fingers_converts_to_a_tree_of_nine_bodies)
     free(doc);
 }
 
+Test(urdf, panda_with_prismatic_fingers_matches_jacobian_dynamics_and_gdca)
+{
+    buf b = {.n = 0};
+    panda_urdf(&b, "prismatic");
+    tjoint J[NPANDA + 2];
+    int par[NPANDA + 2];
+    int n = panda_oracle(T_PRI, J, par);
+    char *doc = urdf_job(b.s);
+    job *j = parse_ok(doc);
+    cr_assert_eq(j->spec.chain.nbodies, 9);
+    double acc = 0, worst = compare_tree(j, J, par, n, &acc);
+    cr_log_info("panda with fingers: M, c, G to %.3g; GDCA qacc to %.3g relative", worst, acc);
+    job_free(j);
+    free(doc);
+}
+
 Test(urdf, panda_arm_with_fixed_fingers_matches_jacobian_dynamics)
 {
     buf b = {.n = 0};
     panda_urdf(&b, "fixed");
     tjoint J[NPANDA + 2];
-    int n = frames_oracle(panda_links, NPANDA, J);
-    /* the fingers, fixed to the hand */
-    for (int f = 0; f < 2; f++) {
-        tjoint *t = &J[n++];
-        *t = (tjoint){.type = T_FIXED,
-                      .A = xf_rpy(0, 0, 0.0584, 0, 0, 0),
-                      .B = xf_id(),
-                      .axis = {1, 0, 0},
-                      .mass = 0.015,
-                      .com = {0, f ? -0.01 : 0.01, 0.02},
-                      .I = {2.4e-6, 0, 0, 0, 2.4e-6, 0, 0, 0, 7.5e-7}};
-    }
-    /* the oracle's chain is serial: the right finger hangs from the left one, whose frame is
-       the right finger's own (both are the hand's frame moved by the same origin) */
-    J[n - 1].A = xf_id();
+    int par[NPANDA + 2];
+    int n = panda_oracle(T_FIXED, J, par);
     char *doc = urdf_job(b.s);
     job *j = parse_ok(doc);
     cr_assert_eq(j->spec.chain.nbodies, 7);
-    compare(j, J, n);
+    compare_tree(j, J, par, n, NULL);
+    job_free(j);
+    free(doc);
+}
+
+/* Franka's modified (Craig) DH table of the Panda (frankaemika.github.io, "Denavit-Hartenberg
+ * parameters"): row i holds a_(i-1), alpha_(i-1) and d_i */
+static const double panda_dh_a[7] = {0, 0, 0, 0.0825, -0.0825, 0, 0.088};
+static const double panda_dh_d[7] = {0.333, 0, 0.316, 0, 0.384, 0, 0};
+static const double panda_dh_alpha[7] = {0, -PANDA_H, PANDA_H, PANDA_H, -PANDA_H, PANDA_H, PANDA_H};
+
+Test(urdf, panda_arm_urdf_and_frankas_modified_dh_table_give_the_same_dynamics)
+{
+    /* the arm alone (links 0..7): the URDF's link frames are the DH frames, so each row takes
+       the link's inertial as it is */
+    buf b = {.n = 0};
+    frames_urdf(&b, "panda_arm", panda_links, 8);
+    char *doc_urdf = urdf_job(b.s);
+    b.n = 0;
+    put(&b, "{\"dh\": {\"convention\": \"modified\", \"rows\": [");
+    for (int i = 0; i < 7; i++) {
+        const tlink *l = &panda_links[i + 1];
+        put(&b,
+            "%s{\"a\": %.17g, \"alpha\": %.17g, \"d\": %.17g, \"mass\": %.17g, \"com\": "
+            "[%.17g, %.17g, %.17g], \"inertia\": [[%.17g, %.17g, %.17g], [%.17g, %.17g, %.17g], "
+            "[%.17g, %.17g, %.17g]]}",
+            i ? ", " : "", panda_dh_a[i], panda_dh_alpha[i], panda_dh_d[i], l->mass, l->ixyz[0],
+            l->ixyz[1], l->ixyz[2], l->in[0], l->in[3], l->in[4], l->in[3], l->in[1], l->in[5],
+            l->in[4], l->in[5], l->in[2]);
+    }
+    put(&b, "]}}");
+    char *doc_dh = job_text(b.s);
+    job *ju = parse_ok(doc_urdf), *jd = parse_ok(doc_dh);
+    cr_assert_eq(jd->spec.chain.nbodies, 7);
+    compare_jobs(ju, jd);
+    tjoint J[8];
+    int n = frames_oracle(panda_links, 8, J);
+    compare(jd, J, n);
+    job_free(ju);
+    job_free(jd);
+    free(doc_urdf);
+    free(doc_dh);
+}
+
+/* ---- a two-finger gripper on a three-joint arm, written for this test ---- */
+
+/* the arm's links (rpy on every axis, off-axis centres of mass, products of inertia), a palm
+ * fixed to the forearm, and two fingers on the palm: the left one two revolute joints, the right
+ * one a prismatic joint and a revolute one. Listed breadth first and written in this order, the
+ * order of the converted bodies (urdf.c), so that the oracle's coordinates are ctcsim's. */
+static const tlink gripper_links[] = {
+    {"base", 0, {0}, {0}, 0, {0}, T_FIXED, {0}, {0}, {0}},
+    {"shoulder",
+     1,
+     {0.01, 0.02, 0.1},
+     {0.1, 0, 0},
+     2.0,
+     {0.02, 0.021, 0.008, 0.001, 0.0005, 0},
+     T_REV,
+     {0, 0, 0.2},
+     {0, 0, 0.3},
+     {0, 0, 1}},
+    {"upper",
+     1,
+     {0.15, 0, 0.02},
+     {0, 0.3, 0},
+     1.5,
+     {0.003, 0.012, 0.011, 0, 0, 0.0004},
+     T_REV,
+     {0, 0.05, 0.15},
+     {-1.2, 0.2, 0},
+     {0, 0, 1}},
+    {"fore",
+     1,
+     {0.12, 0.01, 0},
+     {0},
+     1.0,
+     {0.002, 0.006, 0.006, 0, 0.0002, 0},
+     T_REV,
+     {0.3, 0, 0.02},
+     {0, 0, 0.5},
+     {0, 1, 0.2}},
+    {"palm",
+     1,
+     {0.02, 0, 0.005},
+     {0.2, 0, 0},
+     0.3,
+     {0.0004, 0.0003, 0.0003, 0, 0, 0},
+     T_FIXED,
+     {0.25, 0, 0},
+     {0.4, 0.1, -0.2},
+     {1, 0, 0}},
+    {"left_base",
+     1,
+     {0.03, 0, 0.005},
+     {0},
+     0.05,
+     {1e-5, 4e-5, 4e-5, 0, 0, 0},
+     T_REV,
+     {0.04, 0.03, 0},
+     {0, 0, 0.3},
+     {0, 0, 1}},
+    {"right_base",
+     1,
+     {0.03, 0, -0.004},
+     {0},
+     0.05,
+     {1e-5, 4e-5, 4e-5, 0, 0, 0},
+     T_PRI,
+     {0.04, -0.03, 0},
+     {0, 0, -0.3},
+     {0, -1, 0}},
+    {"left_tip",
+     1,
+     {0.02, 0.003, 0},
+     {0, 0, 0.2},
+     0.03,
+     {5e-6, 1.5e-5, 1.5e-5, 0, 0, 0},
+     T_REV,
+     {0.06, 0, 0},
+     {0.2, 0, 0},
+     {0, 0, 1}},
+    {"right_tip",
+     1,
+     {0.02, -0.003, 0.001},
+     {0.1, 0, 0},
+     0.03,
+     {5e-6, 1.5e-5, 1.5e-5, 0, 0, 0},
+     T_REV,
+     {0.06, 0, 0},
+     {-0.2, 0, 0},
+     {0, 0, -1}},
+};
+#define NGRIPPER ((int)(sizeof gripper_links / sizeof gripper_links[0]))
+static const int gripper_parent[NGRIPPER] = {-1, 0, 1, 2, 3, 4, 4, 5, 6};
+
+Test(urdf, gripper_tree_matches_jacobian_dynamics_and_gdca)
+{
+    buf b = {.n = 0};
+    frames_urdf_tree(&b, "gripper", gripper_links, gripper_parent, NGRIPPER, 0);
+    tjoint J[NGRIPPER];
+    int par[NGRIPPER];
+    int n = frames_oracle(gripper_links, NGRIPPER, J);
+    /* joint i moves link i + 1 */
+    for (int i = 0; i < n; i++) par[i] = gripper_parent[i + 1] - 1;
+    char *doc = urdf_job(b.s);
+    job *j = parse_ok(doc);
+    /* shoulder, upper, fore (+ palm), the fingers' bases, the fingers' tips */
+    static const int parents[7] = {-1, 0, 1, 2, 2, 3, 4};
+    cr_assert_eq(j->spec.chain.nbodies, 7);
+    for (int k = 0; k < 7; k++) cr_assert_eq(j->spec.chain.parent[k], parents[k], "body %d", k);
+    double acc = 0, worst = compare_tree(j, J, par, n, &acc);
+    cr_log_info("gripper: M, c, G to %.3g; GDCA qacc to %.3g relative", worst, acc);
     job_free(j);
     free(doc);
 }
@@ -1201,6 +1479,19 @@ Test(urdf, iiwa14_preset_tracks_exactly_and_holds_the_published_dynamics)
     job *j = run_preset("iiwa14_min_jerk");
     cr_assert_eq(j->spec.chain.nbodies, 7);
     compare(j, J, n);
+    job_free(j);
+}
+
+Test(urdf, panda_preset_tracks_exactly_and_holds_the_published_dynamics)
+{
+    tjoint J[NPANDA + 2];
+    int par[NPANDA + 2];
+    int n = panda_oracle(T_PRI, J, par);
+    job *j = run_preset("panda_min_jerk");
+    static const int parents[9] = {-1, 0, 1, 2, 3, 4, 5, 6, 6};
+    cr_assert_eq(j->spec.chain.nbodies, 9);
+    for (int k = 0; k < 9; k++) cr_assert_eq(j->spec.chain.parent[k], parents[k], "body %d", k);
+    compare_tree(j, J, par, n, NULL);
     job_free(j);
 }
 
