@@ -220,7 +220,7 @@ static const bad_job bad_jobs[] = {
      JOB_INVALID_FIELD, "scene.form",
      "must be one of \"auto\", \"planar\", \"spatial\" (got \"flat\")"},
     {"negative mass", BODY_JOB("{'mass':-1,'com':[0,0,0],'inertia':[1,1,1],'joint':" REV "}"), NULL,
-     JOB_INVALID_FIELD, "scene.bodies[0].mass", "must be positive (got -1 kg)"},
+     JOB_INVALID_FIELD, "scene.bodies[0].mass", "must not be negative (got -1 kg)"},
     {"mass a string", BODY_JOB("{'mass':'1','com':[0,0,0],'inertia':[1,1,1],'joint':" REV "}"),
      NULL, JOB_INVALID_FIELD, "scene.bodies[0].mass", "must be a number (got a string)"},
     {"mass 1e400", BODY_JOB("{'mass':1e400,'com':[0,0,0],'inertia':[1,1,1],'joint':" REV "}"), NULL,
