@@ -564,7 +564,7 @@ static int expand_preset(const cJSON *request, cJSON **out, const preset **used,
     }
     const preset *pr = presets_find(name->valuestring);
     if (pr == NULL) {
-        char names[400];
+        char names[sizeof err->message]; /* the message's room: the list is cut where it is */
         list_presets(names, sizeof names);
         return json_error_at(err, JOB_UNKNOWN_PRESET, "preset",
                              "unknown preset \"%s\" (the presets are: %s)", name->valuestring,
