@@ -160,14 +160,15 @@ typedef struct ctc_body_spec {
  * mass, a slender rod, Puma 560's link 1 with inertia about one axis only), or, in planar form, a
  * moment about the plane normal <= CTC_INERTIA_ZERO_REL times the body's inertia trace. The
  * forward pass's handle equations need each body's inverse inertia (handles.h), so for a
- * singular body they use an augmented one: CTC_SINGULAR_AUGMENT_REL times the chain's largest
- * mass added to the mass, and the same fraction of the chain's inertia scale (the largest
- * principal moment or largest mass times squared joint-to-centre distance, 1 m^2 when every
- * distance is zero) added to each principal moment (model.h fwd_bodies, planar[k].fwd_*). The
- * composite inverse pass inverts no body (gdca_inverse.c) and stays exact, and the forward pass's
- * refinement (gdca_refine.h: at least CTC_REFINE_SINGULAR_STEPS steps) corrects the augmented
- * result against it: each step shrinks the error by about the augmentation's share of the
- * joint-space inertia, about 1e-6, so two steps reach rounding. The joint-space mass matrix M(q)
+ * singular body they use an augmented one: CTC_SINGULAR_AUGMENT_REL times the smallest inertia
+ * about its own joint among the body and its descendants, m |c|^2 + trace(I) / 2, added to each
+ * principal moment, and, to a massless body's mass, that fraction of the smallest mass among them
+ * (model.c setup_singular; fwd_bodies, planar[k].fwd_*). The composite inverse pass inverts no
+ * body (gdca_inverse.c) and stays exact, and the forward pass's refinement (gdca_refine.h: up to
+ * CTC_REFINE_SINGULAR_STEPS steps) corrects the augmented result against it: each step shrinks
+ * the error by about the augmentation's share of the joint-space inertia, 1e-6 to 1e-5, so two
+ * steps reach rounding. 1e-6 is measured (bench/NOTEBOOK.md, "Singular bodies"): 1e-4 needs
+ * three steps, 1e-8 and less lose digits to the augmented bodies' own conditioning. The joint-space mass matrix M(q)
  * must then be positive definite: with a singular body the builder factors M at a generic
  * configuration (each coordinate q_i = sin(i + 1), each quaternion normalised from
  * (1, 0.1 sin(i + 1), 0.2, 0.3)) and refuses a pivot <= CTC_MASS_MATRIX_PIVOT_REL times the

@@ -826,13 +826,13 @@ static void setup_mass_ratio(ctc_model *m)
 }
 
 /* Marks the singular bodies of form `form` (model.h "singular bodies"; n: the plane normal in
- * planar form) and makes fwd_bodies, each singular body's mass and inertia augmented by
- * CTC_SINGULAR_AUGMENT_REL of what its joint carries: its subtree's mass m_s and its subtree's
- * inertia about its joint's centre at q = 0, J_s = sum (trace(I_j) / 2 + m_j |c_j - p_k|^2),
- * where bodies' frames are parallel to the world's (model.h). A massless subtree takes the
- * chain's largest mass, and J_s = 0 takes m_s times 1 m^2. Scaling by the subtree keeps the
- * augmentation's share of the joint-space inertia near CTC_SINGULAR_AUGMENT_REL however the
- * chain's masses spread. */
+ * planar form) and makes fwd_bodies: a singular body's principal moments each get
+ * CTC_SINGULAR_AUGMENT_REL times J_ref, the smallest positive J_own(j) = m_j |c_j|^2 + tr(I_j) / 2
+ * (its inertia about its own joint's centre, c_j from the body's origin) over the body and its
+ * descendants, and a massless body's mass CTC_SINGULAR_AUGMENT_REL times the smallest positive mass
+ * among them (1 kg m^2, 1 kg when there is none: the mass-matrix check refuses such a subtree).
+ * The smallest of the subtree, not its sum, bounds the augmentation's share of the joint-space
+ * inertia on a long chain of point masses too (bench/NOTEBOOK.md, "Singular bodies"). */
 static ctc_status setup_singular(ctc_model *m, const double *moments, const double *n, char *err,
                                  size_t errlen)
 {
@@ -872,46 +872,34 @@ static ctc_status setup_singular(ctc_model *m, const double *moments, const doub
                         k, m->bodies[k].mass, moments[3 * k]);
     }
 
-    /* frame origins p and centres c at q = 0, then each subtree's m_s and J_s, tip first */
-    double *pos = malloc((size_t)nb * 8 * sizeof(double));
+    /* J_ref and m_ref of each subtree, children before parents (body_parent[k] < k) */
+    double *ref = malloc((size_t)nb * 2 * sizeof(double));
     m->fwd_bodies = malloc((size_t)nb * sizeof *m->fwd_bodies);
-    if (pos == NULL || m->fwd_bodies == NULL) {
-        free(pos);
+    if (ref == NULL || m->fwd_bodies == NULL) {
+        free(ref);
         if (m->fwd_bodies == NULL) m->fwd_bodies = m->bodies;
         return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     }
     memcpy(m->fwd_bodies, m->bodies, (size_t)nb * sizeof *m->bodies);
-    double *p = pos, *c = pos + 3 * nb, *msub = pos + 6 * nb, *jsub = pos + 7 * nb;
-    for (int k = 0; k < nb; k++) {
+    double *jref = ref, *mref = ref + nb;
+    for (int k = 0; k < nb; k++) jref[k] = mref[k] = INFINITY;
+    for (int k = nb - 1; k >= 0; k--) {
+        const ctc_body_spec *b = &m->bodies[k];
+        const double own = b->mass * ctc_v3_dot(b->com, b->com) +
+                           0.5 * (b->inertia[0] + b->inertia[4] + b->inertia[8]);
+        if (own > 0) jref[k] = fmin(jref[k], own);
+        if (b->mass > 0) mref[k] = fmin(mref[k], b->mass);
         const int par = m->body_parent[k];
-        for (int a = 0; a < 3; a++) {
-            p[3 * k + a] = (par < 0 ? 0 : p[3 * par + a]) + m->joints[k].location[a];
-            c[3 * k + a] = p[3 * k + a] + m->bodies[k].com[a];
-        }
-    }
-    for (int k = 0; k < nb; k++) {
-        msub[k] = 0, jsub[k] = 0;
-    }
-    for (int j = nb - 1; j >= 0; j--) { /* body j adds itself to each of its ancestors k */
-        const ctc_body_spec *b = &m->bodies[j];
-        for (int k = j; k >= 0; k = m->body_parent[k]) {
-            if (!m->body_singular[k]) continue;
-            double r[3];
-            ctc_v3_sub(r, &c[3 * j], &p[3 * k]);
-            msub[k] += b->mass;
-            jsub[k] +=
-                0.5 * (b->inertia[0] + b->inertia[4] + b->inertia[8]) + b->mass * ctc_v3_dot(r, r);
-        }
+        if (par >= 0) jref[par] = fmin(jref[par], jref[k]), mref[par] = fmin(mref[par], mref[k]);
     }
     for (int k = 0; k < nb; k++) {
         if (!m->body_singular[k]) continue;
-        double ms = msub[k] > 0 ? msub[k] : (mhi > 0 ? mhi : 1.0);
-        double js = jsub[k] > 0 ? jsub[k] : ms * 1.0;
         ctc_body_spec *fb = &m->fwd_bodies[k];
-        fb->mass += CTC_SINGULAR_AUGMENT_REL * ms;
+        const double js = isfinite(jref[k]) ? jref[k] : 1.0, ms = isfinite(mref[k]) ? mref[k] : 1.0;
+        if (!(fb->mass > CTC_MASS_ZERO_REL * mhi)) fb->mass += CTC_SINGULAR_AUGMENT_REL * ms;
         for (int a = 0; a < 3; a++) fb->inertia[4 * a] += CTC_SINGULAR_AUGMENT_REL * js;
     }
-    free(pos);
+    free(ref);
     return CTC_OK;
 }
 

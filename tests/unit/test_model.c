@@ -108,13 +108,13 @@ Test(model, marks_singular_bodies_and_the_forward_pass_augmented_inertias)
     ctc_model *m = build(&c->spec);
     cr_assert_eq(m->nsingular, 3);
     for (int k = 0; k < 3; k++) {
-        /* rod k's subtree: 3 - k rods of 1 kg, J_s = sum of (1/12 + 1/4 + (i - k)^2 + (i - k))
-           over the rods i >= k (trace / 2 = 1/12, centre at i - k + 1/2 m below joint k) */
-        double js = 0;
-        for (int i = k; i < 3; i++) js += 1.0 / 12 + (i - k + 0.5) * (i - k + 0.5);
+        /* each rod's inertia about its own joint: 1 kg (0.5 m)^2 + trace / 2 = 1/4 + 1/12, the
+           smallest in every subtree; the masses are not singular and stay */
         cr_assert(m->body_singular[k]);
-        cr_assert_float_eq(m->fwd_bodies[k].mass, 1.0 + CTC_SINGULAR_AUGMENT_REL * (3 - k), 1e-15);
-        cr_assert_float_eq(m->fwd_bodies[k].inertia[4], CTC_SINGULAR_AUGMENT_REL * js, 1e-18);
+        cr_assert_eq(m->fwd_bodies[k].mass, 1.0);
+        cr_assert_float_eq(m->fwd_bodies[k].inertia[4], CTC_SINGULAR_AUGMENT_REL / 3.0, 1e-20);
+        cr_assert_float_eq(m->fwd_bodies[k].inertia[0], 1.0 / 12 + CTC_SINGULAR_AUGMENT_REL / 3.0,
+                           1e-15);
         cr_assert_eq(m->bodies[k].mass, 1.0, "the model's own bodies stay as given");
     }
     ctc_model_free(m);
