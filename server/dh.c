@@ -104,11 +104,9 @@ static int parse_row(parser *p, const cJSON *v, int i, dh_row *r, char *name_buf
         json_member_number(p, v, path, "mass", REQUIRED, 0, &r->mass) != 0) {
         return -1;
     }
-    if (!(r->mass > 0)) {
+    if (r->mass < 0) { /* 0: a massless link (Puma 560's first); the builder checks M(q) */
         return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, "mass"),
-                             "must be positive (got %g kg; massless bodies and point masses are "
-                             "not supported yet)",
-                             r->mass);
+                             "must not be negative (got %g kg)", r->mass);
     }
     if (json_member_vec3(p, v, path, "com", REQUIRED, NULL, r->com) != 0) return -1;
     const cJSON *inertia = json_required_member(p, v, path, "inertia", "");

@@ -22,8 +22,10 @@
  * at offset o_k = o_P + R0_P p_k from the body's origin, its centre of mass at o_k + R0_k c_k.
  * A body's mass properties sum its links' about the body's origin, m, h = sum m c and
  * J = sum (I_c + m ([c]x^T [c]x)), and go back to the centre of mass: c = h / m,
- * I = J - m [c]x^T [c]x (parallel axis theorem). The root and its fixed descendants are the
- * ground (their masses play no part).
+ * I = J - m [c]x^T [c]x (parallel axis theorem); a massless body (m = 0) keeps J about its
+ * origin, c = 0. The root and its fixed descendants are the ground (their masses play no part).
+ * Moving bodies without mass go to the model builder, which accepts them where the joint-space
+ * mass matrix stays positive definite (model.h "singular bodies").
  */
 #include "import.h"
 
@@ -102,8 +104,8 @@ typedef struct body_acc {
  * an allocation fails */
 static cJSON *body_json(const body_acc *b, import_link *l)
 {
-    double c[3], I[9];
-    for (int i = 0; i < 3; i++) c[i] = b->h[i] / b->m;
+    double c[3], I[9]; /* a massless body: its lumped inertia J about its origin */
+    for (int i = 0; i < 3; i++) c[i] = b->m > 0 ? b->h[i] / b->m : 0;
     memcpy(I, b->J, sizeof I);
     add_point_inertia(I, -b->m, c);
     for (int i = 0; i < 3; i++) /* exactly symmetric */
@@ -181,7 +183,7 @@ cJSON *import_bodies(import_link *links, int n, char *msg, size_t msg_len)
                 off[k][0] = off[k][1] = off[k][2] = 0;
             }
         }
-        if (!l->has_inertial || group[k] < 0 || l->mass == 0) continue;
+        if (!l->has_inertial || group[k] < 0) continue;
         body_acc *b = &bodies[group[k]];
         double c[3], RI[9], I[9], Rt[9];
         import_mat_vec(R0[k], l->com, c);
@@ -200,22 +202,9 @@ cJSON *import_bodies(import_link *links, int n, char *msg, size_t msg_len)
         goto done;
     }
 
-    /* every moving body needs a mass */
-    for (int b = 0; b < nb; b++) {
-        const import_link *l = &links[bodies[b].link];
-        if (bodies[b].m > 0) continue;
-        char where[200];
-        if (l->line > 0)
-            snprintf(where, sizeof where, "line %d: <link name=\"%.100s\">", l->line, l->name);
-        else
-            snprintf(where, sizeof where, "link \"%.100s\"", l->name);
-        snprintf(msg, msg_len,
-                 "%s: moves (joint \"%s\") but has no mass%s: massless bodies and point masses "
-                 "are not supported yet; give it an inertial, or fix it to a link that has one",
-                 where, l->joint_name ? l->joint_name : "",
-                 l->has_inertial ? "" : " (no <inertial>)");
-        goto done;
-    }
+    /* a moving body without mass (a link without <inertial>, a massless frame between two
+       joints) is a singular body: the model builder accepts it where the joint-space mass
+       matrix stays positive definite and names it where not (model.h "singular bodies") */
 
     out = cJSON_CreateArray();
     for (int b = 0; out != NULL && b < nb; b++) {

@@ -46,8 +46,8 @@ typedef struct import_link {
  * cJSON prints and reads back (within DBL_EPSILON relative of the computed one), so a printed job
  * parses to the same spec. Returns the array (the
  * caller owns it; the links' extra objects are moved into it or freed), or NULL with msg filled
- * ("line 40: <link name=\"wrist\">: ..."; NO_MEMORY: "out of memory") when a moving body has no
- * mass (massless bodies and point masses are not supported yet) or nothing moves. */
+ * ("out of memory", or "no joint moves (every joint is fixed)"). A moving body without mass is
+ * converted (mass 0, its lumped inertia about its origin); the model builder decides on it. */
 cJSON *import_bodies(import_link *links, int n, char *msg, size_t msg_len);
 
 /* Rotation matrices, row-major: R = Rz(yaw) Ry(pitch) Rx(roll) (URDF's rpy, fixed axes x, y, z). */

@@ -645,8 +645,8 @@ static int expand_preset(const cJSON *request, cJSON **out, const preset **used,
     }
     const preset *pr = presets_find(name->valuestring);
     if (pr == NULL) {
-        char
-            names[sizeof err->message - 64]; /* within err->message with the rest of the sentence */
+        /* the list within err->message, with room for the rest of the sentence */
+        char names[sizeof err->message - 64];
         list_presets(names, sizeof names);
         return json_error_at(err, JOB_UNKNOWN_PRESET, "preset",
                              "unknown preset \"%s\" (the presets are: %s)", name->valuestring,

@@ -23,7 +23,8 @@
  *                      it (a whole number), a body's "name" (unique among the bodies), or -1 /
  *                      "ground" for the ground; default the ground for the first body and the
  *                      previous body after it (a chain). Written as the index (-1: the ground)
- *           "mass"     kg > 0, required (a shape needs it too)
+ *           "mass"     kg >= 0, required (a shape needs it > 0); 0 or a zero inertia: a
+ *                      singular body, model.h (refused where M(q) is singular)
  *           "com"      [x, y, z] m, centre of mass in the body frame   } both, or a "shape"
  *           "inertia"  3x3 array of rows, or [Ixx, Iyy, Izz] (principal   } instead
  *                      axes along the body axes), kg m^2 about the CoM  }
@@ -51,7 +52,7 @@
  *       "dh"        instead of "bodies": a Denavit-Hartenberg table (dh.c), converted the same
  *                   way: {"convention": "standard"|"modified", "rows": [1..JOB_MAX_BODIES rows
  *                   {"name" (default "linkI"), "type": "revolute" (default)|"prismatic", "a" m,
- *                   "alpha" rad, "d" m, "theta" rad (default 0), "mass" kg > 0, "com" [x,y,z] m
+ *                   "alpha" rad, "d" m, "theta" rad (default 0), "mass" kg >= 0, "com" [x,y,z] m
  *                   and "inertia" (as a body's) in the row's DH frame}]}; q = 0 is the pose with
  *                   each row's theta (or d), so q is the DH joint variable minus it
  *                   With "urdf" or "dh" the default gravity is [0, 0, -9.81] (their z is up).

@@ -415,9 +415,9 @@ static int parse_body(parser *p, const cJSON *bodies, const cJSON *v, int k, cJS
 
     /* mass */
     if (json_member_number(p, v, path, "mass", REQUIRED, 0, &body->mass) != 0) return -1;
-    if (!(body->mass > 0)) {
+    if (body->mass < 0) { /* 0: a massless body; the model builder checks the mass matrix */
         return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, "mass"),
-                             "must be positive (got %g kg)", body->mass);
+                             "must not be negative (got %g kg)", body->mass);
     }
     json_put_number(p, out, "mass", body->mass);
 

@@ -22,8 +22,9 @@
  * declaration (no entities are expanded), a root element other than <robot>, floating and planar
  * joints, <mimic>, unknown joint types, a joint whose parent or child is not a link, a link with
  * two parent joints, a parent/child cycle, two roots, repeated names, a missing required element
- * or attribute, numbers that do not parse or are not finite, a negative mass, a zero axis, and a
- * moving link without mass (massless bodies and point masses are not supported yet).
+ * or attribute, numbers that do not parse or are not finite, a negative mass, a zero axis. A
+ * moving link without mass becomes a massless body, which the model builder accepts where the
+ * joint-space mass matrix stays positive definite (model.h "singular bodies").
  *
  * Thread safety: any number of calls may run at once (libxml2 is initialised once, thread-safe).
  */

@@ -144,25 +144,28 @@ static inline void gdca_rake_light(const int dim, int type, int nc, const double
     }
 }
 
-/* body k's M (dim x dim) and b (dim) about its centre of mass (handles.h) */
+/* body k's M (dim x dim) and b (dim) about its centre of mass (handles.h): M that of the forward
+ * bodies (model.h fwd_bodies, a singular body's augmented), b the body's own */
 static inline void gdca_rake_body(const ctc_model *m, const ctc_data *d, int k, const int dim,
                                   double *mm, double *b)
 {
     for (int i = 0; i < dim * dim; i++) mm[i] = 0;
     if (dim == 3) {
         const ctc_planar_body *p = &m->planar[k];
-        mm[0] = p->inertia, mm[4] = mm[8] = p->mass;
+        mm[0] = p->fwd_inertia, mm[4] = mm[8] = p->fwd_mass;
         b[0] = 0, b[1] = p->mass * m->plane_gravity[0], b[2] = p->mass * m->plane_gravity[1];
         return;
     }
     const ctc_body_spec *body = &m->bodies[k];
     const double *w = d->omega + 3 * k;
     double iw[9], iww[3];
-    ctc_m3_rotate_sym(iw, d->xrot + 9 * k, body->inertia);
+    const ctc_body_spec *fwd = &m->fwd_bodies[k];
+    ctc_m3_rotate_sym(iw, d->xrot + 9 * k, fwd->inertia);
     for (int i = 0; i < 3; i++) {
         for (int j = 0; j < 3; j++) mm[6 * i + j] = iw[3 * i + j];
-        mm[6 * (3 + i) + 3 + i] = body->mass;
+        mm[6 * (3 + i) + 3 + i] = fwd->mass;
     }
+    if (fwd != body) ctc_m3_rotate_sym(iw, d->xrot + 9 * k, body->inertia);
     ctc_m3_mulv(iww, iw, w);
     ctc_v3_cross(b, iww, w); /* -w x I w */
     ctc_v3_scale(b + 3, m->gravity, body->mass);

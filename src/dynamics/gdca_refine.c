@@ -15,6 +15,10 @@
 
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d)
 {
+    if (m->nsingular > 0) { /* the refinement is what makes the augmented pass exact */
+        return d->opt.fwd_refine > CTC_REFINE_SINGULAR_STEPS ? d->opt.fwd_refine
+                                                             : CTC_REFINE_SINGULAR_STEPS;
+    }
     if (d->opt.fwd_refine >= 0) return d->opt.fwd_refine;
     if (m->mass_ratio >= CTC_REFINE_MASS_RATIO) return CTC_REFINE_MAX_STEPS;
     return m->nbodies >= CTC_REFINE_MIN_BODIES ? 1 : 0;

@@ -40,6 +40,12 @@
 #define CTC_REFINE_CONVERGED 1e-8
 #define CTC_REFINE_STALL 10.0
 
+/* A model with a singular body (model.h "singular bodies") computes its forward handle equations
+ * with augmented inertias, and the refinement removes that error: it gets up to
+ * CTC_REFINE_SINGULAR_STEPS steps, or d->opt.fwd_refine if that is more (each shrinks the error
+ * by about the augmentation's share, 1e-6 to 1e-5; the stopping rules above end it after two). */
+#define CTC_REFINE_SINGULAR_STEPS 6
+
 /* The most refinement steps ctc_gdca_forward makes on model m with settings d: d->opt.fwd_refine
  * when >= 0, else by the rule above CTC_REFINE_MAX_STEPS (mass ratio), 1 (length) or 0. */
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d);

@@ -6,6 +6,9 @@
  *     h_i3 = ( a0 ;  a0 x r_i + g + w x (w x r_i) ),     a0 = I^-1 (-w x I w)
  * Planar: h_ij = [1/J, -y_j/J, x_j/J; -y_i/J, y_i y_j/J + 1/m, -y_i x_j/J;
  *                 x_i/J, -x_i y_j/J, x_i x_j/J + 1/m],   h_i3 = (0, g_x - w^2 x_i, g_y - w^2 y_i).
+ * M^-1 is that of the model's forward bodies (model.h fwd_bodies, planar fwd_mass, fwd_inertia):
+ * a singular body's augmented inertia, whose error the forward pass's refinement removes
+ * (gdca_refine.h); the bias b is the body's own.
  */
 #include "handles.h"
 
@@ -49,7 +52,7 @@ static void handles_planar(const ctc_model *m, ctc_data *d)
         ctc_v3_set(hr + 3, r2[0], r2[1], 0);
 
         double *h = d->hbody + (size_t)k * d->hsize;
-        double ij = 1.0 / b->inertia, im = 1.0 / b->mass, w2 = d->omega[3 * k + 2];
+        double ij = 1.0 / b->fwd_inertia, im = 1.0 / b->fwd_mass, w2 = d->omega[3 * k + 2];
         w2 *= w2;
         planar_block(h, r1, r1, ij, im);      /* h11 */
         planar_block(h + 9, r1, r2, ij, im);  /* h12 */
@@ -98,7 +101,7 @@ static void handles_spatial(const ctc_model *m, ctc_data *d)
             }
         }
         double *h = d->hbody + (size_t)k * d->hsize;
-        double im = 1.0 / body->mass;
+        double im = 1.0 / m->fwd_bodies[k].mass;
         spatial_block(h, iw, g1, g1, r1, im);      /* h11 */
         spatial_block(h + 36, iw, g1, g2, r2, im); /* h12 */
         spatial_block(h + 72, iw, g2, g2, r2, im); /* h22 */

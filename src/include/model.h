@@ -149,10 +149,41 @@ typedef enum ctc_form {
 } ctc_form;
 
 typedef struct ctc_body_spec {
-    double mass;       /* kg, > 0 */
+    double mass;       /* kg, >= 0 (0: a massless body, a frame or a lumped rotor inertia) */
     double com[3];     /* m, centre of mass in the body frame */
-    double inertia[9]; /* kg m^2, about the centre of mass, body-frame axes, row-major, symmetric */
+    double inertia[9]; /* kg m^2, about the centre of mass, body-frame axes, row-major, symmetric,
+                          positive semidefinite (0: a point mass); with mass > 0 its principal
+                          moments satisfy the triangle inequality, as any distribution of mass's
+                          do; a massless body's inertia is a lumped one and need not */
 } ctc_body_spec;
+
+/* ---- singular bodies and the model check's thresholds ----
+ *
+ * A body is singular when its spatial (planar: 3x3) inertia about its centre of mass has no
+ * inverse: mass <= CTC_MASS_ZERO_REL times the chain's largest body mass (a massless body), or,
+ * in spatial form, a principal moment <= CTC_INERTIA_ZERO_REL times the body's largest (a point
+ * mass, a slender rod, Puma 560's link 1 with inertia about one axis only), or, in planar form, a
+ * moment about the plane normal <= CTC_INERTIA_ZERO_REL times the body's inertia trace. The
+ * forward pass's handle equations need each body's inverse inertia (handles.h), so for a
+ * singular body they use an augmented one: CTC_SINGULAR_AUGMENT_REL times the smallest inertia
+ * about its own joint among the body and its descendants, m |c|^2 + trace(I) / 2, added to each
+ * principal moment, and, to a massless body's mass, that fraction of the smallest mass among them
+ * (model.c setup_singular; fwd_bodies, planar[k].fwd_*). The composite inverse pass inverts no
+ * body (gdca_inverse.c) and stays exact, and the forward pass's refinement (gdca_refine.h: up to
+ * CTC_REFINE_SINGULAR_STEPS steps) corrects the augmented result against it: each step shrinks
+ * the error by about the augmentation's share of the joint-space inertia, 1e-6 to 1e-5, so two
+ * steps reach rounding. 1e-6 is measured (bench/NOTEBOOK.md, "Singular bodies"): 1e-4 needs
+ * three steps, 1e-8 and less lose digits to the augmented bodies' own conditioning. The joint-space mass matrix M(q)
+ * must then be positive definite: with a singular body the builder factors M at a generic
+ * configuration (each coordinate q_i = sin(i + 1), each quaternion normalised from
+ * (1, 0.1 sin(i + 1), 0.2, 0.3)) and refuses a pivot <= CTC_MASS_MATRIX_PIVOT_REL times the
+ * largest diagonal entry, naming the joint's body: a massless tip on a moving joint, a point
+ * mass on a revolute axis through it. Loop models refuse singular bodies (their passes invert
+ * each body's mobility). Models without a singular body skip all of this and are unchanged. */
+#define CTC_MASS_ZERO_REL 1e-12
+#define CTC_INERTIA_ZERO_REL 1e-12
+#define CTC_SINGULAR_AUGMENT_REL 1e-6
+#define CTC_MASS_MATRIX_PIVOT_REL 1e-10
 
 typedef struct ctc_joint_spec {
     ctc_joint_type type;
@@ -213,12 +244,14 @@ typedef struct ctc_tree_node {
 
 /* Planar data of one body and its inboard joint, in the plane's coordinates (form PLANAR only). */
 typedef struct ctc_planar_body {
-    double mass;    /* kg */
-    double inertia; /* kg m^2, about the centre of mass and the plane normal */
-    double com[2];  /* m, centre of mass in the body frame */
-    double loc[2];  /* m, inboard joint centre in the parent frame */
-    double axis[2]; /* prismatic: unit axis in the parent frame */
-    double sign;    /* revolute: +1 if the axis is along +n, -1 if along -n */
+    double mass;        /* kg */
+    double inertia;     /* kg m^2, about the centre of mass and the plane normal */
+    double fwd_mass;    /* kg, the forward pass's handle equations': mass, augmented when the */
+    double fwd_inertia; /* kg m^2  body is singular (see "singular bodies"); likewise inertia */
+    double com[2];      /* m, centre of mass in the body frame */
+    double loc[2];      /* m, inboard joint centre in the parent frame */
+    double axis[2];     /* prismatic: unit axis in the parent frame */
+    double sign;        /* revolute: +1 if the axis is along +n, -1 if along -n */
 } ctc_planar_body;
 
 typedef struct ctc_model {
@@ -240,9 +273,15 @@ typedef struct ctc_model {
     int *jnt_nq;            /* (n) */
     int *jnt_nv;            /* (n) */
 
-    double mass_ratio;        /* the larger of max/min body mass and max/min inertia trace over
-                                 the chain (>= 1) */
-    double *body_inertia_inv; /* (n x 9) inverse inertia about the CoM, body frame (spatial) */
+    double mass_ratio;            /* the larger of max/min body mass and max/min inertia trace over
+                                     the chain's bodies with mass (>= 1) */
+    int nsingular;                /* the singular bodies (see "singular bodies" above) */
+    unsigned char *body_singular; /* (n) 1: body k is singular; NULL when nsingular = 0 */
+    ctc_body_spec *fwd_bodies;    /* (n) the bodies of the forward pass's handle equations:
+                                     `bodies` itself (the same pointer) when nsingular = 0, else a
+                                     copy with each singular body's mass and inertia augmented */
+    double *body_inertia_inv; /* (n x 9) inverse of fwd_bodies' inertia about the CoM, body frame
+                                 (spatial) */
     double *jnt_perp;         /* (n x 6) two unit vectors normal to joint k's axis, parent frame */
     ctc_planar_body *planar;  /* (n) form PLANAR, else NULL */
 
@@ -311,8 +350,8 @@ typedef struct ctc_model {
 
 /* Builds and validates a model from spec. On success returns CTC_OK and *out owns a new model
  * (free with ctc_model_free); otherwise *out is NULL and err (errlen bytes, may be NULL) says
- * which item is wrong and why, e.g. "body 2: mass must be positive (got -1)". The spec is copied;
- * the caller keeps ownership of it. */
+ * which item is wrong and why, e.g. "body 2: mass must not be negative (got -1 kg)". The spec is
+ * copied; the caller keeps ownership of it. */
 ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *err, size_t errlen);
 
 /* Frees a model; NULL is allowed. No ctc_data made from it may be used afterwards. */

@@ -12,8 +12,9 @@
 #include "model.h"
 
 /* Uniform slender rod from the body origin to the point end (body frame): centre of mass end/2,
- * inertia (m L^2 / 12)(1 - e e^T) with e = end / L. It has no inertia about its own axis, so it
- * suits planar scenes only (ctc_model_build rejects it in spatial form). */
+ * inertia (m L^2 / 12)(1 - e e^T) with e = end / L. It has no inertia about its own axis: in
+ * spatial form it is a singular body (model.h), refused where a joint spins it about that axis
+ * alone. */
 ctc_status ctc_shape_rod(double mass, const double end[3], ctc_body_spec *out, char *err,
                          size_t errlen);
 

@@ -1,11 +1,13 @@
 /*
  * model.c - building, validating and describing a kinematic tree (model.h).
  *
- * The builder copies the spec, checks every number (finite, masses positive, inertias symmetric,
- * positive semidefinite and satisfying the triangle inequality of principal moments, axes of
- * non-zero length), decides the form (planar when every joint moves in one plane and gravity lies
- * in it, DESIGN.md section 3; per joint, so a tree needs nothing more), precomputes what the
- * kinematics and handle passes need per body, records the topology (each body's parent,
+ * The builder copies the spec, checks every number (finite, masses not negative, inertias
+ * symmetric, positive semidefinite and, on bodies with mass, satisfying the triangle inequality of
+ * principal moments, axes of non-zero length), decides the form (planar when every joint moves in
+ * one plane and gravity lies in it, DESIGN.md section 3; per joint, so a tree needs nothing more),
+ * precomputes what the kinematics and handle passes need per body (a singular body's augmented
+ * inertia, model.h "singular bodies", and then the mass matrix's check at a generic
+ * configuration), records the topology (each body's parent,
  * lambda(k), from the spec's parent array, and its children), and lays out the assembly plan of
  * GDCA, nodes stored by height so that the nodes of one height are independent of each other.
  * A chain's plan is the balanced binary tree (paper section 3, Fig. 3): bodies [first, last]
@@ -24,10 +26,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "oracle.h"
 #include "spatial.h"
 
-/* relative tolerance under which a principal moment counts as zero, and axes as (anti)parallel */
-#define INERTIA_ZERO_REL 1e-12
+/* relative tolerance under which axes count as (anti)parallel */
 #define AXIS_ALIGN_TOL 1e-12
 
 const char *ctc_form_name(ctc_form f)
@@ -77,9 +79,9 @@ static ctc_status check_body(const ctc_body_spec *b, int k, double eig[3], char 
     if (!isfinite(b->mass)) {
         return ctc_fail(CTC_EINVAL, err, errlen, "body %d: mass is not finite", k);
     }
-    if (!(b->mass > 0)) {
-        return ctc_fail(CTC_EINVAL, err, errlen, "body %d: mass must be positive (got %g kg)", k,
-                        b->mass);
+    if (b->mass < 0) {
+        return ctc_fail(CTC_EINVAL, err, errlen, "body %d: mass must not be negative (got %g kg)",
+                        k, b->mass);
     }
     if (!all_finite(b->com, 3, &bad)) {
         return ctc_fail(CTC_EINVAL, err, errlen, "body %d: com[%d] is not finite", k, bad);
@@ -104,21 +106,16 @@ static ctc_status check_body(const ctc_body_spec *b, int k, double eig[3], char 
         }
     }
 
-    /* principal moments: none negative, not all zero, triangle inequality */
+    /* principal moments: none negative; with mass, the triangle inequality (zero moments are a
+       singular body's, model.h) */
     ctc_sym3_eigenvalues(in, eig);
-    double tol = INERTIA_ZERO_REL * eig[2];
-    if (!(eig[2] > 0)) {
-        return ctc_fail(CTC_EINVAL, err, errlen,
-                        "body %d: inertia is zero; a body needs a positive moment of inertia "
-                        "(give a radius, length or explicit inertia)",
-                        k);
-    }
+    double tol = CTC_INERTIA_ZERO_REL * eig[2];
     if (eig[0] < -tol) {
         return ctc_fail(CTC_EINVAL, err, errlen,
                         "body %d: inertia is not positive definite (principal moment %g kg m^2)", k,
                         eig[0]);
     }
-    if (eig[0] + eig[1] < eig[2] * (1.0 - 1e-9)) {
+    if (b->mass > 0 && eig[0] + eig[1] < eig[2] * (1.0 - 1e-9)) {
         return ctc_fail(CTC_EINVAL, err, errlen,
                         "body %d: inertia violates the triangle inequality (principal moments "
                         "%g + %g < %g kg m^2)",
@@ -252,13 +249,12 @@ static ctc_status setup_planar(ctc_model *m, const double n[3], char *err, size_
         ctc_planar_body *p = &m->planar[k];
         double in[3];
         ctc_m3_mulv(in, b->inertia, n);
+        const ctc_body_spec *fb = &m->fwd_bodies[k];
         p->mass = b->mass;
         p->inertia = ctc_v3_dot(n, in);
-        if (!(p->inertia >
-              INERTIA_ZERO_REL * fabs(b->inertia[0] + b->inertia[4] + b->inertia[8]))) {
-            return ctc_fail(CTC_EINVAL, err, errlen,
-                            "body %d: no moment of inertia about the plane normal", k);
-        }
+        ctc_m3_mulv(in, fb->inertia, n);
+        p->fwd_mass = fb->mass;
+        p->fwd_inertia = ctc_v3_dot(n, in);
         p->com[0] = ctc_v3_dot(b->com, e1);
         p->com[1] = ctc_v3_dot(b->com, e2);
         p->loc[0] = ctc_v3_dot(j->location, e1);
@@ -870,26 +866,149 @@ static void setup_mass_ratio(ctc_model *m)
     for (int k = 0; k < m->nbodies; k++) {
         const ctc_body_spec *b = &m->bodies[k];
         double tr = b->inertia[0] + b->inertia[4] + b->inertia[8];
-        mlo = fmin(mlo, b->mass), mhi = fmax(mhi, b->mass);
+        if (b->mass > 0) mlo = fmin(mlo, b->mass), mhi = fmax(mhi, b->mass);
         if (tr > 0) tlo = fmin(tlo, tr), thi = fmax(thi, tr);
     }
-    m->mass_ratio = fmax(mhi / mlo, thi > 0 ? thi / tlo : 1.0);
+    m->mass_ratio = fmax(mhi > 0 ? mhi / mlo : 1.0, thi > 0 ? thi / tlo : 1.0);
 }
 
-/* spatial form: every body's 6x6 inertia must be invertible; its rotational block's inverse */
-static ctc_status setup_spatial(ctc_model *m, const double *moments, char *err, size_t errlen)
+/* Marks the singular bodies of form `form` (model.h "singular bodies"; n: the plane normal in
+ * planar form) and makes fwd_bodies: a singular body's principal moments each get
+ * CTC_SINGULAR_AUGMENT_REL times J_ref, the smallest positive J_own(j) = m_j |c_j|^2 + tr(I_j) / 2
+ * (its inertia about its own joint's centre, c_j from the body's origin) over the body and its
+ * descendants, and a massless body's mass CTC_SINGULAR_AUGMENT_REL times the smallest positive mass
+ * among them (1 kg m^2, 1 kg when there is none: the mass-matrix check refuses such a subtree).
+ * The smallest of the subtree, not its sum, bounds the augmentation's share of the joint-space
+ * inertia on a long chain of point masses too (bench/NOTEBOOK.md, "Singular bodies"). */
+static ctc_status setup_singular(ctc_model *m, const double *moments, const double *n, char *err,
+                                 size_t errlen)
+{
+    const int nb = m->nbodies;
+    double mhi = 0;
+    for (int k = 0; k < nb; k++) mhi = fmax(mhi, m->bodies[k].mass);
+    m->nsingular = 0;
+    m->fwd_bodies = m->bodies;
+    for (int k = 0; k < nb; k++) {
+        const ctc_body_spec *b = &m->bodies[k];
+        const double *e = &moments[3 * k];
+        int sing = !(b->mass > CTC_MASS_ZERO_REL * mhi);
+        if (n == NULL) {
+            sing |= e[0] <= CTC_INERTIA_ZERO_REL * e[2];
+        } else {
+            double in[3];
+            ctc_m3_mulv(in, b->inertia, n);
+            sing |= !(ctc_v3_dot(n, in) >
+                      CTC_INERTIA_ZERO_REL * fabs(b->inertia[0] + b->inertia[4] + b->inertia[8]));
+        }
+        if (!sing) continue;
+        if (m->body_singular == NULL) {
+            m->body_singular = calloc((size_t)nb, 1);
+            if (m->body_singular == NULL) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+        }
+        m->body_singular[k] = 1;
+        m->nsingular++;
+    }
+    if (m->nsingular == 0) return CTC_OK;
+    if (m->has_loop) {
+        int k = 0;
+        while (!m->body_singular[k]) k++;
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "body %d: a massless or point-mass body (mass %g kg, smallest principal "
+                        "moment %g kg m^2) is not supported in a loop model: give it mass and "
+                        "inertia about every axis",
+                        k, m->bodies[k].mass, moments[3 * k]);
+    }
+
+    /* J_ref and m_ref of each subtree, children before parents (body_parent[k] < k) */
+    double *ref = malloc((size_t)nb * 2 * sizeof(double));
+    m->fwd_bodies = malloc((size_t)nb * sizeof *m->fwd_bodies);
+    if (ref == NULL || m->fwd_bodies == NULL) {
+        free(ref);
+        if (m->fwd_bodies == NULL) m->fwd_bodies = m->bodies;
+        return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    }
+    memcpy(m->fwd_bodies, m->bodies, (size_t)nb * sizeof *m->bodies);
+    double *jref = ref, *mref = ref + nb;
+    for (int k = 0; k < nb; k++) jref[k] = mref[k] = INFINITY;
+    for (int k = nb - 1; k >= 0; k--) {
+        const ctc_body_spec *b = &m->bodies[k];
+        const double own = b->mass * ctc_v3_dot(b->com, b->com) +
+                           0.5 * (b->inertia[0] + b->inertia[4] + b->inertia[8]);
+        if (own > 0) jref[k] = fmin(jref[k], own);
+        if (b->mass > 0) mref[k] = fmin(mref[k], b->mass);
+        const int par = m->body_parent[k];
+        if (par >= 0) jref[par] = fmin(jref[par], jref[k]), mref[par] = fmin(mref[par], mref[k]);
+    }
+    for (int k = 0; k < nb; k++) {
+        if (!m->body_singular[k]) continue;
+        ctc_body_spec *fb = &m->fwd_bodies[k];
+        const double js = isfinite(jref[k]) ? jref[k] : 1.0, ms = isfinite(mref[k]) ? mref[k] : 1.0;
+        if (!(fb->mass > CTC_MASS_ZERO_REL * mhi)) fb->mass += CTC_SINGULAR_AUGMENT_REL * ms;
+        for (int a = 0; a < 3; a++) fb->inertia[4 * a] += CTC_SINGULAR_AUGMENT_REL * js;
+    }
+    free(ref);
+    return CTC_OK;
+}
+
+/* A model with a singular body: refuses it unless the joint-space mass matrix is positive
+ * definite at a generic configuration (model.h "singular bodies"), by an LDL^T factorisation in
+ * coordinate order: a pivot at or under CTC_MASS_MATRIX_PIVOT_REL times the largest diagonal
+ * entry means the coordinate moves no mass or inertia that the coordinates before it do not. */
+static ctc_status check_mass_matrix(const ctc_model *m, char *err, size_t errlen)
+{
+    const int nv = m->nv;
+    if (m->nsingular == 0 || nv == 0) return CTC_OK;
+    ctc_oracle *o = ctc_oracle_new(m);
+    double *q = malloc(((size_t)m->nq + (size_t)nv * nv) * sizeof(double));
+    if (o == NULL || q == NULL) {
+        ctc_oracle_free(o);
+        free(q);
+        return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    }
+    double *mm = q + m->nq, dmax = 0;
+    for (int i = 0; i < m->nq; i++) q[i] = sin(i + 1.0);
+    for (int k = 0; k < m->nbodies; k++) {
+        if (m->joints[k].type != CTC_JOINT_SPHERICAL) continue;
+        double *qk = q + m->jnt_qadr[k];
+        qk[0] = 1, qk[1] = 0.1 * sin(m->jnt_qadr[k] + 1.0), qk[2] = 0.2, qk[3] = 0.3;
+    }
+    ctc_model_q_normalize(m, q);
+    ctc_oracle_mass_matrix(m, o, q, mm);
+    ctc_oracle_free(o);
+    for (int i = 0; i < nv; i++) dmax = fmax(dmax, mm[i * nv + i]);
+
+    /* LDL^T in place, lower triangle: mm[i][j] = L_ij d_j, mm[i][i] = d_i */
+    ctc_status st = CTC_OK;
+    for (int i = 0; i < nv && st == CTC_OK; i++) {
+        for (int j = 0; j <= i; j++) {
+            double s = mm[i * nv + j];
+            for (int l = 0; l < j; l++) s -= mm[i * nv + l] * mm[j * nv + l] / mm[l * nv + l];
+            mm[i * nv + j] = s;
+        }
+        const double rel = dmax > 0 ? mm[i * nv + i] / dmax : 0;
+        if (!(rel > CTC_MASS_MATRIX_PIVOT_REL)) {
+            int k = 0;
+            while (k + 1 < m->nbodies && m->jnt_vadr[k + 1] <= i) k++;
+            st = ctc_fail(CTC_EINVAL, err, errlen,
+                          "body %d: the joint-space mass matrix is singular: joint %d (%s) moves "
+                          "no mass or inertia that the joints before it do not (relative pivot "
+                          "%.3g <= %g); body %d and the bodies beyond it need mass off the joint's "
+                          "axis or inertia about it",
+                          k, k, ctc_joint_type_name(m->joints[k].type), rel,
+                          CTC_MASS_MATRIX_PIVOT_REL, k);
+        }
+    }
+    free(q);
+    return st;
+}
+
+/* spatial form: the inverse of each body's forward inertia (fwd_bodies: a singular body's is
+   augmented, setup_singular) */
+static void setup_spatial(ctc_model *m)
 {
     for (int k = 0; k < m->nbodies; k++) {
-        const double *e = &moments[3 * k];
-        if (e[0] <= INERTIA_ZERO_REL * e[2]) {
-            return ctc_fail(CTC_EINVAL, err, errlen,
-                            "body %d: 6x6 inertia is singular (a principal moment is %g kg m^2); "
-                            "a body without inertia about an axis, such as a slender rod, is "
-                            "allowed only in a planar scene",
-                            k, e[0]);
-        }
-        /* inverse by cofactors; well conditioned enough after the check above */
-        const double *a = m->bodies[k].inertia;
+        /* inverse by cofactors; a principal moment is over CTC_INERTIA_ZERO_REL of the largest */
+        const double *a = m->fwd_bodies[k].inertia;
         double *inv = &m->body_inertia_inv[9 * k];
         double c00 = a[4] * a[8] - a[5] * a[7], c01 = a[5] * a[6] - a[3] * a[8],
                c02 = a[3] * a[7] - a[4] * a[6];
@@ -904,7 +1023,6 @@ static ctc_status setup_spatial(ctc_model *m, const double *moments, char *err, 
         inv[7] = (a[1] * a[6] - a[0] * a[7]) / det;
         inv[8] = (a[0] * a[4] - a[1] * a[3]) / det;
     }
-    return CTC_OK;
 }
 
 /* the form: planar when the chain moves in one plane with gravity in it (and the spec allows),
@@ -921,8 +1039,12 @@ static ctc_status setup_form(ctc_model *m, ctc_form requested, const double *mom
     }
     m->form = (planar && requested != CTC_FORM_SPATIAL) ? CTC_FORM_PLANAR : CTC_FORM_SPATIAL;
     m->dim = m->form == CTC_FORM_PLANAR ? 3 : 6;
-    if (m->form == CTC_FORM_PLANAR) return setup_planar(m, normal, err, errlen);
-    return setup_spatial(m, moments, err, errlen);
+    const int planar_form = m->form == CTC_FORM_PLANAR;
+    ctc_status st = setup_singular(m, moments, planar_form ? normal : NULL, err, errlen);
+    if (st != CTC_OK) return st;
+    if (planar_form) return setup_planar(m, normal, err, errlen);
+    setup_spatial(m);
+    return CTC_OK;
 }
 
 ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *err, size_t errlen)
@@ -950,6 +1072,7 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
     if ((st = setup_form(m, spec->form, moments, err, errlen)) != CTC_OK) goto fail;
     if ((st = build_tree(m, err, errlen)) != CTC_OK) goto fail;
     if ((st = setup_independent(m, err, errlen)) != CTC_OK) goto fail;
+    if ((st = check_mass_matrix(m, err, errlen)) != CTC_OK) goto fail;
     free(moments);
     *out = m;
     return CTC_OK;
@@ -963,6 +1086,8 @@ fail:
 void ctc_model_free(ctc_model *m)
 {
     if (m == NULL) return;
+    if (m->fwd_bodies != m->bodies) free(m->fwd_bodies);
+    free(m->body_singular);
     free(m->bodies);
     free(m->joints);
     free(m->jnt_qadr);

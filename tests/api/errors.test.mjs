@@ -72,7 +72,7 @@ const CASES = [
     { name: '"NaN" text as the mass', json: bodyJob(unitBody({ mass: 'NaN' })), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].mass', message: 'must be a number (got a string)' },
     { name: 'mass 1e999', body: JSON.stringify(bodyJob(unitBody({ mass: 12345 }))).replace('12345', '1e999'), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].mass', message: 'must be finite (got inf)' },
     { name: 'gravity -1e999', body: JSON.stringify({ scene: { ...SCENE2, gravity: [0, 12345, 0] }, controller: PASSIVE, duration: 1 }).replace('12345', '-1e999'), status: 400, code: 'INVALID_FIELD', field: 'scene.gravity[1]', message: 'must be finite (got -inf)' },
-    { name: 'negative mass', json: bodyJob(unitBody({ mass: -1 })), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].mass', message: 'must be positive (got -1 kg)' },
+    { name: 'negative mass', json: bodyJob(unitBody({ mass: -1 })), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].mass', message: 'must not be negative (got -1 kg)' },
     { name: 'negative principal moment', json: bodyJob(unitBody({ inertia: [1, -1, 1] })), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].inertia[1]', message: 'must not be negative (got -1 kg m^2)' },
     { name: 'no bodies', json: { scene: { bodies: [] }, controller: PASSIVE, duration: 1 }, status: 400, code: 'INVALID_FIELD', field: 'scene.bodies', message: 'must not be empty' },
     { name: 'unknown joint type', json: bodyJob(unitBody({ joint: { type: 'hinge' } })), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].joint.type', message: 'must be one of "revolute", "prismatic", "cylindrical", "spherical", "fixed" (got "hinge")' },
@@ -96,7 +96,7 @@ const CASES = [
     { name: 'loop between two branches', json: { preset: 'y_four_bar_pd', scene: { loop: { body: 3 } } }, status: 400, code: 'INVALID_FIELD', field: 'scene.loop', message: 'loop: body 3 is not on the path from the ground to the tip (body 5); a loop between two branches is not supported yet' },
     { name: 'preset not a string', json: { preset: 5 }, status: 400, code: 'INVALID_FIELD', field: 'preset', message: 'must be a string (got a number)' },
     { name: 'preset parameter out of range', json: { preset: 'n_link_pendulum', n: 1 }, status: 400, code: 'INVALID_FIELD', field: 'n', message: 'must be an integer from 2 to 4096 (got 1)' },
-    { name: 'validate: negative mass', path: '/api/validate', json: bodyJob(unitBody({ mass: -1 })), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].mass', message: 'must be positive (got -1 kg)' },
+    { name: 'validate: negative mass', path: '/api/validate', json: bodyJob(unitBody({ mass: -1 })), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].mass', message: 'must not be negative (got -1 kg)' },
     { name: 'validate: array body', path: '/api/validate', body: '[]', status: 400, code: 'INVALID_FIELD', field: '', message: 'the job must be a JSON object (got an array)' },
 
     /* the HTTP envelope */

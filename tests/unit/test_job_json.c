@@ -221,7 +221,7 @@ static const bad_job bad_jobs[] = {
      JOB_INVALID_FIELD, "scene.form",
      "must be one of \"auto\", \"planar\", \"spatial\" (got \"flat\")"},
     {"negative mass", BODY_JOB("{'mass':-1,'com':[0,0,0],'inertia':[1,1,1],'joint':" REV "}"), NULL,
-     JOB_INVALID_FIELD, "scene.bodies[0].mass", "must be positive (got -1 kg)"},
+     JOB_INVALID_FIELD, "scene.bodies[0].mass", "must not be negative (got -1 kg)"},
     {"mass a string", BODY_JOB("{'mass':'1','com':[0,0,0],'inertia':[1,1,1],'joint':" REV "}"),
      NULL, JOB_INVALID_FIELD, "scene.bodies[0].mass", "must be a number (got a string)"},
     {"mass 1e400", BODY_JOB("{'mass':1e400,'com':[0,0,0],'inertia':[1,1,1],'joint':" REV "}"), NULL,
@@ -281,12 +281,13 @@ static const bad_job bad_jobs[] = {
      BODY_JOB("{'mass':1,'shape':{'type':'rod','end':[0,-1,0],'radius':0.1},'joint':" REV "}"),
      NULL, JOB_UNKNOWN_FIELD, "scene.bodies[0].shape.radius",
      "key \"radius\" does not apply to shape type \"rod\""},
-    {"rod in a spatial scene",
-     "{'scene':{'form':'spatial','bodies':[{'mass':1,'shape':{'type':'rod','end':[0,-1,0]},"
+    {"rod spun about its own axis",
+     "{'scene':{'form':'spatial','bodies':[{'mass':1,'shape':{'type':'rod','end':[0,0,-1]},"
      "'joint':" REV "}]}," PASSIVE "," DUR "}",
      NULL, JOB_INVALID_FIELD, "scene",
-     "body 0: 6x6 inertia is singular (a principal moment is 0 kg m^2); a body without inertia "
-     "about an axis, such as a slender rod, is allowed only in a planar scene"},
+     "body 0: the joint-space mass matrix is singular: joint 0 (revolute) moves no mass or "
+     "inertia that the joints before it do not (relative pivot 0 <= 1e-10); body 0 and the "
+     "bodies beyond it need mass off the joint's axis or inertia about it"},
     {"planar form of a spatial chain",
      "{'scene':{'form':'planar','bodies':[" BODY ",{'mass':1,'com':[0,-0.5,0],'inertia':[0.1,"
      "0.1,0.1],'joint':{'type':'revolute','axis':[1,0,0]}}]}," PASSIVE "," DUR "}",

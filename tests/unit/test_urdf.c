@@ -1246,13 +1246,6 @@ Test(urdf, malformed_documents_are_refused_naming_element_and_line)
             "line 3: not well-formed XML: Opening and ending tag mismatch: link line 2 and robot");
     refused("<robot name=\"r\">\n" LINK("a") "<link name=\"b\"/>\n",
             "line 4: not well-formed XML: Premature end of data in tag robot line 1");
-    refused(
-        "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"/>\n"
-        "<joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/></joint>\n"
-        "</robot>\n",
-        "line 3: <link name=\"b\">: moves (joint \"j\") but has no mass (no <inertial>): massless "
-        "bodies and point masses are not supported yet; give it an inertial, or fix it to a "
-        "link that has one");
     refused("<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"><inertial>\n"
             "<mass value=\"-1\"/><inertia ixx=\"1\" iyy=\"1\" izz=\"1\"/></inertial></link>\n"
             "</robot>\n",
@@ -1339,11 +1332,10 @@ Test(urdf, scene_takes_one_of_bodies_urdf_and_dh)
     cr_assert_str_eq(err.field, "scene.dh.convention");
     free(doc);
     doc = job_text("{\"dh\": {\"convention\": \"standard\", \"rows\": [{\"a\": 0, \"alpha\": 0, "
-                   "\"d\": 0, \"mass\": 0, \"com\": [0, 0, 0], \"inertia\": [1, 1, 1]}]}}");
+                   "\"d\": 0, \"mass\": -1, \"com\": [0, 0, 0], \"inertia\": [1, 1, 1]}]}}");
     cr_assert_eq(job_parse(doc, strlen(doc), &j, &err), -1);
     cr_assert_str_eq(err.field, "scene.dh.rows[0].mass");
-    cr_assert_str_eq(err.message, "must be positive (got 0 kg; massless bodies and point masses "
-                                  "are not supported yet)");
+    cr_assert_str_eq(err.message, "must not be negative (got -1 kg)");
     free(doc);
 }
 
@@ -1606,4 +1598,39 @@ Test(urdf, builder_errors_about_a_converted_body_name_its_link)
     cr_assert_str_eq(err.message + strlen(err.message) - strlen(tail), tail, "%s", err.message);
     free(doc);
     free(bad);
+}
+
+Test(urdf, moving_links_without_mass_are_accepted_where_the_mass_matrix_allows)
+{
+    /* b has no <inertial> and is the tip of a revolute joint: nothing moves with it, so the
+       builder refuses it and the job names the link */
+    const char *tip = "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"/>\n"
+                      "<joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>"
+                      "</joint>\n</robot>\n";
+    char *doc = urdf_job(tip);
+    job *j = NULL;
+    job_error err;
+    cr_assert_eq(job_parse(doc, strlen(doc), &j, &err), -1);
+    cr_assert_str_eq(err.field, "scene");
+    cr_assert_str_eq(err.message,
+                     "body 0: the joint-space mass matrix is singular: joint 0 (revolute) moves "
+                     "no mass or inertia that the joints before it do not (relative pivot 0 <= "
+                     "1e-10); body 0 and the bodies beyond it need mass off the joint's axis or "
+                     "inertia about it (the robot's link \"b\")");
+    free(doc);
+
+    /* a massless link b between two joints (a universal joint's cross), c with mass beyond it:
+       accepted, b a massless body */
+    const char *cross = "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"/>\n"
+                        "<link name=\"c\"><inertial><origin xyz=\"0.5 0 0\"/><mass value=\"1\"/>"
+                        "<inertia ixx=\"0.01\" iyy=\"0.02\" izz=\"0.02\"/></inertial></link>\n"
+                        "<joint name=\"j1\" type=\"revolute\"><parent link=\"a\"/>"
+                        "<child link=\"b\"/><axis xyz=\"0 0 1\"/></joint>\n"
+                        "<joint name=\"j2\" type=\"revolute\"><parent link=\"b\"/>"
+                        "<child link=\"c\"/><axis xyz=\"0 1 0\"/></joint>\n</robot>\n";
+    doc = urdf_job(cross);
+    cr_assert_eq(job_parse(doc, strlen(doc), &j, &err), 0, "%s: %s", err.field, err.message);
+    cr_assert_eq(j->bodies[0].mass, 0.0);
+    job_free(j);
+    free(doc);
 }
