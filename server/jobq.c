@@ -70,6 +70,10 @@
 #define JOBQ_RETRY_LOG 20            /* after the first failed try, one in this many is logged */
 #define JOBQ_LOG_RESERVE (4LL << 20) /* bytes: about SQLite's auto-checkpoint of 1000 pages */
 #define JOBQ_LOG_RESERVE_MIN (256LL << 10) /* bytes: the least tried on a nearly full disk */
+/* start-up recovery waits this many tries for a write lock held by another process (a backup, an
+   sqlite3 shell), each try waiting the store's busy timeout (STORE_BUSY_MS, 5 s) and then a
+   pause of 1 s: about a minute, after which the start fails as before */
+#define JOBQ_START_TRIES 10
 
 /* what became of a popped job */
 typedef enum worker_outcome {
@@ -480,11 +484,26 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
     q->config.db_path = q->db_path;
     if (init_sync(q, err, errlen) != 0) goto cleanup;
 
-    /* recovery: what the database holds as queued or running is queued again, oldest first */
-    if (store_open(q->db_path, &db, why, sizeof why) != 0 ||
-        store_recover(db, &ids, &nids, why, sizeof why) != 0) {
-        fail(err, errlen, "recovering jobs: %s", why);
-        goto cleanup;
+    /* recovery: what the database holds as queued or running is queued again, oldest first. A
+       lock held elsewhere is waited for (JOBQ_START_TRIES), so a server restarted under a backup
+       starts late rather than not at all; any other failure fails the start at once. */
+    for (int attempt = 1;; attempt++) {
+        if (store_open(q->db_path, &db, why, sizeof why) == 0 &&
+            store_recover(db, &ids, &nids, why, sizeof why) == 0)
+            break;
+        /* store_open's failures carry SQLite's message; store_recover's fault is the store's */
+        int locked = db ? store_last_fault(db) == STORE_FAULT_LOCKED
+                        : strstr(why, store_fault_text(STORE_FAULT_LOCKED)) != NULL;
+        store_close(db);
+        db = NULL;
+        if (!locked || attempt >= JOBQ_START_TRIES) {
+            fail(err, errlen, "recovering jobs: %s", why);
+            goto cleanup;
+        }
+        fprintf(stderr, "jobq: recovering jobs (try %d of %d, waiting for the lock): %s\n",
+                attempt, JOBQ_START_TRIES, why);
+        struct timespec pause = {.tv_sec = 1, .tv_nsec = 0};
+        while (nanosleep(&pause, &pause) != 0 && errno == EINTR) continue;
     }
     q->cap = nids > config->max_queue ? nids : config->max_queue;
     q->ring = malloc((size_t)q->cap * sizeof *q->ring);

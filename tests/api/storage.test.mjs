@@ -11,7 +11,8 @@
  * finished job can still be deleted, a new job is then accepted and stored, a result too large for
  * the disk ends its job "failed" with SQLite's reason, health says "full" with 503, and once room
  * comes back health says "ok". The same with --db-max-size, which needs neither root nor the
- * sqlite3 command; the others are skipped without them.
+ * sqlite3 command; the others are skipped without them. A server started while the lock is held
+ * waits for it (jobq_start's JOBQ_START_TRIES) and then runs the jobs it recovers.
  */
 import assert from 'node:assert/strict';
 import { spawn, spawnSync } from 'node:child_process';
@@ -112,6 +113,32 @@ test('a write lock held by another process stalls no request and drops no job',
     assert.deepEqual(ok.json.database, { state: 'ok' });
     const after = await submit(srv, SMALL);
     assert.equal((await waitJob(srv, after.id)).status, 'done');
+    await srv.stop();
+});
+
+test('a server started while another process holds the lock waits for it and recovers its jobs',
+    { skip: !haveSqlite && 'no sqlite3 command' }, async () => {
+    /* a queued job left in the database by a server stopped before it ran */
+    const dir = tempDir();
+    const first = await startServer({ dir, workers: 1 });
+    const long = await submit(first, {
+        ...SMALL, name: 'long', duration: 4, integrator: { method: 'rk4', step: 0.0001 },
+    });
+    const left = await submit(first, { ...SMALL, name: 'left queued' });
+    await waitJob(first, long.id, { until: (j) => j.status === 'running', intervalMs: 10 });
+    await first.stop('SIGKILL');
+
+    /* the lock held past the store's 5 s busy timeout: the start must wait, not exit */
+    const lock = await holdWriteLock(first.db);
+    const released = sleep(7000).then(() => lock.release());
+    const t0 = Date.now();
+    const srv = await startServer({ dir, workers: 1, timeoutMs: 30000 });
+    const ms = Date.now() - t0;
+    await released;
+    assert.ok(ms >= 6000, `the server answered after ${ms} ms, while the lock was held`);
+    assert.match(srv.output(), /waiting for the lock/);
+    const done = await waitJob(srv, left.id, { timeoutMs: 60000 });
+    assert.equal(done.status, 'done', JSON.stringify(done));
     await srv.stop();
 });
 
