@@ -500,8 +500,8 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
             fail(err, errlen, "recovering jobs: %s", why);
             goto cleanup;
         }
-        fprintf(stderr, "jobq: recovering jobs (try %d of %d, waiting for the lock): %s\n",
-                attempt, JOBQ_START_TRIES, why);
+        fprintf(stderr, "jobq: recovering jobs (try %d of %d, waiting for the lock): %s\n", attempt,
+                JOBQ_START_TRIES, why);
         struct timespec pause = {.tv_sec = 1, .tv_nsec = 0};
         while (nanosleep(&pause, &pause) != 0 && errno == EINTR) continue;
     }
