@@ -51,10 +51,14 @@
  *    about its axis, a body the model accepts because M(q) stays positive definite. The motor
  *    inertias and gear ratios (Jm, G) and friction of that file are left out: ctcsim models the
  *    links. Move: from Corke's qz (all zero) to (pi/3, -pi/4, pi/4, pi/6, -pi/3, pi/4).
- * The Stanford arm is not here: Corke's mdl_stanford (after Paul 1981) gives link 5 principal
- * moments (0.003, 0.0004, 0) kg m^2, which break the triangle inequality, and centres of mass
- * (-1.054, -6.447, 1.554 along links 2, 3, 6) too large for metres; no consistent published
- * table was found to replace them, and guessing their units would make a preset no source backs.
+ * The Stanford arm is not here: its usual source, Corke's mdl_stanford (dynamic data cited to
+ * Paul, Robot Manipulators, 1981, tables 6.4-6.6), gives link 5 principal moments (0.003,
+ * 0.0004, 0) kg m^2, which break the triangle inequality, where Corke's older stanford.m of the
+ * same table gives (0.003, 0.003, 0.0004) and moves that link's centre of mass from (0, 0,
+ * 0.566) to (0, 0.566, 0.003); and its centres of mass mix units: link 1's (0, 0.0175, -0.1105)
+ * reads as metres, links 2, 3 and 6's (-1.054, -6.447, 1.554 along y, z, z) cannot be metres on
+ * an arm 0.412 m tall, yet as inches or centimetres they give different arms. Without Paul's
+ * tables to settle which, any correction would be a guess no source backs.
  */
 #include <stdio.h>
 #include <string.h>
