@@ -1191,6 +1191,8 @@ Test(presets, y_four_bar_closes_its_four_bar_branch_on_the_arm)
     /* the trajectory: one entry per independent coordinate, starting at q0 */
     cr_assert_eq(cJSON_GetArraySize(at(doc, "trajectory")), 4);
     pose_free(&p);
+    job_free(j);
+    cJSON_Delete(doc);
 }
 
 Test(presets, panda_moves_inside_frankas_joint_limits_and_opens_both_fingers)
