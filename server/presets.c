@@ -1194,6 +1194,14 @@ static const preset preset_table[] = {
      "Franka Emika Panda (URDF) moving between two poses by minimum jerk while its two fingers "
      "open, " PD_GAINS,
      no_params, presets_panda},
+    {"two_link_min_jerk",
+     "Two-link planar arm with point masses at the link ends (DH table; Modern Robotics 8.1.1) "
+     "moving between two poses by minimum jerk, " PD_GAINS ", gravity -y",
+     no_params, presets_two_link},
+    {"puma560_min_jerk",
+     "Puma 560 (modified DH table of Armstrong, Khatib and Burdick 1986) moving between two "
+     "poses by minimum jerk, " PD_GAINS,
+     no_params, presets_puma560},
 };
 
 const preset *presets_list(int *count)

@@ -14,10 +14,11 @@
  *   y_pendulum_pd                                a planar Y tree: two double pendulums on an arm
  *   spatial_hand_pd                              a wrist, a palm and three three-link fingers
  *   two_arm_torso_pd                             a torso on a waist with two three-link arms
- *   ur5_min_jerk, iiwa14_min_jerk, panda_min_jerk
- *                                                industrial arms from their DH table or URDF
+ *   ur5_min_jerk, iiwa14_min_jerk, panda_min_jerk, two_link_min_jerk, puma560_min_jerk
+ *                                                arms from their DH table or URDF
  *                                                (presets_robots.c), a minimum-jerk move, PD;
- *                                                the Panda's two fingers make it a tree
+ *                                                the Panda's two fingers make it a tree; the
+ *                                                two-link arm is planar, with point masses
  * presets.c describes each scene's geometry and numbers.
  */
 #ifndef PRESETS_H

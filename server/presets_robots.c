@@ -1,11 +1,19 @@
 /*
- * presets_robots.c - industrial arms as ready-made jobs (presets.h), each given in its published
- * form, a DH table or a URDF document, which the job format converts into bodies (dh.c, urdf.c),
- * and each tracking a minimum-jerk move between two poses with CTC (PD, kp 100 s^-2, kv 20 s^-1):
- * the move takes 2 s from the start pose, which is q0, so with the exact model the tracking
- * error stays at the integrator's tolerance; 3 s at dopri5 rtol 1e-8, atol 1e-10, sampled every
- * 0.01 s; gravity -z.
+ * presets_robots.c - robot arms, a textbook's and industrial ones, as ready-made jobs
+ * (presets.h), each given in its published form, a DH table or a URDF document, which the job
+ * format converts into bodies (dh.c, urdf.c), and each tracking a minimum-jerk move between two
+ * poses with CTC (PD, kp 100 s^-2, kv 20 s^-1): the move takes 2 s from the start pose, which is
+ * q0, so with the exact model the tracking error stays at the integrator's tolerance; 3 s at dopri5
+ * rtol 1e-8, atol 1e-10, sampled every 0.01 s; gravity -z (the planar arm's -y).
  *
+ *  - The two-link planar arm with point masses (standard DH): Lynch and Park, Modern Robotics
+ *    (2017), section 8.1.1, Figure 8.1: links of lengths L1, L2 turning about z, a point mass m1
+ *    at the end of link 1 (at joint 2) and m2 at the end of link 2, gravity g along -y, the
+ *    joint angles measured from x (theta1) and from link 1 (theta2). The book keeps the values
+ *    symbolic; here L1 = L2 = 1 m and m1 = m2 = 1 kg, and g = 9.81 m/s^2. Each mass sits at its
+ *    DH frame's origin with no inertia, so M(q) = [[m1 L1^2 + m2 (L1^2 + 2 L1 L2 c2 + L2^2),
+ *    m2 (L1 L2 c2 + L2^2)], [., m2 L2^2]] (the book's eq. 8.9), positive definite for m1 > 0.
+ *    Move: from hanging straight down (-pi/2, 0) to (pi/6, pi/2).
  *  - UR5 (standard DH): a, d and alpha, the link masses and the centres of mass in the DH frames
  *    from Universal Robots, "Parameters for calculations of kinematics and dynamics"
  *    (universal-robots.com, UR5 column); the link inertias, principal about the centres of mass,
@@ -35,9 +43,22 @@
  *    body and the fingers hang from that body. Move: from Franka's ready pose (0, -pi/4, 0,
  *    -3pi/4, 0, pi/2, pi/4) to (0.6, -0.2, -0.4, -2.0, 0.3, 2.0, 1.2), inside the joint limits,
  *    while both fingers open from 0.01 m to 0.04 m.
- * The Puma 560 is not here: Armstrong, Khatib and Burdick's parameters (Corke's mdl_puma560akb)
- * give link 1 a zero mass with an inertia about its axis, a body ctc_model_build refuses (mass
- * > 0) until massless bodies are supported.
+ *  - Puma 560 (modified DH): Armstrong, Khatib and Burdick, "The Explicit Dynamic Model and
+ *    Inertial Parameters of the PUMA 560 Arm", IEEE ICRA 1986, as Corke's Robotics Toolbox
+ *    mdl_puma560akb lists them (the link table L(1..6): a_(i-1), alpha_(i-1), d_i; the masses
+ *    L(i).m; the centres of mass L(i).r in frame i; the inertias L(i).I, whose products are
+ *    zero): link 1 has no mass (AKB found none; it does not enter the dynamics) and 0.35 kg m^2
+ *    about its axis, a body the model accepts because M(q) stays positive definite. The motor
+ *    inertias and gear ratios (Jm, G) and friction of that file are left out: ctcsim models the
+ *    links. Move: from Corke's qz (all zero) to (pi/3, -pi/4, pi/4, pi/6, -pi/3, pi/4).
+ * The Stanford arm is not here: its usual source, Corke's mdl_stanford (dynamic data cited to
+ * Paul, Robot Manipulators, 1981, tables 6.4-6.6), gives link 5 principal moments (0.003,
+ * 0.0004, 0) kg m^2, which break the triangle inequality, where Corke's older stanford.m of the
+ * same table gives (0.003, 0.003, 0.0004) and moves that link's centre of mass from (0, 0,
+ * 0.566) to (0, 0.566, 0.003); and its centres of mass mix units: link 1's (0, 0.0175, -0.1105)
+ * reads as metres, links 2, 3 and 6's (-1.054, -6.447, 1.554 along y, z, z) cannot be metres on
+ * an arm 0.412 m tall, yet as inches or centimetres they give different arms. Without Paul's
+ * tables to settle which, any correction would be a guess no source backs.
  */
 #include <stdio.h>
 #include <string.h>
@@ -87,21 +108,112 @@ static cJSON *finish_robot(cJSON *doc, int n, const double *from, const double *
     return NULL;
 }
 
+/* one row of a DH table: the joint's geometry and link i's mass, centre of mass and principal
+ * moments of inertia (about the centre of mass, along DH frame i's axes) */
+typedef struct dh_link {
+    const char *name;
+    double a, alpha, d, mass, com[3], inertia[3];
+} dh_link;
+
+/* The document of the arm of n DH rows (convention "standard" or "modified"), named title, with
+ * gravity g, moving from -> to by finish_robot. Returns NULL with err filled (out of memory). */
+static cJSON *robot_from_dh(const char *title, const char *convention, const dh_link *rows, int n,
+                            const double g[3], const double *from, const double *to,
+                            const char *preset_name, job_error *err)
+{
+    cJSON *doc = cJSON_CreateObject();
+    cJSON *scene = cJSON_AddObjectToObject(doc, "scene");
+    cJSON *dh = cJSON_AddObjectToObject(scene, "dh");
+    cJSON *list = cJSON_AddArrayToObject(dh, "rows");
+    int ok = cJSON_AddStringToObject(doc, "name", title) &&
+             cJSON_AddItemToObject(scene, "gravity", cJSON_CreateDoubleArray(g, 3)) &&
+             cJSON_AddStringToObject(dh, "convention", convention) && list != NULL;
+    for (int i = 0; ok && i < n; i++) {
+        const dh_link *l = &rows[i];
+        cJSON *r = cJSON_CreateObject();
+        ok = cJSON_AddItemToArray(list, r) && cJSON_AddStringToObject(r, "name", l->name) &&
+             cJSON_AddNumberToObject(r, "a", l->a) &&
+             cJSON_AddNumberToObject(r, "alpha", l->alpha) &&
+             cJSON_AddNumberToObject(r, "d", l->d) && cJSON_AddNumberToObject(r, "mass", l->mass) &&
+             cJSON_AddItemToObject(r, "com", cJSON_CreateDoubleArray(l->com, 3)) &&
+             cJSON_AddItemToObject(r, "inertia", cJSON_CreateDoubleArray(l->inertia, 3));
+    }
+    if (!ok) {
+        cJSON_Delete(doc);
+        err->code = JOB_NO_MEMORY;
+        err->field[0] = '\0';
+        snprintf(err->message, sizeof err->message, "out of memory building preset %s",
+                 preset_name);
+        return NULL;
+    }
+    return finish_robot(doc, n, from, to, preset_name, err);
+}
+
+/* ---- the two-link planar arm with point masses ---- */
+
+/* standard DH: frame i sits at link i's far end, where its point mass is */
+static const dh_link two_link[2] = {
+    {"link1", 1.0, 0, 0, 1.0, {0, 0, 0}, {0, 0, 0}},
+    {"link2", 1.0, 0, 0, 1.0, {0, 0, 0}, {0, 0, 0}},
+};
+
+cJSON *presets_two_link(const cJSON *request, job_error *err)
+{
+    (void)request;
+    static const double from[2] = {-HALF_PI, 0};
+    static const double to[2] = {0.52359877559829887, HALF_PI};
+    static const double gravity[3] = {0, -9.81, 0};
+    return robot_from_dh("Two-link planar arm with point masses at the link ends, minimum-jerk "
+                         "move, PD (Lynch and Park, Modern Robotics, sec. 8.1.1)",
+                         "standard", two_link, 2, gravity, from, to, "two_link_min_jerk", err);
+}
+
 /* ---- UR5 ---- */
 
-static const double ur5_a[6] = {0, -0.425, -0.39225, 0, 0, 0};
-static const double ur5_d[6] = {0.089159, 0, 0, 0.10915, 0.09465, 0.0823};
-static const double ur5_alpha[6] = {HALF_PI, 0, 0, HALF_PI, -HALF_PI, 0};
-static const double ur5_mass[6] = {3.7, 8.393, 2.33, 1.219, 1.219, 0.1879};
-static const double ur5_com[6][3] = {{0, -0.02561, 0.00193}, {0.2125, 0, 0.11336},
-                                     {0.15, 0, 0.0265},      {0, -0.0018, 0.01634},
-                                     {0, 0.0018, 0.01634},   {0, 0, -0.001159}};
-static const double ur5_inertia[6][3] = {
-    {0.010267495893, 0.010267495893, 0.00666},  {0.22689067591, 0.22689067591, 0.0151074},
-    {0.049443313556, 0.049443313556, 0.004095}, {0.111172755531, 0.111172755531, 0.21942},
-    {0.111172755531, 0.111172755531, 0.21942},  {0.0171364731454, 0.0171364731454, 0.033822}};
-static const char *const ur5_names[6] = {"shoulder", "upper_arm", "forearm",
-                                         "wrist_1",  "wrist_2",   "wrist_3"};
+static const dh_link ur5[6] = {
+    {"shoulder",
+     0,
+     HALF_PI,
+     0.089159,
+     3.7,
+     {0, -0.02561, 0.00193},
+     {0.010267495893, 0.010267495893, 0.00666}},
+    {"upper_arm",
+     -0.425,
+     0,
+     0,
+     8.393,
+     {0.2125, 0, 0.11336},
+     {0.22689067591, 0.22689067591, 0.0151074}},
+    {"forearm",
+     -0.39225,
+     0,
+     0,
+     2.33,
+     {0.15, 0, 0.0265},
+     {0.049443313556, 0.049443313556, 0.004095}},
+    {"wrist_1",
+     0,
+     HALF_PI,
+     0.10915,
+     1.219,
+     {0, -0.0018, 0.01634},
+     {0.111172755531, 0.111172755531, 0.21942}},
+    {"wrist_2",
+     0,
+     -HALF_PI,
+     0.09465,
+     1.219,
+     {0, 0.0018, 0.01634},
+     {0.111172755531, 0.111172755531, 0.21942}},
+    {"wrist_3",
+     0,
+     0,
+     0.0823,
+     0.1879,
+     {0, 0, -0.001159},
+     {0.0171364731454, 0.0171364731454, 0.033822}},
+};
 
 cJSON *presets_ur5(const cJSON *request, job_error *err)
 {
@@ -111,33 +223,35 @@ cJSON *presets_ur5(const cJSON *request, job_error *err)
                                  1.0471975511965976, -HALF_PI,
                                  -HALF_PI,           0.78539816339744831};
     static const double gravity[3] = {0, 0, -9.81};
-    cJSON *doc = cJSON_CreateObject();
-    cJSON *scene = cJSON_AddObjectToObject(doc, "scene");
-    cJSON *dh = cJSON_AddObjectToObject(scene, "dh");
-    cJSON *rows = cJSON_AddArrayToObject(dh, "rows");
-    int ok = cJSON_AddStringToObject(doc, "name",
-                                     "UR5 minimum-jerk move, PD (DH, masses and centres of mass of "
-                                     "Universal Robots; inertias of ur_description)") &&
-             cJSON_AddItemToObject(scene, "gravity", cJSON_CreateDoubleArray(gravity, 3)) &&
-             cJSON_AddStringToObject(dh, "convention", "standard") && rows != NULL;
-    for (int i = 0; ok && i < 6; i++) {
-        cJSON *r = cJSON_CreateObject();
-        ok = cJSON_AddItemToArray(rows, r) && cJSON_AddStringToObject(r, "name", ur5_names[i]) &&
-             cJSON_AddNumberToObject(r, "a", ur5_a[i]) &&
-             cJSON_AddNumberToObject(r, "alpha", ur5_alpha[i]) &&
-             cJSON_AddNumberToObject(r, "d", ur5_d[i]) &&
-             cJSON_AddNumberToObject(r, "mass", ur5_mass[i]) &&
-             cJSON_AddItemToObject(r, "com", cJSON_CreateDoubleArray(ur5_com[i], 3)) &&
-             cJSON_AddItemToObject(r, "inertia", cJSON_CreateDoubleArray(ur5_inertia[i], 3));
-    }
-    if (!ok) {
-        cJSON_Delete(doc);
-        err->code = JOB_NO_MEMORY;
-        err->field[0] = '\0';
-        snprintf(err->message, sizeof err->message, "out of memory building preset ur5_min_jerk");
-        return NULL;
-    }
-    return finish_robot(doc, 6, from, to, "ur5_min_jerk", err);
+    return robot_from_dh("UR5 minimum-jerk move, PD (DH, masses and centres of mass of "
+                         "Universal Robots; inertias of ur_description)",
+                         "standard", ur5, 6, gravity, from, to, "ur5_min_jerk", err);
+}
+
+/* ---- Puma 560 ---- */
+
+/* Armstrong, Khatib and Burdick 1986 as Corke's mdl_puma560akb lists them: modified DH, row i
+ * holding a_(i-1), alpha_(i-1) and d_i; m_i, r_i and the diagonal of I_i (kg m^2, about the
+ * centre of mass, in frame i; the products are zero) */
+static const dh_link puma560[6] = {
+    {"link1", 0, 0, 0, 0, {0, 0, 0}, {0, 0, 0.35}},
+    {"link2", 0, -HALF_PI, 0.2435, 17.4, {0.068, 0.006, -0.016}, {0.13, 0.524, 0.539}},
+    {"link3", 0.4318, 0, -0.0934, 4.8, {0, -0.070, 0.014}, {0.066, 0.0125, 0.066}},
+    {"link4", -0.0203, HALF_PI, 0.4331, 0.82, {0, 0, -0.019}, {1.8e-3, 1.8e-3, 1.3e-3}},
+    {"link5", 0, -HALF_PI, 0, 0.34, {0, 0, 0}, {0.3e-3, 0.3e-3, 0.4e-3}},
+    {"link6", 0, HALF_PI, 0, 0.09, {0, 0, 0.032}, {0.15e-3, 0.15e-3, 0.04e-3}},
+};
+
+cJSON *presets_puma560(const cJSON *request, job_error *err)
+{
+    (void)request;
+    static const double from[6] = {0, 0, 0, 0, 0, 0};
+    static const double to[6] = {1.0471975511965976,  -0.78539816339744831, 0.78539816339744831,
+                                 0.52359877559829887, -1.0471975511965976,  0.78539816339744831};
+    static const double gravity[3] = {0, 0, -9.81};
+    return robot_from_dh("Puma 560 minimum-jerk move, PD (modified DH and inertial parameters of "
+                         "Armstrong, Khatib and Burdick 1986, as Corke's mdl_puma560akb)",
+                         "modified", puma560, 6, gravity, from, to, "puma560_min_jerk", err);
 }
 
 /* ---- KUKA LBR iiwa 14 ---- */
@@ -255,8 +369,7 @@ static const panda_joint panda[7] = {
     {"0 0 0.333", "0 0 0", "-2.8973", "2.8973", "87", "2.1750", "0.003875 0.002081 -0.04762",
      "4.970684", "0.70337", "0.70661", "0.0091170", "-0.00013900", "0.0067720", "0.019169"},
     {"0 0 0", PANDA_RPY_MINUS, "-1.7628", "1.7628", "87", "2.1750", "-0.003141 -0.02872 0.003495",
-     "0.646926", "0.0079620", "2.8110e-02", "2.5995e-02", "-3.9250e-3", "1.0254e-02",
-     "7.0400e-04"},
+     "0.646926", "0.0079620", "2.8110e-02", "2.5995e-02", "-3.9250e-3", "1.0254e-02", "7.0400e-04"},
     {"0 -0.316 0", PANDA_RPY_PLUS, "-2.8973", "2.8973", "87", "2.1750",
      "2.7518e-02 3.9252e-02 -6.6502e-02", "3.228604", "3.7242e-02", "3.6155e-02", "1.0830e-02",
      "-4.7610e-03", "-1.1396e-02", "-1.2805e-02"},
@@ -348,8 +461,9 @@ static int panda_text(char *buf, size_t len)
 cJSON *presets_panda(const cJSON *request, job_error *err)
 {
     (void)request;
-    static const double from[9] = {0, -0.78539816339744831, 0, -2.3561944901923448, 0, HALF_PI,
-                                   0.78539816339744831, 0.01, 0.01};
+    static const double from[9] = {
+        0,   -0.78539816339744831, 0, -2.3561944901923448, 0, HALF_PI, 0.78539816339744831, 0.01,
+        0.01};
     static const double to[9] = {0.6, -0.2, -0.4, -2.0, 0.3, 2.0, 1.2, 0.04, 0.04};
     static const double gravity[3] = {0, 0, -9.81};
     char text[12288];

@@ -14,6 +14,14 @@
  * NULL with err filled (out of memory). */
 cJSON *presets_ur5(const cJSON *request, job_error *err);
 
+/* The textbook two-link planar arm with point masses at the link ends (Lynch and Park, Modern
+ * Robotics, sec. 8.1.1) from its DH table, gravity -y. As presets_ur5. */
+cJSON *presets_two_link(const cJSON *request, job_error *err);
+
+/* The Puma 560 of Armstrong, Khatib and Burdick 1986 (Corke's mdl_puma560akb) from its modified
+ * DH table; link 1 massless with an inertia about its axis. As presets_ur5. */
+cJSON *presets_puma560(const cJSON *request, job_error *err);
+
 /* The KUKA LBR iiwa 14 from its URDF (Drake's). As presets_ur5. */
 cJSON *presets_iiwa14(const cJSON *request, job_error *err);
 

@@ -92,7 +92,7 @@ const CASES = [
     { name: 'too many bodies (4097)', server: 'B', headers: { 'content-type': J, authorization: `Bearer ${TOKEN}` }, body: tooManyBodies(), status: 400, code: 'LIMIT_EXCEEDED', field: 'scene.bodies', message: 'has 4097 bodies; the limit is 4096' },
 
     /* presets in a body */
-    { name: 'unknown preset', json: { preset: 'nope' }, status: 400, code: 'UNKNOWN_PRESET', field: 'preset', message: /^unknown preset "nope" \(the presets are: triple_pendulum_pd, .*n_link_pendulum, five_bar_pd, .*rssr_passive, y_pendulum_pd, y_four_bar_pd, spatial_hand_pd, two_arm_torso_pd, ur5_min_jerk, iiwa14_min_jerk, .*triple_pendulum_pid_limited, panda_min_jerk\)$/ },
+    { name: 'unknown preset', json: { preset: 'nope' }, status: 400, code: 'UNKNOWN_PRESET', field: 'preset', message: /^unknown preset "nope" \(the presets are: triple_pendulum_pd, .*n_link_pendulum, five_bar_pd, .*rssr_passive, y_pendulum_pd, y_four_bar_pd, spatial_hand_pd, two_arm_torso_pd, ur5_min_jerk, iiwa14_min_jerk, .*triple_pendulum_pid_limited, panda_min_jerk, two_link_min_jerk, puma560_min_jerk\)$/ },
     { name: 'loop between two branches', json: { preset: 'y_four_bar_pd', scene: { loop: { body: 3 } } }, status: 400, code: 'INVALID_FIELD', field: 'scene.loop', message: 'loop: body 3 is not on the path from the ground to the tip (body 5); a loop between two branches is not supported yet' },
     { name: 'preset not a string', json: { preset: 5 }, status: 400, code: 'INVALID_FIELD', field: 'preset', message: 'must be a string (got a number)' },
     { name: 'preset parameter out of range', json: { preset: 'n_link_pendulum', n: 1 }, status: 400, code: 'INVALID_FIELD', field: 'n', message: 'must be an integer from 2 to 4096 (got 1)' },

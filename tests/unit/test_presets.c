@@ -25,7 +25,11 @@
  *    ancestors' angles, a quarter turn of the wrist or the waist);
  *  - the Panda: Franka's ready pose and joint limits (franka_description's franka_arm and
  *    franka_hand xacro files) typed in here, against the document's moves and the limits its
- *    URDF carries; its exact tracking and published dynamics are checked in test_urdf.c.
+ *    URDF carries; its exact tracking and published dynamics are checked in test_urdf.c;
+ *  - the two-link arm: Lynch and Park's point masses at the link ends (Modern Robotics 8.1.1)
+ *    posed by hand at the start and end of its move; the Puma 560: Armstrong, Khatib and
+ *    Burdick's table as Corke's mdl_puma560akb lists it, typed in here and read back, and two
+ *    centres of mass at Corke's qz worked by hand through the modified DH frames.
  * Positions are compared to 1e-12 m, numbers read back to 1e-15 relative.
  */
 #include <criterion/criterion.h>
@@ -75,6 +79,8 @@ static const char *const all_names[] = {
     "triple_pendulum_pid_50hz",
     "triple_pendulum_pid_limited",
     "panda_min_jerk",
+    "two_link_min_jerk",
+    "puma560_min_jerk",
 };
 #define NPRESETS ((int)(sizeof all_names / sizeof all_names[0]))
 
@@ -115,6 +121,8 @@ static const struct preset_want {
     {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
     {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
     {0, 9, 9, 9, 0, 9, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
+    {0, 2, 2, 2, 0, 2, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
+    {0, 6, 6, 6, 0, 6, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
 };
 _Static_assert(sizeof preset_want / sizeof preset_want[0] == NPRESETS, "one row per preset");
 
@@ -1183,6 +1191,8 @@ Test(presets, y_four_bar_closes_its_four_bar_branch_on_the_arm)
     /* the trajectory: one entry per independent coordinate, starting at q0 */
     cr_assert_eq(cJSON_GetArraySize(at(doc, "trajectory")), 4);
     pose_free(&p);
+    job_free(j);
+    cJSON_Delete(doc);
 }
 
 Test(presets, panda_moves_inside_frankas_joint_limits_and_opens_both_fingers)
@@ -1233,6 +1243,92 @@ Test(presets, panda_moves_inside_frankas_joint_limits_and_opens_both_fingers)
     job *j = parse_doc(doc, "panda_min_jerk");
     cr_assert_eq(j->spec.chain.nbodies, 9);
     for (int i = 0; i < 9; i++) cr_assert_eq(j->spec.chain.parent[i], parents[i], "body %d", i);
+    job_free(j);
+    cJSON_Delete(doc);
+}
+
+Test(presets, two_link_arm_carries_point_masses_at_its_link_ends_from_hanging_down)
+{
+    cJSON *doc = build("two_link_min_jerk", NULL);
+    job *j = parse_doc(doc, "two_link_min_jerk");
+    cr_assert_eq(j->spec.chain.gravity[1], -9.81, "gravity along -y, as Modern Robotics 8.1.1");
+    /* 1 kg each, no inertia: point masses */
+    for (int k = 0; k < 2; k++) {
+        const ctc_body_spec *b = &j->spec.chain.bodies[k];
+        cr_assert_eq(b->mass, 1.0, "m%d", k + 1);
+        for (int e = 0; e < 9; e++) cr_assert_eq(b->inertia[e], 0.0, "body %d inertia[%d]", k, e);
+    }
+    /* from hanging straight down to theta = (pi/6, pi/2) */
+    const double from[2] = {-pi / 2, 0}, to[2] = {pi / 6, pi / 2};
+    const cJSON *traj = at(doc, "trajectory");
+    for (int i = 0; i < 2; i++) {
+        const cJSON *t = cJSON_GetArrayItem(traj, i);
+        cr_assert_str_eq(string_at(t, "type"), "min_jerk");
+        expect_close(number_at(t, "from"), from[i], READ_TOL, "from");
+        expect_close(number_at(t, "to"), to[i], 4 * READ_TOL, "to");
+        expect_close(j->q0[i], from[i], READ_TOL, "q0");
+    }
+    /* the masses: at the ends of links of 1 m, link k along theta_1 + .. + theta_k from x */
+    const double *poses[2] = {from, to};
+    for (int c = 0; c < 2; c++) {
+        posed p = pose(j, poses[c]);
+        cr_assert_eq(p.m->form, CTC_FORM_PLANAR, "the two-link arm is planar");
+        double theta = 0, x = 0, y = 0, com[3];
+        for (int k = 0; k < 2; k++) {
+            theta += poses[c][k];
+            x += cos(theta);
+            y += sin(theta);
+            to_world(p.m, p.d->xcom + 3 * k, com);
+            expect_point(com, x, y, 0, "point mass");
+        }
+        pose_free(&p);
+    }
+    job_free(j);
+    cJSON_Delete(doc);
+}
+
+Test(presets, puma560_holds_armstrong_khatib_burdicks_table_as_corke_lists_it)
+{
+    /* mdl_puma560akb: a_(i-1), alpha_(i-1), d_i, m_i, r_i, diag(I_i) */
+    static const double a[6] = {0, 0, 0.4318, -0.0203, 0, 0};
+    const double alpha[6] = {0, -pi / 2, 0, pi / 2, -pi / 2, pi / 2};
+    static const double d[6] = {0, 0.2435, -0.0934, 0.4331, 0, 0};
+    static const double m[6] = {0, 17.4, 4.8, 0.82, 0.34, 0.09};
+    static const double r[6][3] = {{0, 0, 0},          {0.068, 0.006, -0.016},
+                                   {0, -0.070, 0.014}, {0, 0, -0.019},
+                                   {0, 0, 0},          {0, 0, 0.032}};
+    static const double I[6][3] = {{0, 0, 0.35},
+                                   {0.13, 0.524, 0.539},
+                                   {0.066, 0.0125, 0.066},
+                                   {1.8e-3, 1.8e-3, 1.3e-3},
+                                   {0.3e-3, 0.3e-3, 0.4e-3},
+                                   {0.15e-3, 0.15e-3, 0.04e-3}};
+    cJSON *doc = build("puma560_min_jerk", NULL);
+    cr_assert_str_eq(string_at(doc, "scene.dh.convention"), "modified");
+    const cJSON *rows = at(doc, "scene.dh.rows");
+    cr_assert_eq(cJSON_GetArraySize(rows), 6);
+    for (int i = 0; i < 6; i++) {
+        const cJSON *row = cJSON_GetArrayItem(rows, i);
+        expect_close(number_at(row, "a"), a[i], 0, "a");
+        expect_close(number_at(row, "alpha"), alpha[i], READ_TOL, "alpha");
+        expect_close(number_at(row, "d"), d[i], 0, "d");
+        expect_close(number_at(row, "mass"), m[i], 0, "mass");
+        for (int k = 0; k < 3; k++) {
+            expect_close(element(at(row, "com"), k, "com"), r[i][k], 0, "com");
+            expect_close(element(at(row, "inertia"), k, "inertia"), I[i][k], 0, "inertia");
+        }
+    }
+    /* from Corke's qz (all zero) */
+    job *j = parse_doc(doc, "puma560_min_jerk");
+    cr_assert_eq(j->spec.chain.bodies[0].mass, 0, "link 1 is massless");
+    for (int i = 0; i < 6; i++) cr_assert_eq(j->q0[i], 0, "q0[%d]", i);
+    /* at qz, frame 2 = Rx(-pi/2) at (0, 0.2435, 0): link 2's centre of mass at
+       (0.068, 0.2435 - 0.016, -0.006); frames 4..6 meet at (0.4318 - 0.0203, 0.2435 - 0.0934,
+       0.4331), frame 6 parallel to the world's: link 6's centre of mass 0.032 above */
+    posed p = pose(j, j->q0);
+    expect_point(p.d->xcom + 3, 0.068, 0.2275, -0.006, "link 2 centre of mass");
+    expect_point(p.d->xcom + 15, 0.4115, 0.1501, 0.4651, "link 6 centre of mass");
+    pose_free(&p);
     job_free(j);
     cJSON_Delete(doc);
 }

@@ -26,15 +26,19 @@
  * links' masses, centres of mass and inertias identified by Gaz, Cognetti, Oliva, Robuffo
  * Giordano and De Luca (IEEE RA-L 2019), and the hand's and fingers', as franka_description's
  * robots/common/inertial.yaml lists them; its arm also as Franka's modified DH table
- * (frankaemika.github.io), which must give the URDF's dynamics. The Panda with prismatic fingers and the gripper on an
- * arm written for the test are trees: a link's Jacobian has columns only for the joints on its
- * path to the ground. On them, and on every robot here, GDCA's forward accelerations must also
- * equal the oracle's M^-1 (tau - c - G), solved densely in the test. The two-link arm is the
- * textbook planar arm (Spong, Hutchinson and Vidyasagar, Robot Modeling and Control, section
- * 7.3: l = 1 m, lc = 0.5 m, m = 1 kg) with a slender-rod inertia m l^2 / 12 about the normal axes
- * and a small one about the rod's. The KUKA LBR iiwa 14 from Drake's iiwa14_no_collision.urdf
- * (RobotLocomotion/drake, manipulation/models/iiwa_description), typed in here apart from its
- * preset (server/presets_robots.c); so is the Panda's.
+ * (frankaemika.github.io), which must give the URDF's dynamics. The Panda with prismatic fingers
+ * and the gripper on an arm written for the test are trees: a link's Jacobian has columns only for
+ * the joints on its path to the ground. On them, and on every robot here, GDCA's forward
+ * accelerations must also equal the oracle's M^-1 (tau - c - G), solved densely in the test. The
+ * two-link arm is the textbook planar arm (Spong, Hutchinson and Vidyasagar, Robot Modeling and
+ * Control, section 7.3: l = 1 m, lc = 0.5 m, m = 1 kg) with a slender-rod inertia m l^2 / 12 about
+ * the normal axes and a small one about the rod's. The KUKA LBR iiwa 14 from Drake's
+ * iiwa14_no_collision.urdf (RobotLocomotion/drake, manipulation/models/iiwa_description), typed in
+ * here apart from its preset (server/presets_robots.c); so is the Panda's. The two-link preset is
+ * Lynch and Park's arm with point masses at the link ends (Modern Robotics, section 8.1.1, its M, c
+ * and g in closed form, eqs. 8.9-8.11); the Puma 560 preset is Armstrong, Khatib and Burdick's
+ * (1986) modified DH table and inertial parameters as Corke's mdl_puma560akb lists them, link 1
+ * massless with 0.35 kg m^2 about its axis.
  */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -197,8 +201,8 @@ static int oracle_dynamics(const tjoint *J, const int *par, int n, const double 
     memset(M, 0, (size_t)(nv * nv) * sizeof *M);
     memset(G, 0, (size_t)nv * sizeof *G);
     memset(c, 0, (size_t)nv * sizeof *c);
+    /* every link, a massless one too: its rotational inertia counts (Puma 560's link 1) */
     for (int i = 0; i < n; i++) {
-        if (J[i].mass == 0) continue;
         double pc[3], Iw[9], RI[9], Rt[9];
         mv(Rl[i], J[i].com, pc);
         for (int k = 0; k < 3; k++) pc[k] += pl[i][k];
@@ -1484,6 +1488,92 @@ Test(urdf, panda_preset_tracks_exactly_and_holds_the_published_dynamics)
     cr_assert_eq(j->spec.chain.nbodies, 9);
     for (int k = 0; k < 9; k++) cr_assert_eq(j->spec.chain.parent[k], parents[k], "body %d", k);
     compare_tree(j, J, par, n, NULL);
+    job_free(j);
+}
+
+Test(urdf, two_link_preset_tracks_exactly_and_has_modern_robotics_closed_form)
+{
+    /* Lynch and Park, Modern Robotics 8.1.1: point masses m1 = m2 = 1 kg at the ends of links
+       L1 = L2 = 1 m, g along -y; as standard DH rows (a = L, the mass at frame i's origin) */
+    tjoint J[2];
+    for (int i = 0; i < 2; i++)
+        J[i] = (tjoint){.type = T_REV,
+                        .A = xf_id(),
+                        .B = dh_standard(1, 0, 0, 0),
+                        .axis = {0, 0, 1},
+                        .mass = 1};
+    job *j = run_preset("two_link_min_jerk");
+    cr_assert_eq(j->spec.chain.nbodies, 2);
+    compare(j, J, 2);
+
+    /* the book's eqs. 8.9-8.11: M11 = m1 L1^2 + m2 (L1^2 + 2 L1 L2 c2 + L2^2),
+       M12 = m2 (L1 L2 c2 + L2^2), M22 = m2 L2^2; c = (-m2 L1 L2 s2 (2 v1 v2 + v2^2),
+       m2 L1 L2 v1^2 s2); g = ((m1 + m2) L1 g c1 + m2 g L2 c12, m2 g L2 c12) */
+    ctc_model *m = NULL;
+    char msg[256];
+    cr_assert_eq(ctc_model_build(&j->spec.chain, &m, msg, sizeof msg), CTC_OK, "%s", msg);
+    ctc_oracle *o = ctc_oracle_new(m);
+    const double g = 9.81, zero[2] = {0, 0};
+    for (int k = 1; k < 5; k++) {
+        double q[2], v[2], M[4], tv[2], t0[2];
+        pose(k, 2, q, v);
+        double c1 = cos(q[0]), c2 = cos(q[1]), s2 = sin(q[1]), c12 = cos(q[0] + q[1]);
+        const double Mw[4] = {1 + (1 + 2 * c2 + 1), c2 + 1, c2 + 1, 1};
+        const double cw[2] = {-s2 * (2 * v[0] * v[1] + v[1] * v[1]), v[0] * v[0] * s2};
+        const double gw[2] = {2 * g * c1 + g * c12, g * c12};
+        ctc_oracle_mass_matrix(m, o, q, M);
+        ctc_oracle_rnea(m, o, q, v, zero, tv);
+        ctc_oracle_rnea(m, o, q, zero, zero, t0);
+        for (int e = 0; e < 4; e++)
+            cr_assert_leq(fabs(M[e] - Mw[e]), DYN_TOL, "pose %d: M[%d] %.17g, want %.17g", k, e,
+                          M[e], Mw[e]);
+        for (int i = 0; i < 2; i++) {
+            cr_assert_leq(fabs(t0[i] - gw[i]), DYN_TOL, "pose %d: g[%d] %.17g, want %.17g", k, i,
+                          t0[i], gw[i]);
+            cr_assert_leq(fabs(tv[i] - t0[i] - cw[i]), DYN_TOL, "pose %d: c[%d] %.17g, want %.17g",
+                          k, i, tv[i] - t0[i], cw[i]);
+        }
+    }
+    ctc_oracle_free(o);
+    ctc_model_free(m);
+    job_free(j);
+}
+
+/* Armstrong, Khatib and Burdick's Puma 560 as Corke's mdl_puma560akb lists it, typed in again:
+ * modified DH (a_(i-1), alpha_(i-1), d_i), masses, centres of mass and principal inertias in the
+ * link frames */
+static const double puma_a[6] = {0, 0, 0.4318, -0.0203, 0, 0};
+static const double puma_alpha[6] = {0, -PANDA_H, 0, PANDA_H, -PANDA_H, PANDA_H};
+static const double puma_d[6] = {0, 0.2435, -0.0934, 0.4331, 0, 0};
+static const double puma_m[6] = {0, 17.4, 4.8, 0.82, 0.34, 0.09};
+static const double puma_r[6][3] = {{0, 0, 0},          {0.068, 0.006, -0.016},
+                                    {0, -0.070, 0.014}, {0, 0, -0.019},
+                                    {0, 0, 0},          {0, 0, 0.032}};
+static const double puma_I[6][3] = {{0, 0, 0.35},
+                                    {0.13, 0.524, 0.539},
+                                    {0.066, 0.0125, 0.066},
+                                    {1.8e-3, 1.8e-3, 1.3e-3},
+                                    {0.3e-3, 0.3e-3, 0.4e-3},
+                                    {0.15e-3, 0.15e-3, 0.04e-3}};
+
+Test(urdf, puma560_preset_tracks_exactly_with_its_massless_first_link)
+{
+    /* F_i = F_(i-1) Rx(alpha_(i-1)) Tx(a_(i-1)) Rz(q_i) Tz(d_i) */
+    tjoint J[6];
+    for (int i = 0; i < 6; i++) {
+        J[i] = (tjoint){.type = T_REV,
+                        .A = xf_rpy(puma_a[i], 0, 0, puma_alpha[i], 0, 0),
+                        .B = xf_rpy(0, 0, puma_d[i], 0, 0, 0),
+                        .axis = {0, 0, 1},
+                        .mass = puma_m[i]};
+        memcpy(J[i].com, puma_r[i], sizeof J[i].com);
+        for (int k = 0; k < 3; k++) J[i].I[4 * k] = puma_I[i][k];
+    }
+    job *j = run_preset("puma560_min_jerk");
+    cr_assert_eq(j->spec.chain.nbodies, 6);
+    cr_assert_eq(j->spec.chain.bodies[0].mass, 0);
+    cr_assert_eq(j->spec.chain.gravity[2], -9.81);
+    compare(j, J, 6);
     job_free(j);
 }
 
