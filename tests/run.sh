@@ -4,8 +4,10 @@
 #   "N passed, N failed"                  every listed test ran
 #   "N passed, N failed, N not run"       a binary was stopped or died before all its tests ran
 # A test counts as run when Criterion reported it passing, failing or crashing; the tests a binary
-# lists (--list) and never reported are "not run", not failures. Exits non-zero if any test
-# failed, crashed or did not run.
+# lists (--list) and never reported are "not run", not failures. A binary whose output holds a
+# sanitizer's report (ASan or LSan "ERROR:", UBSan "runtime error:") counts one failure more,
+# since Criterion's workers report them at exit and Criterion still counts the test passed.
+# Exits non-zero if any test failed, crashed or did not run, or a sanitizer reported.
 #
 # From the environment:
 #   TEST_TIME_LIMIT  seconds one binary may take before it is stopped (default 600; the slowest,
@@ -62,6 +64,10 @@ for bin in "$@"; do
     else
         printf '%-44s %s (%s s)\n' "$name" "$(echo "$line" | sed 's/.*Synthesis: //; s/ *$//')" \
             "$secs"
+    fi
+    if grep -q -E '^==[0-9]+==ERROR: (Address|Leak)Sanitizer|runtime error:' "$tmp/out"; then
+        echo "$name: a sanitizer reported an error (its report is above)"
+        f=$((f + 1))
     fi
     passed=$((passed + p))
     failed=$((failed + f))
