@@ -149,7 +149,8 @@ static void build_ctrl_format(void)
 
 /* the keys of a complex pole, and of the controller's model */
 static const char *const pole_keys[] = {"re", "im", NULL};
-static const char *const model_keys[] = {"mass_scale", "inertia_scale", NULL};
+static const char *const model_keys[] = {"mass_scale", "inertia_scale", "bodies", "gravity",
+                                         "payload",    "random",        NULL};
 
 /* "poles": three entries, each a real pole or {"re": x, "im": y} */
 static int poles_at(parser *p, const cJSON *v, const char *path, double re[3], double im[3])
@@ -399,7 +400,7 @@ static int parse_ctrl_model(parser *p, const cJSON *ctrl, cJSON *out_ctrl)
         }
         json_put_number(p, out, keys[i], *scales[i]);
     }
-    return 0;
+    return parse_model_bodies(p, v, out);
 }
 
 /* "controller.sample_period" (s >= 0, 0 = continuous) and "controller.sample_delay" (whole
@@ -558,13 +559,9 @@ static const job_format_default doc_defaults[] = {
 
 const job_format_object *const *job_format_object_tables(void)
 {
-    static const job_format_object *const tables[] = {doc_objects,
-                                                      ctrl_format.rows,
-                                                      job_scene_objects,
-                                                      job_scene_joint_objects,
-                                                      job_run_objects,
-                                                      job_plant_objects,
-                                                      NULL};
+    static const job_format_object *const tables[] = {
+        doc_objects,     ctrl_format.rows,  job_scene_objects, job_scene_joint_objects,
+        job_run_objects, job_plant_objects, job_model_objects, NULL};
     pthread_once(&ctrl_format_once, build_ctrl_format);
     job_scene_joint_format();
     return tables;
@@ -810,6 +807,7 @@ void job_free(job *j)
     free(j->traj);
     free(j->disturb);
     free(j->plant);
+    free(j->model_bodies);
     free(j->gains);
     free(j->q0);
     free(j->v0);

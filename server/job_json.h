@@ -102,7 +102,12 @@
  *                 and pid, an override that names the other pair ("zeta"/"tau" where the
  *                 controller has "kp"/"kv", or the reverse) replaces the pair and must give both
  *       "model"   optional {"mass_scale": s > 0, "inertia_scale": s > 0}, default 1 and 1:
- *                 the controller's model of the plant (model error)
+ *                 the controller's model of the plant (model error); and (job_model.c):
+ *                 "bodies" [{"body": k, "mass" >= 0 | "mass_scale" > 0, "com": [3],
+ *                 "inertia" | "inertia_scale" > 0}], the model's own body values; "gravity"
+ *                 [3], the model's gravity; "payload" {"body": k, "mass" > 0, "point": [3]}, a
+ *                 point mass the plant carries and the model lacks; "random" {"seed", "mass",
+ *                 "com", "inertia"}, seeded uniform draws of the model's errors
  *       "sample_period"  s >= 0, default 0 (the paper's continuous controller): a sampled
  *                 controller with zero-order hold, its command computed at t = k T and held
  *                 (sim.h); at most JOB_MAX_CONTROL_SAMPLES instants in the run
@@ -138,7 +143,10 @@
  *                 regularised friction -coulomb tanh(v / v_s)
  *       "spring"   N m/rad or N/m >= 0, with "spring_rest" (rad or m, 0 when left out): the joint
  *                 force -spring (q - spring_rest)
+ *       "armature" kg m^2 or kg >= 0: the rotor's reflected inertia, added to the joint's
+ *                 diagonal of M (open chains)
  *       "known"    true | false (when left out): the controller compensates the joint forces
+ *                 and the armature
  *       "noise_q", "noise_v"  standard deviations >= 0 (rad or m, rad/s or m/s) of the Gaussian
  *                 noise on what a sampled controller measures; "resolution" >= 0 (rad or m):
  *                 its encoder's count. Need "controller.sample_period" and an open chain.
@@ -155,8 +163,11 @@
  *   "duration"    s, required, 0 < duration <= JOB_MAX_DURATION
  *   "output"      optional: {"interval": dt, 0 < dt <= duration (default 0.01 s, or the duration
  *                 when shorter), "channels": ["q", "qdot", "q_des", "qdot_des", "e", "tau", "w",
- *                 "energy", "loop"] (default: all that apply; q_des, qdot_des, e and w need a
- *                 controller, loop a loop, tau at least one controlled coordinate)}
+ *                 "energy", "loop", "end_effector"] (default: all that apply; q_des, qdot_des, e
+ *                 and w need a controller, loop a loop, end_effector its point, tau at least one
+ *                 controlled coordinate), "end_effector": {"body": k, "point": [3] (m, the body's
+ *                 frame; default [0, 0, 0])}: the point whose world position and velocity the
+ *                 end_effector channel records (x, y, z, vx, vy, vz)}
  *   "limits"      optional: {"max_speed": rad/s or m/s, > 0 (default 1e6), "wall_time": s >= 0
  *                 (0 = none)}
  *   "threads"     optional whole number 1..CTC_MAX_THREADS (64), default 1: the threads the run's
@@ -252,6 +263,11 @@ typedef struct job {
     ctc_traj *traj;             /* (nind) NULL when passive */
     ctc_disturb *disturb;       /* (nind) NULL when none */
     ctc_plant_coord *plant;     /* (nind) NULL when the plant is the ideal one */
+    /* (nbodies) the controller model's bodies (spec.model_bodies), NULL when they are the
+       plant's; model_gravity, the model's gravity when spec.model_gravity (job_model.c) */
+    ctc_body_spec *model_bodies;
+    double model_gravity[3];
+    ctc_end_effector end_effector; /* spec.end_effector points here when "output" gives one */
     cJSON *normalised; /* the job with the preset expanded and every default filled in; itself
                           a valid job document. Owned. */
 } job;

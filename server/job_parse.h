@@ -159,6 +159,15 @@ int parse_limits(parser *p, const cJSON *doc);
 /* "threads": a whole number 1..CTC_MAX_THREADS, default 1. */
 int parse_threads(parser *p, const cJSON *doc);
 
+/* ---- the controller's model beyond the scales (job_model.c) ---- */
+
+extern const job_format_object job_model_objects[];
+
+/* "controller.model"'s "bodies", "gravity", "payload" and "random" (model, at controller.model;
+ * NULL when absent), after the scene: fills spec.model_bodies and spec.model_gravity, and merges
+ * the payload into the plant's body. Written to out_model. */
+int parse_model_bodies(parser *p, const cJSON *model, cJSON *out_model);
+
 /* ---- the plant (job_plant.c) ---- */
 
 extern const job_format_object job_plant_objects[];

@@ -5,11 +5,12 @@
  *
  * Every term is off unless the job gives it, and no key has a default to write out: a job
  * without "plant" (normalised to "plant": {}) runs the paper's ideal plant and spec.plant stays
- * NULL. Each value is checked at its path: a limit and coulomb_velocity > 0, the friction levels
- * and the spring >= 0; a torque limit needs a controller (it clips the controller's force);
- * coulomb needs its coulomb_velocity, and coulomb_velocity and spring_rest their term. "known"
- * says the controller's model has the joint forces (it compensates them; plant.h). The sensors'
- * noise_q, noise_v and resolution (>= 0) need a sampled controller, which reads them.
+ * NULL. Each value is checked at its path: a limit and coulomb_velocity > 0, the friction levels,
+ * the spring and the armature >= 0 (the armature in an open chain); a torque limit needs a
+ * controller (it clips the controller's force); coulomb needs its coulomb_velocity, and
+ * coulomb_velocity and spring_rest their term. "known" says the controller's model has the joint
+ * forces and the armature (it compensates them; plant.h). The sensors' noise_q, noise_v and
+ * resolution (>= 0) need a sampled controller, which reads them.
  */
 #include <math.h>
 #include <stdio.h>
@@ -19,8 +20,8 @@
 #include "job_parse.h"
 
 static const char *const plant_keys[] = {
-    "torque_limit", "viscous", "coulomb", "coulomb_velocity", "spring", "spring_rest",
-    "known",        "noise_q", "noise_v", "resolution",       NULL};
+    "torque_limit", "viscous", "coulomb", "coulomb_velocity", "spring",     "spring_rest",
+    "armature",     "known",   "noise_q", "noise_v",          "resolution", NULL};
 
 /* the number obj[key] (at path), if given, into *x, checked: min 1 means > 0, 0 means >= 0,
    -1 any finite number; written to out */
@@ -46,7 +47,7 @@ static int parse_plant_item(parser *p, const cJSON *v, const char *path, int fir
 {
     char at[PATH_LEN];
     ctc_plant_coord pc = {0};
-    int given[9];
+    int given[10];
     if (json_object_at(p, v, path) != 0 ||
         json_check_keys(p, v, path, plant_keys, NULL, NULL) != 0 ||
         plant_number(p, v, path, "torque_limit", 1, &pc.torque_limit, &given[0], out) != 0 ||
@@ -58,7 +59,8 @@ static int parse_plant_item(parser *p, const cJSON *v, const char *path, int fir
         plant_number(p, v, path, "spring_rest", -1, &pc.spring_rest, &given[5], out) != 0 ||
         plant_number(p, v, path, "noise_q", 0, &pc.noise_q, &given[6], out) != 0 ||
         plant_number(p, v, path, "noise_v", 0, &pc.noise_v, &given[7], out) != 0 ||
-        plant_number(p, v, path, "resolution", 0, &pc.resolution, &given[8], out) != 0) {
+        plant_number(p, v, path, "resolution", 0, &pc.resolution, &given[8], out) != 0 ||
+        plant_number(p, v, path, "armature", 0, &pc.armature, &given[9], out) != 0) {
         return -1;
     }
     static const char *const sensor_keys[3] = {"noise_q", "noise_v", "resolution"};
@@ -73,6 +75,10 @@ static int parse_plant_item(parser *p, const cJSON *v, const char *path, int fir
             return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, sensor_keys[k]),
                                  "needs an open chain");
         }
+    }
+    if (given[9] && p->j->spec.chain.loop != NULL) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, "armature"),
+                             "needs an open chain");
     }
     if (given[0] && p->ctrl == CTC_CTRL_NONE) {
         return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, "torque_limit"),
@@ -112,8 +118,8 @@ int parse_plant(parser *p, const cJSON *doc)
     j->plant = json_alloc(p, (size_t)j->nind, sizeof *j->plant);
     if (j->plant == NULL || parse_per_coordinate(p, v, "plant", parse_plant_item) != 0) return -1;
     for (int i = 0; i < j->nind; i++) {
-        if (j->plant[i].torque_limit > 0 || ctc_plant_has_joint_force(&j->plant[i]) ||
-            ctc_plant_has_sensor_error(&j->plant[i])) {
+        if (j->plant[i].torque_limit > 0 || j->plant[i].armature > 0 ||
+            ctc_plant_has_joint_force(&j->plant[i]) || ctc_plant_has_sensor_error(&j->plant[i])) {
             j->spec.plant = j->plant;
             return 0;
         }

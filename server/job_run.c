@@ -425,6 +425,8 @@ static int channel_width(const job *j, int c)
     case CTC_CH_ENERGY:
     case CTC_CH_LOOP:
         return 2;
+    case CTC_CH_EE:
+        return 6;
     default:
         return j->nind;
     }
@@ -434,6 +436,7 @@ static int channel_width(const job *j, int c)
 static const char *why_not_applicable(int c)
 {
     if (c == CTC_CH_LOOP) return "needs a loop (\"scene.loop\")";
+    if (c == CTC_CH_EE) return "needs its point (\"output.end_effector\")";
     if (c == CTC_CH_TAU) return "has no columns (the loop has no independent coordinates)";
     return "needs a controller (this run is passive)";
 }
@@ -444,6 +447,7 @@ static int parse_channels(parser *p, const cJSON *output, const char *const *nam
     unsigned applicable = CTC_CH_ALL;
     if (p->ctrl == CTC_CTRL_NONE) applicable &= ~tracking_channels();
     if (p->j->spec.chain.loop == NULL) applicable &= ~CTC_CH_BIT(CTC_CH_LOOP);
+    if (p->j->spec.end_effector == NULL) applicable &= ~CTC_CH_BIT(CTC_CH_EE);
     if (p->j->nind == 0) applicable &= ~CTC_CH_BIT(CTC_CH_TAU); /* a loop of dependent joints */
     const cJSON *v = json_member(output, "channels");
     if (v == NULL) {
@@ -477,7 +481,38 @@ static int parse_channels(parser *p, const cJSON *output, const char *const *nam
     return 0;
 }
 
-static const char *const output_keys[] = {"interval", "channels", NULL};
+static const char *const output_keys[] = {"interval", "channels", "end_effector", NULL};
+static const char *const end_effector_keys[] = {"body", "point", NULL};
+
+/* "output.end_effector": {"body": k, "point": [x, y, z] (m, body frame; default the origin)},
+ * into j->end_effector and spec.end_effector; written to out */
+static int parse_end_effector(parser *p, const cJSON *output, cJSON *out)
+{
+    const char *path = "output.end_effector";
+    static const double origin[3] = {0, 0, 0};
+    job *j = p->j;
+    const cJSON *v = json_member(output, "end_effector");
+    double body;
+    if (v == NULL) return 0;
+    if (json_object_at(p, v, path) != 0 ||
+        json_check_keys(p, v, path, end_effector_keys, NULL, NULL) != 0 ||
+        json_member_number(p, v, path, "body", REQUIRED, 0, &body) != 0 ||
+        json_member_vec3(p, v, path, "point", OPTIONAL, origin, j->end_effector.point) != 0) {
+        return -1;
+    }
+    const int n = j->spec.chain.nbodies;
+    if (!(body >= 0 && body < n && body == floor(body))) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "output.end_effector.body",
+                             "must be a body index, a whole number from 0 to %d (got %g)", n - 1,
+                             body);
+    }
+    j->end_effector.body = (int)body;
+    j->spec.end_effector = &j->end_effector;
+    cJSON *o = json_put(p, out, "end_effector", cJSON_CreateObject());
+    json_put_number(p, o, "body", body);
+    json_put_numbers(p, o, "point", j->end_effector.point, 3);
+    return 0;
+}
 
 int parse_output(parser *p, const cJSON *doc)
 {
@@ -514,7 +549,10 @@ int parse_output(parser *p, const cJSON *doc)
     /* the channels, and the values they record */
     const char *names[CTC_NCHANNELS];
     for (int c = 0; c < CTC_NCHANNELS; c++) names[c] = ctc_channel_name((ctc_channel)c);
-    if (parse_channels(p, v, names, &s->channels) != 0) return -1;
+    cJSON *out = json_put(p, p->norm, "output", cJSON_CreateObject());
+    json_put_number(p, out, "interval", s->output_interval);
+    if (parse_end_effector(p, v, out) != 0 || parse_channels(p, v, names, &s->channels) != 0)
+        return -1;
     double per_sample = 1; /* t */
     for (int c = 0; c < CTC_NCHANNELS; c++) {
         if (!(s->channels & CTC_CH_BIT(c))) continue;
@@ -527,8 +565,6 @@ int parse_output(parser *p, const cJSON *doc)
                              samples * per_sample, samples, per_sample, JOB_MAX_VALUES);
     }
 
-    cJSON *out = json_put(p, p->norm, "output", cJSON_CreateObject());
-    json_put_number(p, out, "interval", s->output_interval);
     cJSON *channels = json_put(p, out, "channels", cJSON_CreateArray());
     for (int c = 0; c < CTC_NCHANNELS; c++) {
         if (s->channels & CTC_CH_BIT(c)) json_put(p, channels, NULL, cJSON_CreateString(names[c]));
@@ -590,6 +626,7 @@ const job_format_object job_run_objects[] = {
     FORMAT_KEYS("trajectory", "type", "polynomial", traj_keys[CTC_TRAJ_POLYNOMIAL]),
     FORMAT_KEYS("trajectory", "type", "min_jerk", traj_keys[CTC_TRAJ_MIN_JERK]),
     FORMAT_KEYS("trajectory", "type", "spline", traj_keys[CTC_TRAJ_SPLINE]),
+    FORMAT_KEYS("output.end_effector", NULL, NULL, end_effector_keys),
     FORMAT_KEYS("disturbance", "type", NULL, disturb_keys_all),
     FORMAT_KEYS("disturbance", "type", "none", disturb_keys[CTC_DISTURB_NONE]),
     FORMAT_KEYS("disturbance", "type", "constant", disturb_keys[CTC_DISTURB_CONSTANT]),

@@ -11,6 +11,7 @@
 
 static const char *const energy_parts[2] = {"kinetic", "potential"};
 static const char *const loop_parts[2] = {"position", "velocity"};
+static const char *const ee_parts[6] = {"x", "y", "z", "vx", "vy", "vz"};
 
 static cJSON *number_or_null(double x)
 {
@@ -159,7 +160,8 @@ static int every_of(const result_select *sel)
 /* column i of channel c is written: the coordinate filter applies to nv-wide channels */
 static int column_kept(const ctc_sim_result *r, const result_select *sel, int c, int i)
 {
-    if (!sel || !sel->coords || c == CTC_CH_ENERGY || c == CTC_CH_LOOP || r->width[c] != r->nv)
+    if (!sel || !sel->coords || c == CTC_CH_ENERGY || c == CTC_CH_LOOP || c == CTC_CH_EE ||
+        r->width[c] != r->nv)
         return 1;
     return sel->coords[i] != 0;
 }
@@ -170,6 +172,8 @@ void result_column_name(char *buf, size_t len, int c, int i)
         snprintf(buf, len, "energy[%s]", energy_parts[i]);
     else if (c == CTC_CH_LOOP)
         snprintf(buf, len, "loop[%s]", loop_parts[i]);
+    else if (c == CTC_CH_EE)
+        snprintf(buf, len, "end_effector[%s]", ee_parts[i]);
     else
         snprintf(buf, len, "%s[%d]", ctc_channel_name((ctc_channel)c), i);
 }

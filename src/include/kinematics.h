@@ -29,4 +29,13 @@
  * d's kinematics and joint arrays (data.h). Assumes a validated model; allocates nothing. */
 void ctc_kinematics(const ctc_model *m, ctc_data *d, const double *q, const double *v);
 
+/* The world position x (m) and velocity xd (m/s) of the point p (m, in body k's frame, whose
+ * origin is joint k's centre) of body k, from d's kinematics (ctc_kinematics):
+ *     x = xpos_k + R_k p,   xd = xvel_k + omega_k x (R_k p)
+ * In planar form the plane's coordinates are turned into the world's (x e1 + y e2 + z n), the
+ * normal component being the sum of the joint locations' along n on the path from the ground
+ * plus p's (constant: every motion lies in the plane). 0 <= k < nbodies. Pure. */
+void ctc_kinematics_point(const ctc_model *m, const ctc_data *d, int k, const double p[3],
+                          double x[3], double xd[3]);
+
 #endif

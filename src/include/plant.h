@@ -39,11 +39,25 @@
  * Flood 2014), u = (x >> 11) 2^-53, and a normal n = sqrt(-2 ln(1 - u_a)) cos(2 pi u_b) from two
  * successive uniforms (Box-Muller, the cosine branch only). Open chains only.
  *
+ * Armature. The reflected inertia of the actuator's rotor (gear ratio squared times the rotor's
+ * inertia), armature_i in kg m^2 (kg for a prismatic coordinate), is added to the diagonal of the
+ * joint-space mass matrix: the plant's accelerations solve
+ *     (M(q) + diag(armature)) qdd = f - h(q, v)
+ * (Featherstone 2008, section 9.6; MuJoCo's dof_armature). GDCA's assembly is not changed: the
+ * plant solves this exactly from k + 1 forward passes at the same state, k the number of
+ * coordinates with armature (ctc_plant_forward_armature below). When `known` is set, the
+ * controller adds armature_i u_i to its force, u the commanded acceleration (the inverse
+ * dynamics of the plant with armature: iGDCA's force plus armature u), so that with an exact
+ * model the error dynamics are the linear law of ctrl.h again. Open chains only.
+ *
  * A zero-initialised ctc_plant_coord is the ideal coordinate of the paper: no limit, no joint
  * force, exact sensors.
  */
 #ifndef CTC_PLANT_H
 #define CTC_PLANT_H
+
+#include "data.h"
+#include "model.h"
 
 typedef struct ctc_plant_coord {
     double torque_limit;     /* N m, or N for a prismatic coordinate: > 0 saturates the actuator at
@@ -53,10 +67,11 @@ typedef struct ctc_plant_coord {
     double coulomb_velocity; /* rad/s, m/s: > 0 when coulomb > 0, the regularisation's scale */
     double spring;           /* N m/rad, N/m: >= 0 */
     double spring_rest;      /* rad, m: the spring's rest position */
-    int known;               /* 1: the controller compensates the joint forces */
-    double noise_q;          /* rad, m: >= 0, the position noise's standard deviation */
-    double noise_v;          /* rad/s, m/s: >= 0, the rate noise's standard deviation */
-    double resolution;       /* rad, m: >= 0, the encoder's count; 0 = continuous */
+    double armature;   /* kg m^2, kg: >= 0, the reflected rotor inertia added to M's diagonal */
+    int known;         /* 1: the controller's model has the joint forces and the armature */
+    double noise_q;    /* rad, m: >= 0, the position noise's standard deviation */
+    double noise_v;    /* rad/s, m/s: >= 0, the rate noise's standard deviation */
+    double resolution; /* rad, m: >= 0, the encoder's count; 0 = continuous */
 } ctc_plant_coord;
 
 /* The joint force tau_j of coordinate p at position q and rate v (above). Pure. */
@@ -70,5 +85,27 @@ int ctc_plant_has_sensor_error(const ctc_plant_coord *p);
 
 /* The generator of the sensors' noise (above): the next standard normal draw, advancing *state. */
 double ctc_plant_normal(unsigned long long *state);
+
+/* The same generator's next uniform draw in [0, 1), u = (x >> 11) 2^-53 (above), advancing
+ * *state: for seeded draws of a model's errors (Monte-Carlo studies). */
+double ctc_plant_uniform(unsigned long long *state);
+
+/* The accelerations qdd (nv) of an open-chain model m with armature arm (nv, >= 0, per velocity
+ * coordinate) under the generalised forces f (nv): (M(q) + diag(arm)) qdd = f - h(q, v), for the
+ * state whose kinematics and body handle equations d holds (ctc_kinematics, ctc_handles). With
+ * J the k coordinates where arm > 0 and X = M^-1 (columns J), from k + 1 GDCA forward passes
+ * qdd0 = GDCA(f) and X e_j = GDCA(f + e_j) - qdd0:
+ *     (I + X_JJ diag(arm_J)) qdd_J = qdd0_J,   qdd = qdd0 - X_J diag(arm_J) qdd_J
+ * (I + X_JJ A_J is non-singular: X_JJ is positive definite and A_J >= 0), solved by Gaussian
+ * elimination with partial pivoting. work holds ctc_plant_armature_work(nv, k) doubles. With no
+ * armature it is ctc_gdca_forward. Not thread-safe on one d; allocates nothing. */
+void ctc_plant_forward_armature(const ctc_model *m, ctc_data *d, const double *arm, const double *f,
+                                double *qdd, double *work);
+
+/* the size in doubles of ctc_plant_forward_armature's work for nv coordinates, k with armature */
+static inline int ctc_plant_armature_work(int nv, int k)
+{
+    return nv + nv * k + k * k + k;
+}
 
 #endif

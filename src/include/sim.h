@@ -51,9 +51,16 @@
 #include "status.h"
 #include "traj.h"
 
+/* A point on a body whose world position and velocity the end_effector channel records. */
+typedef struct ctc_end_effector {
+    int body;        /* 0 .. nbodies - 1 */
+    double point[3]; /* m, in the body's frame (origin at its joint's centre) */
+} ctc_end_effector;
+
 /* Output channels, as bits of ctc_sim_spec.channels. Widths: q nq; qdot nv; energy 2 (kinetic,
- * potential); loop 2; all others nind (the controlled coordinates: nv for an open chain). q_des,
- * qd_des, e and w need a controller, loop a loop model. */
+ * potential); loop 2; end_effector 6; all others nind (the controlled coordinates: nv for an open
+ * chain). q_des, qd_des, e and w need a controller, loop a loop model, end_effector
+ * spec.end_effector. */
 typedef enum ctc_channel {
     CTC_CH_Q = 0,  /* q: joint positions (rad, m; quaternions as w, x, y, z) */
     CTC_CH_QD,     /* qdot: joint velocities */
@@ -65,6 +72,8 @@ typedef enum ctc_channel {
     CTC_CH_ENERGY, /* energy: kinetic and potential (J); potential is zero at the world origin */
     CTC_CH_LOOP,   /* loop: position and velocity residual max-norms of the closure (m or rad,
                       m/s or rad/s); loop models only */
+    CTC_CH_EE,     /* end_effector: world position (m) and velocity (m/s) of the point
+                      spec.end_effector, x y z vx vy vz; only when the spec gives one */
     CTC_NCHANNELS
 } ctc_channel;
 
@@ -92,6 +101,11 @@ typedef struct ctc_sim_spec {
                                      passive */
     double model_mass_scale;      /* controller's model: every mass times this (> 0; 1 = exact) */
     double model_inertia_scale;   /* controller's model: every inertia about the CoM times this */
+    /* (nbodies) the controller model's bodies, to which the two scales then apply; NULL = the
+       plant's (chain.bodies). The model builder checks them as it checks the plant's */
+    const ctc_body_spec *model_bodies;
+    /* (3) m/s^2, the controller model's gravity; NULL = the plant's (chain.gravity) */
+    const double *model_gravity;
     const ctc_traj *traj;         /* (nind) desired trajectory per coordinate; unused if NONE */
     const ctc_disturb *disturb;   /* (nind) disturbance per coordinate; NULL = none */
     const ctc_plant_coord *plant; /* (nind) the actuator limit per coordinate (plant.h); NULL =
@@ -109,6 +123,8 @@ typedef struct ctc_sim_spec {
     double duration;        /* s, > 0 */
     double output_interval; /* s, > 0: samples at t = 0, dt, 2 dt, ... and at duration */
     unsigned channels;      /* CTC_CH_BIT mask; 0 = every channel that applies */
+    /* the end_effector channel's point; NULL = none (the channel does not apply) */
+    const ctc_end_effector *end_effector;
     double max_speed;       /* divergence bound on any |v_i| (rad/s, m/s); 0 = 1e6 */
     double wall_limit;      /* s of wall time before the run stops as "timeout"; 0 = none */
     /* loop models only */

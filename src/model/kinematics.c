@@ -186,3 +186,30 @@ void ctc_kinematics(const ctc_model *m, ctc_data *d, const double *q, const doub
     }
     if (m->has_loop) ctc_loop_kinematics(m, d);
 }
+
+void ctc_kinematics_point(const ctc_model *m, const ctc_data *d, int k, const double p[3],
+                          double x[3], double xd[3])
+{
+    const double *xr = d->xrot + 9 * k, *w = d->omega + 3 * k;
+    double r[3], wr[3];
+    if (m->form != CTC_FORM_PLANAR) {
+        ctc_m3_mulv(r, xr, p);
+        ctc_v3_add(x, d->xpos + 3 * k, r);
+        ctc_v3_cross(wr, w, r);
+        ctc_v3_add(xd, d->xvel + 3 * k, wr);
+        return;
+    }
+    /* planar: p in the plane's coordinates, turned by the body's angle (xrot's 2 x 2 block) */
+    const double *e1 = m->plane_e1, *e2 = m->plane_e2, *n = m->plane_n;
+    const double p1 = ctc_v3_dot(p, e1), p2 = ctc_v3_dot(p, e2);
+    double zn = ctc_v3_dot(p, n);
+    for (int j = k; j >= 0; j = m->body_parent[j]) zn += ctc_v3_dot(m->joints[j].location, n);
+    r[0] = xr[0] * p1 + xr[1] * p2;
+    r[1] = xr[3] * p1 + xr[4] * p2;
+    const double px = d->xpos[3 * k] + r[0], py = d->xpos[3 * k + 1] + r[1];
+    const double vx = d->xvel[3 * k] - w[2] * r[1], vy = d->xvel[3 * k + 1] + w[2] * r[0];
+    for (int i = 0; i < 3; i++) {
+        x[i] = px * e1[i] + py * e2[i] + zn * n[i];
+        xd[i] = vx * e1[i] + vy * e2[i];
+    }
+}

@@ -32,7 +32,7 @@
 #include "sim_internal.h"
 
 static const char *const channel_names[] = {"q",   "qdot", "q_des",  "qdot_des", "e",
-                                            "tau", "w",    "energy", "loop"};
+                                            "tau", "w",    "energy", "loop",     "end_effector"};
 static const char *const run_names[] = {"done",      "diverged", "failed",
                                         "cancelled", "timeout",  "singular"};
 static const char *const stab_names[] = {"project", "baumgarte", "none"};
@@ -65,7 +65,8 @@ static double now(clockid_t clock)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* the controller's model: the plant's chain with masses and inertias scaled */
+/* the controller's model: the plant's chain with the model's bodies (the plant's when none are
+   given), masses and inertias scaled, and the model's gravity */
 static ctc_status build_controller_model(const ctc_sim_spec *s, ctc_model **out, char *err,
                                          size_t errlen)
 {
@@ -73,18 +74,19 @@ static ctc_status build_controller_model(const ctc_sim_spec *s, ctc_model **out,
     ctc_body_spec *b = malloc((size_t)n * sizeof *b);
     if (!b) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     for (int k = 0; k < n; k++) {
-        b[k] = s->chain.bodies[k];
+        b[k] = s->model_bodies ? s->model_bodies[k] : s->chain.bodies[k];
         b[k].mass *= s->model_mass_scale;
         for (int j = 0; j < 9; j++) b[k].inertia[j] *= s->model_inertia_scale;
     }
     ctc_chain_spec c = s->chain;
     c.bodies = b;
     c.form = CTC_FORM_AUTO;
+    if (s->model_gravity)
+        for (int i = 0; i < 3; i++) c.gravity[i] = s->model_gravity[i];
     char why[200];
     ctc_status st = ctc_model_build(&c, out, why, sizeof why);
     free(b);
-    if (st != CTC_OK)
-        return ctc_fail(st, err, errlen, "controller model (scaled masses and inertias): %s", why);
+    if (st != CTC_OK) return ctc_fail(st, err, errlen, "controller model: %s", why);
     return CTC_OK;
 }
 
@@ -140,6 +142,7 @@ static void ctx_free(sim_ctx *c)
     free(c->ring);
     free(c->ym);
     free(c->xq);
+    free(c->arm);
 }
 
 /* The message of a run stopped as singular at time t, why saying what stopped it; the estimate
@@ -208,7 +211,8 @@ static ctc_status setup_context(sim_ctx *c, char *err, size_t errlen)
     c->cond_max = spec->loop_cond_max > 0 ? spec->loop_cond_max : CTC_SIM_DEFAULT_COND_MAX;
     for (int k = 0; k < plant->nbodies; k++) /* a q that is not a vector: renormalised */
         c->has_quat |= plant->jnt_nq[k] != plant->jnt_nv[k];
-    if (c->active && !(spec->model_mass_scale == 1 && spec->model_inertia_scale == 1)) {
+    if (c->active && !(spec->model_mass_scale == 1 && spec->model_inertia_scale == 1 &&
+                       !spec->model_bodies && !spec->model_gravity)) {
         ctc_status st = build_controller_model(spec, &c->ctrl_model, err, errlen);
         if (st != CTC_OK) return st;
     }
@@ -240,6 +244,17 @@ static ctc_status setup_context(sim_ctx *c, char *err, size_t errlen)
             c->jforces = 1;
             c->jknown &= spec->plant[i].known != 0;
         }
+        if (spec->plant[i].armature > 0) {
+            c->armed = 1;
+            c->jknown &= spec->plant[i].known != 0;
+        }
+    }
+    if (c->armed) { /* open chains only (sim_check.c): coordinate i is velocity ind_coord[i] */
+        int k = 0;
+        for (int i = 0; i < c->nind; i++) k += spec->plant[i].armature > 0;
+        c->arm = calloc((size_t)(c->nv + ctc_plant_armature_work(c->nv, k)), sizeof(double));
+        if (!c->arm) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+        for (int i = 0; i < c->nind; i++) c->arm[plant->ind_coord[i]] = spec->plant[i].armature;
     }
     c->law_in = (ctc_ctrl_eval){.nind = c->nind,
                                 .qi = c->qi,
@@ -273,6 +288,7 @@ static ctc_status setup_recorder(sim_ctx *c, recorder *rec, double *ybuf, char *
     const ctc_sim_spec *spec = c->spec;
     unsigned channels = spec->channels ? spec->channels : sim_channels_applicable(c->active);
     if (!spec->channels && c->plant->has_loop) channels |= CTC_CH_BIT(CTC_CH_LOOP);
+    if (!spec->channels && spec->end_effector) channels |= CTC_CH_BIT(CTC_CH_EE);
     rec->count = sim_sample_count(spec->duration, spec->output_interval);
     rec->dt = spec->output_interval;
     if (sim_alloc_result(c, channels, rec->count, &rec->r) != CTC_OK)

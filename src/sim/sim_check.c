@@ -19,7 +19,7 @@
 
 unsigned sim_channels_applicable(int active)
 {
-    unsigned all = CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_LOOP);
+    unsigned all = CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_LOOP) & ~CTC_CH_BIT(CTC_CH_EE);
     if (!active)
         all &= ~(CTC_CH_BIT(CTC_CH_Q_DES) | CTC_CH_BIT(CTC_CH_QD_DES) | CTC_CH_BIT(CTC_CH_E) |
                  CTC_CH_BIT(CTC_CH_W));
@@ -83,7 +83,22 @@ ctc_status sim_check_run(const ctc_sim_spec *s, char *err, size_t errlen)
     if (s->sample_period > 0 && !active)
         return ctc_fail(CTC_EINVAL, err, errlen,
                         "sample_period needs a controller (this run is passive)");
-    unsigned bad = s->channels & ~sim_channels_applicable(active) & ~CTC_CH_BIT(CTC_CH_LOOP);
+    unsigned bad = s->channels & ~sim_channels_applicable(active) & ~CTC_CH_BIT(CTC_CH_LOOP) &
+                   ~CTC_CH_BIT(CTC_CH_EE);
+    if ((s->channels & CTC_CH_BIT(CTC_CH_EE)) && !s->end_effector)
+        return ctc_fail(CTC_EINVAL, err, errlen,
+                        "channel \"end_effector\" needs the end effector's body and point");
+    if (s->end_effector) {
+        const ctc_end_effector *ee = s->end_effector;
+        if (ee->body < 0 || ee->body >= s->chain.nbodies)
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "end effector body %d out of range (the chain has %d bodies)", ee->body,
+                            s->chain.nbodies);
+        for (int i = 0; i < 3; i++)
+            if (!isfinite(ee->point[i]))
+                return ctc_fail(CTC_EINVAL, err, errlen,
+                                "end effector point[%d] must be finite (got %g)", i, ee->point[i]);
+    }
     if (s->channels & ~CTC_CH_ALL)
         return ctc_fail(CTC_EINVAL, err, errlen, "unknown output channel bits 0x%x",
                         s->channels & ~CTC_CH_ALL);
@@ -100,6 +115,10 @@ ctc_status sim_check_run(const ctc_sim_spec *s, char *err, size_t errlen)
         return ctc_fail(CTC_EINVAL, err, errlen,
                         "model inertia scale must be positive and finite (got %g)",
                         s->model_inertia_scale);
+    for (int i = 0; active && s->model_gravity && i < 3; i++)
+        if (!isfinite(s->model_gravity[i]))
+            return ctc_fail(CTC_EINVAL, err, errlen, "model gravity[%d] must be finite (got %g)", i,
+                            s->model_gravity[i]);
     if ((unsigned)s->loop_stab > CTC_LOOP_NONE)
         return ctc_fail(CTC_EINVAL, err, errlen, "unknown loop stabilisation %d",
                         (int)s->loop_stab);
@@ -204,8 +223,11 @@ ctc_status sim_check_with_model(const ctc_sim_spec *s, const ctc_model *m, char 
         const struct {
             const char *name;
             double x;
-        } nonneg[] = {{"viscous", pc->viscous}, {"coulomb", pc->coulomb}, {"spring", pc->spring}};
-        for (int k = 0; k < 3; k++)
+        } nonneg[] = {{"viscous", pc->viscous},
+                      {"coulomb", pc->coulomb},
+                      {"spring", pc->spring},
+                      {"armature", pc->armature}};
+        for (int k = 0; k < 4; k++)
             if (!(nonneg[k].x >= 0) || isinf(nonneg[k].x))
                 return ctc_fail(CTC_EINVAL, err, errlen,
                                 "coordinate %d: %s must be non-negative and finite (got %g)", i,
@@ -234,6 +256,9 @@ ctc_status sim_check_with_model(const ctc_sim_spec *s, const ctc_model *m, char 
                 return ctc_fail(CTC_EINVAL, err, errlen,
                                 "coordinate %d: %s needs an open chain", i, sensor[k].name);
         }
+        if (pc->armature > 0 && m->has_loop)
+            return ctc_fail(CTC_EINVAL, err, errlen, "coordinate %d: armature needs an open chain",
+                            i);
         if (!isfinite(pc->spring_rest))
             return ctc_fail(CTC_EINVAL, err, errlen,
                             "coordinate %d: spring_rest must be finite (got %g)", i,

@@ -47,6 +47,9 @@ typedef struct sim_ctx {
     int jknown;      /* every coordinate's joint force is known to the controller */
     double *fp;      /* (nvx) what the forward pass receives: fz plus the joint forces */
     double *xq;      /* (nq + nv) a baseline controller's model state (sim_rhs.c) */
+    int armed;       /* some coordinate has armature (plant.h) */
+    double *arm;     /* (nv) the armature per velocity coordinate, then ctc_plant_forward_armature's
+                        work; NULL when none has armature */
     /* a sampled controller (sim.h sample_period): the commands of the last delay + 1 samples,
        each (nvx) f, (nind) w, (nind) clip, in a ring, and a zero command */
     int sampled, delay;

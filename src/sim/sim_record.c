@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "energy.h"
+#include "kinematics.h"
 #include "sim_internal.h"
 
 long sim_sample_count(double duration, double dt)
@@ -42,7 +43,7 @@ unsigned sim_sample_needs(const sim_ctx *c, const recorder *rec)
     if (c->plant->has_loop) return SIM_EVAL_FULL;
     unsigned what = 0;
     if (c->active) what |= SIM_EVAL_FORCES; /* the tau channel and metrics, the clipping */
-    if (r->ch[CTC_CH_ENERGY] || rec->track_energy) what |= SIM_EVAL_KIN;
+    if (r->ch[CTC_CH_ENERGY] || r->ch[CTC_CH_EE] || rec->track_energy) what |= SIM_EVAL_KIN;
     return what;
 }
 
@@ -101,6 +102,11 @@ void sim_record_sample(sim_ctx *c, recorder *rec, double t, const double *y)
             }
         }
     }
+    if (r->ch[CTC_CH_EE]) {
+        double *out = r->ch[CTC_CH_EE] + 6 * (size_t)j;
+        const ctc_end_effector *ee = c->spec->end_effector;
+        ctc_kinematics_point(c->plant, c->dp, ee->body, ee->point, out, out + 3);
+    }
     double ke = 0, pe = 0;
     if (r->ch[CTC_CH_ENERGY] || rec->track_energy) {
         ctc_energy(c->plant, c->dp, &ke, &pe);
@@ -126,6 +132,7 @@ ctc_status sim_alloc_result(const sim_ctx *c, unsigned channels, long count, ctc
         r->width[ch] = ch == CTC_CH_Q                             ? c->nq
                        : ch == CTC_CH_QD                          ? c->nv
                        : ch == CTC_CH_ENERGY || ch == CTC_CH_LOOP ? 2
+                       : ch == CTC_CH_EE                          ? 6
                                                                   : c->nind;
         if (r->width[ch] == 0) continue;
         r->ch[ch] = malloc((size_t)count * (size_t)r->width[ch] * sizeof(double));

@@ -20,7 +20,9 @@
  * the controller share one ctc_data, so the kinematics and the body handle equations are computed
  * once per evaluation (Eq. 42-43). Spherical joints (passive runs only) are integrated as
  * quaternions; the evaluation reads a normalised copy. The law is called once per evaluation
- * through the class's pointer, for all coordinates at once; nothing here allocates.
+ * through the class's pointer, for all coordinates at once; nothing here allocates. With
+ * armature (plant.h) the plant's pass is ctc_plant_forward_armature, and a known armature adds
+ * armature u to the controller's force.
  *
  * Loop models: the controller's coordinates are the independent ones (the closing joint's
  * position and rate come from the loop kinematics), the forces and accelerations of the passes
@@ -135,6 +137,10 @@ int sim_evaluate(sim_ctx *c, double t, const double *y, unsigned what)
             }
         }
         if (forces && m->has_loop) c->cond = c->dc->loop_cond;
+        /* a known armature: the plant's inverse dynamics add armature u (plant.h) */
+        for (int i = 0; forces && c->armed && i < c->nind; i++)
+            if (s->plant[i].known)
+                c->f[m->ind_coord[i]] += s->plant[i].armature * c->u[m->ind_coord[i]];
         for (int i = 0; forces && c->jforces && i < c->nind; i++)
             if (s->plant[i].known)
                 c->f[m->ind_coord[i]] -= ctc_plant_joint_force(&s->plant[i], c->qi[i], c->vi[i]);
@@ -163,7 +169,11 @@ int sim_evaluate(sim_ctx *c, double t, const double *y, unsigned what)
             c->fp[m->ind_coord[i]] += ctc_plant_joint_force(&s->plant[i], c->qi[i], c->vi[i]);
         fwd = c->fp;
     }
-    ctc_gdca_forward(m, c->dp, fwd, c->acc);
+    if (c->armed) {
+        ctc_plant_forward_armature(m, c->dp, c->arm, fwd, c->acc, c->arm + c->nv);
+    } else {
+        ctc_gdca_forward(m, c->dp, fwd, c->acc);
+    }
     c->evals++;
     c->eval_valid = 1;
     c->t_eval = t;

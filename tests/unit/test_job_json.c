@@ -466,6 +466,33 @@ static const bad_job bad_jobs[] = {
      "more accurate and stiffer)"},
     {"negative viscous friction", PD_JOB(",'plant':[{},{'viscous':-2}]"), NULL, JOB_INVALID_FIELD,
      "plant[1].viscous", "must be non-negative (got -2)"},
+    {"model body index out of range", PD_JOB_CTRL("'model':{'bodies':[{'body':2,'mass':1}]}"), NULL,
+     JOB_INVALID_FIELD, "controller.model.bodies[0].body",
+     "must be a body index, a whole number from 0 to 1 (got 2)"},
+    {"negative model mass", PD_JOB_CTRL("'model':{'bodies':[{'body':0},{'body':1,'mass':-1}]}"),
+     NULL, JOB_INVALID_FIELD, "controller.model.bodies[1].mass", "must not be negative (got -1)"},
+    {"model mass and its scale",
+     PD_JOB_CTRL("'model':{'bodies':[{'body':0,'mass':1,'mass_scale':2}]}"), NULL,
+     JOB_INVALID_FIELD, "controller.model.bodies[0].mass_scale",
+     "give either \"mass\" or \"mass_scale\", not both"},
+    {"negative model inertia", PD_JOB_CTRL("'model':{'bodies':[{'body':0,'inertia':[1,-1,1]}]}"),
+     NULL, JOB_INVALID_FIELD, "controller.model.bodies[0].inertia[1]",
+     "must not be negative (got -1 kg m^2)"},
+    {"payload on no body", PD_JOB_CTRL("'model':{'payload':{'body':-1,'mass':1,'point':[0,0,0]}}"),
+     NULL, JOB_INVALID_FIELD, "controller.model.payload.body",
+     "must be a body index, a whole number from 0 to 1 (got -1)"},
+    {"payload without mass", PD_JOB_CTRL("'model':{'payload':{'body':0,'point':[0,0,0]}}"), NULL,
+     JOB_MISSING_FIELD, "controller.model.payload.mass", "is required"},
+    {"random mass range of 1", PD_JOB_CTRL("'model':{'random':{'seed':1,'mass':1}}"), NULL,
+     JOB_INVALID_FIELD, "controller.model.random.mass",
+     "must be less than 1, a relative range (got 1)"},
+    {"negative random seed", PD_JOB_CTRL("'model':{'random':{'seed':-3}}"), NULL, JOB_INVALID_FIELD,
+     "controller.model.random.seed", "must be a whole number from 0 to 2^53 (got -3)"},
+    {"model gravity of 2 numbers", PD_JOB_CTRL("'model':{'gravity':[0,-9.81]}"), NULL,
+     JOB_INVALID_FIELD, "controller.model.gravity",
+     "must be an array of 3 numbers (got 2 entries)"},
+    {"negative armature", PD_JOB(",'plant':[{'armature':-0.1},{}]"), NULL, JOB_INVALID_FIELD,
+     "plant[0].armature", "must be non-negative (got -0.1)"},
     {"zero coulomb velocity", PD_JOB(",'plant':{'coulomb':1,'coulomb_velocity':0}"), NULL,
      JOB_INVALID_FIELD, "plant.coulomb_velocity", "must be positive (got 0)"},
     {"spring rest without a spring", PASSIVE_JOB(",'plant':{'spring_rest':1}"), NULL,
@@ -550,7 +577,7 @@ static const bad_job bad_jobs[] = {
     {"unknown channel", PASSIVE_JOB(",'output':{'channels':['x']}"), NULL, JOB_INVALID_FIELD,
      "output.channels[0]",
      "must be one of \"q\", \"qdot\", \"q_des\", \"qdot_des\", \"e\", \"tau\", \"w\", \"energy\", "
-     "\"loop\" (got \"x\")"},
+     "\"loop\", \"end_effector\" (got \"x\")"},
     {"channel twice", PASSIVE_JOB(",'output':{'channels':['q','q']}"), NULL, JOB_INVALID_FIELD,
      "output.channels[1]", "\"q\" is listed twice"},
     {"no channels", PASSIVE_JOB(",'output':{'channels':[]}"), NULL, JOB_INVALID_FIELD,
@@ -882,7 +909,8 @@ Test(job_json, fills_every_default_of_a_minimal_planar_job)
     j = parse_ok("{" SCENE1 "," PD "," HOLD ",'duration':0.004,'integrator':{'method':'rk4'}}");
     cr_assert_eq(j->spec.integrator.step, 1e-3);
     cr_assert_eq(j->spec.output_interval, 0.004);
-    cr_assert_eq(j->spec.channels, CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_LOOP), "loop: no loop");
+    cr_assert_eq(j->spec.channels, CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_LOOP) & ~CTC_CH_BIT(CTC_CH_EE),
+                 "loop: no loop; end_effector: no point");
     cr_assert_null(j->spec.chain.loop);
     cr_assert_null(j->spec.chain.independent);
     cr_assert_eq(j->nind, j->nv);
@@ -906,7 +934,8 @@ Test(job_json, a_loop_counts_its_independent_coordinates_and_fills_its_defaults)
     cr_assert_eq(s->loop_stab, CTC_LOOP_PROJECT);
     cr_assert_eq(s->loop_tol, 1e-12);
     cr_assert_eq(s->loop_cond_max, 1e5, "the documented default (api/job.schema.json)");
-    cr_assert_eq(s->channels, CTC_CH_ALL, "every channel, the loop's included");
+    cr_assert_eq(s->channels, CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_EE),
+                 "every channel, the loop's included (end_effector: no point)");
     cr_assert(j->gains[0].kp == 100 && j->gains[0].kv == 20 && j->gains[0].ki == 0);
     cr_assert_eq(j->traj[0].type, CTC_TRAJ_CONSTANT);
 
@@ -1120,6 +1149,10 @@ Test(job_json, plant_terms_reach_the_spec_and_an_ideal_plant_leaves_none)
         cr_expect(pc->viscous == 0.5 && pc->coulomb == 2 && pc->coulomb_velocity == 0.01 &&
                   pc->spring == 3 && pc->spring_rest == -0.1 && pc->known == 1);
     }
+    job_free(j);
+    j = parse_ok(PD_JOB(",'plant':[{},{'armature':0.25}]"));
+    cr_assert_not_null(j->spec.plant, "an armature alone is a plant term");
+    cr_expect(j->spec.plant[0].armature == 0 && j->spec.plant[1].armature == 0.25);
     job_free(j);
 }
 
