@@ -39,7 +39,9 @@
  * status is 1 when it is not met). On CTC forces no forward solver can be held to 1e-8 - the
  * oracle's own round trip is far above it there - so "fwd ctc" and "rt gdca" are printed against
  * "rt aba" instead. ctc_gdca_forward is measured as it stands, so a change to it shows by simply
- * running this again. Usage: bench_accuracy [max_n] [states]
+ * running this again. Last, slender rods (issue 18): GDCA against a dense solve, against ABA and
+ * in a round trip, over each rod's moment ratio 1 .. 1e-12 at n = 2 ... 4096 (model.h "slender
+ * bodies"). Usage: bench_accuracy [max_n] [states]
  */
 #include <lapacke.h>
 #include <math.h>
@@ -340,6 +342,98 @@ static int print_requirement(void)
     return !(x <= REQUIREMENT);
 }
 
+/* ---- slender bodies (issue 18): test_chain_slender_rods over moment ratios ---- */
+
+static const double slender_ratio[] = {1, 1e-2, 2e-3, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12};
+static const int slender_n[] = {2, 16, 256, 1024, 4096};
+#define NSLR ((int)(sizeof slender_ratio / sizeof *slender_ratio))
+#define NSLN ((int)(sizeof slender_n / sizeof *slender_n))
+#define SLENDER_DENSE_MAX 1024 /* the dense solve's O(n^3) cost beyond */
+
+/* n rods of moment ratio `ratio` at `states` random states (v in [-1, 1] rad/s): the largest
+ * error of ctc_gdca_forward's qdd against the dense solve of M qdd = f - N (CRBA, RNEA,
+ * Cholesky; n <= SLENDER_DENSE_MAX, else NAN) and against ABA for f in [-5, 5] N m (out[0],
+ * out[1]), and the round trip GDCA(RNEA(u)) against u in [-1, 1] (out[2]); out[3] = the
+ * refinement steps of the last call. Returns 1 if a result is not finite. */
+static int measure_slender(int n, double ratio, int states, double out[4])
+{
+    char err[256];
+    test_chain *c = test_chain_slender_rods(n, ratio);
+    ctc_model *m = NULL;
+    if (ctc_model_build(&c->spec, &m, err, sizeof err) != CTC_OK) {
+        fprintf(stderr, "slender n = %d ratio %g: %s\n", n, ratio, err);
+        test_chain_free(c);
+        return 1;
+    }
+    ctc_data *d = ctc_data_new(m);
+    ctc_oracle *o = ctc_oracle_new(m);
+    const int nv = m->nv, dense = n <= SLENDER_DENSE_MAX;
+    double *buf = calloc((size_t)m->nq + 8 * (size_t)nv, sizeof(double));
+    double *mm = dense ? malloc(sizeof(double) * (size_t)nv * (size_t)nv) : NULL;
+    int bad = d == NULL || o == NULL || buf == NULL || (dense && mm == NULL);
+    for (int i = 0; i < 4; i++) out[i] = NAN;
+    uint64_t rng = 18;
+    for (int s = 0; s < states && !bad; s++) {
+        double *q = buf, *v = q + m->nq, *f = v + nv, *a = f + nv, *ref = a + nv, *b = ref + nv,
+               *zero = b + nv, *u = zero + nv, *fu = u + nv;
+        test_random_state(m, &rng, 1.0, q, v);
+        for (int i = 0; i < nv; i++) {
+            f[i] = test_uniform(&rng, -5, 5);
+            u[i] = test_uniform(&rng, -1, 1);
+        }
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        ctc_gdca_forward(m, d, f, a);
+        bad |= !test_all_finite(a, nv);
+        if (dense) {
+            ctc_oracle_mass_matrix(m, o, q, mm);
+            ctc_oracle_rnea(m, o, q, v, zero, b);
+            for (int i = 0; i < nv; i++) b[i] = f[i] - b[i];
+            bad |= test_solve_spd(mm, nv, b, ref) != 0;
+            update(&out[0], test_rel_err(a, ref, nv));
+        }
+        ctc_oracle_aba(m, o, q, v, f, ref);
+        update(&out[1], test_rel_err(a, ref, nv));
+        ctc_oracle_rnea(m, o, q, v, u, fu);
+        ctc_gdca_forward(m, d, fu, a);
+        bad |= !test_all_finite(a, nv);
+        update(&out[2], test_rel_err(a, u, nv));
+        out[3] = d->fwd_refine_done;
+    }
+    free(mm);
+    free(buf);
+    ctc_oracle_free(o);
+    ctc_data_free(d);
+    ctc_model_free(m);
+    test_chain_free(c);
+    return bad;
+}
+
+static int print_slender(int max_n, int states)
+{
+    int bad = 0;
+    printf("\nSlender rods (issue 18; tests/support test_chain_slender_rods: 1 kg, 1 m, hinges "
+           "about z and y),\nby each rod's smallest / largest principal moment, the largest over "
+           "%d states:\nGDCA qdd vs the dense solve (n <= %d) | vs ABA | round trip "
+           "GDCA(RNEA(u)) vs u | refinement steps\n\n%7s",
+           states, SLENDER_DENSE_MAX, "ratio");
+    for (int j = 0; j < NSLN && slender_n[j] <= max_n; j++) printf(" %31d", slender_n[j]);
+    printf("\n");
+    for (int r = 0; r < NSLR; r++) {
+        printf("%7.0e", slender_ratio[r]);
+        for (int j = 0; j < NSLN && slender_n[j] <= max_n; j++) {
+            double x[4] = {NAN, NAN, NAN, NAN};
+            int fail = measure_slender(slender_n[j], slender_ratio[r], states, x);
+            bad |= fail;
+            printf("  %7.1e %7.1e %7.1e %2.0f%s", x[0], x[1], x[2], x[3], fail ? "!" : " ");
+        }
+        printf("\n");
+        fflush(stdout);
+    }
+    printf("(! : a non-finite result)\n");
+    return bad;
+}
+
 int main(int argc, char **argv)
 {
     int max_n = argc > 1 ? atoi(argv[1]) : sizes[NSIZES - 1];
@@ -373,5 +467,6 @@ int main(int argc, char **argv)
     printf("Growth with n: ratio between successive sizes:\n\n");
     print_ratios();
     bad |= print_requirement();
+    bad |= print_slender(max_n, states);
     return bad;
 }

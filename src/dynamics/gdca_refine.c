@@ -15,7 +15,7 @@
 
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d)
 {
-    if (m->nsingular > 0) { /* the refinement is what makes the augmented pass exact */
+    if (m->nsingular > 0 || m->nslender > 0) { /* it makes the augmented pass exact */
         return d->opt.fwd_refine > CTC_REFINE_SINGULAR_STEPS ? d->opt.fwd_refine
                                                              : CTC_REFINE_SINGULAR_STEPS;
     }

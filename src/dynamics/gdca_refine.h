@@ -40,10 +40,12 @@
 #define CTC_REFINE_CONVERGED 1e-8
 #define CTC_REFINE_STALL 10.0
 
-/* A model with a singular body (model.h "singular bodies") computes its forward handle equations
- * with augmented inertias, and the refinement removes that error: it gets up to
+/* A model with a singular or a slender body (model.h "singular bodies", "slender bodies")
+ * computes its forward handle equations with augmented inertias, and the refinement removes that
+ * error: it gets up to
  * CTC_REFINE_SINGULAR_STEPS steps, or d->opt.fwd_refine if that is more (each shrinks the error
- * by about the augmentation's share, 1e-6 to 1e-5; the stopping rules above end it after two). */
+ * by about the augmentation's share, 1e-6 to 1e-5 for a singular body and about 1e-4 for a
+ * slender one; the stopping rules above end it after two). */
 #define CTC_REFINE_SINGULAR_STEPS 6
 
 /* The most refinement steps ctc_gdca_forward makes on model m with settings d: d->opt.fwd_refine

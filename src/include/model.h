@@ -173,17 +173,39 @@ typedef struct ctc_body_spec {
  * CTC_REFINE_SINGULAR_STEPS steps) corrects the augmented result against it: each step shrinks
  * the error by about the augmentation's share of the joint-space inertia, 1e-6 to 1e-5, so two
  * steps reach rounding. 1e-6 is measured (bench/NOTEBOOK.md, "Singular bodies"): 1e-4 needs
- * three steps, 1e-8 and less lose digits to the augmented bodies' own conditioning. The joint-space mass matrix M(q)
- * must then be positive definite: with a singular body the builder factors M at a generic
- * configuration (each coordinate q_i = sin(i + 1), each quaternion normalised from
- * (1, 0.1 sin(i + 1), 0.2, 0.3)) and refuses a pivot <= CTC_MASS_MATRIX_PIVOT_REL times the
- * largest diagonal entry, naming the joint's body: a massless tip on a moving joint, a point
- * mass on a revolute axis through it. Loop models refuse singular bodies (their passes invert
- * each body's mobility). Models without a singular body skip all of this and are unchanged. */
+ * three steps, 1e-8 and less lose digits to the augmented bodies' own conditioning. The joint-space
+ * mass matrix M(q) must then be positive definite: with a singular body the builder factors M at a
+ * generic configuration (each coordinate q_i = sin(i + 1), each quaternion normalised from (1, 0.1
+ * sin(i + 1), 0.2, 0.3)) and refuses a pivot <= CTC_MASS_MATRIX_PIVOT_REL times the largest
+ * diagonal entry, naming the joint's body: a massless tip on a moving joint, a point mass on a
+ * revolute axis through it. Loop models refuse singular bodies (their passes invert each body's
+ * mobility). Models without a singular body skip all of this and are unchanged. */
 #define CTC_MASS_ZERO_REL 1e-12
 #define CTC_INERTIA_ZERO_REL 1e-12
 #define CTC_SINGULAR_AUGMENT_REL 1e-6
 #define CTC_MASS_MATRIX_PIVOT_REL 1e-10
+
+/* ---- slender bodies ----
+ *
+ * A body of a spatial open model that is not singular but whose smallest principal moment is
+ * under CTC_SLENDER_RATIO times its largest (a rod, a thin beam) is slender. The forward pass's
+ * handle equations carry its inverse inertia, and rounding there costs about eps times the
+ * body's largest / smallest moment in qdd whether or not any joint spins the body about its thin
+ * axis (bench/NOTEBOOK.md, "Slender bodies (issue 18)": 16 rods at a ratio of 1e-10 lose 1e-5 of
+ * qdd, 256 rods at 1e-6 lose the joint factor's positive definiteness). So fwd_bodies gives a
+ * slender body CTC_SLENDER_AUGMENT_REL times its largest moment on each principal moment (an
+ * isotropic addition: the principal axes stay and the triangle inequality holds), which bounds
+ * its moment ratio at about that fraction, and the forward pass's refinement (gdca_refine.h:
+ * CTC_REFINE_SINGULAR_STEPS at most) removes the augmentation's error against the composite
+ * inverse pass, which inverts no body. qdd then matches a dense solve to 1.2e-13 (16 rods, as
+ * thick rods do) and to the dense solve's own rounding (256 rods) at every ratio from 1e-2 to
+ * 1e-12, in two steps. Ratios
+ * from CTC_SLENDER_RATIO up lose at most about 1e-12 of qdd unrefined, and 7e-11 in the round
+ * trip GDCA(RNEA(u)) of CTC-like forces (16 rods; 2e-3 lost 3e-10 there). The thresholds are
+ * measured (bench/NOTEBOOK.md). A loop model's slender bodies are not augmented (its passes invert
+ * each body's mobility, gdca_inverse_loop.h); nslender is 0 there. */
+#define CTC_SLENDER_RATIO 1e-2
+#define CTC_SLENDER_AUGMENT_REL 1e-5
 
 typedef struct ctc_joint_spec {
     ctc_joint_type type;
@@ -276,10 +298,13 @@ typedef struct ctc_model {
     double mass_ratio;            /* the larger of max/min body mass and max/min inertia trace over
                                      the chain's bodies with mass (>= 1) */
     int nsingular;                /* the singular bodies (see "singular bodies" above) */
+    int nslender;                 /* the slender bodies (see "slender bodies" above; 0 in planar
+                                     form and in loop models) */
     unsigned char *body_singular; /* (n) 1: body k is singular; NULL when nsingular = 0 */
     ctc_body_spec *fwd_bodies;    /* (n) the bodies of the forward pass's handle equations:
-                                     `bodies` itself (the same pointer) when nsingular = 0, else a
-                                     copy with each singular body's mass and inertia augmented */
+                                     `bodies` itself (the same pointer) when nsingular = nslender
+                                     = 0, else a copy with each singular body's mass and inertia
+                                     and each slender body's inertia augmented */
     double *body_inertia_inv; /* (n x 9) inverse of fwd_bodies' inertia about the CoM, body frame
                                  (spatial) */
     double *jnt_perp;         /* (n x 6) two unit vectors normal to joint k's axis, parent frame */

@@ -872,14 +872,25 @@ static void setup_mass_ratio(ctc_model *m)
     m->mass_ratio = fmax(mhi > 0 ? mhi / mlo : 1.0, thi > 0 ? thi / tlo : 1.0);
 }
 
+/* 1 when body k of a spatial open model (n == NULL: spatial form) is slender (model.h "slender
+ * bodies"): not singular, smallest principal moment under CTC_SLENDER_RATIO times its largest */
+static int is_slender(const ctc_model *m, const double *moments, const double *n, int k)
+{
+    const double *e = &moments[3 * k];
+    return n == NULL && !m->has_loop && !(m->body_singular != NULL && m->body_singular[k]) &&
+           e[0] < CTC_SLENDER_RATIO * e[2];
+}
+
 /* Marks the singular bodies of form `form` (model.h "singular bodies"; n: the plane normal in
- * planar form) and makes fwd_bodies: a singular body's principal moments each get
- * CTC_SINGULAR_AUGMENT_REL times J_ref, the smallest positive J_own(j) = m_j |c_j|^2 + tr(I_j) / 2
- * (its inertia about its own joint's centre, c_j from the body's origin) over the body and its
- * descendants, and a massless body's mass CTC_SINGULAR_AUGMENT_REL times the smallest positive mass
- * among them (1 kg m^2, 1 kg when there is none: the mass-matrix check refuses such a subtree).
- * The smallest of the subtree, not its sum, bounds the augmentation's share of the joint-space
- * inertia on a long chain of point masses too (bench/NOTEBOOK.md, "Singular bodies"). */
+ * planar form) and the slender ones (model.h "slender bodies": spatial open models only, each of
+ * their principal moments gets CTC_SLENDER_AUGMENT_REL times the largest) and makes fwd_bodies: a
+ * singular body's principal moments each get CTC_SINGULAR_AUGMENT_REL times J_ref, the smallest
+ * positive J_own(j) = m_j |c_j|^2 + tr(I_j) / 2 (its inertia about its own joint's centre, c_j from
+ * the body's origin) over the body and its descendants, and a massless body's mass
+ * CTC_SINGULAR_AUGMENT_REL times the smallest positive mass among them (1 kg m^2, 1 kg when there
+ * is none: the mass-matrix check refuses such a subtree). The smallest of the subtree, not its sum,
+ * bounds the augmentation's share of the joint-space inertia on a long chain of point masses too
+ * (bench/NOTEBOOK.md, "Singular bodies"). */
 static ctc_status setup_singular(ctc_model *m, const double *moments, const double *n, char *err,
                                  size_t errlen)
 {
@@ -908,8 +919,10 @@ static ctc_status setup_singular(ctc_model *m, const double *moments, const doub
         m->body_singular[k] = 1;
         m->nsingular++;
     }
-    if (m->nsingular == 0) return CTC_OK;
-    if (m->has_loop) {
+    m->nslender = 0;
+    for (int k = 0; k < nb; k++) m->nslender += is_slender(m, moments, n, k);
+    if (m->nsingular == 0 && m->nslender == 0) return CTC_OK;
+    if (m->nsingular > 0 && m->has_loop) {
         int k = 0;
         while (!m->body_singular[k]) k++;
         return ctc_fail(CTC_EINVAL, err, errlen,
@@ -940,6 +953,11 @@ static ctc_status setup_singular(ctc_model *m, const double *moments, const doub
         if (par >= 0) jref[par] = fmin(jref[par], jref[k]), mref[par] = fmin(mref[par], mref[k]);
     }
     for (int k = 0; k < nb; k++) {
+        if (!is_slender(m, moments, n, k)) continue;
+        const double add = CTC_SLENDER_AUGMENT_REL * moments[3 * k + 2];
+        for (int a = 0; a < 3; a++) m->fwd_bodies[k].inertia[4 * a] += add;
+    }
+    for (int k = 0; k < nb && m->nsingular > 0; k++) {
         if (!m->body_singular[k]) continue;
         ctc_body_spec *fb = &m->fwd_bodies[k];
         const double js = isfinite(jref[k]) ? jref[k] : 1.0, ms = isfinite(mref[k]) ? mref[k] : 1.0;

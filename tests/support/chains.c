@@ -193,6 +193,27 @@ test_chain *test_chain_rod_pendulum(int n, double length, double mass)
     return c;
 }
 
+test_chain *test_chain_slender_rods(int n, double ratio)
+{
+    test_chain *c = chain_alloc(n);
+    ctc_v3_set(c->spec.gravity, 0, 0, -9.81);
+    c->spec.form = CTC_FORM_SPATIAL;
+    const double jt = 1.0 / 12.0;
+    for (int k = 0; k < n; k++) {
+        ctc_joint_spec *j = &c->joints[k];
+        j->type = CTC_JOINT_REVOLUTE;
+        ctc_v3_set(j->axis, 0, k % 2, 1 - k % 2);
+        ctc_v3_set(j->location, k ? 1.0 : 0, 0, 0);
+        ctc_body_spec *b = &c->bodies[k];
+        memset(b, 0, sizeof *b);
+        b->mass = 1.0;
+        b->com[0] = 0.5;
+        b->inertia[0] = ratio * jt;
+        b->inertia[4] = b->inertia[8] = jt;
+    }
+    return c;
+}
+
 test_chain *test_chain_coil(int n)
 {
     test_chain *c = chain_alloc(n);

@@ -49,6 +49,13 @@ test_chain *test_chain_random_planar(int n, uint64_t seed, int prismatic, int ro
  * revolute joints about +z. */
 test_chain *test_chain_rod_pendulum(int n, double length, double mass);
 
+/* n slender rods of issue 18: each 1 kg and 1 m along its body x axis (centre of mass at
+ * (0.5, 0, 0), transverse moments m l^2 / 12, axial moment `ratio` times that), joint k + 1 at
+ * the end of rod k, revolute axes alternating z (even k) and y (odd k), gravity (0, 0, -9.81),
+ * form SPATIAL. No joint axis is along a rod at q = 0, so M(q) stays well conditioned however
+ * small the ratio (0 < ratio <= 1). */
+test_chain *test_chain_slender_rods(int n, double ratio);
+
 /* Featherstone's coil: n bodies, each a thin cylinder of length 1/n, mass 1/n and radius
  * 1/(20 n) along its link; joint k+1 sits at the link's end, its axis twisted by 5 pi / n about
  * the link from joint k's. Gravity (0, 0, -9.81). */
