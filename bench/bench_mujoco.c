@@ -1,7 +1,8 @@
 /*
  * bench_mujoco.c - ctcsim against MuJoCo 2.2.2 (Debian's libmujoco): one CTC right-hand side on
- * serial chains of 2 ... max_n bodies (MuJoCo up to 1024), whole CTC simulations at equal error,
- * and a stiff 64-link chain on which MuJoCo's RK4 at 1 ms diverges.
+ * serial chains of 2 ... max_n bodies (MuJoCo up to 1024) and on Featherstone's autoTree, whole
+ * CTC simulations at equal error, and a stiff 64-link chain on which MuJoCo's RK4 at 1 ms
+ * diverges.
  *
  * The chains are built once as ctcsim specs (tests/support/chains.h) and written out as MJCF with
  * the same masses, centres of mass, inertias, joint axes and locations and gravity: one body per
@@ -30,6 +31,20 @@
  *    starting one timing further on, each timing run untimed for SETTLE_S before it is timed;
  *    medians over the batches. MuJoCo is skipped beyond MJ_MAX_N (its factorisation is O(n^3)
  *    on a serial chain) and calls slower than SLOW_S get fewer batches (SLOW_BATCHES).
+ *
+ * 1t. The same right-hand side, timed the same way (ctcsim's and MuJoCo's only), on autoTree
+ *    (tests/support/chains.h: taper 1, branching factor 1, 2 and 4, planar with no skew and
+ *    spatial with skew 0.5 rad, n = 16, 64, ..., max_n), as bench_dynamics's part a times it
+ *    against the oracle. The tree is written as nested MJCF bodies (mj_load_tree: the chains'
+ *    body elements, a subtree moved into an <include>d file where one file would nest
+ *    MJCF_SEGMENT bodies). MuJoCo numbers bodies depth first, ctcsim as the spec does (autoTree
+ *    breadth first), so states, forces and accelerations are mapped through MuJoCo's joint
+ *    j<k> of ctcsim's body k. Checked first at a random state: tau from iGDCA against
+ *    qfrc_inverse, and qdd from GDCA against qacc for other random torques, both to
+ *    TREE_CHECK_TOL (1e-10) relative to the largest entry, or to CHECK_TOL on bf 1, a chain
+ *    (its M's conditioning grows with n); a tree that fails is reported, not timed, and the run
+ *    ends with status 1. MuJoCo is skipped where the longest path exceeds MJ_MAX_N (bf 1
+ *    beyond 1024: M is dense along a path).
  *
  * 2. Whole 5 s CTC simulations, sampled every 0.01 s: the paper's triple pendulum PID run
  *    (bench_sim) and a 64-link planar rod chain under PD. ctcsim: ctc_sim_run with DOPRI5 at
@@ -70,8 +85,8 @@
  * they interrupt - often to more than half of the batches of a case, which medians cannot
  * remove. On an idle machine the two clocks agree.
  *
- * Usage: bench_mujoco [max_n [batches [parts]]]; parts: any of r (right-hand side), s
- * (simulations), d (divergence); default 4096 15 rsd.
+ * Usage: bench_mujoco [max_n [batches [parts]]]; parts: any of r (right-hand side), t (the same on
+ * autoTree), s (simulations), d (divergence); default 4096 15 rtsd.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -87,15 +102,16 @@
 #include "sim.h"
 
 #define PI 3.14159265358979323846
-#define MJCF_SEGMENT 40 /* bodies per MJCF file: keeps every file under tinyxml2's depth 100 */
-#define MJ_MAX_N 1024   /* MuJoCo is timed up to this n */
-#define CHECK_TOL 1e-8  /* agreement of ctcsim and MuJoCo, relative to the largest entry */
-#define SETTLE_S 5e-3   /* s, untimed runs before each timing in a batch */
-#define BATCH_S 2e-3    /* s, length of one timed batch of fast calls */
-#define SLOW_S 10e-3    /* s, a call slower than this gets SLOW_BATCHES batches */
-#define SLOW_BATCHES 7  /* batches for a timing slower than SLOW_S */
-#define MAX_SPEED 1e6   /* rad/s, divergence bound (ctc_sim_spec's default) */
-#define REF_DT 1e-4     /* s, MuJoCo stagewise run checked against the reference */
+#define MJCF_SEGMENT 40      /* bodies per MJCF file: keeps every file under tinyxml2's depth 100 */
+#define MJ_MAX_N 1024        /* MuJoCo is timed up to this n */
+#define CHECK_TOL 1e-8       /* agreement of ctcsim and MuJoCo, relative to the largest entry */
+#define TREE_CHECK_TOL 1e-10 /* the same on branched autoTrees (part 1t; bf 1: CHECK_TOL) */
+#define SETTLE_S 5e-3        /* s, untimed runs before each timing in a batch */
+#define BATCH_S 2e-3         /* s, length of one timed batch of fast calls */
+#define SLOW_S 10e-3         /* s, a call slower than this gets SLOW_BATCHES batches */
+#define SLOW_BATCHES 7       /* batches for a timing slower than SLOW_S */
+#define MAX_SPEED 1e6        /* rad/s, divergence bound (ctc_sim_spec's default) */
+#define REF_DT 1e-4          /* s, MuJoCo stagewise run checked against the reference */
 #define MAX_CONFIGS 32
 
 static volatile double sink;
@@ -202,6 +218,39 @@ static void mj_inertia(const ctc_chain_spec *s, int k, double out[9])
         for (int j = 0; j < 3; j++) out[3 * i + j] += eps * b->com[i] * b->com[j] / (c * c);
 }
 
+/* Opens body k's element in b: its frame at the joint's location in the parent's frame, parallel
+ * to the parent's at q = 0 (model.h), its hinge at the frame origin, its inertial. Ends the run on
+ * a joint that is not revolute. */
+static void sb_body_open(strbuf *b, const ctc_chain_spec *s, int k)
+{
+    const ctc_joint_spec *j = &s->joints[k];
+    const ctc_body_spec *bd = &s->bodies[k];
+    if (j->type != CTC_JOINT_REVOLUTE) {
+        fprintf(stderr, "bench_mujoco: joint %d is not revolute\n", k);
+        exit(1);
+    }
+    double in[9];
+    mj_inertia(s, k, in);
+    sb_printf(b,
+              "<body name='b%d' pos='%.17g %.17g %.17g'>"
+              "<joint name='j%d' type='hinge' axis='%.17g %.17g %.17g'/>"
+              "<inertial pos='%.17g %.17g %.17g' mass='%.17g' "
+              "fullinertia='%.17g %.17g %.17g %.17g %.17g %.17g'/>\n",
+              k, j->location[0], j->location[1], j->location[2], k, j->axis[0], j->axis[1],
+              j->axis[2], bd->com[0], bd->com[1], bd->com[2], bd->mass, in[0], in[4], in[8], in[1],
+              in[2], in[5]);
+}
+
+/* adds b's text to vfs as the file name, or ends the run */
+static void vfs_put(mjVFS *vfs, const char *name, const strbuf *b)
+{
+    if (mj_makeEmptyFileVFS(vfs, name, (int)b->len) != 0) {
+        fprintf(stderr, "bench_mujoco: MuJoCo's VFS is full\n");
+        exit(1);
+    }
+    memcpy(vfs->filedata[mj_findFileVFS(vfs, name)], b->s, b->len);
+}
+
 /* Loads the chain into MuJoCo (revolute joints only): RK4, the given timestep, contacts off.
  * integral != 0 adds one integrator actuator of zero gain per joint, whose activation holds the
  * integral of the joint's tracking error (act_dot = ctrl). Returns a new model or ends the run. */
@@ -220,25 +269,7 @@ static mjModel *mj_load_chain(const ctc_chain_spec *s, int integral, double time
                       "<flag contact='disable'/></option>\n<worldbody>\n",
                       timestep, s->gravity[0], s->gravity[1], s->gravity[2]);
         int k0 = seg * MJCF_SEGMENT, k1 = k0 + MJCF_SEGMENT < n ? k0 + MJCF_SEGMENT : n;
-        for (int k = k0; k < k1; k++) {
-            const ctc_joint_spec *j = &s->joints[k];
-            const ctc_body_spec *bd = &s->bodies[k];
-            if (j->type != CTC_JOINT_REVOLUTE) {
-                fprintf(stderr, "bench_mujoco: joint %d is not revolute\n", k);
-                exit(1);
-            }
-            double in[9];
-            mj_inertia(s, k, in);
-            /* the body frame sits on the joint, parallel to the parent's at q = 0 (model.h) */
-            sb_printf(&b,
-                      "<body name='b%d' pos='%.17g %.17g %.17g'>"
-                      "<joint name='j%d' type='hinge' axis='%.17g %.17g %.17g'/>"
-                      "<inertial pos='%.17g %.17g %.17g' mass='%.17g' "
-                      "fullinertia='%.17g %.17g %.17g %.17g %.17g %.17g'/>\n",
-                      k, j->location[0], j->location[1], j->location[2], k, j->axis[0], j->axis[1],
-                      j->axis[2], bd->com[0], bd->com[1], bd->com[2], bd->mass, in[0], in[4], in[8],
-                      in[1], in[2], in[5]);
-        }
+        for (int k = k0; k < k1; k++) sb_body_open(&b, s, k);
         if (seg + 1 < nseg) sb_printf(&b, "<include file='chain%d.xml'/>\n", seg + 1);
         for (int k = k0; k < k1; k++) sb_printf(&b, "</body>");
         if (seg == 0) {
@@ -256,11 +287,7 @@ static mjModel *mj_load_chain(const ctc_chain_spec *s, int integral, double time
         sb_printf(&b, "</mujoco>\n");
         char name[32];
         snprintf(name, sizeof name, "chain%d.xml", seg);
-        if (mj_makeEmptyFileVFS(vfs, name, (int)b.len) != 0) {
-            fprintf(stderr, "bench_mujoco: MuJoCo's VFS is full\n");
-            exit(1);
-        }
-        memcpy(vfs->filedata[mj_findFileVFS(vfs, name)], b.s, b.len);
+        vfs_put(vfs, name, &b);
     }
     char err[1000] = "";
     mjModel *m = mj_loadXML("chain0.xml", vfs, err, sizeof err);
@@ -269,6 +296,81 @@ static mjModel *mj_load_chain(const ctc_chain_spec *s, int integral, double time
     free(b.s);
     if (!m || m->nv != n) {
         fprintf(stderr, "bench_mujoco: MuJoCo cannot load the %d-body chain: %s\n", n, err);
+        exit(1);
+    }
+    return m;
+}
+
+/* the MJCF of a tree: its spec, each body's first child and next sibling (-1: none) */
+typedef struct mjcf_tree {
+    const ctc_chain_spec *s;
+    const int *first_child, *next_sibling; /* (n) */
+    mjVFS *vfs;
+} mjcf_tree;
+
+/* Writes body k and its subtree into b, where k is nested depth bodies deep in b's file. Where a
+ * file would nest MJCF_SEGMENT bodies, k's children go into a file of their own (tree<k>.xml),
+ * <include>d inside k, as the chains' segments are. */
+static void mjcf_subtree(const mjcf_tree *t, strbuf *b, int k, int depth)
+{
+    sb_body_open(b, t->s, k);
+    if (t->first_child[k] >= 0 && depth + 1 < MJCF_SEGMENT) {
+        for (int c = t->first_child[k]; c >= 0; c = t->next_sibling[c])
+            mjcf_subtree(t, b, c, depth + 1);
+    } else if (t->first_child[k] >= 0) {
+        strbuf sub = {0};
+        sb_printf(&sub, "<mujoco model='ctcsim_tree'>\n");
+        for (int c = t->first_child[k]; c >= 0; c = t->next_sibling[c]) mjcf_subtree(t, &sub, c, 0);
+        sb_printf(&sub, "</mujoco>\n");
+        char name[32];
+        snprintf(name, sizeof name, "tree%d.xml", k);
+        vfs_put(t->vfs, name, &sub);
+        free(sub.s);
+        sb_printf(b, "<include file='%s'/>\n", name);
+    }
+    sb_printf(b, "</body>\n");
+}
+
+/* Loads a tree (s->parent, or a chain when NULL; revolute joints only) into MuJoCo as nested
+ * bodies, with the same body elements as mj_load_chain and no actuators; MuJoCo numbers the bodies
+ * depth first, so its body and dof of ctcsim's body k are found by name (b<k>, j<k>). Returns a
+ * new model or ends the run. */
+static mjModel *mj_load_tree(const ctc_chain_spec *s, double timestep)
+{
+    int n = s->nbodies;
+    int *first_child = xcalloc((size_t)n, sizeof(int)),
+        *next_sibling = xcalloc((size_t)n, sizeof(int));
+    int *roots_last = xcalloc((size_t)n + 1, sizeof(int)); /* children of the ground, in order */
+    int nroots = 0;
+    for (int k = 0; k < n; k++) first_child[k] = next_sibling[k] = -1;
+    /* children in increasing order: link from the last body back */
+    for (int k = n - 1; k >= 0; k--) {
+        int p = s->parent ? s->parent[k] : k - 1;
+        if (p < 0) continue;
+        next_sibling[k] = first_child[p];
+        first_child[p] = k;
+    }
+    for (int k = 0; k < n; k++)
+        if ((s->parent ? s->parent[k] : k - 1) < 0) roots_last[nroots++] = k;
+    mjVFS *vfs = xcalloc(1, sizeof *vfs);
+    mj_defaultVFS(vfs);
+    mjcf_tree t = {s, first_child, next_sibling, vfs};
+    strbuf b = {0};
+    sb_printf(&b,
+              "<mujoco model='ctcsim_tree'>\n<option timestep='%.17g' integrator='RK4' "
+              "gravity='%.17g %.17g %.17g'><flag contact='disable'/></option>\n<worldbody>\n",
+              timestep, s->gravity[0], s->gravity[1], s->gravity[2]);
+    for (int r = 0; r < nroots; r++) mjcf_subtree(&t, &b, roots_last[r], 0);
+    sb_printf(&b, "</worldbody>\n</mujoco>\n");
+    vfs_put(vfs, "tree.xml", &b);
+    char err[1000] = "";
+    mjModel *m = mj_loadXML("tree.xml", vfs, err, sizeof err);
+    mj_deleteVFS(vfs);
+    free(vfs);
+    free(b.s);
+    free(first_child), free(next_sibling), free(roots_last);
+    if (!m || m->nv != n) {
+        fprintf(stderr, "bench_mujoco: MuJoCo cannot load the %d-body tree: %s\n", n, err);
         exit(1);
     }
     return m;
@@ -287,8 +389,12 @@ static void adopt_mj_inertia(test_chain *chain, const mjModel *m)
         ctc_body_spec *b = &chain->bodies[k];
         double rot[9], in[9], given[9], scale = 0, change = 0;
         mj_inertia(&chain->spec, k, given);
-        const double *moments = m->body_inertia + 3 * (k + 1);
-        mju_quat2Mat(rot, m->body_iquat + 4 * (k + 1));
+        /* MuJoCo numbers bodies depth first in the order of the MJCF, ctcsim as its spec does */
+        char name[32];
+        snprintf(name, sizeof name, "b%d", k);
+        int mb = mj_name2id(m, mjOBJ_BODY, name);
+        const double *moments = m->body_inertia + 3 * mb;
+        mju_quat2Mat(rot, m->body_iquat + 4 * mb);
         for (int i = 0; i < 3; i++)
             for (int j = 0; j < 3; j++) {
                 in[3 * i + j] = 0;
@@ -299,8 +405,8 @@ static void adopt_mj_inertia(test_chain *chain, const mjModel *m)
             scale = fmax(scale, fabs(given[i]));
             change = fmax(change, fabs(in[i] - given[i]));
         }
-        for (int i = 0; i < 3; i++) b->com[i] = m->body_ipos[3 * (k + 1) + i];
-        b->mass = m->body_mass[k + 1];
+        for (int i = 0; i < 3; i++) b->com[i] = m->body_ipos[3 * mb + i];
+        b->mass = m->body_mass[mb];
         /* symmetric to the last bit */
         for (int i = 0; i < 3; i++)
             for (int j = 0; j < i; j++) in[3 * i + j] = in[3 * j + i];
@@ -327,9 +433,10 @@ typedef struct rhs_case {
     ctc_data *cd;
     mjModel *m; /* NULL: ctcsim only */
     mjData *d;
-    double *q, *v, *u; /* the state and the commanded accelerations */
-    double *f, *a;     /* ctcsim's forces and accelerations */
-    double *tau;       /* MuJoCo's forces */
+    double *q, *v, *u;    /* the state and the commanded accelerations */
+    double *mq, *mv, *mu; /* the same in MuJoCo's order (q, v, u themselves on a chain) */
+    double *f, *a;        /* ctcsim's forces and accelerations */
+    double *tau;          /* MuJoCo's forces */
 } rhs_case;
 
 static void run_once(rhs_case *c, int what)
@@ -347,12 +454,12 @@ static void run_once(rhs_case *c, int what)
         return;
     case T_MJ:
         /* shared: kinematics, composite inertias, M and its factor, bias forces */
-        mju_copy(d->qpos, c->q, nv);
-        mju_copy(d->qvel, c->v, nv);
+        mju_copy(d->qpos, c->mq, nv);
+        mju_copy(d->qvel, c->mv, nv);
         mj_fwdPosition(m, d);
         mj_fwdVelocity(m, d);
         /* inverse: tau = M u + c */
-        mju_copy(d->qacc, c->u, nv);
+        mju_copy(d->qacc, c->mu, nv);
         mj_inverseSkip(m, d, mjSTAGE_VEL, 1);
         /* forward: qacc = M^-1 (tau - c) */
         mju_copy(d->qfrc_applied, d->qfrc_inverse, nv);
@@ -361,8 +468,8 @@ static void run_once(rhs_case *c, int what)
         mj_fwdConstraint(m, d);
         break;
     case T_MJ_POS:
-        mju_copy(d->qpos, c->q, nv);
-        mju_copy(d->qvel, c->v, nv);
+        mju_copy(d->qpos, c->mq, nv);
+        mju_copy(d->qvel, c->mv, nv);
         mj_fwdPosition(m, d);
         break;
     case T_MJ_CRB:
@@ -375,7 +482,7 @@ static void run_once(rhs_case *c, int what)
         mj_fwdVelocity(m, d);
         break;
     case T_MJ_INV:
-        mju_copy(d->qacc, c->u, nv);
+        mju_copy(d->qacc, c->mu, nv);
         mj_inverseSkip(m, d, mjSTAGE_VEL, 1);
         break;
     case T_MJ_ACC:
@@ -468,6 +575,7 @@ static int bench_rhs_chain(const char *label, test_chain *chain, int batches, co
     c.f = xcalloc((size_t)nv, sizeof(double));
     c.a = xcalloc((size_t)nv, sizeof(double));
     c.tau = xcalloc((size_t)nv, sizeof(double));
+    c.mq = c.q, c.mv = c.v, c.mu = c.u;
     double *tq = xcalloc((size_t)nv, sizeof(double));
     uint64_t rng = 1;
     test_random_state(cm, &rng, 1.0, c.q, c.v);
@@ -584,6 +692,187 @@ static int bench_rhs(int max_n, int batches)
     print_target("spatial", spatial, ns, 2, 16, 1.0);
     print_target("spatial", spatial, ns, 256, 256, 0.1);
     printf("\n");
+    return failed;
+}
+
+/* ---------------------------------------------------------------------------------------------
+ * 1t. One CTC right-hand side on autoTree
+ */
+
+/* the longest path from the ground to a body, in bodies */
+static int tree_depth(const ctc_chain_spec *s)
+{
+    int *depth = xcalloc((size_t)s->nbodies, sizeof(int)), most = 0;
+    for (int k = 0; k < s->nbodies; k++) {
+        int p = s->parent ? s->parent[k] : k - 1;
+        depth[k] = p < 0 ? 1 : depth[p] + 1;
+        most = depth[k] > most ? depth[k] : most;
+    }
+    free(depth);
+    return most;
+}
+
+/* max over k of |a[map[k]] - b[k]| / max_k |b[k]| (n): a in MuJoCo's order, b in ctcsim's */
+static double rel_diff_map(const double *a, const int *map, const double *b, int n)
+{
+    double d = 0, s = 0;
+    for (int k = 0; k < n; k++) {
+        d = fmax(d, fabs(a[map[k]] - b[k]));
+        s = fmax(s, fabs(b[k]));
+    }
+    return d / fmax(s, 1e-300);
+}
+
+/* Times one tree, ctcsim and MuJoCo interleaved; per[0], per[1]: s per body of ctcsim's and
+ * MuJoCo's right-hand side (0: not timed). chain_per: the same of the chain (bf 1) of the same n
+ * and form, or NULL for the chain itself. Returns 0, or 1 when the two disagree. */
+static int bench_rhs_tree(const char *label, test_chain *tree, int batches, const double *chain_per,
+                          double per[2])
+{
+    char err[256];
+    int depth = tree_depth(&tree->spec);
+    /* a chain (depth n) is held to part 1's limit: its M's condition number grows as n^2 to n^4
+       (NOTEBOOK.md, "Hard cases"), and both sides' rounding with it */
+    double tol = depth == tree->spec.nbodies ? CHECK_TOL : TREE_CHECK_TOL;
+    rhs_case c = {0};
+    if (depth <= MJ_MAX_N) {
+        c.m = mj_load_tree(&tree->spec, 1e-3);
+        c.d = mj_makeData(c.m);
+        adopt_mj_inertia(tree, c.m);
+    }
+    ctc_model *cm = NULL;
+    if (ctc_model_build(&tree->spec, &cm, err, sizeof err) != CTC_OK) {
+        fprintf(stderr, "bench_mujoco: %s: %s\n", label, err);
+        exit(1);
+    }
+    int n = cm->nbodies, nv = cm->nv;
+    c.cm = cm;
+    c.cd = ctc_data_new(cm);
+    c.q = xcalloc((size_t)cm->nq, sizeof(double));
+    c.v = xcalloc((size_t)nv, sizeof(double));
+    c.u = xcalloc((size_t)nv, sizeof(double));
+    c.f = xcalloc((size_t)nv, sizeof(double));
+    c.a = xcalloc((size_t)nv, sizeof(double));
+    c.tau = xcalloc((size_t)nv, sizeof(double));
+    c.mq = xcalloc((size_t)nv, sizeof(double));
+    c.mv = xcalloc((size_t)nv, sizeof(double));
+    c.mu = xcalloc((size_t)nv, sizeof(double));
+    double *tq = xcalloc((size_t)nv, sizeof(double));
+    int *dof = xcalloc((size_t)nv, sizeof(int)), *qadr = xcalloc((size_t)nv, sizeof(int));
+    uint64_t rng = 1;
+    test_random_state(cm, &rng, 1.0, c.q, c.v);
+    for (int i = 0; i < nv; i++) c.u[i] = test_uniform(&rng, -1, 1);
+    for (int i = 0; i < nv; i++) tq[i] = test_uniform(&rng, -1, 1);
+
+    int failed = 0;
+    double f_err = NAN, a_err = NAN;
+    if (c.m) {
+        /* ctcsim's body k (one revolute joint, dof k) is MuJoCo's joint j<k> */
+        for (int k = 0; k < n; k++) {
+            char name[32];
+            snprintf(name, sizeof name, "j%d", k);
+            int j = mj_name2id(c.m, mjOBJ_JOINT, name);
+            dof[k] = c.m->jnt_dofadr[j];
+            qadr[k] = c.m->jnt_qposadr[j];
+        }
+        for (int k = 0; k < n; k++) {
+            c.mq[qadr[k]] = c.q[k];
+            c.mv[dof[k]] = c.v[k];
+            c.mu[dof[k]] = c.u[k];
+        }
+        /* tau = M u + c on both sides, then qdd = M^-1 (tq - c) for other torques tq */
+        run_once(&c, T_CTC);
+        run_once(&c, T_MJ);
+        f_err = rel_diff_map(c.d->qfrc_inverse, dof, c.f, nv);
+        ctc_gdca_forward(cm, c.cd, tq, c.a);
+        for (int k = 0; k < n; k++) c.d->qfrc_applied[dof[k]] = tq[k];
+        mj_fwdActuation(c.m, c.d);
+        mj_fwdAcceleration(c.m, c.d);
+        mj_fwdConstraint(c.m, c.d);
+        a_err = rel_diff_map(c.d->qacc, dof, c.a, nv);
+        failed = !(f_err <= tol && a_err <= tol);
+    }
+    double med[NT] = {0};
+    if (!failed) measure(&c, c.m ? 2 : 1, batches, med);
+    per[0] = failed ? 0 : med[T_CTC] / n;
+    per[1] = c.m && !failed ? med[T_MJ] / n : 0;
+
+    char tc[16] = "-", tm[16] = "-", mj[16] = "-", mjn[16] = "-", ratio[16] = "-";
+    char fe[16] = "-", ae[16] = "-";
+    if (c.m) {
+        snprintf(fe, sizeof fe, "%.1e", f_err);
+        snprintf(ae, sizeof ae, "%.1e", a_err);
+    }
+    if (chain_per && chain_per[0] > 0 && per[0] > 0)
+        snprintf(tc, sizeof tc, "%.2f", per[0] / chain_per[0]);
+    if (chain_per && chain_per[1] > 0 && per[1] > 0)
+        snprintf(tm, sizeof tm, "%.3g", per[1] / chain_per[1]);
+    if (per[1] > 0) {
+        snprintf(mj, sizeof mj, "%.2f", 1e6 * med[T_MJ]);
+        snprintf(mjn, sizeof mjn, "%.1f", 1e9 * per[1]);
+        snprintf(ratio, sizeof ratio, "%.3f", med[T_CTC] / med[T_MJ]);
+    }
+    if (failed)
+        printf("| %-7s | %4d | %6d | %5d | FAILED: tau vs MuJoCo %.1e, qdd vs MuJoCo %.1e (limit "
+               "%.0e): not timed |\n",
+               label, n, cm->height, depth, f_err, a_err, tol);
+    else
+        printf("| %-7s | %4d | %6d | %5d | %9.2f | %10s | %6s | %7.1f | %8s | %5s | %5s | %7s | "
+               "%7s |\n",
+               label, n, cm->height, depth, 1e6 * med[T_CTC], mj, ratio, 1e9 * per[0], mjn, tc, tm,
+               fe, ae);
+    fflush(stdout);
+    if (c.m) {
+        mj_deleteData(c.d);
+        mj_deleteModel(c.m);
+    }
+    free(c.q), free(c.v), free(c.u), free(c.f), free(c.a), free(c.tau);
+    free(c.mq), free(c.mv), free(c.mu), free(tq), free(dof), free(qadr);
+    ctc_data_free(c.cd);
+    ctc_model_free(cm);
+    return failed;
+}
+
+static int bench_rhs_trees(int max_n, int batches)
+{
+    printf("## 1t. One CTC right-hand side on autoTree: ctcsim against MuJoCo %s\n\n",
+           mj_versionString());
+    printf("Featherstone's autoTree (tests/support/chains.h; taper 1; pl: planar, skew 0; sp: "
+           "spatial, skew 0.5 rad; bf: branching factor, 1 = a chain), as nested MJCF bodies. The "
+           "right-hand sides as in part 1, ctcsim's and MuJoCo's interleaved; medians of %d "
+           "batches (%d for a call over %.0f ms); thread CPU times in us, per body in ns; ratio = "
+           "ctcsim / MuJoCo; tree/chain = per body over bf 1's at the same n and form; height: "
+           "ctcsim's plan; depth: the longest path (MuJoCo only up to %d). Checked first: tau "
+           "(iGDCA against qfrc_inverse) and qdd (GDCA against qacc, other random torques) at a "
+           "random state, relative to the largest entry, limit %.0e (%.0e for bf 1, a chain, as in "
+           "part 1).\n\n",
+           batches, batches < SLOW_BATCHES ? batches : SLOW_BATCHES, 1e3 * SLOW_S, MJ_MAX_N,
+           TREE_CHECK_TOL, CHECK_TOL);
+    printf("| tree    |    n | height | depth | ctcsim (us) | MuJoCo (us) | ratio | ctcsim/n ns | "
+           "MuJoCo/n ns | ctcsim tree/chain | MuJoCo tree/chain | tau vs MuJoCo | qdd vs MuJoCo "
+           "|\n");
+    printf("| ------- | ---: | -----: | ----: | --------: | ---------: | ----: | ------: | "
+           "-------: | ----: | ----: | ---: | ---: |\n");
+    int failed = 0;
+    inertia_adjust_max = 0;
+    for (int form = 0; form < 2; form++) {
+        for (int n = 16; n <= max_n; n *= 4) {
+            double chain_per[2] = {0};
+            static const int bf[] = {1, 2, 4};
+            for (int b = 0; b < 3; b++) {
+                char label[16];
+                snprintf(label, sizeof label, "%s bf %d", form ? "sp" : "pl", bf[b]);
+                test_chain *t = test_auto_tree(n, bf[b], form ? 0.5 : 0.0, 1.0);
+                double per[2];
+                failed |= bench_rhs_tree(label, t, batches, b ? chain_per : NULL, per);
+                if (b == 0) memcpy(chain_per, per, sizeof per);
+                test_chain_free(t);
+            }
+        }
+    }
+    printf("\nctcsim was given the inertias as MuJoCo compiled them (largest change %.1e relative "
+           "to the body's largest entry).\n\n",
+           inertia_adjust_max);
     return failed;
 }
 
@@ -1141,15 +1430,16 @@ int main(int argc, char **argv)
 {
     int max_n = argc > 1 ? atoi(argv[1]) : 4096;
     int batches = argc > 2 ? atoi(argv[2]) : 15;
-    const char *parts = argc > 3 ? argv[3] : "rsd";
-    if (max_n < 2 || batches < 1 || parts[strspn(parts, "rsd")] != '\0') {
-        fprintf(stderr, "usage: bench_mujoco [max_n >= 2 [batches >= 1 [parts: r s d]]]\n");
+    const char *parts = argc > 3 ? argv[3] : "rtsd";
+    if (max_n < 2 || batches < 1 || parts[strspn(parts, "rtsd")] != '\0') {
+        fprintf(stderr, "usage: bench_mujoco [max_n >= 2 [batches >= 1 [parts: r t s d]]]\n");
         return 2;
     }
     mju_user_warning = mj_quiet;
     int failed = 0;
     double t0 = clock_s(CLOCK_MONOTONIC);
     if (strchr(parts, 'r')) failed |= bench_rhs(max_n, batches);
+    if (strchr(parts, 't')) failed |= bench_rhs_trees(max_n, batches);
     if (strchr(parts, 's')) {
         sim_triple();
         sim_chain64();

@@ -28,19 +28,22 @@
  *             the split tree beats it, the library may take the tree on threads.
  *             The same speed-up table follows for Featherstone's autoTree (branching factors 2 and
  *             4, planar and spatial, n = 1024, 4096, 16384), whose plan (model.c) splits as the
- *             chains' tree does and whose sequential order is the tip runs (gdca_forward_tseq.c).
+ *             chains' tree does and whose sequential order is the tip runs (gdca_forward_tseq.c),
+ *             with each tree's pass depth (the plan's height) beside log2 n.
  * Before timing, the results on k threads are checked bitwise against 1 thread; a mismatch ends
  * the run with status 1. Every timing of a case first runs round-robin for WARM_S. Batches of
  * all timings of one chain are interleaved, each batch starting one timing further on; each
  * timing runs untimed for SETTLE_S (at least once) before it is timed, so that the workers are
  * warm and the caches hold the timing's own data; the figures are medians over the batches.
  *
- * Usage: bench_parallel [max_n] [batches]     (default 65536 and 11)
+ * Usage: bench_parallel [max_n] [batches] [parts]     (default 65536, 11 and bgct)
+ *        parts: any of b (barrier), g (grain), c (speed-up on chains), t (speed-up on trees)
  * Environment: CTC_BENCH_THREADS="2,4,8" thread counts beside 1 (default "2", each 2..64);
  *              CTC_BENCH_QUICK=1: max_n 4096 and 5 batches unless given;
  *              CTC_BENCH_WAIT="spin_ns,block_ns": the waiting phases of the passes' pools
  *              (ctc_pool_set_wait; default: the pool's own).
  */
+#include <math.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -465,6 +468,7 @@ static void bench_sweep(const char *label, test_chain *chain, int batches)
 typedef struct speed_row {
     char label[8];
     int n;
+    int height;             /* the depth of the split passes: the plan's height (model.h) */
     double t[MAXK + 2][NP]; /* s per call: 1 thread, each count, 1 thread sequential */
 } speed_row;
 
@@ -486,6 +490,7 @@ static int bench_speedup(const char *label, test_chain *chain, int batches, spee
     measure(run_speedup, c, (2 + nk) * NP, batches, med);
     snprintf(row->label, sizeof row->label, "%s", label);
     row->n = m->nbodies;
+    row->height = m->height;
     for (int k = 0; k <= nk; k++)
         for (int p = 0; p < NP; p++) row->t[k][p] = med[k * NP + p];
     for (int p = 0; p < NP; p++) row->t[nk + 1][p] = med[(nk + 1) * NP + p];
@@ -521,9 +526,12 @@ static void print_pays(const speed_row *rows, int nrows, int k, int p, const cha
         printf("none in the table\n");
 }
 
-static void print_speedup(const speed_row *rows, int nrows, int pays)
+/* the speed-up table; trees = 1 adds each row's pass depth (the plan's height) and log2 n, and
+   leaves out where threads pay (the library's thresholds are the chains') */
+static void print_speedup(const speed_row *rows, int nrows, int trees)
 {
     printf("| chain   |     n |");
+    if (trees) printf(" height | log2 n |");
     for (int p = 0; p < NP; p++) {
         printf(" %s 1T (us) |", pass_names[p]);
         for (int k = 0; k < nk; k++) printf(" %dT (us) | speed-up |", kthreads[k]);
@@ -533,6 +541,7 @@ static void print_speedup(const speed_row *rows, int nrows, int pays)
         }
     }
     printf("\n| ------- | ----: |");
+    if (trees) printf(" -----: | -----: |");
     for (int p = 0; p < NP; p++) {
         printf(" ---------: |");
         for (int k = 0; k < nk; k++) printf(" --------: | ----: |");
@@ -545,6 +554,7 @@ static void print_speedup(const speed_row *rows, int nrows, int pays)
     for (int i = 0; i < nrows; i++) {
         const speed_row *r = &rows[i];
         printf("| %-7s | %5d |", r->label, r->n);
+        if (trees) printf(" %6d | %6.1f |", r->height, log2((double)r->n));
         for (int p = 0; p < NP; p++) {
             printf(" %10.1f |", 1e6 * r->t[0][p]);
             for (int k = 1; k <= nk; k++) {
@@ -557,7 +567,7 @@ static void print_speedup(const speed_row *rows, int nrows, int pays)
         }
         printf("\n");
     }
-    if (!pays) return;
+    if (trees) return;
 
     printf("\nThe least n from which every larger n of the table runs at least 5%% faster on k "
            "threads (the tree) than on 1 thread:\n\n");
@@ -601,8 +611,10 @@ int main(int argc, char **argv)
     int is_quick = quick && *quick && strcmp(quick, "0") != 0;
     int max_n = argc > 1 ? atoi(argv[1]) : is_quick ? 4096 : 65536;
     int batches = argc > 2 ? atoi(argv[2]) : is_quick ? 5 : 11;
-    if (max_n < 64 || batches < 1) {
-        fprintf(stderr, "usage: bench_parallel [max_n >= 64] [batches >= 1]\n");
+    const char *parts = argc > 3 ? argv[3] : "bgct";
+    if (max_n < 64 || batches < 1 || !*parts || strspn(parts, "bgct") != strlen(parts)) {
+        fprintf(stderr, "usage: bench_parallel [max_n >= 64] [batches >= 1] [parts: any of "
+                        "b g c t]\n");
         return 2;
     }
     parse_threads(getenv("CTC_BENCH_THREADS"));
@@ -617,68 +629,76 @@ int main(int argc, char **argv)
            "start: %.2f. Waiting of the passes' pools: %s.\n\n",
            batches, load0, wait ? wait : "default");
 
-    calibrate_chunk();
-    printf("Level barrier: ns per stage of one %d ns chunk per thread, each stage waiting for the "
-           "one before (pthread_barrier: %d ns of work, then a crossing), and one run of one "
-           "stage (ns); %d ns is the ideal:\n\n",
-           CHUNK_NS, CHUNK_NS, CHUNK_NS);
-    printf("| threads | waiting | ns per stage |\n| ------: | ------- | -----------: |\n");
-    bench_barrier(2, batches);
-    for (int k = 0; k < nk; k++)
-        if (kthreads[k] != 2) bench_barrier(kthreads[k], batches);
-
-    printf("\nGrain sweep, 2 threads: one pass (us) as the grain varies, and the best:\n\n");
-    printf("| chain   |     n | pass     |");
-    for (int g = 0; g < NSWEEP; g++) {
-        if (sweep[g])
-            printf(" %8d |", sweep[g]);
-        else
-            printf("   serial |");
-    }
-    printf(" best |\n| ------- | ----: | -------- |");
-    for (int g = 0; g < NSWEEP; g++) printf(" -------: |");
-    printf(" ---: |\n");
-    static const int sweep_n[] = {64, 128, 256, 512, 1024, 2048, 4096};
-    for (int form = 0; form < 2; form++) {
-        for (int i = 0; i < 7 && sweep_n[i] <= max_n; i++) {
-            test_chain *c = form
-                                ? test_chain_random_spatial(sweep_n[i], 7, 1u << CTC_JOINT_REVOLUTE)
-                                : test_chain_random_planar(sweep_n[i], 7, 0, 1);
-            bench_sweep(form ? "spatial" : "planar", c, batches);
-            test_chain_free(c);
-        }
-    }
-
-    printf("\nOne pass and one CTC right-hand side on 1 thread and on k threads (us), speed-up = "
-           "1 thread / k threads:\n\n");
     speed_row rows[MAXROWS];
-    int nrows = 0, failed = 0;
-    for (int form = 0; form < 2; form++) {
-        for (int n = 64; n <= max_n && nrows < MAXROWS; n *= 2) {
-            test_chain *c = form ? test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE)
-                                 : test_chain_random_planar(n, 7, 0, 1);
-            failed |= bench_speedup(form ? "spatial" : "planar", c, batches, &rows[nrows++]);
-            test_chain_free(c);
-        }
+    int failed = 0;
+    if (strchr(parts, 'b')) {
+        calibrate_chunk();
+        printf(
+            "Level barrier: ns per stage of one %d ns chunk per thread, each stage waiting for the "
+            "one before (pthread_barrier: %d ns of work, then a crossing), and one run of one "
+            "stage (ns); %d ns is the ideal:\n\n",
+            CHUNK_NS, CHUNK_NS, CHUNK_NS);
+        printf("| threads | waiting | ns per stage |\n| ------: | ------- | -----------: |\n");
+        bench_barrier(2, batches);
+        for (int k = 0; k < nk; k++)
+            if (kthreads[k] != 2) bench_barrier(kthreads[k], batches);
     }
-    print_speedup(rows, nrows, 1);
-
-    printf("\nThe same on Featherstone's autoTree (taper 1; pl: planar, no skew; sp: spatial, "
-           "skew 0.5 rad; bf: branching factor): the plan split over threads against the plan "
-           "and the sequential tip runs on 1 thread:\n\n");
-    nrows = 0;
-    for (int form = 0; form < 2; form++) {
-        for (int bf = 2; bf <= 4; bf += 2) {
-            for (int n = 1024; n <= max_n && n <= 16384 && nrows < MAXROWS; n *= 4) {
-                char label[8];
-                snprintf(label, sizeof label, "%s bf%d", form ? "sp" : "pl", bf);
-                test_chain *c = test_auto_tree(n, bf, form ? 0.5 : 0.0, 1.0);
-                failed |= bench_speedup(label, c, batches, &rows[nrows++]);
+    if (strchr(parts, 'g')) {
+        printf("\nGrain sweep, 2 threads: one pass (us) as the grain varies, and the best:\n\n");
+        printf("| chain   |     n | pass     |");
+        for (int g = 0; g < NSWEEP; g++) {
+            if (sweep[g])
+                printf(" %8d |", sweep[g]);
+            else
+                printf("   serial |");
+        }
+        printf(" best |\n| ------- | ----: | -------- |");
+        for (int g = 0; g < NSWEEP; g++) printf(" -------: |");
+        printf(" ---: |\n");
+        static const int sweep_n[] = {64, 128, 256, 512, 1024, 2048, 4096};
+        for (int form = 0; form < 2; form++) {
+            for (int i = 0; i < 7 && sweep_n[i] <= max_n; i++) {
+                test_chain *c =
+                    form ? test_chain_random_spatial(sweep_n[i], 7, 1u << CTC_JOINT_REVOLUTE)
+                         : test_chain_random_planar(sweep_n[i], 7, 0, 1);
+                bench_sweep(form ? "spatial" : "planar", c, batches);
                 test_chain_free(c);
             }
         }
     }
-    print_speedup(rows, nrows, 0);
+    if (strchr(parts, 'c')) {
+        int nrows = 0;
+        printf(
+            "\nOne pass and one CTC right-hand side on 1 thread and on k threads (us), speed-up = "
+            "1 thread / k threads:\n\n");
+        for (int form = 0; form < 2; form++) {
+            for (int n = 64; n <= max_n && nrows < MAXROWS; n *= 2) {
+                test_chain *c = form ? test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE)
+                                     : test_chain_random_planar(n, 7, 0, 1);
+                failed |= bench_speedup(form ? "spatial" : "planar", c, batches, &rows[nrows++]);
+                test_chain_free(c);
+            }
+        }
+        print_speedup(rows, nrows, 0);
+    }
+    if (strchr(parts, 't')) {
+        printf("\nThe same on Featherstone's autoTree (taper 1; pl: planar, no skew; sp: spatial, "
+               "skew 0.5 rad; bf: branching factor): the plan split over threads against the plan "
+               "and the sequential tip runs on 1 thread:\n\n");
+        int nrows = 0;
+        for (int form = 0; form < 2; form++) {
+            for (int bf = 2; bf <= 4; bf += 2) {
+                for (int n = 1024; n <= max_n && n <= 16384 && nrows < MAXROWS; n *= 4) {
+                    char label[8];
+                    snprintf(label, sizeof label, "%s bf%d", form ? "sp" : "pl", bf);
+                    test_chain *c = test_auto_tree(n, bf, form ? 0.5 : 0.0, 1.0);
+                    failed |= bench_speedup(label, c, batches, &rows[nrows++]);
+                    test_chain_free(c);
+                }
+            }
+        }
+        print_speedup(rows, nrows, 1);
+    }
     printf("\nLoad average at the end: %.2f; %.0f s in all.\n", loadavg(), now() - t0);
     if (failed) return 1;
     return sink == 12345.678 ? 1 : 0;
