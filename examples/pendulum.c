@@ -22,15 +22,14 @@
 
 int main(void)
 {
-    const double m = 1.0, L = 1.0, g = 9.81; /* kg, m, m/s^2 */
+    const double m = 1.0, L = 1.0, g = 9.81;  /* kg, m, m/s^2 */
     const double q = 0.7, v = 1.3, tau = 2.0; /* rad, rad/s, N m */
 
     /* the rod: centre of mass mid-way, inertia m L^2 / 12 about x and z (slender along y) */
     ctc_body_spec body = {.mass = m, .com = {0, -L / 2, 0}};
     body.inertia[0] = body.inertia[8] = m * L * L / 12;
     ctc_joint_spec joint = {.type = CTC_JOINT_REVOLUTE, .axis = {0, 0, 1}};
-    ctc_chain_spec chain = {
-        .nbodies = 1, .bodies = &body, .joints = &joint, .gravity = {0, -g, 0}};
+    ctc_chain_spec chain = {.nbodies = 1, .bodies = &body, .joints = &joint, .gravity = {0, -g, 0}};
 
     char err[256];
     ctc_model *model = NULL;

@@ -133,8 +133,8 @@ void ctc_data_free(ctc_data *d);
  * tree's) forward pass takes the sequential order on one thread and, from a measured length on
  * (planar 4096, spatial 1024 bodies; chains' figures, used for trees too), the balanced tree (the
  * plan) on two threads or more (gdca_forward_seq.h, opt.fwd_order), so at those lengths one thread
- * and several agree to rounding, and any two counts of two or more bitwise. Returns CTC_OK, or CTC_EINVAL with a message
- * in err (errlen bytes; may be NULL) when nthreads is out of range. */
+ * and several agree to rounding, and any two counts of two or more bitwise. Returns CTC_OK, or
+ * CTC_EINVAL with a message in err (errlen bytes; may be NULL) when nthreads is out of range. */
 ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t errlen);
 
 /* Makes d's passes use owner's thread count and workers instead of its own, for two data used in

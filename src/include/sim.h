@@ -94,13 +94,13 @@ typedef struct ctc_sim_spec {
     ctc_ctrl_type controller;         /* NONE = passive; ignored when ctrl_class is set */
     const ctc_ctrl_class *ctrl_class; /* NULL = ctc_ctrl_classes[controller]; else a class of the
                                          caller's own (ctrl.h), which must outlive the run */
-    const void *ctrl_params;      /* passed to the class's law as ctc_ctrl_eval.params; NULL ok */
-    const ctc_gains *gains;       /* (nind) designed gains per coordinate (ctrl.h): required by a
-                                     class with closed_loop (every built-in active kind), optional
-                                     for others (then passed to the law as given); unused if
-                                     passive */
-    double model_mass_scale;      /* controller's model: every mass times this (> 0; 1 = exact) */
-    double model_inertia_scale;   /* controller's model: every inertia about the CoM times this */
+    const void *ctrl_params;    /* passed to the class's law as ctc_ctrl_eval.params; NULL ok */
+    const ctc_gains *gains;     /* (nind) designed gains per coordinate (ctrl.h): required by a
+                                   class with closed_loop (every built-in active kind), optional
+                                   for others (then passed to the law as given); unused if
+                                   passive */
+    double model_mass_scale;    /* controller's model: every mass times this (> 0; 1 = exact) */
+    double model_inertia_scale; /* controller's model: every inertia about the CoM times this */
     /* (nbodies) the controller model's bodies, to which the two scales then apply; NULL = the
        plant's (chain.bodies). The model builder checks them as it checks the plant's */
     const ctc_body_spec *model_bodies;
@@ -116,8 +116,8 @@ typedef struct ctc_sim_spec {
        integrator restarts at every t_k, and the integral state is the discrete sum
        xi_k+1 = xi_k + T e_k (clamped as plant.h says). sample_delay d: the force computed at
        t_k is applied from t_k+d on; before t_d the actuator gives 0. */
-    double sample_period; /* s, >= 0 */
-    int sample_delay;     /* whole samples, >= 0; > 0 only with sample_period > 0 */
+    double sample_period;    /* s, >= 0 */
+    int sample_delay;        /* whole samples, >= 0; > 0 only with sample_period > 0 */
     unsigned long long seed; /* the sensors' noise generator's seed (plant.h) */
     ctc_integ_spec integrator;
     double duration;        /* s, > 0 */
@@ -125,8 +125,8 @@ typedef struct ctc_sim_spec {
     unsigned channels;      /* CTC_CH_BIT mask; 0 = every channel that applies */
     /* the end_effector channel's point; NULL = none (the channel does not apply) */
     const ctc_end_effector *end_effector;
-    double max_speed;       /* divergence bound on any |v_i| (rad/s, m/s); 0 = 1e6 */
-    double wall_limit;      /* s of wall time before the run stops as "timeout"; 0 = none */
+    double max_speed;  /* divergence bound on any |v_i| (rad/s, m/s); 0 = 1e6 */
+    double wall_limit; /* s of wall time before the run stops as "timeout"; 0 = none */
     /* loop models only */
     ctc_loop_stab loop_stab;
     double loop_tol;      /* projection: the position (m, rad) or velocity (m/s, rad/s)

@@ -240,9 +240,8 @@ ctc_status sim_check_with_model(const ctc_sim_spec *s, const ctc_model *m, char 
         const struct {
             const char *name;
             double x;
-        } sensor[] = {{"noise_q", pc->noise_q},
-                      {"noise_v", pc->noise_v},
-                      {"resolution", pc->resolution}};
+        } sensor[] = {
+            {"noise_q", pc->noise_q}, {"noise_v", pc->noise_v}, {"resolution", pc->resolution}};
         for (int k = 0; k < 3; k++) {
             if (!(sensor[k].x >= 0) || isinf(sensor[k].x))
                 return ctc_fail(CTC_EINVAL, err, errlen,
@@ -253,8 +252,8 @@ ctc_status sim_check_with_model(const ctc_sim_spec *s, const ctc_model *m, char 
                                 "coordinate %d: %s needs a sampled controller (sample_period)", i,
                                 sensor[k].name);
             if (sensor[k].x > 0 && m->has_loop)
-                return ctc_fail(CTC_EINVAL, err, errlen,
-                                "coordinate %d: %s needs an open chain", i, sensor[k].name);
+                return ctc_fail(CTC_EINVAL, err, errlen, "coordinate %d: %s needs an open chain", i,
+                                sensor[k].name);
         }
         if (pc->armature > 0 && m->has_loop)
             return ctc_fail(CTC_EINVAL, err, errlen, "coordinate %d: armature needs an open chain",

@@ -53,15 +53,15 @@ typedef struct sim_ctx {
     /* a sampled controller (sim.h sample_period): the commands of the last delay + 1 samples,
        each (nvx) f, (nind) w, (nind) clip, in a ring, and a zero command */
     int sampled, delay;
-    int sampling_now;     /* sim_evaluate computes the controller (at a sample instant) */
-    long k_ctrl;          /* the next sample's index */
-    double *ring;         /* (delay + 2) commands; the last is zero */
-    const double *held;   /* the command being applied: one of ring's */
-    int sensed;               /* some coordinate's sensors are not exact (plant.h) */
-    unsigned long long rng;   /* the sensors' noise generator's state */
-    double *ym;               /* (ny) the state as the sampled controller measures it */
-    ctc_ctrl_eval law_in; /* the law's input: the arrays above, t, q, v and xi set per call */
-    double cond_max;      /* loop models: singular beyond this condition estimate */
+    int sampling_now;       /* sim_evaluate computes the controller (at a sample instant) */
+    long k_ctrl;            /* the next sample's index */
+    double *ring;           /* (delay + 2) commands; the last is zero */
+    const double *held;     /* the command being applied: one of ring's */
+    int sensed;             /* some coordinate's sensors are not exact (plant.h) */
+    unsigned long long rng; /* the sensors' noise generator's state */
+    double *ym;             /* (ny) the state as the sampled controller measures it */
+    ctc_ctrl_eval law_in;   /* the law's input: the arrays above, t, q, v and xi set per call */
+    double cond_max;        /* loop models: singular beyond this condition estimate */
     double cond;  /* loop models: the last evaluation's condition estimate (max of passes) */
     double cond0; /* loop models: the condition estimate at t = 0 */
     long evals;   /* evaluations with the forward pass (the right-hand side's) */

@@ -890,8 +890,8 @@ Test(ctrl, every_class_in_the_table_has_a_unique_name_and_its_index)
         if (c->closed_loop) cr_expect(c->design && c->law && c->nstate == 1, "\"%s\"", c->name);
     }
     /* the names jobs use, in the enum's order */
-    const char *names[] = {"none", "pd", "pid", "poles", "lqr", "joint_pd", "pd_gravity",
-                           "feedforward"};
+    const char *names[] = {"none", "pd",       "pid",        "poles",
+                           "lqr",  "joint_pd", "pd_gravity", "feedforward"};
     for (int t = 0; t < CTC_CTRL_NTYPES; t++) cr_expect_str_eq(ctc_ctrl_classes[t]->name, names[t]);
     cr_expect_null(ctc_ctrl_class_of((ctc_ctrl_type)CTC_CTRL_NTYPES));
     cr_expect_eq(ctc_ctrl_type_of("PD"), -1);

@@ -924,7 +924,8 @@ Test(integrator, adaptive_methods_stop_where_the_step_falls_below_min_step)
         cr_assert_leq(h, 1e-4 * (1 + 1e-12), "h = %g", h);
         cr_assert(t > 0.99 && t < 1, "%s stopped at t = %.17g", ctc_integ_method_name(spec.method),
                   t);
-        cr_assert_geq(ctc_integrator_stats(it)->h_last, 1e-4 * (1 - 1e-12), "%s h_last %g", ctc_integ_method_name(spec.method), ctc_integrator_stats(it)->h_last);
+        cr_assert_geq(ctc_integrator_stats(it)->h_last, 1e-4 * (1 - 1e-12), "%s h_last %g",
+                      ctc_integ_method_name(spec.method), ctc_integrator_stats(it)->h_last);
         ctc_integrator_free(it);
     }
 }

@@ -1198,17 +1198,17 @@ Test(presets, y_four_bar_closes_its_four_bar_branch_on_the_arm)
 Test(presets, panda_moves_inside_frankas_joint_limits_and_opens_both_fingers)
 {
     /* franka_arm.xacro's limits (rad) and franka_hand.xacro's (m) */
-    static const double lower[9] = {-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973,
-                                    0, 0};
-    static const double upper[9] = {2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973,
-                                    0.04, 0.04};
+    static const double lower[9] = {-2.8973, -1.7628, -2.8973, -3.0718, -2.8973,
+                                    -0.0175, -2.8973, 0,       0};
+    static const double upper[9] = {2.8973, 1.7628, 2.8973, -0.0698, 2.8973,
+                                    3.7525, 2.8973, 0.04,   0.04};
     /* Franka's ready pose, then both fingers from 1 cm to 4 cm open */
     const double ready[9] = {0, -pi / 4, 0, -3 * pi / 4, 0, pi / 2, pi / 4, 0.01, 0.01};
     static const int parents[9] = {-1, 0, 1, 2, 3, 4, 5, 6, 6};
     cJSON *doc = build("panda_min_jerk", NULL);
     const cJSON *traj = cJSON_GetObjectItemCaseSensitive(doc, "trajectory");
-    const cJSON *q0 = cJSON_GetObjectItemCaseSensitive(
-        cJSON_GetObjectItemCaseSensitive(doc, "scene"), "q0");
+    const cJSON *q0 =
+        cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(doc, "scene"), "q0");
     cr_assert_eq(cJSON_GetArraySize(traj), 9);
     for (int i = 0; i < 9; i++) {
         const cJSON *t = cJSON_GetArrayItem(traj, i);
@@ -1222,17 +1222,17 @@ Test(presets, panda_moves_inside_frankas_joint_limits_and_opens_both_fingers)
         if (i >= 7) cr_assert_eq(to, 0.04, "finger %d opens to 4 cm", i - 7);
     }
     /* the URDF carries the same limits, and both fingers hang from the hand (link 7) */
-    const char *text = cJSON_GetObjectItemCaseSensitive(
-                           cJSON_GetObjectItemCaseSensitive(doc, "scene"), "urdf")
-                           ->valuestring;
+    const char *text =
+        cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(doc, "scene"), "urdf")
+            ->valuestring;
     char msg[256];
     cJSON *bodies = urdf_to_bodies(text, strlen(text), NULL, 0, msg, sizeof msg);
     cr_assert_not_null(bodies, "%s", msg);
     cr_assert_eq(cJSON_GetArraySize(bodies), 9);
     for (int i = 0; i < 9; i++) {
         const cJSON *b = cJSON_GetArrayItem(bodies, i);
-        const cJSON *limit = cJSON_GetObjectItemCaseSensitive(
-            cJSON_GetObjectItemCaseSensitive(b, "joint"), "limit");
+        const cJSON *limit =
+            cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(b, "joint"), "limit");
         cr_assert_eq(cJSON_GetObjectItemCaseSensitive(b, "parent")->valuedouble, parents[i]);
         cr_assert_eq(cJSON_GetObjectItemCaseSensitive(limit, "lower")->valuedouble, lower[i],
                      "body %d", i);

@@ -153,8 +153,8 @@ static int on_path(const int *par, int j, int i)
 
 /* the tree's M (nv x nv), G and c at q, v; gravity g. Joint i moves link i from the link of
  * joint par[i] (par NULL: a serial chain), par[i] < i. */
-static int oracle_dynamics(const tjoint *J, const int *par, int n, const double *g,
-                           const double *q, const double *v, double *M, double *G, double *c)
+static int oracle_dynamics(const tjoint *J, const int *par, int n, const double *g, const double *q,
+                           const double *v, double *M, double *G, double *c)
 {
     double z[MAXJ][3], o[MAXJ][3], Rl[MAXJ][9], pl[MAXJ][3];
     int col[MAXJ], nv = 0;
