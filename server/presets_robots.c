@@ -149,6 +149,29 @@ static cJSON *robot_from_dh(const char *title, const char *convention, const dh_
     return finish_robot(doc, n, from, to, preset_name, err);
 }
 
+/* The document of the arm described by the URDF text (NULL: it could not be written), named
+ * title, with gravity -z, moving from -> to (n coordinates) by finish_robot. Returns NULL with err
+ * filled (out of memory). */
+static cJSON *robot_from_urdf(const char *title, const char *text, int n, const double *from,
+                              const double *to, const char *preset_name, job_error *err)
+{
+    static const double gravity[3] = {0, 0, -9.81};
+    cJSON *doc = text != NULL ? cJSON_CreateObject() : NULL;
+    cJSON *scene = cJSON_AddObjectToObject(doc, "scene");
+    int ok = doc != NULL && cJSON_AddStringToObject(doc, "name", title) &&
+             cJSON_AddItemToObject(scene, "gravity", cJSON_CreateDoubleArray(gravity, 3)) &&
+             cJSON_AddStringToObject(scene, "urdf", text);
+    if (!ok) {
+        cJSON_Delete(doc);
+        err->code = JOB_NO_MEMORY;
+        err->field[0] = '\0';
+        snprintf(err->message, sizeof err->message, "out of memory building preset %s",
+                 preset_name);
+        return NULL;
+    }
+    return finish_robot(doc, n, from, to, preset_name, err);
+}
+
 /* ---- the two-link planar arm with point masses ---- */
 
 /* standard DH: frame i sits at link i's far end, where its point mass is */
@@ -331,26 +354,11 @@ cJSON *presets_iiwa14(const cJSON *request, job_error *err)
     (void)request;
     static const double from[7] = {0, 0, 0, 0, 0, 0, 0};
     static const double to[7] = {0.5, 0.6, 0, -1.2, 0, 0.8, 0};
-    static const double gravity[3] = {0, 0, -9.81};
     char text[8192];
-    cJSON *doc = NULL;
-    if (iiwa14_text(text, sizeof text) == 0) doc = cJSON_CreateObject();
-    cJSON *scene = cJSON_AddObjectToObject(doc, "scene");
-    int ok = doc != NULL &&
-             cJSON_AddStringToObject(doc, "name",
-                                     "KUKA LBR iiwa 14 minimum-jerk move, PD (URDF of Drake's "
-                                     "iiwa14_no_collision.urdf)") &&
-             cJSON_AddItemToObject(scene, "gravity", cJSON_CreateDoubleArray(gravity, 3)) &&
-             cJSON_AddStringToObject(scene, "urdf", text);
-    if (!ok) {
-        cJSON_Delete(doc);
-        err->code = JOB_NO_MEMORY;
-        err->field[0] = '\0';
-        snprintf(err->message, sizeof err->message,
-                 "out of memory building preset iiwa14_min_jerk");
-        return NULL;
-    }
-    return finish_robot(doc, 7, from, to, "iiwa14_min_jerk", err);
+    return robot_from_urdf("KUKA LBR iiwa 14 minimum-jerk move, PD (URDF of Drake's "
+                           "iiwa14_no_collision.urdf)",
+                           iiwa14_text(text, sizeof text) == 0 ? text : NULL, 7, from, to,
+                           "iiwa14_min_jerk", err);
 }
 
 /* ---- Franka Emika Panda with its fingers ---- */
@@ -465,24 +473,9 @@ cJSON *presets_panda(const cJSON *request, job_error *err)
         0,   -0.78539816339744831, 0, -2.3561944901923448, 0, HALF_PI, 0.78539816339744831, 0.01,
         0.01};
     static const double to[9] = {0.6, -0.2, -0.4, -2.0, 0.3, 2.0, 1.2, 0.04, 0.04};
-    static const double gravity[3] = {0, 0, -9.81};
     char text[12288];
-    cJSON *doc = NULL;
-    if (panda_text(text, sizeof text) == 0) doc = cJSON_CreateObject();
-    cJSON *scene = cJSON_AddObjectToObject(doc, "scene");
-    int ok = doc != NULL &&
-             cJSON_AddStringToObject(doc, "name",
-                                     "Franka Emika Panda minimum-jerk move opening its fingers, PD "
-                                     "(URDF of franka_description; link inertials of Gaz et al. "
-                                     "2019)") &&
-             cJSON_AddItemToObject(scene, "gravity", cJSON_CreateDoubleArray(gravity, 3)) &&
-             cJSON_AddStringToObject(scene, "urdf", text);
-    if (!ok) {
-        cJSON_Delete(doc);
-        err->code = JOB_NO_MEMORY;
-        err->field[0] = '\0';
-        snprintf(err->message, sizeof err->message, "out of memory building preset panda_min_jerk");
-        return NULL;
-    }
-    return finish_robot(doc, 9, from, to, "panda_min_jerk", err);
+    return robot_from_urdf("Franka Emika Panda minimum-jerk move opening its fingers, PD (URDF of "
+                           "franka_description; link inertials of Gaz et al. 2019)",
+                           panda_text(text, sizeof text) == 0 ? text : NULL, 9, from, to,
+                           "panda_min_jerk", err);
 }
