@@ -51,7 +51,7 @@ static const char usage[] =
     "            controller and a gentle minimum-jerk move of every joint, to edit and run\n"
     "\n"
     "  --channels LIST  comma-separated subset of q,qdot,q_des,qdot_des,e,tau,w,energy,loop,\n"
-    "                   end_effector\n"
+    "                   end_effector,body_pose\n"
     "  --every N        keep every N-th sample (and the last)\n"
     "  --quiet          no summary line on standard error\n"
     "\n"
