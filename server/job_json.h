@@ -44,6 +44,13 @@
  *                       N), "velocity" (rad/s or m/s)} and "dynamics": {"damping", "friction"},
  *                       optional, each key optional, magnitudes >= 0: kept in the job (a URDF
  *                       gives them) for the lab plant; the simulation does not use them yet}
+ *           "visuals"  optional, up to JOB_MAX_VISUALS shapes the page's animation draws for
+ *                      the body (job_scene.c parse_visuals): {"type": "box", "size": [3]} |
+ *                      {"type": "cylinder", "radius", "length"} | {"type": "sphere", "radius"}
+ *                      (m > 0), with "origin" [3] (m, body frame; default 0) and, but for a
+ *                      sphere, "rotation" (3 rows, a proper rotation; default the identity);
+ *                      a URDF's <visual> boxes, cylinders and spheres come here (import.h);
+ *                      the simulation ignores them
  *       "urdf"      instead of "bodies": a URDF robot description, XML text (urdf.h), converted
  *                   into bodies (import.h: frames rotated to be parallel to the world's at
  *                   q = 0, fixed joints merged, the root link fixed to the world); the
@@ -228,6 +235,7 @@
 #define JOB_MAX_VALUES 20000000 /* samples x values per sample over the recorded channels */
 #define JOB_MAX_NAME 200        /* bytes */
 #define JOB_MAX_WRENCHES 64     /* external wrenches */
+#define JOB_MAX_VISUALS 64      /* visual shapes of one body (scene.bodies[k].visuals) */
 #define JOB_MAX_FIXED_STEPS 1e9 /* rk4 steps (duration / step) when max_steps is 0 */
 /* rk4 steps x bodies at most: about 7 min of a worker at the 0.43 us a planar body-step measured
    (a 64-link pendulum, 10^4 steps in 0.28 s), so about what the server's default time limit of
