@@ -207,7 +207,8 @@ typedef struct ctc_sim_metrics {
     /* (CTC_NCAUSES x nv, row-major) the tracking error caused by each of sampling, noise and
        model error, and by the three together (sim_causes.c): RMS over the samples of the
        difference between the errors of two runs that differ by that cause alone; zeros when
-       the spec has none of them; NULL when passive */
+       the spec has none of them; NaN when it has one and the run stopped early, or a row's
+       counterfactual run did not finish; NULL when passive */
     double *err_cause;
     double energy_drift; /* passive, no disturbance, no wrench: max |E(t) - E(0)| / max(|E(0)|,
                             KE scale); NaN otherwise */

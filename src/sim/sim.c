@@ -520,7 +520,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     static const ctc_sim_hooks no_hooks = {0};
     if (!hooks) hooks = &no_hooks;
     ctc_status st = sim_run_once(spec, hooks, out, err, errlen);
-    if (st != CTC_OK || (*out)->status != CTC_RUN_DONE) return st;
+    if (st != CTC_OK) return st;
     st = sim_error_by_cause(spec, hooks, *out, err, errlen);
     if (st != CTC_OK) {
         ctc_sim_result_free(*out);

@@ -17,8 +17,11 @@
  * alone) is not repeated. The shares need not add up to the total: the causes interact (a model
  * error's effect changes with the sample period), and the total says by how much.
  * Noise on a continuous controller is never read (sim.h), so N counts only with S. A
- * counterfactual that does not run to its end (diverged, failed) leaves NaN in the rows that
- * need it. The runs' time is not part of the run's wall_s and cpu_s.
+ * run that stopped early (diverged, cancelled, ...) has NaN in every row when it has a cause. A
+ * counterfactual that does not run to its end (diverged, failed, out of wall time) leaves NaN in
+ * the rows that need it. The runs share the spec's wall_limit with the run itself: each gets
+ * what the run and the runs before it left of it. Their time is not part of the run's wall_s
+ * and cpu_s.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -44,10 +47,15 @@ static unsigned causes_of(const ctc_sim_spec *s, int nind)
 /* The run of spec s with the causes x only, recording e: *out, or NULL when it did not run to
  * its end (a cancelled run sets *cancelled). plant is scratch of nind coordinates. */
 static ctc_status run_with(const ctc_sim_spec *s, unsigned x, int nind, ctc_plant_coord *plant,
-                           const ctc_sim_hooks *hooks, ctc_sim_result **out, int *cancelled,
-                           char *err, size_t errlen)
+                           const ctc_sim_hooks *hooks, double *wall_used, ctc_sim_result **out,
+                           int *cancelled, char *err, size_t errlen)
 {
     ctc_sim_spec cf = *s;
+    *out = NULL;
+    if (s->wall_limit > 0) {
+        cf.wall_limit = s->wall_limit - *wall_used;
+        if (!(cf.wall_limit > 0)) return CTC_OK;
+    }
     cf.channels = CTC_CH_BIT(CTC_CH_E);
     cf.end_effector = NULL;
     cf.pose_bodies = NULL, cf.npose = 0;
@@ -63,10 +71,10 @@ static ctc_status run_with(const ctc_sim_spec *s, unsigned x, int nind, ctc_plan
         cf.model_mass_scale = cf.model_inertia_scale = 1;
     }
     ctc_sim_hooks h = {.ctx = hooks->ctx, .cancelled = hooks->cancelled};
-    *out = NULL;
     ctc_sim_result *r = NULL;
     ctc_status st = sim_run_once(&cf, &h, &r, err, errlen);
     if (st != CTC_OK) return st;
+    *wall_used += r->metrics.wall_s;
     *cancelled |= r->status == CTC_RUN_CANCELLED;
     if (r->status != CTC_RUN_DONE) {
         ctc_sim_result_free(r);
@@ -101,15 +109,20 @@ ctc_status sim_error_by_cause(const ctc_sim_spec *s, const ctc_sim_hooks *hooks,
     double *rows = r->metrics.err_cause;
     const unsigned x = causes_of(s, nind);
     if (!rows || x == 0) return CTC_OK;
+    if (r->status != CTC_RUN_DONE) { /* a run stopped early has no shares to measure */
+        for (size_t i = 0; i < (size_t)CTC_NCAUSES * (size_t)nind; i++) rows[i] = NAN;
+        return CTC_OK;
+    }
     ctc_plant_coord *plant = calloc((size_t)nind + 1, sizeof *plant);
     ctc_sim_result *run[8] = {0}; /* by causes; the run itself at x when it recorded e */
     int cancelled = 0;
+    double wall_used = r->metrics.wall_s;
     ctc_status st = plant ? CTC_OK : ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     const unsigned need[] = {0, CAUSE_S, CAUSE_S | CAUSE_N, CAUSE_M, x};
     for (size_t k = 0; st == CTC_OK && !cancelled && k < sizeof need / sizeof *need; k++) {
         const unsigned y = need[k];
         if ((y & ~x) || run[y] || (y == x && r->ch[CTC_CH_E])) continue;
-        st = run_with(s, y, nind, plant, hooks, &run[y], &cancelled, err, errlen);
+        st = run_with(s, y, nind, plant, hooks, &wall_used, &run[y], &cancelled, err, errlen);
     }
     if (st == CTC_OK && cancelled) {
         r->status = CTC_RUN_CANCELLED;

@@ -110,9 +110,9 @@ ctc_status sim_run_once(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ct
 
 /* ---- sim_causes.c ---- */
 
-/* metrics.err_cause of result r, done, of spec s (sim.h CTC_CAUSE_*): the counterfactual runs
- * and their RMS differences; zeros when s has no cause. CTC_OK, or CTC_ENOMEM / CTC_EINVAL with
- * a message; a cancelled counterfactual marks r cancelled. hooks not NULL. */
+/* metrics.err_cause of result r of spec s (sim.h CTC_CAUSE_*): the counterfactual runs and
+ * their RMS differences; zeros when s has no cause, NaN when r stopped early. CTC_OK, or CTC_ENOMEM
+ * / CTC_EINVAL with a message; a cancelled counterfactual marks r cancelled. hooks not NULL. */
 ctc_status sim_error_by_cause(const ctc_sim_spec *s, const ctc_sim_hooks *hooks, ctc_sim_result *r,
                               char *err, size_t errlen);
 

@@ -165,3 +165,18 @@ Test(error_cause, every_cause_has_its_share_and_the_same_seed_the_same_shares)
     ctc_sim_result_free(r);
     job_free(j);
 }
+
+Test(error_cause, a_run_stopped_early_has_no_shares)
+{
+    job *j = parse_ok("{'preset':'triple_pendulum_pid_50hz','duration':1}");
+    j->spec.max_speed = 0.1; /* the start's speeds pass it within the first steps */
+    ctc_sim_result *r = NULL;
+    char err[256] = "";
+    cr_assert_eq(ctc_sim_run(&j->spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
+    cr_assert_eq(r->status, CTC_RUN_DIVERGED, "%s", r->message);
+    for (int c = 0; c < CTC_NCAUSES; c++)
+        for (int i = 0; i < r->nind; i++)
+            cr_expect(isnan(row(r, c)[i]), "cause %d, joint %d: %g", c, i, row(r, c)[i]);
+    ctc_sim_result_free(r);
+    job_free(j);
+}
