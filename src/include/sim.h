@@ -5,7 +5,8 @@
  * At each evaluation of the right-hand side, for the state y = (q, v, int e):
  *   e = q_d - q, de = qd_d - v, w = law(t, q, v, q_d, int e), u = qdd_d + w   (per coordinate)
  *   f = iGDCA_controller(q, v, u)              driving forces from the controller's model
- *   qdd = GDCA_plant(q, v, sat(f) + z(t))      forward dynamics of the plant, disturbance added
+ *   qdd = GDCA_plant(q, v, sat(f) + z(t) + J^T W(t))   forward dynamics of the plant, disturbance
+ *                                              and external wrenches (wrench.h) added
  * where sat clips each actuator at its limit when spec.plant gives one (plant.h; the integral
  * state is then kept from winding up by clamping), and is the identity otherwise.
  * The controller's model is the plant unless mass or inertia scale factors are given. With

@@ -3,11 +3,13 @@
  * recorder of samples and metrics, and the stages between them. Not a public header.
  *
  * The run (sim.c) is a recipe of stages, one file each:
- *   sim_check.c    the spec's checks, with and without a model, and the initial state
- *   sim_rhs.c      one evaluation: state -> desired motion -> controller law -> iGDCA forces ->
- *                  saturation -> disturbance -> GDCA accelerations; the integrator's right-hand
- * side and bdf's in-step projection sim_record.c   the result's arrays and one output sample's
- * channels sim_metrics.c  the accuracy and tracking figures gathered at the samples and at the end
+ *   - sim_check.c: the spec's checks, with and without a model, and the initial state;
+ *   - sim_rhs.c: one evaluation, state -> desired motion -> controller law -> iGDCA forces ->
+ *     saturation -> disturbance and wrenches -> GDCA accelerations; the integrator's right-hand
+ *     side and bdf's in-step projection;
+ *   - sim_record.c: the result's arrays and one output sample's channels;
+ *   - sim_metrics.c: the accuracy and tracking figures gathered at the samples and at the end;
+ *   - sim_causes.c: the tracking error by cause, from counterfactual runs after the run.
  * Everything a run touches is allocated in sim.c before its first step.
  */
 #ifndef CTC_SIM_INTERNAL_H
