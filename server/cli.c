@@ -51,7 +51,7 @@ static const char usage[] =
     "            controller and a gentle minimum-jerk move of every joint, to edit and run\n"
     "\n"
     "  --channels LIST  comma-separated subset of q,qdot,q_des,qdot_des,e,tau,w,energy,loop,\n"
-    "                   end_effector\n"
+    "                   end_effector,body_pose\n"
     "  --every N        keep every N-th sample (and the last)\n"
     "  --quiet          no summary line on standard error\n"
     "\n"
@@ -352,6 +352,7 @@ static int cmd_import(int argc, char **argv)
     cJSON *doc = cJSON_Parse("{" IMPORT_JOB_TAIL "}");
     cJSON *scene = cJSON_CreateObject(), *robot = NULL;
     char name[JOB_MAX_NAME + 1] = "robot";
+    int meshes = 0;
     if (dh) {
         robot = cJSON_ParseWithLength(text, len);
         const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
@@ -364,7 +365,7 @@ static int cmd_import(int argc, char **argv)
             robot = cJSON_CreateString(text);
             /* the robot's name, when it has one (errors are the job's to report) */
             char msg[512], rname[JOB_MAX_NAME + 1];
-            cJSON_Delete(urdf_to_bodies(text, len, rname, sizeof rname, msg, sizeof msg));
+            cJSON_Delete(urdf_read(text, len, rname, sizeof rname, &meshes, msg, sizeof msg));
             if (rname[0]) snprintf(name, sizeof name, "%s", rname);
         }
     }
@@ -401,6 +402,11 @@ static int cmd_import(int argc, char **argv)
             "%s: %d bodies, %d coordinates: a PD controller moving each joint 0.2 from "
             "q = 0 in 2 s\n",
             path, j->spec.chain.nbodies, j->nv);
+    if (meshes > 0)
+        fprintf(stderr,
+                "note: %d <visual> mesh%s left out (the animation draws boxes, cylinders and "
+                "spheres)\n",
+                meshes, meshes == 1 ? "" : "es");
     cJSON_free(out);
     job_free(j);
     return out ? 0 : EXIT_IO;

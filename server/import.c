@@ -26,6 +26,8 @@
  * origin, c = 0. The root and its fixed descendants are the ground (their masses play no part).
  * Moving bodies without mass go to the model builder, which accepts them where the joint-space
  * mass matrix stays positive definite (model.h "singular bodies").
+ * A link's visual shape at (R_v, p_v) in its link frame is in its body's frame at
+ * (R0_k R_v, o_k + R0_k p_v), as its centre of mass is.
  */
 #include "import.h"
 
@@ -140,6 +142,36 @@ static cJSON *body_json(const body_acc *b, import_link *l)
     return o;
 }
 
+/* link l's visual v, at offset o in its body whose frame is R0 (the link's world rotation at
+ * q = 0), as the body's "visuals" entry; NULL when an allocation fails */
+static cJSON *visual_json(const import_visual *v, const double R0[9], const double o[3])
+{
+    static const char *const names[3] = {"box", "cylinder", "sphere"};
+    double pos[3], rot[9];
+    import_mat_vec(R0, v->pos, pos);
+    for (int i = 0; i < 3; i++) pos[i] += o[i];
+    import_mat_mul(R0, v->rot, rot);
+    cJSON *j = cJSON_CreateObject();
+    int ok = j != NULL && cJSON_AddStringToObject(j, "type", names[v->type]) != NULL;
+    if (v->type == IMPORT_BOX) ok = ok && cJSON_AddItemToObject(j, "size", numbers(v->size, 3));
+    if (v->type != IMPORT_BOX)
+        ok = ok && cJSON_AddNumberToObject(j, "radius", printed(v->size[0])) != NULL;
+    if (v->type == IMPORT_CYLINDER)
+        ok = ok && cJSON_AddNumberToObject(j, "length", printed(v->size[1])) != NULL;
+    ok = ok && cJSON_AddItemToObject(j, "origin", numbers(pos, 3));
+    if (v->type != IMPORT_SPHERE) {
+        cJSON *rows = cJSON_AddArrayToObject(j, "rotation");
+        for (int i = 0; ok && rows != NULL && i < 3; i++)
+            ok = cJSON_AddItemToArray(rows, numbers(&rot[3 * i], 3));
+        ok = ok && rows != NULL;
+    }
+    if (!ok) {
+        cJSON_Delete(j);
+        return NULL;
+    }
+    return j;
+}
+
 cJSON *import_bodies(import_link *links, int n, char *msg, size_t msg_len)
 {
     cJSON *out = NULL;
@@ -211,6 +243,24 @@ cJSON *import_bodies(import_link *links, int n, char *msg, size_t msg_len)
         cJSON *o = body_json(&bodies[b], &links[bodies[b].link]);
         if (o == NULL || !cJSON_AddItemToArray(out, o)) {
             cJSON_Delete(o);
+            cJSON_Delete(out);
+            out = NULL;
+        }
+    }
+    /* the links' visual shapes, in their bodies' frames, in link order */
+    for (int k = 0; out != NULL && k < n; k++) {
+        if (group[k] < 0 || links[k].nvisuals == 0) continue;
+        cJSON *body = cJSON_GetArrayItem(out, group[k]),
+              *list = cJSON_GetObjectItem(body, "visuals");
+        if (list == NULL) list = cJSON_AddArrayToObject(body, "visuals");
+        for (int v = 0; list != NULL && v < links[k].nvisuals; v++) {
+            cJSON *o = visual_json(&links[k].visuals[v], R0[k], off[k]);
+            if (o == NULL || !cJSON_AddItemToArray(list, o)) {
+                cJSON_Delete(o);
+                list = NULL;
+            }
+        }
+        if (list == NULL) {
             cJSON_Delete(out);
             out = NULL;
         }

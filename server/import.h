@@ -17,6 +17,17 @@
 
 #include "model.h"
 
+/* A visual shape of a link (URDF's <visual> with a <box>, <cylinder> or <sphere>), kept for the
+ * page's animation: the simulation does not use it. */
+typedef enum import_shape { IMPORT_BOX, IMPORT_CYLINDER, IMPORT_SPHERE } import_shape;
+typedef struct import_visual {
+    import_shape type;
+    double size[3]; /* m: a box's edges along its axes; a cylinder's radius and length (along its
+                       z axis); a sphere's radius */
+    double pos[3];  /* m, the shape's centre in the link frame */
+    double rot[9];  /* its axes in the link frame (row-major) */
+} import_visual;
+
 /* One link and the joint from its parent. Names are the caller's (kept only until
  * import_bodies returns). */
 typedef struct import_link {
@@ -35,6 +46,8 @@ typedef struct import_link {
     double inertia[9];      /* kg m^2, about the centre of mass, link-frame axes, row-major */
     cJSON *extra;           /* NULL, or keys kept in the body's "joint" for other uses ("limit",
                                "dynamics"); moved into the result (import_bodies takes it) */
+    const import_visual *visuals; /* (nvisuals) the link's shapes; the caller's */
+    int nvisuals;
 } import_link;
 
 /* The job's bodies for links[0..n-1] (n >= 1, links[0] the root): one body per link whose joint
@@ -44,7 +57,10 @@ typedef struct import_link {
  * merged into the body it is fixed to: its mass, centre of mass and inertia added there (parallel
  * axis theorem), its children's joints re-placed in that body's frame. Each number is the one
  * cJSON prints and reads back (within DBL_EPSILON relative of the computed one), so a printed job
- * parses to the same spec. Returns the array (the
+ * parses to the same spec. A body's "visuals" (when its links have any) lists every shape of its
+ * links in the body's frame: {"type": "box", "size": [3]} | {"type": "cylinder", "radius",
+ * "length"} | {"type": "sphere", "radius"}, each with "origin" (m, the centre) and, but for a
+ * sphere, "rotation" (3 rows, the shape's axes). Returns the array (the
  * caller owns it; the links' extra objects are moved into it or freed), or NULL with msg filled
  * ("out of memory", or "no joint moves (every joint is fixed)"). A moving body without mass is
  * converted (mass 0, its lumped inertia about its origin); the model builder decides on it. */

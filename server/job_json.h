@@ -44,6 +44,13 @@
  *                       N), "velocity" (rad/s or m/s)} and "dynamics": {"damping", "friction"},
  *                       optional, each key optional, magnitudes >= 0: kept in the job (a URDF
  *                       gives them) for the lab plant; the simulation does not use them yet}
+ *           "visuals"  optional, up to JOB_MAX_VISUALS shapes the page's animation draws for
+ *                      the body (job_scene.c parse_visuals): {"type": "box", "size": [3]} |
+ *                      {"type": "cylinder", "radius", "length"} | {"type": "sphere", "radius"}
+ *                      (m > 0), with "origin" [3] (m, body frame; default 0) and, but for a
+ *                      sphere, "rotation" (3 rows, a proper rotation; default the identity);
+ *                      a URDF's <visual> boxes, cylinders and spheres come here (import.h);
+ *                      the simulation ignores them
  *       "urdf"      instead of "bodies": a URDF robot description, XML text (urdf.h), converted
  *                   into bodies (import.h: frames rotated to be parallel to the world's at
  *                   q = 0, fixed joints merged, the root link fixed to the world); the
@@ -150,6 +157,13 @@
  *       "noise_q", "noise_v"  standard deviations >= 0 (rad or m, rad/s or m/s) of the Gaussian
  *                 noise on what a sampled controller measures; "resolution" >= 0 (rad or m):
  *                 its encoder's count. Need "controller.sample_period" and an open chain.
+ *   "wrenches"    optional (default []): up to JOB_MAX_WRENCHES external wrenches on the plant's
+ *                 bodies (wrench.h; open chains and trees), each {"body": k, "point": [3] (m,
+ *                 the body's frame; default 0), "force": [3] (N), "torque": [3] (N m), "frame":
+ *                 "world" (default) | "body" (the axes of force and torque), "profile":
+ *                 "constant" (default) | "sine" ("period" > 0 s, "phase" rad, default 0) |
+ *                 "step" ("time" >= 0 s), "known": false (default) | true (the controller
+ *                 compensates it; needs a controller)}
  *   "integrator"  optional, default {"method": "dopri5", "rtol": 1e-8, "atol": 1e-10}:
  *       {"method": "rk4", "step": h}      (default step 1e-3 s; the step is shortened so that it
  *                                          divides the output interval)
@@ -163,11 +177,14 @@
  *   "duration"    s, required, 0 < duration <= JOB_MAX_DURATION
  *   "output"      optional: {"interval": dt, 0 < dt <= duration (default 0.01 s, or the duration
  *                 when shorter), "channels": ["q", "qdot", "q_des", "qdot_des", "e", "tau", "w",
- *                 "energy", "loop", "end_effector"] (default: all that apply; q_des, qdot_des, e
- *                 and w need a controller, loop a loop, end_effector its point, tau at least one
+ *                 "energy", "loop", "end_effector", "body_pose"] (default: all that apply; q_des,
+ *                 qdot_des, e and w need a controller, loop a loop, end_effector its point,
+ *                 body_pose its bodies, tau at least one
  *                 controlled coordinate), "end_effector": {"body": k, "point": [3] (m, the body's
  *                 frame; default [0, 0, 0])}: the point whose world position and velocity the
- *                 end_effector channel records (x, y, z, vx, vy, vz)}
+ *                 end_effector channel records (x, y, z, vx, vy, vz), "body_pose": [k, ...]
+ *                 (distinct body indices): the bodies whose poses the body_pose channel records,
+ *                 7 columns each, body_pose[i][x, y, z, qw, qx, qy, qz] for the i-th listed}
  *   "limits"      optional: {"max_speed": rad/s or m/s, > 0 (default 1e6), "wall_time": s >= 0
  *                 (0 = none)}
  *   "threads"     optional whole number 1..CTC_MAX_THREADS (64), default 1: the threads the run's
@@ -217,6 +234,8 @@
 #define JOB_MAX_SAMPLES 200000  /* output samples */
 #define JOB_MAX_VALUES 20000000 /* samples x values per sample over the recorded channels */
 #define JOB_MAX_NAME 200        /* bytes */
+#define JOB_MAX_WRENCHES 64     /* external wrenches */
+#define JOB_MAX_VISUALS 64      /* visual shapes of one body (scene.bodies[k].visuals) */
 #define JOB_MAX_FIXED_STEPS 1e9 /* rk4 steps (duration / step) when max_steps is 0 */
 /* rk4 steps x bodies at most: about 7 min of a worker at the 0.43 us a planar body-step measured
    (a 64-link pendulum, 10^4 steps in 0.28 s), so about what the server's default time limit of
@@ -268,6 +287,8 @@ typedef struct job {
     ctc_body_spec *model_bodies;
     double model_gravity[3];
     ctc_end_effector end_effector; /* spec.end_effector points here when "output" gives one */
+    int *pose_bodies;              /* (spec.npose) spec.pose_bodies, NULL when none */
+    ctc_wrench *wrenches;          /* (spec.nwrenches) spec.wrenches, NULL when none */
     cJSON *normalised; /* the job with the preset expanded and every default filled in; itself
                           a valid job document. Owned. */
 } job;

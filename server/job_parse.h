@@ -10,7 +10,7 @@
  *   job_json.c     "name", "controller", and the entry points (presets, the whole document)
  *   job_run.c      "trajectory", "disturbance", "integrator", "duration", "output", "limits",
  *                  "threads"
- *   job_plant.c    "plant" (read after the disturbance)
+ *   job_plant.c    "plant" (read after the disturbance) and "wrenches"
  * The parts run in that order and may read what earlier parts left in p and p->j (the sizes,
  * nind, the loop, p->ctrl). Each returns 0, or -1 with p->err filled.
  */
@@ -176,5 +176,8 @@ extern const job_format_default job_plant_defaults[];
 /* "plant", default {} (the ideal plant): one object for every coordinate or an array of nind.
  * Fills p->j->plant; spec.plant stays NULL when no coordinate has a term. */
 int parse_plant(parser *p, const cJSON *doc);
+
+/* "wrenches", default []: the external wrenches on the plant's bodies (job_plant.c) */
+int parse_wrenches(parser *p, const cJSON *doc);
 
 #endif

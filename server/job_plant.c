@@ -11,6 +11,13 @@
  * coulomb_velocity and spring_rest their term. "known" says the controller's model has the joint
  * forces and the armature (it compensates them; plant.h). The sensors' noise_q, noise_v and
  * resolution (>= 0) need a sampled controller, which reads them.
+ *
+ * "wrenches" (wrench.h), an array of external wrenches on the plant's bodies, default []: each
+ * names its "body" by index and gives its "point" in the body's frame, "force" and "torque"
+ * (default zero), their "frame" ("world", default, or "body"), its "profile" ("constant",
+ * default; "sine" with "period" > 0 and "phase", default 0; "step" with "time" >= 0) and
+ * "known" (default false: the controller does not compensate it). Open chains and trees only;
+ * "known" needs a controller. Every key is written out.
  */
 #include <math.h>
 #include <stdio.h>
@@ -129,12 +136,131 @@ int parse_plant(parser *p, const cJSON *doc)
     return 0;
 }
 
+static const char *const wrench_keys[] = {"body",   "point", "force", "torque", "frame", "profile",
+                                          "period", "phase", "time",  "known",  NULL};
+
+/* wrenches[i] (at path) into *w; written to out */
+static int parse_wrench(parser *p, const cJSON *v, const char *path, ctc_wrench *w, cJSON *out)
+{
+    static const double zero[3] = {0, 0, 0};
+    static const char *const frames[] = {"world", "body"};
+    static const char *const profiles[] = {"constant", "sine", "step"};
+    char at[PATH_LEN];
+    double body;
+    int frame = CTC_WRENCH_WORLD, profile = CTC_WRENCH_CONSTANT;
+    const int n = p->j->spec.chain.nbodies;
+    if (json_object_at(p, v, path) != 0 ||
+        json_check_keys(p, v, path, wrench_keys, NULL, NULL) != 0 ||
+        json_member_number(p, v, path, "body", REQUIRED, 0, &body) != 0)
+        return -1;
+    if (!(body >= 0 && body < n && body == floor(body))) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, "body"),
+                             "must be a body index, a whole number from 0 to %d (got %g)", n - 1,
+                             body);
+    }
+    w->body = (int)body;
+    if (json_member_vec3(p, v, path, "point", OPTIONAL, zero, w->point) != 0 ||
+        json_member_vec3(p, v, path, "force", OPTIONAL, zero, w->force) != 0 ||
+        json_member_vec3(p, v, path, "torque", OPTIONAL, zero, w->torque) != 0)
+        return -1;
+    const cJSON *x = json_member(v, "frame");
+    if (x != NULL && json_enum_at(p, x, json_key_path(at, path, "frame"), frames, 2, &frame) != 0)
+        return -1;
+    x = json_member(v, "profile");
+    if (x != NULL &&
+        json_enum_at(p, x, json_key_path(at, path, "profile"), profiles, 3, &profile) != 0)
+        return -1;
+    w->frame = (ctc_wrench_frame)frame;
+    w->profile = (ctc_wrench_profile)profile;
+    json_put_number(p, out, "body", body);
+    json_put_numbers(p, out, "point", w->point, 3);
+    json_put_numbers(p, out, "force", w->force, 3);
+    json_put_numbers(p, out, "torque", w->torque, 3);
+    json_put(p, out, "frame", cJSON_CreateString(frames[frame]));
+    json_put(p, out, "profile", cJSON_CreateString(profiles[profile]));
+    /* the profile's own keys: required, defaulted, or not allowed */
+    static const char *const own[3] = {"period", "phase", "time"};
+    const int allowed[3][3] = {{0, 0, 0}, {1, 1, 0}, {0, 0, 1}};
+    for (int k = 0; k < 3; k++) {
+        if (json_member(v, own[k]) != NULL && !allowed[profile][k]) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, own[k]),
+                                 "applies only to the profile \"%s\"", k == 2 ? "step" : "sine");
+        }
+    }
+    if (profile == CTC_WRENCH_SINE) {
+        if (json_member_number(p, v, path, "period", REQUIRED, 0, &w->period) != 0 ||
+            json_member_number(p, v, path, "phase", OPTIONAL, 0, &w->phase) != 0)
+            return -1;
+        if (!(w->period > 0)) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, "period"),
+                                 "must be positive (got %g s)", w->period);
+        }
+        json_put_number(p, out, "period", w->period);
+        json_put_number(p, out, "phase", w->phase);
+    }
+    if (profile == CTC_WRENCH_STEP) {
+        if (json_member_number(p, v, path, "time", REQUIRED, 0, &w->time) != 0) return -1;
+        if (!(w->time >= 0)) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, "time"),
+                                 "must be non-negative (got %g s)", w->time);
+        }
+        json_put_number(p, out, "time", w->time);
+    }
+    x = json_member(v, "known");
+    if (x != NULL && json_bool_at(p, x, json_key_path(at, path, "known"), &w->known) != 0)
+        return -1;
+    if (w->known && p->ctrl == CTC_CTRL_NONE) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, path, "known"),
+                             "needs a controller: the controller compensates a known wrench (this "
+                             "run is passive)");
+    }
+    json_put(p, out, "known", cJSON_CreateBool(w->known));
+    return 0;
+}
+
+int parse_wrenches(parser *p, const cJSON *doc)
+{
+    job *j = p->j;
+    const cJSON *v = json_member(doc, "wrenches");
+    cJSON *out = json_put(p, p->norm, "wrenches", cJSON_CreateArray());
+    if (v == NULL) return 0;
+    if (!cJSON_IsArray(v)) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "wrenches",
+                             "must be an array of wrench objects (got %s)", json_kind(v));
+    }
+    const int count = cJSON_GetArraySize(v);
+    if (count == 0) return 0;
+    if (count > JOB_MAX_WRENCHES) {
+        return json_error_at(p->err, JOB_LIMIT_EXCEEDED, "wrenches",
+                             "has %d wrenches; the limit is %d", count, JOB_MAX_WRENCHES);
+    }
+    if (j->spec.chain.loop != NULL) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "wrenches",
+                             "needs an open chain or tree (the scene has a loop)");
+    }
+    j->wrenches = json_alloc(p, (size_t)count, sizeof *j->wrenches);
+    if (j->wrenches == NULL) return -1;
+    int i = 0;
+    for (const cJSON *e = v->child; e != NULL; e = e->next, i++) {
+        char at[PATH_LEN];
+        cJSON *o = cJSON_CreateObject();
+        if (out != NULL && o != NULL) cJSON_AddItemToArray(out, o);
+        if (parse_wrench(p, e, json_index_path(at, "wrenches", i), &j->wrenches[i], o) != 0)
+            return -1;
+    }
+    j->spec.wrenches = j->wrenches;
+    j->spec.nwrenches = count;
+    return 0;
+}
+
 const job_format_object job_plant_objects[] = {
     FORMAT_KEYS("plant", NULL, NULL, plant_keys),
+    FORMAT_KEYS("wrenches[]", NULL, NULL, wrench_keys),
     FORMAT_END,
 };
 
 const job_format_default job_plant_defaults[] = {
     DEFAULT_JSON("", NULL, "plant", "{}"),
+    DEFAULT_JSON("", NULL, "wrenches", "[]"),
     DEFAULT_END,
 };

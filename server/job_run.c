@@ -427,6 +427,8 @@ static int channel_width(const job *j, int c)
         return 2;
     case CTC_CH_EE:
         return 6;
+    case CTC_CH_POSE:
+        return 7 * j->spec.npose;
     default:
         return j->nind;
     }
@@ -437,6 +439,7 @@ static const char *why_not_applicable(int c)
 {
     if (c == CTC_CH_LOOP) return "needs a loop (\"scene.loop\")";
     if (c == CTC_CH_EE) return "needs its point (\"output.end_effector\")";
+    if (c == CTC_CH_POSE) return "needs its bodies (\"output.body_pose\")";
     if (c == CTC_CH_TAU) return "has no columns (the loop has no independent coordinates)";
     return "needs a controller (this run is passive)";
 }
@@ -448,6 +451,7 @@ static int parse_channels(parser *p, const cJSON *output, const char *const *nam
     if (p->ctrl == CTC_CTRL_NONE) applicable &= ~tracking_channels();
     if (p->j->spec.chain.loop == NULL) applicable &= ~CTC_CH_BIT(CTC_CH_LOOP);
     if (p->j->spec.end_effector == NULL) applicable &= ~CTC_CH_BIT(CTC_CH_EE);
+    if (p->j->spec.npose == 0) applicable &= ~CTC_CH_BIT(CTC_CH_POSE);
     if (p->j->nind == 0) applicable &= ~CTC_CH_BIT(CTC_CH_TAU); /* a loop of dependent joints */
     const cJSON *v = json_member(output, "channels");
     if (v == NULL) {
@@ -481,7 +485,8 @@ static int parse_channels(parser *p, const cJSON *output, const char *const *nam
     return 0;
 }
 
-static const char *const output_keys[] = {"interval", "channels", "end_effector", NULL};
+static const char *const output_keys[] = {"interval", "channels", "end_effector", "body_pose",
+                                          NULL};
 static const char *const end_effector_keys[] = {"body", "point", NULL};
 
 /* "output.end_effector": {"body": k, "point": [x, y, z] (m, body frame; default the origin)},
@@ -511,6 +516,48 @@ static int parse_end_effector(parser *p, const cJSON *output, cJSON *out)
     cJSON *o = json_put(p, out, "end_effector", cJSON_CreateObject());
     json_put_number(p, o, "body", body);
     json_put_numbers(p, o, "point", j->end_effector.point, 3);
+    return 0;
+}
+
+/* "output.body_pose": [k, ...], 1 to nbodies distinct body indices, into j->pose_bodies and
+ * spec.pose_bodies; written to out */
+static int parse_body_pose(parser *p, const cJSON *output, cJSON *out)
+{
+    const char *path = "output.body_pose";
+    job *j = p->j;
+    const cJSON *v = json_member(output, "body_pose");
+    if (v == NULL) return 0;
+    const int n = j->spec.chain.nbodies;
+    const int count = cJSON_IsArray(v) ? cJSON_GetArraySize(v) : 0;
+    if (count < 1 || count > n) {
+        char buf[32];
+        return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                             "must be an array of 1 to %d body indices (got %s)", n,
+                             json_describe(buf, v));
+    }
+    j->pose_bodies = json_alloc(p, (size_t)count, sizeof *j->pose_bodies);
+    if (j->pose_bodies == NULL) return -1;
+    cJSON *o = json_put(p, out, "body_pose", cJSON_CreateArray());
+    int i = 0;
+    for (const cJSON *e = v->child; e != NULL; e = e->next, i++) {
+        char at[PATH_LEN];
+        double x;
+        json_index_path(at, path, i);
+        if (json_number_at(p, e, at, &x) != 0) return -1;
+        if (!(x >= 0 && x < n && x == floor(x))) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, at,
+                                 "must be a body index, a whole number from 0 to %d (got %g)",
+                                 n - 1, x);
+        }
+        for (int k = 0; k < i; k++)
+            if (j->pose_bodies[k] == (int)x)
+                return json_error_at(p->err, JOB_INVALID_FIELD, at, "body %d is listed twice",
+                                     (int)x);
+        j->pose_bodies[i] = (int)x;
+        if (o) cJSON_AddItemToArray(o, cJSON_CreateNumber(x));
+    }
+    j->spec.pose_bodies = j->pose_bodies;
+    j->spec.npose = count;
     return 0;
 }
 
@@ -551,7 +598,8 @@ int parse_output(parser *p, const cJSON *doc)
     for (int c = 0; c < CTC_NCHANNELS; c++) names[c] = ctc_channel_name((ctc_channel)c);
     cJSON *out = json_put(p, p->norm, "output", cJSON_CreateObject());
     json_put_number(p, out, "interval", s->output_interval);
-    if (parse_end_effector(p, v, out) != 0 || parse_channels(p, v, names, &s->channels) != 0)
+    if (parse_end_effector(p, v, out) != 0 || parse_body_pose(p, v, out) != 0 ||
+        parse_channels(p, v, names, &s->channels) != 0)
         return -1;
     double per_sample = 1; /* t */
     for (int c = 0; c < CTC_NCHANNELS; c++) {

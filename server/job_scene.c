@@ -390,8 +390,103 @@ static int parse_parent(parser *p, const cJSON *v, const char *path, const cJSON
     return 0;
 }
 
-static const char *const body_keys[] = {"name",    "parent", "mass",  "com",
-                                        "inertia", "shape",  "joint", NULL};
+static const char *const body_keys[] = {"name",  "parent", "mass",    "com", "inertia",
+                                        "shape", "joint",  "visuals", NULL};
+static const char *const visual_keys[] = {"type",   "size",     "radius", "length",
+                                          "origin", "rotation", NULL};
+
+/* body k's "visuals" (at path), if given: up to JOB_MAX_VISUALS shapes the page draws, each
+ * {"type": "box", "size": [3] > 0} | {"type": "cylinder", "radius" > 0, "length" > 0, its axis
+ * the rotation's z} | {"type": "sphere", "radius" > 0}, with "origin" (m, the centre in the
+ * body's frame; default 0) and, but for a sphere, "rotation" (3 rows, a proper rotation within
+ * 1e-6: the shape's axes in the body's frame; default the identity). The simulation ignores
+ * them; written to out. */
+static int parse_visuals(parser *p, const cJSON *body, const char *body_path, cJSON *out_body)
+{
+    static const char *const types[3] = {"box", "cylinder", "sphere"};
+    static const double zero[3] = {0, 0, 0};
+    char path[PATH_LEN], at[PATH_LEN], item[PATH_LEN];
+    const cJSON *v = json_member(body, "visuals");
+    if (v == NULL) return 0;
+    json_key_path(path, body_path, "visuals");
+    const int n = cJSON_IsArray(v) ? cJSON_GetArraySize(v) : -1;
+    if (n < 0 || n > JOB_MAX_VISUALS) {
+        char buf[32];
+        return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                             "must be an array of at most %d shapes (got %s)", JOB_MAX_VISUALS,
+                             json_describe(buf, v));
+    }
+    cJSON *out = json_put(p, out_body, "visuals", cJSON_CreateArray());
+    int i = 0;
+    for (const cJSON *e = v->child; e != NULL; e = e->next, i++) {
+        int type = 0;
+        double size[3] = {0, 0, 0}, origin[3], rot[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+        json_index_path(item, path, i);
+        if (json_object_at(p, e, item) != 0 ||
+            json_check_keys(p, e, item, visual_keys, NULL, NULL) != 0)
+            return -1;
+        const cJSON *t = json_required_member(p, e, item, "type", "");
+        if (t == NULL || json_enum_at(p, t, json_key_path(at, item, "type"), types, 3, &type) != 0)
+            return -1;
+        /* the type's own keys */
+        static const char *const own[4] = {"size", "radius", "length", "rotation"};
+        static const int allowed[3][4] = {{1, 0, 0, 1}, {0, 1, 1, 1}, {0, 1, 0, 0}};
+        for (int k = 0; k < 4; k++) {
+            if (json_member(e, own[k]) != NULL && !allowed[type][k]) {
+                return json_error_at(p->err, JOB_INVALID_FIELD, json_key_path(at, item, own[k]),
+                                     "does not apply to a %s", types[type]);
+            }
+        }
+        if (type == 0) {
+            const cJSON *sz = json_required_member(p, e, item, "size", "");
+            if (sz == NULL || json_vec3_at(p, sz, json_key_path(at, item, "size"), size) != 0)
+                return -1;
+            if (!(size[0] > 0 && size[1] > 0 && size[2] > 0)) {
+                return json_error_at(p->err, JOB_INVALID_FIELD, at,
+                                     "must be positive (got [%g, %g, %g] m)", size[0], size[1],
+                                     size[2]);
+            }
+        } else {
+            static const char *const dims[2] = {"radius", "length"};
+            for (int k = 0; k < (type == 1 ? 2 : 1); k++) {
+                if (json_member_number(p, e, item, dims[k], REQUIRED, 0, &size[k]) != 0) return -1;
+                if (!(size[k] > 0)) {
+                    return json_error_at(p->err, JOB_INVALID_FIELD,
+                                         json_key_path(at, item, dims[k]),
+                                         "must be positive (got %g m)", size[k]);
+                }
+            }
+        }
+        if (json_member_vec3(p, e, item, "origin", OPTIONAL, zero, origin) != 0) return -1;
+        const cJSON *r = json_member(e, "rotation");
+        if (r != NULL) {
+            int diagonal = 0;
+            json_key_path(at, item, "rotation");
+            if (json_matrix3_at(p, r, at, "rotation", rot, &diagonal) != 0) return -1;
+            double dev = 0, det = rot[0] * (rot[4] * rot[8] - rot[5] * rot[7]) -
+                                  rot[1] * (rot[3] * rot[8] - rot[5] * rot[6]) +
+                                  rot[2] * (rot[3] * rot[7] - rot[4] * rot[6]);
+            for (int a = 0; a < 3; a++)
+                for (int b = 0; b < 3; b++) {
+                    double d = rot[3 * a] * rot[3 * b] + rot[3 * a + 1] * rot[3 * b + 1] +
+                               rot[3 * a + 2] * rot[3 * b + 2];
+                    dev = fmax(dev, fabs(d - (a == b)));
+                }
+            if (!(dev <= 1e-6 && det > 0)) {
+                return json_error_at(p->err, JOB_INVALID_FIELD, at,
+                                     "must be a rotation (orthonormal rows, determinant +1)");
+            }
+        }
+        cJSON *o = json_put(p, out, NULL, cJSON_CreateObject());
+        json_put_string(p, o, "type", types[type]);
+        if (type == 0) json_put_numbers(p, o, "size", size, 3);
+        if (type != 0) json_put_number(p, o, "radius", size[0]);
+        if (type == 1) json_put_number(p, o, "length", size[1]);
+        json_put_numbers(p, o, "origin", origin, 3);
+        if (type != 2) json_put_matrix3(p, o, "rotation", rot, 0);
+    }
+    return 0;
+}
 
 /* body k of bodies: its name and parent, its mass, then com and inertia or a shape, then its
  * joint */
@@ -444,7 +539,8 @@ static int parse_body(parser *p, const cJSON *bodies, const cJSON *v, int k, cJS
             return -1;
         }
     }
-    return parse_joint(p, v, path, k, &p->j->joints[k], out);
+    if (parse_joint(p, v, path, k, &p->j->joints[k], out) != 0) return -1;
+    return parse_visuals(p, v, path, out);
 }
 
 /* "scene.bodies": 1..JOB_MAX_BODIES bodies */
@@ -853,6 +949,7 @@ static int parse_scene_read(parser *p, const cJSON *v)
 const job_format_object job_scene_objects[] = {
     FORMAT_KEYS("scene", NULL, NULL, scene_keys),
     FORMAT_KEYS("scene.bodies[]", NULL, NULL, body_keys),
+    FORMAT_KEYS("scene.bodies[].visuals[]", NULL, NULL, visual_keys),
     FORMAT_KEYS("scene.bodies[].shape", "type", NULL, shape_keys_all),
     FORMAT_KEYS("scene.bodies[].shape", "type", "rod", shape_keys_rod),
     FORMAT_KEYS("scene.bodies[].shape", "type", "box", shape_keys_box),

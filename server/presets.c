@@ -1198,6 +1198,10 @@ static const preset preset_table[] = {
      "Two-link planar arm with point masses at the link ends (DH table; Modern Robotics 8.1.1) "
      "moving between two poses by minimum jerk, " PD_GAINS ", gravity -y",
      no_params, presets_two_link},
+    {"two_link_lab_payload",
+     "Two-link planar arm (Modern Robotics 8.1.1) with joint friction and an unmodelled 0.5 kg "
+     "payload at its tip, minimum-jerk move, " PD_GAINS ", gravity -y",
+     no_params, presets_two_link_lab},
     {"puma560_min_jerk",
      "Puma 560 (modified DH table of Armstrong, Khatib and Burdick 1986) moving between two "
      "poses by minimum jerk, " PD_GAINS,

@@ -191,6 +191,48 @@ cJSON *presets_two_link(const cJSON *request, job_error *err)
                          "standard", two_link, 2, gravity, from, to, "two_link_min_jerk", err);
 }
 
+/* The same arm as it is in a lab (issue 21): each joint with viscous friction 0.2 N m s/rad and
+ * Coulomb friction 1 N m (regularised over 0.01 rad/s), and a 0.5 kg payload at link 2's tip,
+ * all unknown to the controller, whose model is the textbook arm. */
+cJSON *presets_two_link_lab(const cJSON *request, job_error *err)
+{
+    cJSON *doc = presets_two_link(request, err);
+    if (doc == NULL) return NULL;
+    static const double tip[3] = {1, 0, 0};
+    cJSON *name = cJSON_CreateString("Two-link planar arm with point masses at the link ends "
+                                     "(Lynch and Park, Modern Robotics, sec. 8.1.1), joint "
+                                     "friction and a 0.5 kg payload the PD controller's model "
+                                     "lacks, minimum-jerk move");
+    cJSON *plant = cJSON_CreateObject(), *model = cJSON_CreateObject();
+    cJSON *payload = cJSON_AddObjectToObject(model, "payload");
+    cJSON *ctrl = cJSON_GetObjectItemCaseSensitive(doc, "controller");
+    int ok = name != NULL && plant != NULL && payload != NULL && ctrl != NULL &&
+             cJSON_AddNumberToObject(plant, "viscous", 0.2) &&
+             cJSON_AddNumberToObject(plant, "coulomb", 1) &&
+             cJSON_AddNumberToObject(plant, "coulomb_velocity", 0.01) &&
+             cJSON_AddNumberToObject(payload, "body", 1) &&
+             cJSON_AddNumberToObject(payload, "mass", 0.5) &&
+             cJSON_AddItemToObject(payload, "point", cJSON_CreateDoubleArray(tip, 3)) &&
+             cJSON_ReplaceItemInObjectCaseSensitive(doc, "name", name);
+    if (ok) name = NULL;
+    ok = ok && cJSON_AddItemToObject(doc, "plant", plant);
+    if (ok) plant = NULL;
+    ok = ok && cJSON_AddItemToObject(ctrl, "model", model);
+    if (ok) model = NULL;
+    cJSON_Delete(name);
+    cJSON_Delete(plant);
+    cJSON_Delete(model);
+    if (!ok) {
+        cJSON_Delete(doc);
+        err->code = JOB_NO_MEMORY;
+        err->field[0] = '\0';
+        snprintf(err->message, sizeof err->message,
+                 "out of memory building preset two_link_lab_payload");
+        return NULL;
+    }
+    return doc;
+}
+
 /* ---- UR5 ---- */
 
 static const dh_link ur5[6] = {

@@ -18,6 +18,10 @@ cJSON *presets_ur5(const cJSON *request, job_error *err);
  * Robotics, sec. 8.1.1) from its DH table, gravity -y. As presets_ur5. */
 cJSON *presets_two_link(const cJSON *request, job_error *err);
 
+/* The two-link arm of presets_two_link with joint friction (viscous and Coulomb) and a payload
+ * at its tip that the controller's model lacks (issue 21's lab plant). As presets_ur5. */
+cJSON *presets_two_link_lab(const cJSON *request, job_error *err);
+
 /* The Puma 560 of Armstrong, Khatib and Burdick 1986 (Corke's mdl_puma560akb) from its modified
  * DH table; link 1 massless with an inertia about its axis. As presets_ur5. */
 cJSON *presets_puma560(const cJSON *request, job_error *err);

@@ -12,6 +12,7 @@
 static const char *const energy_parts[2] = {"kinetic", "potential"};
 static const char *const loop_parts[2] = {"position", "velocity"};
 static const char *const ee_parts[6] = {"x", "y", "z", "vx", "vy", "vz"};
+static const char *const pose_parts[7] = {"x", "y", "z", "qw", "qx", "qy", "qz"};
 
 static cJSON *number_or_null(double x)
 {
@@ -70,6 +71,18 @@ static cJSON *loop_json(const ctc_sim_metrics *m)
     return o;
 }
 
+/* {"sampling": [nv], "noise": [nv], "model": [nv], "total": [nv]} (sim.h CTC_CAUSE_*), or null
+ * when passive */
+static cJSON *error_by_cause_json(const ctc_sim_metrics *m)
+{
+    static const char *const names[CTC_NCAUSES] = {"sampling", "noise", "model", "total"};
+    if (!m->err_cause) return cJSON_CreateNull();
+    cJSON *o = cJSON_CreateObject();
+    for (int c = 0; o && c < CTC_NCAUSES; c++)
+        cJSON_AddItemToObject(o, names[c], array_or_null(m->err_cause + (size_t)c * m->nv, m->nv));
+    return o;
+}
+
 cJSON *result_metrics_json(const ctc_sim_result *r, const job *j)
 {
     const ctc_sim_metrics *m = &r->metrics;
@@ -90,6 +103,7 @@ cJSON *result_metrics_json(const ctc_sim_result *r, const job *j)
     cJSON_AddItemToObject(o, "tau_peak", array_or_null(m->tau_peak, m->nv));
     cJSON_AddItemToObject(o, "tau_rms", array_or_null(m->tau_rms, m->nv));
     cJSON_AddItemToObject(o, "sat_fraction", array_or_null(m->sat_fraction, m->nv));
+    cJSON_AddItemToObject(o, "error_by_cause", error_by_cause_json(m));
     cJSON_AddItemToObject(o, "errdyn_dev", number_or_null(m->errdyn_dev));
     cJSON_AddItemToObject(o, "energy_drift", number_or_null(m->energy_drift));
     cJSON_AddItemToObject(o, "err_estimate", number_or_null(m->err_estimate));
@@ -161,7 +175,7 @@ static int every_of(const result_select *sel)
 static int column_kept(const ctc_sim_result *r, const result_select *sel, int c, int i)
 {
     if (!sel || !sel->coords || c == CTC_CH_ENERGY || c == CTC_CH_LOOP || c == CTC_CH_EE ||
-        r->width[c] != r->nv)
+        c == CTC_CH_POSE || r->width[c] != r->nv)
         return 1;
     return sel->coords[i] != 0;
 }
@@ -174,6 +188,8 @@ void result_column_name(char *buf, size_t len, int c, int i)
         snprintf(buf, len, "loop[%s]", loop_parts[i]);
     else if (c == CTC_CH_EE)
         snprintf(buf, len, "end_effector[%s]", ee_parts[i]);
+    else if (c == CTC_CH_POSE)
+        snprintf(buf, len, "body_pose[%d][%s]", i / 7, pose_parts[i % 7]);
     else
         snprintf(buf, len, "%s[%d]", ctc_channel_name((ctc_channel)c), i);
 }

@@ -70,7 +70,7 @@ static int width_of(const series_stream *st, int c)
 static int column_kept(const series_stream *st, int c, int i)
 {
     if (c < 0 || !st->coords || c == CTC_CH_ENERGY || c == CTC_CH_LOOP || c == CTC_CH_EE ||
-        st->lay.width[c] != st->lay.nv)
+        c == CTC_CH_POSE || st->lay.width[c] != st->lay.nv)
         return 1;
     return st->coords[i] != 0;
 }

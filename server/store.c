@@ -1327,6 +1327,7 @@ static int expected_width(int c, int nv, int nind)
     return c == -1                                  ? 1
            : c == CTC_CH_ENERGY || c == CTC_CH_LOOP ? 2
            : c == CTC_CH_EE                         ? 6
+           : c == CTC_CH_POSE                       ? 0
            : c == CTC_CH_QD                         ? nv
            : c == CTC_CH_Q                          ? 0
                                                     : nind;
@@ -1358,7 +1359,7 @@ static int check_series_row(series_rows *rows, const char *name, int width, sqli
         return -1;
     }
     if (*c >= 0 && *c != CTC_CH_Q && *c != CTC_CH_QD && *c != CTC_CH_ENERGY && *c != CTC_CH_LOOP &&
-        *c != CTC_CH_EE && rows->nind == 0) {
+        *c != CTC_CH_EE && *c != CTC_CH_POSE && rows->nind == 0) {
         /* the first of the controller's channels: at most one column per coordinate */
         if (width > rows->nv) {
             set_err(err, errlen, "job %lld: series %s has width %d, expected at most %d", id, name,

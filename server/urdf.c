@@ -34,11 +34,12 @@
 /* one parse: the links as found in the document, and the joints' facts about them */
 typedef struct urdf_link {
     xmlNode *node;
-    char *name;       /* the link's name (xmlChar from xmlGetProp; freed with xmlFree) */
-    xmlNode *joint;   /* its parent joint, or NULL */
-    char *joint_name; /* that joint's name */
-    int parent;       /* the parent link's index in the document, or -1 */
-    import_link l;    /* everything but parent (and name pointers, set when ordered) */
+    char *name;             /* the link's name (xmlChar from xmlGetProp; freed with xmlFree) */
+    xmlNode *joint;         /* its parent joint, or NULL */
+    char *joint_name;       /* that joint's name */
+    int parent;             /* the parent link's index in the document, or -1 */
+    import_link l;          /* everything but parent (and name pointers, set when ordered) */
+    import_visual *visuals; /* (l.nvisuals) its <visual> boxes, cylinders and spheres */
 } urdf_link;
 
 typedef struct urdf_state {
@@ -46,6 +47,7 @@ typedef struct urdf_state {
     size_t msg_len;
     urdf_link *links;
     int nlinks;
+    int meshes; /* <visual>s whose geometry is a <mesh>: ignored */
 } urdf_state;
 
 /* the first error libxml2 reports while parsing (its last one may be a consequence) */
@@ -191,6 +193,52 @@ static int read_inertial(urdf_state *s, xmlNode *link, import_link *l)
     import_mat_mul(R, I, RI);
     import_mat_mul(RI, Rt, l->inertia);
     l->has_inertial = 1;
+    return 0;
+}
+
+/* a link's <visual>s: each box, cylinder and sphere with its origin into l's visuals (allocated
+ * here into *out, freed by the caller); a <mesh> is counted in s->meshes and left out */
+static int read_visuals(urdf_state *s, xmlNode *link, import_link *l, import_visual **out)
+{
+    int n = 0;
+    for (xmlNode *c = link->children; c != NULL; c = c->next)
+        n += c->type == XML_ELEMENT_NODE && xmlStrcmp(c->name, BAD_CAST "visual") == 0;
+    if (n == 0) return 0;
+    *out = calloc((size_t)n, sizeof **out);
+    if (*out == NULL) {
+        snprintf(s->msg, s->msg_len, "out of memory");
+        return -1;
+    }
+    for (xmlNode *c = link->children; c != NULL; c = c->next) {
+        if (c->type != XML_ELEMENT_NODE || xmlStrcmp(c->name, BAD_CAST "visual") != 0) continue;
+        xmlNode *geom = child(c, "geometry"), *shape = NULL;
+        if (geom == NULL) return fail(s, c, "<geometry> is required");
+        import_visual *v = &(*out)[l->nvisuals];
+        const char *sizes = NULL;
+        int count = 0;
+        if ((shape = child(geom, "box")) != NULL) {
+            v->type = IMPORT_BOX, sizes = "size", count = 3;
+            if (numbers_attr(s, shape, "size", 3, NULL, v->size) < 0) return -1;
+        } else if ((shape = child(geom, "cylinder")) != NULL) {
+            v->type = IMPORT_CYLINDER, sizes = "radius and length", count = 2;
+            if (numbers_attr(s, shape, "radius", 1, NULL, &v->size[0]) < 0 ||
+                numbers_attr(s, shape, "length", 1, NULL, &v->size[1]) < 0)
+                return -1;
+        } else if ((shape = child(geom, "sphere")) != NULL) {
+            v->type = IMPORT_SPHERE, sizes = "radius", count = 1;
+            if (numbers_attr(s, shape, "radius", 1, NULL, &v->size[0]) < 0) return -1;
+        } else if (child(geom, "mesh") != NULL) {
+            s->meshes++;
+            continue;
+        } else {
+            return fail(s, geom, "must hold a <box>, <cylinder>, <sphere> or <mesh>");
+        }
+        for (int i = 0; i < count; i++)
+            if (!(v->size[i] > 0)) return fail(s, shape, "%s must be positive", sizes);
+        if (read_origin(s, c, v->rot, v->pos) != 0) return -1;
+        l->nvisuals++;
+    }
+    l->visuals = *out;
     return 0;
 }
 
@@ -371,6 +419,12 @@ static int order_tree(urdf_state *s, int *order)
 cJSON *urdf_to_bodies(const char *text, size_t len, char *name, size_t name_len, char *msg,
                       size_t msg_len)
 {
+    return urdf_read(text, len, name, name_len, NULL, msg, msg_len);
+}
+
+cJSON *urdf_read(const char *text, size_t len, char *name, size_t name_len, int *meshes, char *msg,
+                 size_t msg_len)
+{
     urdf_state st = {.msg = msg, .msg_len = msg_len};
     urdf_state *s = &st;
     cJSON *out = NULL;
@@ -457,7 +511,8 @@ cJSON *urdf_to_bodies(const char *text, size_t len, char *name, size_t name_len,
                  xmlGetLineNo(st.links[same].node));
             goto done;
         }
-        if (read_inertial(s, c, &u->l) != 0) goto done;
+        if (read_inertial(s, c, &u->l) != 0 || read_visuals(s, c, &u->l, &u->visuals) != 0)
+            goto done;
     }
 
     /* the joints */
@@ -483,12 +538,14 @@ cJSON *urdf_to_bodies(const char *text, size_t len, char *name, size_t name_len,
         if (i == 0) links[i].type = CTC_JOINT_FIXED;
     }
     out = import_bodies(links, st.nlinks, msg, msg_len);
+    if (meshes != NULL) *meshes = st.meshes;
 
 done:
     for (int i = 0; st.links != NULL && i < st.nlinks; i++) {
         xmlFree(st.links[i].name);
         xmlFree(st.links[i].joint_name);
         cJSON_Delete(st.links[i].l.extra);
+        free(st.links[i].visuals);
     }
     for (int i = 0; links != NULL && i < st.nlinks; i++) cJSON_Delete(links[i].extra);
     free(st.links);

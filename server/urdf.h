@@ -6,8 +6,11 @@
  * <transmission> and <gazebo>, are ignored).
  *   link:  <inertial> with <origin xyz rpy> (default zero), <mass value> (kg, >= 0) and <inertia
  *          ixx iyy izz> (kg m^2, required) and ixy ixz iyz (default 0), about the centre of mass
- *          in the inertial frame's axes; a link without <inertial> is massless. <visual> and
- *          <collision> are ignored.
+ *          in the inertial frame's axes; a link without <inertial> is massless. Each <visual>
+ *          whose <geometry> is a <box size>, <cylinder radius length> or <sphere radius> (> 0),
+ *          with its <origin xyz rpy>, is kept in its body's "visuals" for the page's animation
+ *          (import.h; the simulation ignores them; the ground's are dropped); a <mesh> is left
+ *          out and counted; <collision> is ignored.
  *   joint: name, type revolute | continuous (a revolute joint without limits) | prismatic |
  *          fixed, <parent link>, <child link>, <origin xyz rpy> (default zero), <axis xyz>
  *          (default 1 0 0, any non-zero length), and kept in the body's "joint" for the lab plant,
@@ -43,5 +46,10 @@
  * bytes): the element and its line, or "out of memory". */
 cJSON *urdf_to_bodies(const char *text, size_t len, char *name, size_t name_len, char *msg,
                       size_t msg_len);
+
+/* urdf_to_bodies, and the number of <visual>s left out because their geometry is a <mesh> into
+ * *meshes (may be NULL) when it succeeds. */
+cJSON *urdf_read(const char *text, size_t len, char *name, size_t name_len, int *meshes, char *msg,
+                 size_t msg_len);
 
 #endif

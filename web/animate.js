@@ -43,6 +43,50 @@ function sampler(ts, rows, t) {
   };
 }
 
+/* Fills each body's visual shapes (spec.scene.bodies[k].visuals: a URDF's <visual> boxes,
+ * cylinders and spheres, in the body's frame) at pose, in color: each shape is the convex hull
+ * of points on its surface projected by toXY, its outline under the orthographic view (a sphere's
+ * from three great circles). Returns the number of shapes drawn. */
+function drawVisuals(g, bodies, pose, toXY, color) {
+  const mv = (R, v) => [0, 1, 2].map((i) => R[3 * i] * v[0] + R[3 * i + 1] * v[1] + R[3 * i + 2] * v[2]);
+  const ring = (n) => Array.from({length: n}, (_, i) => [Math.cos((2 * Math.PI * i) / n), Math.sin((2 * Math.PI * i) / n)]);
+  const cw = (o, a, b) => (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+  let drawn = 0;
+  g.save();
+  g.fillStyle = color; g.strokeStyle = color; g.lineWidth = 1.5;
+  bodies.forEach((b, k) => {
+    for (const v of Array.isArray(b?.visuals) ? b.visuals : []) {
+      const pts = [], r = v.radius;
+      if (v.type === "box") {
+        const [a, c, d] = v.size.map((x) => x / 2);
+        for (const x of [-a, a]) for (const y of [-c, c]) for (const z of [-d, d]) pts.push([x, y, z]);
+      } else if (v.type === "cylinder") {
+        for (const [c, s] of ring(24)) pts.push([r * c, r * s, -v.length / 2], [r * c, r * s, v.length / 2]);
+      } else if (v.type === "sphere") {
+        for (const [c, s] of ring(32)) pts.push([r * c, r * s, 0], [r * c, 0, r * s], [0, r * c, r * s]);
+      } else continue;
+      const R = v.rotation ? v.rotation.flat() : [1, 0, 0, 0, 1, 0, 0, 0, 1], o = v.origin || [0, 0, 0];
+      const xy = pts.map((p) => toXY(add(pose[k].origin, mv(pose[k].rot, add(o, mv(R, p))))))
+        .sort((p, q) => p[0] - q[0] || p[1] - q[1]);
+      const hull = []; /* Andrew's monotone chain: lower then upper */
+      for (const pass of [xy, [...xy].reverse()]) {
+        const start = hull.length;
+        for (const p of pass) {
+          while (hull.length >= start + 2 && cw(hull[hull.length - 2], hull[hull.length - 1], p) <= 0) hull.pop();
+          hull.push(p);
+        }
+        hull.pop();
+      }
+      g.globalAlpha = 0.35; g.beginPath();
+      hull.forEach(([x, y], i) => (i ? g.lineTo(x, y) : g.moveTo(x, y)));
+      g.closePath(); g.fill(); g.globalAlpha = 1; g.stroke();
+      drawn++;
+    }
+  });
+  g.restore();
+  return drawn;
+}
+
 /* Draws into host; returns {destroy()}. series: {t, q, q_des?}; form: "planar" | "spatial". */
 export function createAnimation(host, {spec, form, series, timeline}) {
   const bodies = spec.scene.bodies;
@@ -165,7 +209,8 @@ export function createAnimation(host, {spec, form, series, timeline}) {
       g.strokeStyle = "#3d434a"; g.lineWidth = 1.5;
       g.beginPath(); g.moveTo(ex, ey); g.lineTo(ax, ay); g.stroke();
     }
-    chain(pose, toXY, ACTUAL, 5, [], 1);
+    canvas.dataset.visuals = String(drawVisuals(g, bodies, pose, toXY, ACTUAL));
+    chain(pose.filter((_, k) => !bodies[k]?.visuals?.length), toXY, ACTUAL, 5, [], 1);
 
     g.fillStyle = "#1f2328"; g.font = "bold 14px system-ui, sans-serif";
     g.fillText(`t = ${t.toFixed(2)} s`, 10, 20);

@@ -13,7 +13,10 @@
  * The trajectory and the disturbance have an entry per controlled coordinate: every coordinate
  * of an open chain, the independent ones of a closed chain (scene.loop), the closing joint's
  * last. A body's parent is shown as the format reads it (kinematics.js chainParents: the previous
- * body when none is given) and written as an index.
+ * body when none is given) and written as an index. The lab plant (server/job_json.h "plant")
+ * is shown when it is one object for every coordinate: its torque limit, friction and sensor
+ * noise, beside the controller's sample period and delay; an empty field removes its key, so
+ * every term stays off unless given. A plant of one object per coordinate is kept as it is.
  */
 import {el} from "./dom.js";
 import {JOINT_NV as NV} from "./joints.js";
@@ -38,6 +41,12 @@ const LISTS = new Set(["coefficients", "times", "values"]);
 const HINTS = {kp: "K_p, 1/s²", kv: "K_v, 1/s", ki: "K_i, 1/s³", zeta: "damping ratio ζ", tau: "time constant τ, s",
   period: "s", phase: "rad", amplitude: "rad or m", start: "s", end: "s", time: "s", step: "s",
   rtol: "relative tolerance", atol: "absolute tolerance", max_step: "s (0: no limit)"};
+/* the plant's keys the form shows (server/job_json.h "plant"), with their labels and units */
+export const PLANT_FIELDS = [["torque_limit", "torque limit", "±N m (N), clips the actuator; empty: none"],
+  ["viscous", "viscous friction", "N m s/rad"], ["coulomb", "Coulomb friction", "N m"],
+  ["coulomb_velocity", "Coulomb velocity", "rad/s, its regularisation"],
+  ["noise_q", "position noise", "rad, std. dev.; needs a sample period"],
+  ["noise_v", "rate noise", "rad/s, std. dev.; needs a sample period"]];
 
 /* "a.b[2].c" -> ["a", "b", 2, "c"] */
 const tokens = (path) => path.split(/\.|(?=\[)/).map((t) => (t.startsWith("[") ? Number(t.slice(1, -1)) : t));
@@ -172,6 +181,23 @@ export function jobForm(host, getDoc, edited) {
     return fs;
   }
 
+  /* the lab plant and the sampled controller: the plant's terms when it is one object for every
+   * coordinate, the sample period and delay when there is a controller */
+  function plant(doc, type) {
+    const fs = el("fieldset", {name: "plant"}, el("legend", {text: "Plant and sampling"}));
+    if (type && type !== "none") {
+      fs.append(el("div", {class: "row"},
+        number(doc, "controller.sample_period", "sample period", "s, zero-order hold; empty or 0: continuous"),
+        number(doc, "controller.sample_delay", "sample delay", "whole samples")));
+    }
+    if (Array.isArray(doc.plant)) {
+      fs.append(el("p", {class: "hint", text: "The plant has one object per coordinate: edit it in the JSON."}));
+    } else {
+      fs.append(el("div", {class: "row"}, ...PLANT_FIELDS.map(([key, text, hint]) => number(doc, `plant.${key}`, text, hint))));
+    }
+    return fs;
+  }
+
   /* the bodies' parents: per body a select of the ground and the bodies before it, showing the
    * parent the format reads (the previous body when none is given); a choice writes the index */
   function tree(bodies) {
@@ -246,6 +272,7 @@ export function jobForm(host, getDoc, edited) {
 
     if (type !== "none") out.push(perCoordinate(doc, "trajectory", "Desired trajectory", TRAJECTORIES));
     out.push(perCoordinate(doc, "disturbance", "Disturbance (added to the driving torque)", DISTURBANCES));
+    out.push(plant(doc, type));
 
     const bodies = doc.scene && Array.isArray(doc.scene.bodies) ? doc.scene.bodies : [];
     if (bodies.length > 0) out.push(tree(bodies));

@@ -38,4 +38,16 @@ void ctc_kinematics(const ctc_model *m, ctc_data *d, const double *q, const doub
 void ctc_kinematics_point(const ctc_model *m, const ctc_data *d, int k, const double p[3],
                           double x[3], double xd[3]);
 
+/* The rotation R (row-major 3 x 3) that maps body k's frame to the world's, from d's
+ * kinematics: xrot_k in spatial form; in planar form B R_z(angle_k) B^T with B = [e1 e2 n] the
+ * plane's axes as columns (a body's frame is parallel to the world's at q = 0, model.h), so a
+ * vector's component along n is unchanged. 0 <= k < nbodies. Pure. */
+void ctc_kinematics_body_rotation(const ctc_model *m, const ctc_data *d, int k, double rot[9]);
+
+/* The unit quaternion (w, x, y, z) of the rotation rot (row-major 3 x 3, proper orthogonal), with
+ * w >= 0 (of q and -q, the one with the non-negative scalar part; on w = 0 the first non-zero of
+ * x, y, z positive), by Shepperd's method (the largest of 4 w^2, 4 x^2, 4 y^2, 4 z^2 first; J.
+ * Guidance and Control 1(3), 1978). Pure. */
+void ctc_rotation_quaternion(const double rot[9], double quat[4]);
+
 #endif

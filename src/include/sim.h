@@ -5,7 +5,8 @@
  * At each evaluation of the right-hand side, for the state y = (q, v, int e):
  *   e = q_d - q, de = qd_d - v, w = law(t, q, v, q_d, int e), u = qdd_d + w   (per coordinate)
  *   f = iGDCA_controller(q, v, u)              driving forces from the controller's model
- *   qdd = GDCA_plant(q, v, sat(f) + z(t))      forward dynamics of the plant, disturbance added
+ *   qdd = GDCA_plant(q, v, sat(f) + z(t) + J^T W(t))   forward dynamics of the plant, disturbance
+ *                                              and external wrenches (wrench.h) added
  * where sat clips each actuator at its limit when spec.plant gives one (plant.h; the integral
  * state is then kept from winding up by clamping), and is the identity otherwise.
  * The controller's model is the plant unless mass or inertia scale factors are given. With
@@ -50,6 +51,7 @@
 #include "plant.h"
 #include "status.h"
 #include "traj.h"
+#include "wrench.h"
 
 /* A point on a body whose world position and velocity the end_effector channel records. */
 typedef struct ctc_end_effector {
@@ -58,9 +60,9 @@ typedef struct ctc_end_effector {
 } ctc_end_effector;
 
 /* Output channels, as bits of ctc_sim_spec.channels. Widths: q nq; qdot nv; energy 2 (kinetic,
- * potential); loop 2; end_effector 6; all others nind (the controlled coordinates: nv for an open
- * chain). q_des, qd_des, e and w need a controller, loop a loop model, end_effector
- * spec.end_effector. */
+ * potential); loop 2; end_effector 6; body_pose 7 per body of spec.pose_bodies; all others nind
+ * (the controlled coordinates: nv for an open chain). q_des, qd_des, e and w need a controller,
+ * loop a loop model, end_effector spec.end_effector, body_pose spec.pose_bodies. */
 typedef enum ctc_channel {
     CTC_CH_Q = 0,  /* q: joint positions (rad, m; quaternions as w, x, y, z) */
     CTC_CH_QD,     /* qdot: joint velocities */
@@ -74,6 +76,10 @@ typedef enum ctc_channel {
                       m/s or rad/s); loop models only */
     CTC_CH_EE,     /* end_effector: world position (m) and velocity (m/s) of the point
                       spec.end_effector, x y z vx vy vz; only when the spec gives one */
+    CTC_CH_POSE,   /* body_pose: per body of spec.pose_bodies, in their order, the world position
+                      of its frame's origin (joint's centre, m) and its orientation as the unit
+                      quaternion w x y z of ctc_kinematics_body_rotation (w >= 0,
+                      ctc_rotation_quaternion): x y z qw qx qy qz; only when the spec lists bodies */
     CTC_NCHANNELS
 } ctc_channel;
 
@@ -110,6 +116,9 @@ typedef struct ctc_sim_spec {
     const ctc_disturb *disturb;   /* (nind) disturbance per coordinate; NULL = none */
     const ctc_plant_coord *plant; /* (nind) the actuator limit per coordinate (plant.h); NULL =
                                      the ideal plant of the paper. Limits need a controller */
+    const ctc_wrench *wrenches;   /* (nwrenches) external wrenches on the plant's bodies
+                                     (wrench.h); open chains and trees only */
+    int nwrenches;                /* 0 = none */
     /* a sampled controller (sim.c): 0 = the paper's continuous law, evaluated in every
        right-hand side. sample_period > 0: the controller measures the state at t_k = k T,
        computes its force there, and the actuator holds it (zero-order hold) until t_k+1; the
@@ -125,6 +134,9 @@ typedef struct ctc_sim_spec {
     unsigned channels;      /* CTC_CH_BIT mask; 0 = every channel that applies */
     /* the end_effector channel's point; NULL = none (the channel does not apply) */
     const ctc_end_effector *end_effector;
+    /* (npose) the bodies, 0 .. nbodies - 1, whose poses the body_pose channel records */
+    const int *pose_bodies;
+    int npose;         /* 0 = none (the channel does not apply) */
     double max_speed;  /* divergence bound on any |v_i| (rad/s, m/s); 0 = 1e6 */
     double wall_limit; /* s of wall time before the run stops as "timeout"; 0 = none */
     /* loop models only */
@@ -161,6 +173,18 @@ typedef struct ctc_sim_spec {
  * limit, is reported as singular too (sim.c). At 1e5 the forces still carry about 11 digits. */
 #define CTC_SIM_DEFAULT_COND_MAX 1e5
 
+/* The rows of metrics.err_cause (sim_causes.c). With e_X the error samples of a run whose
+ * controller has causes X (S: its sample period and delay, N: its sensors' noise and
+ * quantisation, M: its model's error) and otherwise the spec's plant, trajectory, disturbance and
+ * integrator, RMS_t(a - b) the root mean square over the output samples:
+ *     sampling = RMS(e_S - e_0)      model = RMS(e_M - e_0)
+ *     noise    = RMS(e_SN - e_S)     (the sensors are read at the samples only)
+ *     total    = RMS(e_SNM - e_0)    (the run itself against the ideal one)
+ * A row is 0 when the spec lacks its cause. The ideal run e_0 is the paper's continuous
+ * controller with exact sensors and the controller's model equal to the plant (the payload
+ * included). */
+enum { CTC_CAUSE_SAMPLING = 0, CTC_CAUSE_NOISE, CTC_CAUSE_MODEL, CTC_CAUSE_TOTAL, CTC_NCAUSES };
+
 typedef enum ctc_run_status {
     CTC_RUN_DONE = 0,
     CTC_RUN_DIVERGED,  /* non-finite state or a speed beyond max_speed: time and joint reported */
@@ -181,12 +205,18 @@ typedef struct ctc_sim_metrics {
     double *tau_rms;      /* (nv) RMS of sat(f) over the samples; NULL when passive */
     double *sat_fraction; /* (nv) the fraction of the samples at which the actuator was clipped
                              (|f| > limit); NULL without limits */
-    double energy_drift;  /* passive, no disturbance: max |E(t) - E(0)| / max(|E(0)|, KE scale);
-                             NaN otherwise */
-    double errdyn_dev;    /* continuous controller, exact model, no disturbance, no limit, no
-                             unknown joint force: max over samples and coordinates of
-                             |E(t) - expm(Ac t) E(0)| for the error state (int e, e, de), the
-                             deviation from the linear error dynamics; NaN otherwise */
+    /* (CTC_NCAUSES x nv, row-major) the tracking error caused by each of sampling, noise and
+       model error, and by the three together (sim_causes.c): RMS over the samples of the
+       difference between the errors of two runs that differ by that cause alone; zeros when
+       the spec has none of them; NaN when it has one and the run stopped early, or a row's
+       counterfactual run did not finish; NULL when passive */
+    double *err_cause;
+    double energy_drift; /* passive, no disturbance, no wrench: max |E(t) - E(0)| / max(|E(0)|,
+                            KE scale); NaN otherwise */
+    double errdyn_dev;   /* continuous controller, exact model, no disturbance, no limit, no
+                            unknown joint force or wrench: max over samples and coordinates of
+                            |E(t) - expm(Ac t) E(0)| for the error state (int e, e, de), the
+                            deviation from the linear error dynamics; NaN otherwise */
     long steps, rejected;
     long rhs_evals;       /* evaluations of the dynamics with the forward pass: the integrator's
                              right-hand sides and, for a loop model, one per sample not at a

@@ -8,6 +8,7 @@
  */
 #include "kinematics.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "loop.h"
@@ -212,4 +213,46 @@ void ctc_kinematics_point(const ctc_model *m, const ctc_data *d, int k, const do
         x[i] = px * e1[i] + py * e2[i] + zn * n[i];
         xd[i] = vx * e1[i] + vy * e2[i];
     }
+}
+
+void ctc_kinematics_body_rotation(const ctc_model *m, const ctc_data *d, int k, double rot[9])
+{
+    const double *xr = d->xrot + 9 * k;
+    if (m->form != CTC_FORM_PLANAR) {
+        memcpy(rot, xr, 9 * sizeof *rot);
+        return;
+    }
+    /* B R_z B^T: column j of the world's rotation is B R_z (B^T e_j) */
+    const double *e1 = m->plane_e1, *e2 = m->plane_e2, *n = m->plane_n;
+    for (int j = 0; j < 3; j++) {
+        const double a = e1[j], b = e2[j], c = n[j];
+        const double ra = xr[0] * a + xr[1] * b, rb = xr[3] * a + xr[4] * b;
+        for (int i = 0; i < 3; i++) rot[3 * i + j] = ra * e1[i] + rb * e2[i] + c * n[i];
+    }
+}
+
+void ctc_rotation_quaternion(const double rot[9], double quat[4])
+{
+    const double r00 = rot[0], r11 = rot[4], r22 = rot[8], tr = r00 + r11 + r22;
+    double w, x, y, z;
+    if (tr >= r00 && tr >= r11 && tr >= r22) {
+        w = 0.5 * sqrt(1 + tr);
+        x = (rot[7] - rot[5]) / (4 * w), y = (rot[2] - rot[6]) / (4 * w);
+        z = (rot[3] - rot[1]) / (4 * w);
+    } else if (r00 >= r11 && r00 >= r22) {
+        x = 0.5 * sqrt(1 + r00 - r11 - r22);
+        w = (rot[7] - rot[5]) / (4 * x), y = (rot[1] + rot[3]) / (4 * x);
+        z = (rot[2] + rot[6]) / (4 * x);
+    } else if (r11 >= r22) {
+        y = 0.5 * sqrt(1 - r00 + r11 - r22);
+        w = (rot[2] - rot[6]) / (4 * y), x = (rot[1] + rot[3]) / (4 * y);
+        z = (rot[5] + rot[7]) / (4 * y);
+    } else {
+        z = 0.5 * sqrt(1 - r00 - r11 + r22);
+        w = (rot[3] - rot[1]) / (4 * z), x = (rot[2] + rot[6]) / (4 * z);
+        y = (rot[5] + rot[7]) / (4 * z);
+    }
+    const int flip = w < 0 || (w == 0 && (x < 0 || (x == 0 && (y < 0 || (y == 0 && z < 0)))));
+    const double s = flip ? -1 : 1;
+    quat[0] = s * w, quat[1] = s * x, quat[2] = s * y, quat[3] = s * z;
 }

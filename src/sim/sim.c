@@ -16,6 +16,8 @@
  * controller's instant; on a loop model, measure the drift and project back onto the closure (rk4
  * and dopri5 here, bdf inside its steps, sim_rhs.c) poll for cancellation and the wall-time limit
  *     finish the metrics
+ *     the error by cause: counterfactual runs without the sampling, the noise or the model
+ *     error (sim_causes.c)
  *
  * Everything is allocated before the first step. A run stopped early keeps its samples and says
  * why in its status and message, with the time and the joint where it applies.
@@ -31,8 +33,9 @@
 #include "kinematics.h"
 #include "sim_internal.h"
 
-static const char *const channel_names[] = {"q",   "qdot", "q_des",  "qdot_des", "e",
-                                            "tau", "w",    "energy", "loop",     "end_effector"};
+static const char *const channel_names[] = {"q",    "qdot",         "q_des",    "qdot_des",
+                                            "e",    "tau",          "w",        "energy",
+                                            "loop", "end_effector", "body_pose"};
 static const char *const run_names[] = {"done",      "diverged", "failed",
                                         "cancelled", "timeout",  "singular"};
 static const char *const stab_names[] = {"project", "baumgarte", "none"};
@@ -143,6 +146,7 @@ static void ctx_free(sim_ctx *c)
     free(c->ym);
     free(c->xq);
     free(c->arm);
+    free(c->fext);
 }
 
 /* The message of a run stopped as singular at time t, why saying what stopped it; the estimate
@@ -237,6 +241,15 @@ static ctc_status setup_context(sim_ctx *c, char *err, size_t errlen)
     c->des = c->w + nv, c->qi = c->des + 3 * nv, c->vi = c->qi + nv, c->clip = c->vi + nv;
     memset(c->w, 0, nv * 7 * sizeof(double));
     c->jknown = 1;
+    c->wrenched = spec->nwrenches > 0;
+    for (int k = 0; k < spec->nwrenches; k++) {
+        c->wknown |= spec->wrenches[k].known != 0;
+        c->jknown &= spec->wrenches[k].known != 0;
+    }
+    if (c->wknown) {
+        c->fext = malloc(((size_t)c->nv + 1) * sizeof(double));
+        if (!c->fext) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    }
     for (int i = 0; spec->plant && i < c->nind; i++) {
         c->limited |= spec->plant[i].torque_limit > 0;
         c->sensed |= ctc_plant_has_sensor_error(&spec->plant[i]);
@@ -289,6 +302,7 @@ static ctc_status setup_recorder(sim_ctx *c, recorder *rec, double *ybuf, char *
     unsigned channels = spec->channels ? spec->channels : sim_channels_applicable(c->active);
     if (!spec->channels && c->plant->has_loop) channels |= CTC_CH_BIT(CTC_CH_LOOP);
     if (!spec->channels && spec->end_effector) channels |= CTC_CH_BIT(CTC_CH_EE);
+    if (!spec->channels && spec->npose > 0) channels |= CTC_CH_BIT(CTC_CH_POSE);
     rec->count = sim_sample_count(spec->duration, spec->output_interval);
     rec->dt = spec->output_interval;
     if (sim_alloc_result(c, channels, rec->count, &rec->r) != CTC_OK)
@@ -312,7 +326,7 @@ static ctc_status setup_stepper(sim_ctx *c, sim_stepper *sp, double dt, char *er
     if (sp->is.method == CTC_INTEG_RK4) sp->is.step = dt / ceil(dt / sp->is.step * (1 - 1e-12));
     ctc_status st = ctc_integrator_new(&sp->is, c->ny, sim_rhs, c, &sp->integ, err, errlen);
     if (st != CTC_OK) return st;
-    sp->breaks = malloc(3 * ((size_t)c->nind + 1) * sizeof(double));
+    sp->breaks = malloc((3 * ((size_t)c->nind + 1) + (size_t)spec->nwrenches) * sizeof(double));
     if (!sp->breaks) return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     for (int i = 0; i < c->nind; i++) {
         double tb[3] = {spec->disturb ? ctc_disturb_breakpoint(&spec->disturb[i]) : INFINITY,
@@ -323,6 +337,11 @@ static ctc_status setup_stepper(sim_ctx *c, sim_stepper *sp, double dt, char *er
         }
         for (int k = 0; k < 3; k++)
             if (tb[k] > 0 && tb[k] < spec->duration) sp->breaks[sp->nbreaks++] = tb[k];
+    }
+    for (int k = 0; k < spec->nwrenches; k++) { /* a wrench's step */
+        const ctc_wrench *w = &spec->wrenches[k];
+        if (w->profile == CTC_WRENCH_STEP && w->time > 0 && w->time < spec->duration)
+            sp->breaks[sp->nbreaks++] = w->time;
     }
     qsort(sp->breaks, (size_t)sp->nbreaks, sizeof(double), cmp_double);
     /* bdf projects inside its steps and keeps its history; rk4 and dopri5 between steps */
@@ -500,6 +519,19 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
 {
     static const ctc_sim_hooks no_hooks = {0};
     if (!hooks) hooks = &no_hooks;
+    ctc_status st = sim_run_once(spec, hooks, out, err, errlen);
+    if (st != CTC_OK) return st;
+    st = sim_error_by_cause(spec, hooks, *out, err, errlen);
+    if (st != CTC_OK) {
+        ctc_sim_result_free(*out);
+        *out = NULL;
+    }
+    return st;
+}
+
+ctc_status sim_run_once(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc_sim_result **out,
+                        char *err, size_t errlen)
+{
     *out = NULL;
     ctc_status st = sim_check_run(spec, err, errlen);
     if (st != CTC_OK) return st;

@@ -19,7 +19,8 @@
 
 unsigned sim_channels_applicable(int active)
 {
-    unsigned all = CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_LOOP) & ~CTC_CH_BIT(CTC_CH_EE);
+    unsigned all =
+        CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_LOOP) & ~CTC_CH_BIT(CTC_CH_EE) & ~CTC_CH_BIT(CTC_CH_POSE);
     if (!active)
         all &= ~(CTC_CH_BIT(CTC_CH_Q_DES) | CTC_CH_BIT(CTC_CH_QD_DES) | CTC_CH_BIT(CTC_CH_E) |
                  CTC_CH_BIT(CTC_CH_W));
@@ -29,6 +30,46 @@ unsigned sim_channels_applicable(int active)
 const ctc_ctrl_class *sim_ctrl_class(const ctc_sim_spec *s)
 {
     return s->ctrl_class ? s->ctrl_class : ctc_ctrl_class_of(s->controller);
+}
+
+/* the external wrenches (wrench.h): their bodies, values and profiles */
+static ctc_status check_wrenches(const ctc_sim_spec *s, int active, char *err, size_t errlen)
+{
+    if (s->nwrenches < 0 || (s->nwrenches > 0 && !s->wrenches))
+        return ctc_fail(CTC_EINVAL, err, errlen, "%d wrenches given without their array",
+                        s->nwrenches);
+    for (int k = 0; k < s->nwrenches; k++) {
+        const ctc_wrench *w = &s->wrenches[k];
+        if (w->body < 0 || w->body >= s->chain.nbodies)
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "wrench %d: body %d out of range (the chain has %d bodies)", k, w->body,
+                            s->chain.nbodies);
+        for (int i = 0; i < 3; i++)
+            if (!isfinite(w->point[i]) || !isfinite(w->force[i]) || !isfinite(w->torque[i]))
+                return ctc_fail(CTC_EINVAL, err, errlen,
+                                "wrench %d: point, force and torque must be finite", k);
+        if ((unsigned)w->frame > CTC_WRENCH_BODY)
+            return ctc_fail(CTC_EINVAL, err, errlen, "wrench %d: unknown frame %d", k,
+                            (int)w->frame);
+        if ((unsigned)w->profile > CTC_WRENCH_STEP)
+            return ctc_fail(CTC_EINVAL, err, errlen, "wrench %d: unknown profile %d", k,
+                            (int)w->profile);
+        if (w->profile == CTC_WRENCH_SINE && (!isfinite(w->period) || !(w->period > 0)))
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "wrench %d: sine period must be positive and finite (got %g s)", k,
+                            w->period);
+        if (w->profile == CTC_WRENCH_SINE && !isfinite(w->phase))
+            return ctc_fail(CTC_EINVAL, err, errlen, "wrench %d: phase must be finite (got %g)", k,
+                            w->phase);
+        if (w->profile == CTC_WRENCH_STEP && (!isfinite(w->time) || !(w->time >= 0)))
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "wrench %d: step time must be >= 0 and finite (got %g s)", k, w->time);
+        if (w->known && !active)
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "wrench %d: a known wrench needs a controller (this run is passive)",
+                            k);
+    }
+    return CTC_OK;
 }
 
 ctc_status sim_check_run(const ctc_sim_spec *s, char *err, size_t errlen)
@@ -84,7 +125,7 @@ ctc_status sim_check_run(const ctc_sim_spec *s, char *err, size_t errlen)
         return ctc_fail(CTC_EINVAL, err, errlen,
                         "sample_period needs a controller (this run is passive)");
     unsigned bad = s->channels & ~sim_channels_applicable(active) & ~CTC_CH_BIT(CTC_CH_LOOP) &
-                   ~CTC_CH_BIT(CTC_CH_EE);
+                   ~CTC_CH_BIT(CTC_CH_EE) & ~CTC_CH_BIT(CTC_CH_POSE);
     if ((s->channels & CTC_CH_BIT(CTC_CH_EE)) && !s->end_effector)
         return ctc_fail(CTC_EINVAL, err, errlen,
                         "channel \"end_effector\" needs the end effector's body and point");
@@ -99,6 +140,18 @@ ctc_status sim_check_run(const ctc_sim_spec *s, char *err, size_t errlen)
                 return ctc_fail(CTC_EINVAL, err, errlen,
                                 "end effector point[%d] must be finite (got %g)", i, ee->point[i]);
     }
+    if ((s->channels & CTC_CH_BIT(CTC_CH_POSE)) && s->npose == 0)
+        return ctc_fail(CTC_EINVAL, err, errlen, "channel \"body_pose\" needs a list of bodies");
+    if (s->npose < 0 || (s->npose > 0 && !s->pose_bodies))
+        return ctc_fail(CTC_EINVAL, err, errlen, "body_pose: %d bodies given without their list",
+                        s->npose);
+    for (int i = 0; i < s->npose; i++)
+        if (s->pose_bodies[i] < 0 || s->pose_bodies[i] >= s->chain.nbodies)
+            return ctc_fail(CTC_EINVAL, err, errlen,
+                            "body_pose body %d out of range (the chain has %d bodies)",
+                            s->pose_bodies[i], s->chain.nbodies);
+    ctc_status wst = check_wrenches(s, active, err, errlen);
+    if (wst != CTC_OK) return wst;
     if (s->channels & ~CTC_CH_ALL)
         return ctc_fail(CTC_EINVAL, err, errlen, "unknown output channel bits 0x%x",
                         s->channels & ~CTC_CH_ALL);
@@ -155,6 +208,8 @@ ctc_status sim_check_with_model(const ctc_sim_spec *s, const ctc_model *m, char 
     for (int i = 0; s->v0 && i < m->nv; i++)
         if (!isfinite(s->v0[i]))
             return ctc_fail(CTC_EINVAL, err, errlen, "v0[%d] is not finite", i);
+    if (s->nwrenches > 0 && m->has_loop)
+        return ctc_fail(CTC_EINVAL, err, errlen, "external wrenches need an open chain or tree");
     if ((s->channels & CTC_CH_BIT(CTC_CH_LOOP)) && !m->has_loop)
         return ctc_fail(CTC_EINVAL, err, errlen, "channel \"loop\" needs a loop in the scene");
     if (active) {

@@ -3,11 +3,13 @@
  * recorder of samples and metrics, and the stages between them. Not a public header.
  *
  * The run (sim.c) is a recipe of stages, one file each:
- *   sim_check.c    the spec's checks, with and without a model, and the initial state
- *   sim_rhs.c      one evaluation: state -> desired motion -> controller law -> iGDCA forces ->
- *                  saturation -> disturbance -> GDCA accelerations; the integrator's right-hand
- * side and bdf's in-step projection sim_record.c   the result's arrays and one output sample's
- * channels sim_metrics.c  the accuracy and tracking figures gathered at the samples and at the end
+ *   - sim_check.c: the spec's checks, with and without a model, and the initial state;
+ *   - sim_rhs.c: one evaluation, state -> desired motion -> controller law -> iGDCA forces ->
+ *     saturation -> disturbance and wrenches -> GDCA accelerations; the integrator's right-hand
+ *     side and bdf's in-step projection;
+ *   - sim_record.c: the result's arrays and one output sample's channels;
+ *   - sim_metrics.c: the accuracy and tracking figures gathered at the samples and at the end;
+ *   - sim_causes.c: the tracking error by cause, from counterfactual runs after the run.
  * Everything a run touches is allocated in sim.c before its first step.
  */
 #ifndef CTC_SIM_INTERNAL_H
@@ -45,7 +47,11 @@ typedef struct sim_ctx {
     int limited;     /* some coordinate has a limit (spec.plant) */
     int jforces;     /* some coordinate has a joint force (plant.h) */
     int jknown;      /* every coordinate's joint force is known to the controller */
-    double *fp;      /* (nvx) what the forward pass receives: fz plus the joint forces */
+    double *fp;      /* (nvx) what the forward pass receives: fz plus the joint forces and the
+                        external wrenches' generalised forces */
+    int wrenched;    /* the spec has external wrenches (wrench.h) */
+    int wknown;      /* some wrench is known to the controller */
+    double *fext;    /* (nv) scratch: the known wrenches' generalised forces */
     double *xq;      /* (nq + nv) a baseline controller's model state (sim_rhs.c) */
     int armed;       /* some coordinate has armature (plant.h) */
     double *arm;     /* (nv) the armature per velocity coordinate, then ctc_plant_forward_armature's
@@ -97,6 +103,20 @@ typedef struct recorder {
     int track_energy;
     double e0, ke_max, drift;
 } recorder;
+
+/* ---- sim.c ---- */
+
+/* ctc_sim_run without the error by cause: one run of spec; hooks not NULL */
+ctc_status sim_run_once(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc_sim_result **out,
+                        char *err, size_t errlen);
+
+/* ---- sim_causes.c ---- */
+
+/* metrics.err_cause of result r of spec s (sim.h CTC_CAUSE_*): the counterfactual runs and
+ * their RMS differences; zeros when s has no cause, NaN when r stopped early. CTC_OK, or CTC_ENOMEM
+ * / CTC_EINVAL with a message; a cancelled counterfactual marks r cancelled. hooks not NULL. */
+ctc_status sim_error_by_cause(const ctc_sim_spec *s, const ctc_sim_hooks *hooks, ctc_sim_result *r,
+                              char *err, size_t errlen);
 
 /* ---- sim_check.c ---- */
 

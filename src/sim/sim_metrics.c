@@ -65,7 +65,8 @@ static void expm3(const double a[9], double t, double out[9])
 ctc_status sim_metrics_init(const sim_ctx *c, recorder *rec, int exact, size_t nv)
 {
     const ctc_sim_spec *spec = c->spec;
-    rec->track_energy = !c->active && !has_disturbance(spec, c->nind) && !c->jforces && !c->armed;
+    rec->track_energy =
+        !c->active && !has_disturbance(spec, c->nind) && !c->jforces && !c->armed && !c->wrenched;
     rec->track_errdyn = c->active && exact && c->cls->closed_loop &&
                         !has_disturbance(spec, c->nind) && !c->limited && c->jknown && !c->sampled;
     rec->e_sq = calloc(nv * 3, sizeof(double));

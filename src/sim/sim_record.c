@@ -43,7 +43,8 @@ unsigned sim_sample_needs(const sim_ctx *c, const recorder *rec)
     if (c->plant->has_loop) return SIM_EVAL_FULL;
     unsigned what = 0;
     if (c->active) what |= SIM_EVAL_FORCES; /* the tau channel and metrics, the clipping */
-    if (r->ch[CTC_CH_ENERGY] || r->ch[CTC_CH_EE] || rec->track_energy) what |= SIM_EVAL_KIN;
+    if (r->ch[CTC_CH_ENERGY] || r->ch[CTC_CH_EE] || r->ch[CTC_CH_POSE] || rec->track_energy)
+        what |= SIM_EVAL_KIN;
     return what;
 }
 
@@ -107,6 +108,17 @@ void sim_record_sample(sim_ctx *c, recorder *rec, double t, const double *y)
         const ctc_end_effector *ee = c->spec->end_effector;
         ctc_kinematics_point(c->plant, c->dp, ee->body, ee->point, out, out + 3);
     }
+    if (r->ch[CTC_CH_POSE]) {
+        double *out = r->ch[CTC_CH_POSE] + 7 * (size_t)c->spec->npose * (size_t)j;
+        for (int b = 0; b < c->spec->npose; b++, out += 7) {
+            static const double origin[3] = {0, 0, 0};
+            double xd[3], rot[9];
+            const int k = c->spec->pose_bodies[b];
+            ctc_kinematics_point(c->plant, c->dp, k, origin, out, xd);
+            ctc_kinematics_body_rotation(c->plant, c->dp, k, rot);
+            ctc_rotation_quaternion(rot, out + 3);
+        }
+    }
     double ke = 0, pe = 0;
     if (r->ch[CTC_CH_ENERGY] || rec->track_energy) {
         ctc_energy(c->plant, c->dp, &ke, &pe);
@@ -133,6 +145,7 @@ ctc_status sim_alloc_result(const sim_ctx *c, unsigned channels, long count, ctc
                        : ch == CTC_CH_QD                          ? c->nv
                        : ch == CTC_CH_ENERGY || ch == CTC_CH_LOOP ? 2
                        : ch == CTC_CH_EE                          ? 6
+                       : ch == CTC_CH_POSE                        ? 7 * c->spec->npose
                                                                   : c->nind;
         if (r->width[ch] == 0) continue;
         r->ch[ch] = malloc((size_t)count * (size_t)r->width[ch] * sizeof(double));
@@ -153,7 +166,9 @@ ctc_status sim_alloc_result(const sim_ctx *c, unsigned channels, long count, ctc
         mt->e_final = calloc((size_t)c->nind + 1, sizeof(double));
         mt->tau_peak = calloc((size_t)c->nind + 1, sizeof(double));
         mt->tau_rms = calloc((size_t)c->nind + 1, sizeof(double));
-        if (!mt->e_max || !mt->e_rms || !mt->e_final || !mt->tau_peak || !mt->tau_rms)
+        mt->err_cause = calloc((size_t)CTC_NCAUSES * (size_t)c->nind + 1, sizeof(double));
+        if (!mt->e_max || !mt->e_rms || !mt->e_final || !mt->tau_peak || !mt->tau_rms ||
+            !mt->err_cause)
             return CTC_ENOMEM;
     }
     if (c->limited) {
@@ -174,5 +189,6 @@ void ctc_sim_result_free(ctc_sim_result *r)
     free(r->metrics.tau_peak);
     free(r->metrics.tau_rms);
     free(r->metrics.sat_fraction);
+    free(r->metrics.err_cause);
     free(r);
 }

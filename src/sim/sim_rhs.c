@@ -12,8 +12,9 @@
  * where the controller knows them                                          (paper Eq. 70) sat(f),
  * each actuator clipped at its limit when it has one             (plant.h) sat(f) + z(t), the
  * disturbance added to the applied forces             (disturb.h) qdd = GDCA(plant; q, v, sat(f) +
- * z + tau_j(q, v))                      (paper section 3) dy/dt = (qdot(q, v), qdd, e), with d/dt
- * int(e_i) = 0 while coordinate i is clipped and e_i pushes further into the limit (clamping
+ * z + tau_j(q, v) + J^T W(t))           (paper section 3; the external wrenches W, wrench.h,
+ * minus the known ones from f where the controller knows them) dy/dt = (qdot(q, v), qdd, e), with
+ * d/dt int(e_i) = 0 while coordinate i is clipped and e_i pushes further into the limit (clamping
  * anti-windup, plant.h) A sampled controller (sim.h sample_period) runs the controller's part only
  * at its sample instants (sim_control_sample, from sim.c); in between, the evaluation applies the
  * held command and the integral state does not move. With an exact controller model the plant and
@@ -144,6 +145,13 @@ int sim_evaluate(sim_ctx *c, double t, const double *y, unsigned what)
         for (int i = 0; forces && c->jforces && i < c->nind; i++)
             if (s->plant[i].known)
                 c->f[m->ind_coord[i]] -= ctc_plant_joint_force(&s->plant[i], c->qi[i], c->vi[i]);
+        /* the wrenches the controller knows, at the state it sees (wrench.h) */
+        if (forces && c->wknown) {
+            memset(c->fext, 0, (size_t)c->nv * sizeof *c->fext);
+            for (int k = 0; k < s->nwrenches; k++)
+                if (s->wrenches[k].known) ctc_wrench_forces(m, c->dp, &s->wrenches[k], t, c->fext);
+            for (int k = 0; k < c->nv; k++) c->f[k] -= c->fext[k];
+        }
         /* the actuators' limits: f becomes sat(f), and clip keeps what was cut off */
         for (int i = 0; forces && c->limited && i < c->nind; i++) {
             double lim = s->plant[i].torque_limit, *fi = &c->f[m->ind_coord[i]];
@@ -163,10 +171,12 @@ int sim_evaluate(sim_ctx *c, double t, const double *y, unsigned what)
 
     /* the joints' own forces, which the plant feels and the tau channel does not show */
     const double *fwd = c->fz;
-    if (c->jforces) {
+    if (c->jforces || c->wrenched) {
         memcpy(c->fp, c->fz, (size_t)c->nvx * sizeof *c->fp);
-        for (int i = 0; i < c->nind; i++)
+        for (int i = 0; c->jforces && i < c->nind; i++)
             c->fp[m->ind_coord[i]] += ctc_plant_joint_force(&s->plant[i], c->qi[i], c->vi[i]);
+        for (int k = 0; k < s->nwrenches; k++)
+            ctc_wrench_forces(m, c->dp, &s->wrenches[k], t, c->fp);
         fwd = c->fp;
     }
     if (c->armed) {

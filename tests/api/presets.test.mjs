@@ -19,13 +19,13 @@ const KNOWN = [
     'arm_four_bar_pd', 'rssr_passive', 'y_pendulum_pd', 'y_four_bar_pd', 'spatial_hand_pd',
     'two_arm_torso_pd', 'ur5_min_jerk', 'iiwa14_min_jerk', 'triple_pendulum_pid_1khz',
     'triple_pendulum_pid_200hz', 'triple_pendulum_pid_50hz', 'triple_pendulum_pid_limited', 'panda_min_jerk',
-    'two_link_min_jerk', 'puma560_min_jerk',
+    'two_link_min_jerk', 'two_link_lab_payload', 'puma560_min_jerk',
 ];
 /* bodies of each preset's chain (n_link_pendulum with n = 4) */
 const TREE_BODIES = { y_pendulum_pd: 5, y_four_bar_pd: 6, spatial_hand_pd: 10, two_arm_torso_pd: 7,
     panda_min_jerk: 9 };
 const BODIES = (name) =>
-    TREE_BODIES[name] ?? (name === 'n_link_pendulum' ? 4 : name.startsWith('five_bar') ? 5 : name.startsWith('spatial') || name === 'two_link_min_jerk' ? 2 :
+    TREE_BODIES[name] ?? (name === 'n_link_pendulum' ? 4 : name.startsWith('five_bar') ? 5 : name.startsWith('spatial') || name.startsWith('two_link') ? 2 :
         name === 'arm_four_bar_pd' ? 4 : name === 'ur5_min_jerk' || name === 'puma560_min_jerk' ? 6 : name === 'iiwa14_min_jerk' ? 7 : 3);
 const PASSIVE = new Set(['triple_pendulum_passive', 'four_bar_passive', 'rssr_passive']);
 

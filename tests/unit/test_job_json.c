@@ -577,7 +577,7 @@ static const bad_job bad_jobs[] = {
     {"unknown channel", PASSIVE_JOB(",'output':{'channels':['x']}"), NULL, JOB_INVALID_FIELD,
      "output.channels[0]",
      "must be one of \"q\", \"qdot\", \"q_des\", \"qdot_des\", \"e\", \"tau\", \"w\", \"energy\", "
-     "\"loop\", \"end_effector\" (got \"x\")"},
+     "\"loop\", \"end_effector\", \"body_pose\" (got \"x\")"},
     {"channel twice", PASSIVE_JOB(",'output':{'channels':['q','q']}"), NULL, JOB_INVALID_FIELD,
      "output.channels[1]", "\"q\" is listed twice"},
     {"no channels", PASSIVE_JOB(",'output':{'channels':[]}"), NULL, JOB_INVALID_FIELD,
@@ -909,8 +909,10 @@ Test(job_json, fills_every_default_of_a_minimal_planar_job)
     j = parse_ok("{" SCENE1 "," PD "," HOLD ",'duration':0.004,'integrator':{'method':'rk4'}}");
     cr_assert_eq(j->spec.integrator.step, 1e-3);
     cr_assert_eq(j->spec.output_interval, 0.004);
-    cr_assert_eq(j->spec.channels, CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_LOOP) & ~CTC_CH_BIT(CTC_CH_EE),
-                 "loop: no loop; end_effector: no point");
+    cr_assert_eq(j->spec.channels,
+                 CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_LOOP) & ~CTC_CH_BIT(CTC_CH_EE) &
+                     ~CTC_CH_BIT(CTC_CH_POSE),
+                 "loop: no loop; end_effector: no point; body_pose: no bodies");
     cr_assert_null(j->spec.chain.loop);
     cr_assert_null(j->spec.chain.independent);
     cr_assert_eq(j->nind, j->nv);
@@ -934,8 +936,9 @@ Test(job_json, a_loop_counts_its_independent_coordinates_and_fills_its_defaults)
     cr_assert_eq(s->loop_stab, CTC_LOOP_PROJECT);
     cr_assert_eq(s->loop_tol, 1e-12);
     cr_assert_eq(s->loop_cond_max, 1e5, "the documented default (api/job.schema.json)");
-    cr_assert_eq(s->channels, CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_EE),
-                 "every channel, the loop's included (end_effector: no point)");
+    cr_assert_eq(s->channels, CTC_CH_ALL & ~CTC_CH_BIT(CTC_CH_EE) & ~CTC_CH_BIT(CTC_CH_POSE),
+                 "every channel, the loop's included (end_effector: no point; body_pose: no "
+                 "bodies)");
     cr_assert(j->gains[0].kp == 100 && j->gains[0].kv == 20 && j->gains[0].ki == 0);
     cr_assert_eq(j->traj[0].type, CTC_TRAJ_CONSTANT);
 
@@ -1495,7 +1498,8 @@ Test(job_json, normalised_keys_come_in_canonical_order)
         "0,0],'inertia':[1,1,1],'joint':{'type':'revolute','axis':[0,0,1],'location':[0,0,0],"
         "'independent':true}}],"
         "'q0':[0],'v0':[1]},'controller':{'type':'none'},'disturbance':{'type':'none'},'plant':{},"
-        "'integrator':{'method':'dopri5','rtol':1e-08,'atol':1e-10,'initial_step':0,'max_step':0,"
+        "'wrenches':[],'integrator':{'method':'dopri5','rtol':1e-08,'atol':1e-10,'initial_step':0,'"
+        "max_step':0,"
         "'min_step':0,'max_steps':10000000},'duration':1,'output':{'interval':0.01,'channels':['q',"
         "'qdot']},"
         "'limits':{'max_speed':1000000,'wall_time':0},'threads':1}");

@@ -80,6 +80,7 @@ static const char *const all_names[] = {
     "triple_pendulum_pid_limited",
     "panda_min_jerk",
     "two_link_min_jerk",
+    "two_link_lab_payload",
     "puma560_min_jerk",
 };
 #define NPRESETS ((int)(sizeof all_names / sizeof all_names[0]))
@@ -121,6 +122,7 @@ static const struct preset_want {
     {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
     {1, 3, 3, 3, 0, 3, CTC_CTRL_PID, 1, 5, 1e-8, 1e-10},
     {0, 9, 9, 9, 0, 9, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
+    {0, 2, 2, 2, 0, 2, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
     {0, 2, 2, 2, 0, 2, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
     {0, 6, 6, 6, 0, 6, CTC_CTRL_PD, 0, 3, 1e-8, 1e-10},
 };
@@ -1285,6 +1287,48 @@ Test(presets, two_link_arm_carries_point_masses_at_its_link_ends_from_hanging_do
     }
     job_free(j);
     cJSON_Delete(doc);
+}
+
+Test(presets, two_link_lab_arm_is_the_textbook_arm_with_friction_and_a_payload_it_ignores)
+{
+    cJSON *lab = build("two_link_lab_payload", NULL), *book = build("two_link_min_jerk", NULL);
+    job *j = parse_doc(lab, "two_link_lab_payload"), *b = parse_doc(book, "two_link_min_jerk");
+    /* the plant carries 0.5 kg at link 2's tip (1 m along its x): 1.5 kg, centre of mass at the
+       tip still; the controller's model is the book's arm */
+    cr_assert_eq(j->spec.chain.bodies[1].mass, 1.5);
+    cr_assert_eq(j->spec.chain.bodies[1].com[0], 1.0);
+    cr_assert_not_null(j->spec.model_bodies);
+    for (int k = 0; k < 2; k++) {
+        cr_assert_eq(j->spec.model_bodies[k].mass, b->spec.chain.bodies[k].mass, "body %d", k);
+        cr_assert_eq(j->spec.chain.bodies[0].mass, b->spec.chain.bodies[0].mass);
+    }
+    /* friction on both joints, unknown to the controller */
+    cr_assert_not_null(j->spec.plant);
+    for (int i = 0; i < 2; i++) {
+        const ctc_plant_coord *pc = &j->spec.plant[i];
+        cr_assert(pc->viscous == 0.2 && pc->coulomb == 1 && pc->coulomb_velocity == 0.01);
+        cr_assert_eq(pc->known, 0, "joint %d", i);
+    }
+    /* the same move; its error comes from the model: error_by_cause's model row is its own */
+    for (int i = 0; i < 2; i++) {
+        cr_assert_eq(j->traj[i].type, b->traj[i].type);
+        cr_assert_eq(j->q0[i], b->q0[i]);
+    }
+    ctc_sim_result *r = NULL;
+    char err[256];
+    cr_assert_eq(ctc_sim_run(&j->spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
+    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    for (int i = 0; i < 2; i++) {
+        cr_expect_gt(r->metrics.err_cause[CTC_CAUSE_MODEL * 2 + i], 1e-3, "joint %d", i);
+        cr_expect_eq(r->metrics.err_cause[CTC_CAUSE_MODEL * 2 + i],
+                     r->metrics.err_cause[CTC_CAUSE_TOTAL * 2 + i], "the model is the only cause");
+        cr_expect_eq(r->metrics.err_cause[CTC_CAUSE_SAMPLING * 2 + i], 0);
+    }
+    ctc_sim_result_free(r);
+    job_free(j);
+    job_free(b);
+    cJSON_Delete(lab);
+    cJSON_Delete(book);
 }
 
 Test(presets, puma560_holds_armstrong_khatib_burdicks_table_as_corke_lists_it)

@@ -1724,3 +1724,173 @@ Test(urdf, moving_links_without_mass_are_accepted_where_the_mass_matrix_allows)
     job_free(j);
     free(doc);
 }
+
+/* ---- visual shapes (urdf.h, import.h "visuals") ---- */
+
+/* A chain base -> a (revolute, origin with rpy) -> b (fixed, origin with rpy) -> c (revolute)
+ * with a box on a, a cylinder on b (merged into a's body) and a sphere and a mesh on c: each
+ * shape's pose in its body's frame against the chain of transforms at q = 0 written here, the
+ * body's frame being parallel to the world's with its origin at its joint's centre. */
+static const char visuals_urdf[] =
+    "<robot name=\"dressed\">\n"
+    "  <link name=\"base\"><visual><geometry><box size=\"1 1 1\"/></geometry></visual></link>\n"
+    "  <link name=\"a\">\n"
+    "    <inertial><mass value=\"1\"/><inertia ixx=\"0.1\" iyy=\"0.1\" izz=\"0.1\"/></inertial>\n"
+    "    <visual><origin xyz=\"0.5 0.1 -0.2\" rpy=\"0.3 -0.2 0.7\"/>\n"
+    "      <geometry><box size=\"1 0.1 0.05\"/></geometry></visual>\n"
+    "  </link>\n"
+    "  <link name=\"b\"><visual><origin xyz=\"0 0 0.25\" rpy=\"1.5707963267948966 0 0\"/>\n"
+    "    <geometry><cylinder radius=\"0.04\" length=\"0.5\"/></geometry></visual></link>\n"
+    "  <link name=\"c\">\n"
+    "    <inertial><origin xyz=\"0.3 0 0\"/><mass value=\"0.5\"/>\n"
+    "      <inertia ixx=\"0.01\" iyy=\"0.01\" izz=\"0.01\"/></inertial>\n"
+    "    <visual><origin xyz=\"0.6 0 0\"/><geometry><sphere radius=\"0.07\"/></geometry></visual>\n"
+    "    <visual><geometry><mesh filename=\"package://x/c.stl\"/></geometry></visual>\n"
+    "  </link>\n"
+    "  <joint name=\"ja\" type=\"revolute\"><parent link=\"base\"/><child link=\"a\"/>\n"
+    "    <origin xyz=\"0 0 0.3\" rpy=\"0.1 0.2 0.4\"/><axis xyz=\"0 0 1\"/></joint>\n"
+    "  <joint name=\"jb\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/>\n"
+    "    <origin xyz=\"1 0 0\" rpy=\"0 0.5 -0.3\"/></joint>\n"
+    "  <joint name=\"jc\" type=\"revolute\"><parent link=\"b\"/><child link=\"c\"/>\n"
+    "    <origin xyz=\"0 0 0.5\" rpy=\"-0.6 0 0.2\"/><axis xyz=\"0 1 0\"/></joint>\n"
+    "</robot>\n";
+
+/* the expected pose (origin, rotation) of a shape at xf v in the link whose world frame at q = 0
+   is L, in the body whose origin is at o */
+static void expect_visual(const cJSON *vis, xf L, xf v, const double o[3], const char *type,
+                          const char *what)
+{
+    xf w = xf_mul(L, v);
+    cr_assert_not_null(vis, "%s: no visual", what);
+    cr_expect_str_eq(cJSON_GetObjectItem(vis, "type")->valuestring, type, "%s", what);
+    const cJSON *origin = cJSON_GetObjectItem(vis, "origin");
+    for (int i = 0; i < 3; i++) {
+        double got = cJSON_GetArrayItem(origin, i)->valuedouble;
+        cr_expect(fabs(got - (w.p[i] - o[i])) <= 1e-14, "%s: origin[%d] %.17g, want %.17g", what, i,
+                  got, w.p[i] - o[i]);
+    }
+    const cJSON *rows = cJSON_GetObjectItem(vis, "rotation");
+    if (strcmp(type, "sphere") == 0) {
+        cr_expect_null(rows, "%s: a sphere has no rotation", what);
+        return;
+    }
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            double got = cJSON_GetArrayItem(cJSON_GetArrayItem(rows, i), j)->valuedouble;
+            cr_expect(fabs(got - w.R[3 * i + j]) <= 1e-14, "%s: rotation[%d][%d] %.17g, want %.17g",
+                      what, i, j, got, w.R[3 * i + j]);
+        }
+}
+
+Test(urdf, visual_boxes_cylinders_and_spheres_are_kept_in_their_bodies_frames)
+{
+    char msg[512], name[64];
+    int meshes = -1;
+    cJSON *bodies =
+        urdf_read(visuals_urdf, strlen(visuals_urdf), name, sizeof name, &meshes, msg, sizeof msg);
+    cr_assert_not_null(bodies, "%s", msg);
+    cr_expect_eq(meshes, 1, "the mesh is counted");
+    cr_assert_eq(cJSON_GetArraySize(bodies), 2, "a (with b merged) and c");
+    /* the links' world frames at q = 0, and the bodies' origins (their joints' centres) */
+    xf A = xf_rpy(0, 0, 0.3, 0.1, 0.2, 0.4);
+    xf B = xf_mul(A, xf_rpy(1, 0, 0, 0, 0.5, -0.3));
+    xf C = xf_mul(B, xf_rpy(0, 0, 0.5, -0.6, 0, 0.2));
+    const cJSON *va = cJSON_GetObjectItem(cJSON_GetArrayItem(bodies, 0), "visuals");
+    const cJSON *vc = cJSON_GetObjectItem(cJSON_GetArrayItem(bodies, 1), "visuals");
+    cr_assert_eq(cJSON_GetArraySize(va), 2, "a's box and b's cylinder");
+    cr_assert_eq(cJSON_GetArraySize(vc), 1, "c's sphere; its mesh left out");
+    expect_visual(cJSON_GetArrayItem(va, 0), A, xf_rpy(0.5, 0.1, -0.2, 0.3, -0.2, 0.7), A.p, "box",
+                  "a's box");
+    expect_visual(cJSON_GetArrayItem(va, 1), B, xf_rpy(0, 0, 0.25, 1.5707963267948966, 0, 0), A.p,
+                  "cylinder", "b's cylinder on a");
+    expect_visual(cJSON_GetArrayItem(vc, 0), C, xf_rpy(0.6, 0, 0, 0, 0, 0), C.p, "sphere",
+                  "c's sphere");
+    const cJSON *box = cJSON_GetArrayItem(va, 0), *cyl = cJSON_GetArrayItem(va, 1);
+    cr_expect_eq(cJSON_GetArrayItem(cJSON_GetObjectItem(box, "size"), 1)->valuedouble, 0.1);
+    cr_expect_eq(cJSON_GetObjectItem(cyl, "radius")->valuedouble, 0.04);
+    cr_expect_eq(cJSON_GetObjectItem(cyl, "length")->valuedouble, 0.5);
+    cr_expect_eq(cJSON_GetObjectItem(cJSON_GetArrayItem(vc, 0), "radius")->valuedouble, 0.07);
+    cJSON_Delete(bodies);
+
+    /* through the job format: the normalised job keeps them, and they parse back the same */
+    char *doc = urdf_job(visuals_urdf);
+    job *j = parse_ok(doc);
+    const cJSON *stored = cJSON_GetObjectItem(
+        cJSON_GetArrayItem(
+            cJSON_GetObjectItem(cJSON_GetObjectItem(j->normalised, "scene"), "bodies"), 0),
+        "visuals");
+    cr_assert_eq(cJSON_GetArraySize(stored), 2);
+    expect_visual(cJSON_GetArrayItem(stored, 0), A, xf_rpy(0.5, 0.1, -0.2, 0.3, -0.2, 0.7), A.p,
+                  "box", "the stored box");
+    char *again = cJSON_PrintUnformatted(j->normalised);
+    job *k = parse_ok(again);
+    cr_expect(cJSON_Compare(j->normalised, k->normalised, 1),
+              "the normalised job is a fixed point");
+    job_free(k);
+    free(again);
+    job_free(j);
+    free(doc);
+}
+
+Test(urdf, bad_visuals_are_refused_with_their_element_and_line)
+{
+    static const struct {
+        const char *visual, *message;
+    } bad[] = {
+        {"<visual><origin xyz=\"1 0 0\"/></visual>",
+         "line 2: <visual> in <link name=\"a\">: <geometry> is required"},
+        {"<visual><geometry><box size=\"1 0 1\"/></geometry></visual>",
+         "line 2: <box> in <link name=\"a\">: size must be positive"},
+        {"<visual><geometry><cylinder radius=\"0.1\"/></geometry></visual>",
+         "line 2: <cylinder> in <link name=\"a\">: attribute length is required"},
+        {"<visual><geometry><capsule radius=\"0.1\" length=\"1\"/></geometry></visual>",
+         "line 2: <geometry> in <link name=\"a\">: must hold a <box>, <cylinder>, <sphere> or "
+         "<mesh>"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char urdf[1024], msg[512];
+        snprintf(urdf, sizeof urdf,
+                 "<robot name=\"r\"><link name=\"base\"/>\n<link name=\"a\">%s<inertial><mass "
+                 "value=\"1\"/><inertia ixx=\"1\" iyy=\"1\" izz=\"1\"/></inertial></link>"
+                 "<joint name=\"j\" type=\"revolute\"><parent link=\"base\"/><child link=\"a\"/>"
+                 "</joint></robot>",
+                 bad[i].visual);
+        cJSON *b = urdf_to_bodies(urdf, strlen(urdf), NULL, 0, msg, sizeof msg);
+        cr_expect_null(b, "case %zu accepted", i);
+        cJSON_Delete(b);
+        cr_expect_str_eq(msg, bad[i].message, "case %zu", i);
+    }
+    /* the job format's own checks of a body's visuals */
+    static const struct {
+        const char *visuals, *field, *message;
+    } fmt[] = {
+        {"[{'type':'cone'}]", "scene.bodies[0].visuals[0].type",
+         "must be one of \"box\", \"cylinder\", \"sphere\" (got \"cone\")"},
+        {"[{'type':'sphere','radius':0.1,'size':[1,1,1]}]", "scene.bodies[0].visuals[0].size",
+         "does not apply to a sphere"},
+        {"[{'type':'box','size':[1,1,1],'rotation':[[1,0,0],[0,1,0],[0,0,-1]]}]",
+         "scene.bodies[0].visuals[0].rotation",
+         "must be a rotation (orthonormal rows, determinant +1)"},
+        {"[{'type':'cylinder','radius':-1,'length':1}]", "scene.bodies[0].visuals[0].radius",
+         "must be positive (got -1 m)"},
+    };
+    for (size_t i = 0; i < sizeof fmt / sizeof fmt[0]; i++) {
+        char text[1024];
+        snprintf(text, sizeof text,
+                 "{'scene':{'bodies':[{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{'type':"
+                 "'revolute','axis':[0,0,1]},'visuals':%s}]},'controller':{'type':'none'},"
+                 "'duration':1}",
+                 fmt[i].visuals);
+        for (char *c = text; *c; c++)
+            if (*c == '\'') *c = '"';
+        job *j = NULL;
+        job_error err;
+        cr_expect_eq(job_parse(text, strlen(text), &j, &err), -1, "case %zu accepted", i);
+        if (j) {
+            job_free(j);
+            continue;
+        }
+        cr_expect_str_eq(err.field, fmt[i].field, "case %zu", i);
+        cr_expect_str_eq(err.message, fmt[i].message, "case %zu", i);
+    }
+}
