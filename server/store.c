@@ -78,6 +78,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
 #include <sqlite3.h>
 
 /* series blobs are the host's doubles byte for byte: they must be IEEE 754 binary64 and
@@ -177,11 +178,11 @@ typedef enum stmt_id {
     "id, name, preset, status, progress, created, started, finished, nbodies, nv, controller, "    \
     "message, e_max, wall_s, " SUMMARY_COLUMNS
 /* the summaries a list shows, read from the stored JSON (no column of their own, so the schema
-   stays as it is): max |e_final| over the coordinates, the mean of e_rms^2 (store_job.e_rms is
-   its root) and the tags of the normalised job, as JSON text */
+   stays as it is): metrics.e_final and metrics.e_rms as JSON text, reduced in C (read_job; for
+   4096 coordinates SQLite's json_each took 4 ms a row, json_extract 0.7 ms), and the tags of
+   the normalised job, as JSON text */
 #define SUMMARY_COLUMNS                                                                            \
-    "(SELECT max(abs(value)) FROM json_each(jobs.metrics, '$.e_final')), "                         \
-    "(SELECT avg(value * value) FROM json_each(jobs.metrics, '$.e_rms')), "                        \
+    "json_extract(jobs.metrics, '$.e_final'), json_extract(jobs.metrics, '$.e_rms'), "             \
     "json_extract(jobs.spec, '$.tags')"
 /* a search: ?4 a lowercase text in the name, preset, controller or a tag; ?5 a tag */
 #define SEARCH_WHERE                                                                               \
@@ -546,6 +547,29 @@ static double real_or_nan(sqlite3_stmt *q, int i)
     return sqlite3_column_type(q, i) == SQLITE_NULL ? NAN : sqlite3_column_double(q, i);
 }
 
+/* j->e_final = max |e_final| and j->e_rms = sqrt(mean e_rms^2) over the coordinates, from the
+ * JSON arrays in columns 14 and 15 (NaN when absent, unreadable or without a finite entry;
+ * non-finite entries, written as null, are left out) */
+static void summarise_errors(sqlite3_stmt *q, store_job *j)
+{
+    j->e_final = j->e_rms = NAN;
+    for (int c = 14; c <= 15; c++) {
+        const char *text = (const char *)sqlite3_column_text(q, c);
+        cJSON *a = text ? cJSON_Parse(text) : NULL;
+        double acc = 0;
+        int n = 0;
+        for (const cJSON *v = cJSON_IsArray(a) ? a->child : NULL; v; v = v->next) {
+            if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble)) continue;
+            double x = fabs(v->valuedouble);
+            acc = c == 14 ? (n == 0 || x > acc ? x : acc) : acc + x * x;
+            n++;
+        }
+        cJSON_Delete(a);
+        if (n > 0 && c == 14) j->e_final = acc;
+        if (n > 0 && c == 15) j->e_rms = sqrt(acc / n);
+    }
+}
+
 /* fills j from the current row of a JOB_COLUMNS query (spec and metrics follow when
  * with_spec); 0, or -1 with a message (j is then cleared) */
 static int read_job(sqlite3_stmt *q, int with_spec, store_job *j, char *err, size_t errlen)
@@ -568,8 +592,7 @@ static int read_job(sqlite3_stmt *q, int with_spec, store_job *j, char *err, siz
     j->nv = sqlite3_column_int(q, 9);
     j->e_max = real_or_nan(q, 12);
     j->wall_s = real_or_nan(q, 13);
-    j->e_final = real_or_nan(q, 14);
-    j->e_rms = sqrt(real_or_nan(q, 15));
+    summarise_errors(q, j);
     if (dup_column(q, 1, &j->name) || dup_column(q, 2, &j->preset) ||
         dup_column(q, 10, &j->controller) || dup_column(q, 11, &j->message) ||
         dup_column(q, 16, &j->tags) ||
