@@ -253,18 +253,20 @@ test('several runs animated side by side under one cursor, played at 4x', async 
         await setCursor(page, 0);
         await page.locator('select#speed').selectOption('4');
         await page.locator('button#play').click();
-        /* the simulated time per real second while playing */
+        /* the simulated time per real second while playing, over 0.4 s (1.6 s of the 2 s run):
+         * each reading lags its frame by up to a frame, and a frame may take 0.1 s on a loaded
+         * machine, so the bounds only tell 4x from 1x */
         const rate = await page.evaluate(
             () =>
                 new Promise((resolve) => {
                     const c = document.querySelector('canvas.anim');
                     const t0 = performance.now();
                     const s0 = Number(c.dataset.time);
-                    setTimeout(() => resolve((Number(c.dataset.time) - s0) / ((performance.now() - t0) / 1000)), 300);
+                    setTimeout(() => resolve((Number(c.dataset.time) - s0) / ((performance.now() - t0) / 1000)), 400);
                 }),
         );
         await page.locator('button#play').click();
-        assert.ok(rate > 1.5 && rate < 4.5, `played at ${rate} s per s at 4x`);
+        assert.ok(rate > 1.5 && rate < 6, `played at ${rate} s per s at 4x`);
         await screenshot(page, 'compare-anim-1400.png');
         await page.setViewportSize({ width: 390, height: 844 });
         await screenshot(page, 'compare-anim-390.png');
