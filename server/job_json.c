@@ -2,7 +2,7 @@
  * job_json.c - the job format (job_json.h): JSON text to a checked, runnable ctc_sim_spec and the
  * job's normalised document.
  *
- * One pass walks the document in the format's order: name, scene, controller, trajectory,
+ * One pass walks the document in the format's order: name, tags, scene, controller, trajectory,
  * disturbance, plant, integrator, duration, output, limits, threads. Each object's keys are checked
  * before any of its values is read, so a misspelt key is reported as unknown (with the nearest
  * valid key) rather than as the required key it was meant to be; a typed object ({"type": ...}) is
@@ -49,6 +49,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "job_name.h"
 #include "job_parse.h"
 #include "json_merge.h"
 #include "json_strict.h"
@@ -64,6 +65,57 @@ static int parse_name(parser *p, const cJSON *doc, const char *default_name)
     p->j->name = strdup(name);
     if (p->j->name == NULL) return json_out_of_memory(p->err);
     json_put_string(p, p->norm, "name", name);
+    return 0;
+}
+
+/* ---- tags ----
+ *
+ * Labels for finding runs again (GET /api/jobs?tag=): an array of at most JOB_MAX_TAGS distinct
+ * strings of 1..JOB_MAX_TAG bytes, none holding a control character. Written to the normalised
+ * document only when given, as given. */
+
+static int parse_tags(parser *p, const cJSON *doc)
+{
+    const cJSON *v = json_member(doc, "tags");
+    if (v == NULL) return 0;
+    if (!cJSON_IsArray(v)) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "tags",
+                             "must be an array of strings (got %s)", json_kind(v));
+    }
+    int n = cJSON_GetArraySize(v);
+    if (n > JOB_MAX_TAGS) {
+        return json_error_at(p->err, JOB_INVALID_FIELD, "tags",
+                             "must have at most %d tags (got %d)", JOB_MAX_TAGS, n);
+    }
+    cJSON *out = json_put(p, p->norm, "tags", cJSON_CreateArray());
+    int i = 0;
+    for (const cJSON *t = v->child; t != NULL; t = t->next, i++) {
+        char path[32];
+        snprintf(path, sizeof path, "tags[%d]", i);
+        if (!cJSON_IsString(t)) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, path, "must be a string (got %s)",
+                                 json_kind(t));
+        }
+        size_t len = strlen(t->valuestring);
+        if (len == 0 || len > JOB_MAX_TAG) {
+            return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                                 "must be 1 to %d bytes long (got %zu)", JOB_MAX_TAG, len);
+        }
+        for (size_t k = 0; k < len; k++) {
+            if ((unsigned char)t->valuestring[k] < 0x20 || t->valuestring[k] == 0x7f) {
+                return json_error_at(p->err, JOB_INVALID_FIELD, path,
+                                     "must not hold a control character (byte %zu)", k);
+            }
+        }
+        for (const cJSON *u = v->child; u != t; u = u->next) {
+            if (strcmp(u->valuestring, t->valuestring) == 0) {
+                return json_error_at(p->err, JOB_INVALID_FIELD, path, "repeats tag \"%s\"",
+                                     t->valuestring);
+            }
+        }
+        if (out != NULL) cJSON_AddItemToArray(out, cJSON_CreateString(t->valuestring));
+    }
+    if (out == NULL || cJSON_GetArraySize(out) != n) p->oom = 1;
     return 0;
 }
 
@@ -516,8 +568,8 @@ static int parse_controller(parser *p, const cJSON *doc)
 /* ---- the document ---- */
 
 static const char *const job_keys[] = {
-    "name",       "scene",    "controller", "trajectory", "disturbance", "plant", "wrenches",
-    "integrator", "duration", "output",     "limits",     "threads",     NULL};
+    "name",       "tags",     "scene",      "controller", "trajectory", "disturbance", "plant",
+    "wrenches",   "integrator", "duration", "output",     "limits",     "threads",     NULL};
 
 /* ---- the controller's and the document's keys and defaults, as data (job_json.h) ---- */
 
@@ -596,10 +648,11 @@ static int parse_job(const cJSON *doc, const char *default_name, job **out, job_
     parser p = {.j = j, .err = err, .ctrl = CTC_CTRL_NONE};
     j->normalised = p.norm = cJSON_CreateObject();
     if (p.norm == NULL || json_check_keys(&p, doc, "", job_keys, NULL, NULL) != 0 ||
-        parse_name(&p, doc, default_name) != 0 || parse_scene(&p, doc) != 0 ||
-        parse_controller(&p, doc) != 0 || parse_trajectory(&p, doc) != 0 ||
-        parse_disturbance(&p, doc) != 0 || parse_plant(&p, doc) != 0 ||
-        parse_wrenches(&p, doc) != 0 || parse_integrator(&p, doc) != 0 ||
+        parse_name(&p, doc, default_name) != 0 || parse_tags(&p, doc) != 0 ||
+        parse_scene(&p, doc) != 0 || parse_controller(&p, doc) != 0 ||
+        parse_trajectory(&p, doc) != 0 || parse_disturbance(&p, doc) != 0 ||
+        parse_plant(&p, doc) != 0 || parse_wrenches(&p, doc) != 0 ||
+        parse_integrator(&p, doc) != 0 ||
         parse_duration(&p, doc) != 0 || parse_output(&p, doc) != 0 || parse_limits(&p, doc) != 0 ||
         parse_threads(&p, doc) != 0 || check_spec(&p) != 0) {
         if (p.norm == NULL) json_out_of_memory(err);
@@ -698,6 +751,60 @@ static int expand_preset(const cJSON *request, cJSON **out, const preset **used,
     return 0;
 }
 
+/* A preset job whose request names it not, or names it as the preset's own document does, is
+ * named after what the request changed (job_name.h): its normalised document against the one
+ * of the preset alone, built from the request's preset parameters ("n_link_pendulum, n = 64,
+ * kp = 40"). A "name": null keeps the preset's key; a run with another controller keeps the
+ * name expand_preset gave it. 0, or -1 with *err set. */
+static int name_edit(const cJSON *request, const preset *pr, job *j, job_error *err)
+{
+    cJSON *own = pr->build(request, err);
+    if (own == NULL) return err->code == JOB_OK ? json_out_of_memory(err) : -1;
+    const cJSON *own_name = json_member(own, "name");
+    const cJSON *asked = json_member(request, "name");
+    if (asked != NULL && !(cJSON_IsString(asked) && cJSON_IsString(own_name) &&
+                           strcmp(asked->valuestring, own_name->valuestring) == 0)) {
+        cJSON_Delete(own);
+        return 0; /* a name of the user's own */
+    }
+    job *base = NULL;
+    job_error ignored;
+    int rc = parse_job(own, pr->name, &base, &ignored);
+    cJSON_Delete(own);
+    if (rc != 0) {
+        /* a preset that does not parse alone is a bug of the preset's; the job keeps its name */
+        return ignored.code == JOB_NO_MEMORY ? json_out_of_memory(err) : 0;
+    }
+    /* another controller with a name of its own (expand_preset): that name says the change */
+    if (strcmp(j->name, base->name) != 0) {
+        job_free(base);
+        return 0;
+    }
+    /* the preset's key and the parameters the request gives it ("n_link_pendulum, n = 64") */
+    char base_name[JOB_MAX_NAME + 1], name[JOB_MAX_NAME + 1];
+    size_t used = (size_t)snprintf(base_name, sizeof base_name, "%s", pr->name);
+    for (const char *const *param = pr->params; param != NULL && *param != NULL; param++) {
+        const cJSON *v = json_member(request, *param);
+        if (cJSON_IsNumber(v) && used < sizeof base_name)
+            used += (size_t)snprintf(base_name + used, sizeof base_name - used, ", %s = %g", *param,
+                                     v->valuedouble);
+    }
+    int n = job_name_changes(base->normalised, j->normalised, base_name, name, sizeof name);
+    job_free(base);
+    if (n == 0) return 0;
+    char *copy = strdup(name);
+    cJSON *v = cJSON_CreateString(name);
+    if (copy == NULL || v == NULL ||
+        !cJSON_ReplaceItemInObjectCaseSensitive(j->normalised, "name", v)) {
+        free(copy);
+        cJSON_Delete(v);
+        return json_out_of_memory(err);
+    }
+    free(j->name);
+    j->name = copy;
+    return 0;
+}
+
 /* ---- the interface ---- */
 
 static void clear_error(job_error *err)
@@ -725,10 +832,11 @@ int job_from_json(const cJSON *doc, job **out, job_error *err)
     int rc = json_check_repeated_keys(err, expanded, "");
     if (rc == 0) rc = parse_job(expanded, pr->name, out, err);
     cJSON_Delete(expanded);
-    if (rc == 0 && ((*out)->preset = strdup(pr->name)) == NULL) {
+    if (rc == 0 && ((*out)->preset = strdup(pr->name)) == NULL) rc = json_out_of_memory(err);
+    if (rc == 0) rc = name_edit(doc, pr, *out, err);
+    if (rc != 0) {
         job_free(*out);
         *out = NULL;
-        return json_out_of_memory(err);
     }
     return rc;
 }

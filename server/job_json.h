@@ -13,7 +13,12 @@
  * throughout.
  *
  * A job is an object:
- *   "name"        string, optional (1..JOB_MAX_NAME bytes; default "job" or the preset's name)
+ *   "name"        string, optional (1..JOB_MAX_NAME bytes; default "job" or the preset's name;
+ *                 a preset request's job left unnamed, or named as the preset's own document,
+ *                 is named after what it changes: job_name.h)
+ *   "tags"        optional array of at most JOB_MAX_TAGS (16) distinct strings of 1..JOB_MAX_TAG
+ *                 (40) bytes without control characters; kept in the normalised document only
+ *                 when given (GET /api/jobs?tag= finds them)
  *   "scene"       object, required:
  *       "gravity"   [gx, gy, gz] m/s^2, default [0, -9.81, 0]
  *       "form"      "auto" (default) | "planar" | "spatial"
@@ -236,6 +241,8 @@
 #define JOB_MAX_NAME 200        /* bytes */
 #define JOB_MAX_WRENCHES 64     /* external wrenches */
 #define JOB_MAX_VISUALS 64      /* visual shapes of one body (scene.bodies[k].visuals) */
+#define JOB_MAX_TAGS 16         /* tags of a job */
+#define JOB_MAX_TAG 40          /* bytes of a tag */
 #define JOB_MAX_FIXED_STEPS 1e9 /* rk4 steps (duration / step) when max_steps is 0 */
 /* rk4 steps x bodies at most: about 7 min of a worker at the 0.43 us a planar body-step measured
    (a 64-link pendulum, 10^4 steps in 0.28 s), so about what the server's default time limit of

@@ -302,6 +302,14 @@ static cJSON *job_row(const store_job *j)
     cJSON_AddItemToObject(o, "controller", string_or_null(j->controller));
     cJSON_AddItemToObject(o, "e_max", number_or_null(j->e_max));
     cJSON_AddItemToObject(o, "wall_s", number_or_null(j->wall_s));
+    cJSON_AddItemToObject(o, "e_final", number_or_null(j->e_final));
+    cJSON_AddItemToObject(o, "e_rms", number_or_null(j->e_rms));
+    cJSON *tags = j->tags ? cJSON_Parse(j->tags) : NULL;
+    if (!cJSON_IsArray(tags)) {
+        cJSON_Delete(tags);
+        tags = cJSON_CreateArray();
+    }
+    cJSON_AddItemToObject(o, "tags", tags);
     cJSON_AddStringToObject(o, "location", location);
     /* cJSON's adders fail quietly: check the last of each kind once */
     if (!o || !scene || !cJSON_GetObjectItemCaseSensitive(o, "location")) {
@@ -611,6 +619,20 @@ static void get_jobs(const http_request *req, http_reply *rep, void *arg)
                          st);
         return;
     }
+    /* a search: q, a text in the name, preset, controller or a tag; tag, one tag exactly */
+    store_filter f = {
+        .status = status, .text = http_query(req, "q"), .tag = http_query(req, "tag")};
+    if (f.text && f.text[0] == '\0') f.text = NULL;
+    if (f.text && strlen(f.text) > JOB_MAX_NAME) {
+        http_reply_error(rep, 400, "INVALID_QUERY", "q",
+                         "q must be at most %d bytes long (got %zu)", JOB_MAX_NAME, strlen(f.text));
+        return;
+    }
+    if (f.tag && (f.tag[0] == '\0' || strlen(f.tag) > JOB_MAX_TAG)) {
+        http_reply_error(rep, 400, "INVALID_QUERY", "tag",
+                         "tag must be 1 to %d bytes long (got %zu)", JOB_MAX_TAG, strlen(f.tag));
+        return;
+    }
     store *s = thread_store(ctx, rep);
     if (!s) return;
 
@@ -618,7 +640,10 @@ static void get_jobs(const http_request *req, http_reply *rep, void *arg)
     store_job *rows = NULL;
     int n = 0;
     char err[256] = "";
-    if (store_list(s, cursor, status, (int)limit + 1, &rows, &n, err, sizeof err) != 0) {
+    int failed = f.text || f.tag
+                     ? store_search(s, cursor, &f, (int)limit + 1, &rows, &n, err, sizeof err)
+                     : store_list(s, cursor, status, (int)limit + 1, &rows, &n, err, sizeof err);
+    if (failed != 0) {
         database_failed(rep, "listing jobs", err);
         return;
     }

@@ -31,7 +31,10 @@
  *   {"id", "name", "preset" (or null), "status" ("queued", "running", "done", "failed",
  *    "diverged", "cancelled"), "progress" (0..1), "created", "started", "finished",
  *    "scene": {"bodies", "coordinates"}, "controller", "e_max" (max tracking error over the
- *    coordinates, or null), "wall_s" (or null), "location": "/api/jobs/ID"}
+ *    coordinates, or null; for a CTC run, the initial error), "wall_s" (or null), "e_final"
+ *    (max over the coordinates of |e| at the end, or null), "e_rms" (the RMS of e over the run
+ *    and the coordinates: the root of the mean of metrics.e_rms squared, or null), "tags" (the
+ *    job's tags, [] when none), "location": "/api/jobs/ID"}
  *
  * POST /api/jobs             body: a job or {"preset": ...} (job_json.h). Validates first (400
  *                            with the parser's code, field and message; a "threads" above the
@@ -40,7 +43,10 @@
  *                            holds the answer until the job finishes: then 200 {job} as
  *                            GET /api/jobs/{id}, or 202 {row} if S ran out.
  * GET  /api/jobs             ?limit=N (1..200, default 50) &cursor=ID (rows with id < ID)
- *                            &status=S -> 200 {"jobs": [rows], "next_cursor": ID or null}
+ *                            &status=S &q=TEXT (1..200 bytes: in the name, preset,
+ *                            controller or a tag, ASCII case ignored) &tag=T (1..40 bytes: a
+ *                            tag exactly; 400 INVALID_QUERY naming q or tag otherwise)
+ *                            -> 200 {"jobs": [rows], "next_cursor": ID or null}
  * GET  /api/jobs/{id}        200 {row + "spec": normalised job, "metrics": {...} or null
  *                            (result_out.h), "message": text or null}
  * GET  /api/jobs/{id}/series ?channels=q,tau (default: all recorded) &joints=0,2 (coordinate

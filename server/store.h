@@ -101,6 +101,10 @@ typedef struct store_job {
     char *message;    /* why it failed / diverged / was cancelled, or NULL */
     double e_max;     /* max over coordinates of metrics.e_max, NaN if none */
     double wall_s;    /* NaN until finished */
+    double e_final;   /* max over coordinates of |metrics.e_final|, NaN if none */
+    double e_rms;     /* sqrt of the mean over coordinates of metrics.e_rms^2 (the RMS over the
+                         run and the coordinates), NaN if none */
+    char *tags;       /* the normalised job's "tags" as JSON text, NULL when it has none */
 } store_job;
 
 /* Opens (creating if absent) the database at path, sets WAL mode, foreign keys and a busy
@@ -205,7 +209,21 @@ void store_job_clear(store_job *j);
 int store_list(store *s, int64_t before, int status, int limit, store_job **rows, int *n, char *err,
                size_t errlen);
 
-/* Frees an array from store_list. */
+/* What store_search looks for; NULL (or -1) for what is not asked. */
+typedef struct store_filter {
+    int status;       /* a store_status, or -1 for any */
+    const char *text; /* in the name, preset, controller or a tag, ASCII case ignored */
+    const char *tag;  /* one of the job's tags, exactly */
+} store_filter;
+
+/* store_list with a filter: the jobs that match all it asks, newest first, from id < before
+ * (0 = the newest), at most limit (1..1000). A search reads every job's name, preset and
+ * controller and, where those do not match, its normalised job's tags: linear in the jobs
+ * stored. 0, or -1 with a message. *rows as store_list's. */
+int store_search(store *s, int64_t before, const store_filter *f, int limit, store_job **rows,
+                 int *n, char *err, size_t errlen);
+
+/* Frees an array from store_list or store_search. */
 void store_jobs_free(store_job *rows, int n);
 
 /* Reads the series of a job into a new result (free with ctc_sim_result_free): t, the recorded

@@ -1,6 +1,7 @@
 /*
- * animate.js - the chain or tree drawn on canvas#anim at the view's time cursor, and the player
- * (button#play, select#speed) that moves the cursor in real time or slower.
+ * animate.js - the chain or tree drawn on a canvas (canvas#anim in a job's view) at the view's
+ * time cursor, and the player (button#play, select#speed) that moves the cursor in real time,
+ * faster (2x, 4x) or slower.
  *
  * Each body is a segment from its joint to each of its children's joints (a body with several
  * children, a palm or a torso, a fan of segments), or to its tip when it has none
@@ -11,17 +12,23 @@
  * chain (solid blue). Planar scenes (metrics.form "planar") are drawn in their plane with "up"
  * against gravity (x right, y up for the presets); spatial ones in an orthographic projection
  * that dragging, or the arrow keys on the focused canvas, rotates, over a floor grid through
- * the base. The canvas carries data-mode ("planar" | "spatial") and data-time (the time drawn,
- * s, updated on every frame). The scale fits the largest reach over the whole run.
+ * the base. Both zoom (the wheel, + and -, or the buttons) and pan (shift-drag, a planar drag,
+ * or shift and the arrow keys); "Reset view" (or 0) restores the first view. The canvas carries
+ * data-mode ("planar" | "spatial"), data-time (the time drawn, s, updated on every frame),
+ * data-zoom (the zoom factor, 1 at first), data-pan ("x,y" in CSS px) and data-ghost ("1" while
+ * a desired pose is drawn). The scale fits the largest reach over the whole run.
  *
  * A closed chain (scene.loop) has its second ground pivot, the anchor, drawn like the base (or,
  * for a loop closed on a body, a dot on that body), and a thin line from the last body's closing
- * point to it (a visible gap is the closure residual).
- * It has no ghost: q_des holds only the independent coordinates, and the desired pose of the
- * dependent joints is not recorded.
+ * point to it (a visible gap is the closure residual). Its ghost: q_des holds only the
+ * independent coordinates (series.js controlledCoordinates), so the dependent ones are solved for
+ * at each frame (kinematics.js closeLoop, from the previous frame's solution or the actual pose);
+ * a frame where the loop cannot be closed within 0.1 % of the reach draws no ghost.
  */
 import {el} from "./dom.js";
-import {chainLayout, chainPose, loopAnchor, planeBasis, worldBasis, dot, norm, add, scale, cross} from "./kinematics.js";
+import {chainLayout, chainPose, closeLoop, loopAnchor, planeBasis, worldBasis, dot, norm, add, scale, cross} from "./kinematics.js";
+import {controlledCoordinates} from "./series.js";
+import {JOINT_NQ as NQ} from "./joints.js";
 
 const ACTUAL = "#0072B2";
 const GHOST = "#D55E00";
@@ -87,27 +94,60 @@ function drawVisuals(g, bodies, pose, toXY, color) {
   return drawn;
 }
 
-/* Draws into host; returns {destroy()}. series: {t, q, q_des?}; form: "planar" | "spatial". */
-export function createAnimation(host, {spec, form, series, timeline}) {
+/* The desired pose's sampler of a closed chain: i -> q_i at time t with the independent
+ * coordinates from q_des and the dependent ones solved for (null when it does not close). */
+function loopGhost(layout, loop, spec, nq, ts, q, qDes) {
+  /* each independent coordinate's row of q and its column of q_des (a closing joint's has no row) */
+  const coords = controlledCoordinates({spec, metrics: null}).map((c, col) => ({row: c.row, col}))
+    .filter((c) => c.row < nq);
+  const rows = new Set(coords.map((c) => c.row));
+  const free = Array.from({length: nq}, (_, i) => i).filter((i) => !rows.has(i));
+  const joints = spec.scene.bodies.map((b) => b.joint.type);
+  if (!coords.length || joints.includes("spherical")) return null;
+  let reach = 0;
+  for (const l of layout) reach += norm(l.loc) + norm(l.end);
+  let warm = null;
+  return (t) => {
+    const actual = sampler(ts, q, t), desired = sampler(ts, qDes, t);
+    const start = Array.from({length: nq}, (_, i) => (warm ? warm[i] : actual(i)));
+    for (const c of coords) start[c.row] = desired(c.col);
+    const {q: x, gap} = closeLoop(layout, loop, start, free);
+    if (!(gap <= 1e-3 * Math.max(reach, 1e-3))) { warm = null; return null; }
+    warm = x;
+    return (i) => x[i] ?? 0;
+  };
+}
+
+/* Draws into host; returns {destroy()}. series: {t, q, q_des?}; form: "planar" | "spatial";
+ * id: the canvas's id (several in the compare view); caption: a line above the canvas. */
+export function createAnimation(host, {spec, form, series, timeline, id = "anim", caption = null}) {
   const bodies = spec.scene.bodies;
   const loop = spec.scene.loop || null;
   const onBody = loop !== null && Number.isInteger(loop.body);
   const layout = chainLayout(bodies, loop);
   const branched = layout.some((l) => l.ends.length > 1) || layout.filter((l) => l.parent < 0).length > 1;
+  const nq = bodies.reduce((n, b) => n + (NQ[b.joint.type] ?? 0), 0);
   const ghost = loop ? null : series.q_des;
+  const ghostOfLoop = loop && series.q_des ? loopGhost(layout, loop, spec, nq, series.t, series.q, series.q_des) : null;
+  const hasGhost = Boolean(ghost || ghostOfLoop);
   const ts = series.t;
   const spatial = form !== "planar";
-  const canvas = el("canvas", {id: "anim", tabindex: "0", "data-mode": spatial ? "spatial" : "planar",
-    "data-time": "0", role: "img",
-    "aria-label": `animation of the ${loop ? "closed chain" : branched ? "tree" : "chain"} (${spatial ? "3-D, drag or arrow keys to rotate" : "planar"}); ` +
-      (ghost ? "blue: actual pose, dashed orange: desired pose" : "blue: actual pose")});
+  const canvas = el("canvas", {id, class: "anim", tabindex: "0", "data-mode": spatial ? "spatial" : "planar",
+    "data-time": "0", "data-zoom": "1", "data-pan": "0,0", "data-ghost": "0", role: "img",
+    "aria-label": `animation of the ${loop ? "closed chain" : branched ? "tree" : "chain"} (${spatial ? "3-D, drag or arrow keys to rotate" : "planar"}, wheel or + and - to zoom, shift-drag to pan); ` +
+      (hasGhost ? "blue: actual pose, dashed orange: desired pose" : "blue: actual pose")});
+  const zoomIn = el("button", {type: "button", class: "anim-zoom-in icon", "data-for": id, text: "+", "aria-label": "zoom the animation in"});
+  const zoomOut = el("button", {type: "button", class: "anim-zoom-out icon", "data-for": id, text: "−", "aria-label": "zoom the animation out"});
+  const reset = el("button", {type: "button", class: "anim-reset", "data-for": id, text: "Reset view"});
+  if (caption) host.append(el("p", {class: "anim-caption", text: caption}));
   host.append(el("div", {class: "anim-wrap"}, canvas),
     el("p", {class: "muted small"}, el("span", {class: "key-actual", text: "━ actual"}), "  ",
-      ghost ? el("span", {class: "key-ghost", text: "┅ desired"}) : null,
+      hasGhost ? el("span", {class: "key-ghost", text: "┅ desired"}) : null,
       loop ? (onBody ? "■ ground pivot, ● the loop's pivot on a body" : "■ ground pivots") : null, "  ·  ",
-      spatial ? "drag or use the arrow keys to rotate" : "x right, y up (against gravity)"));
+      spatial ? "drag or use the arrow keys to rotate, shift-drag to pan" : "x right, y up (against gravity); drag to pan"),
+    el("div", {class: "anim-view"}, zoomIn, zoomOut, reset));
 
-  let yaw = -0.6, pitch = 0.35;
+  let yaw = -0.6, pitch = 0.35, zoom = 1, pan = [0, 0];
   let basis;
   function project(p) {
     if (!spatial) return [dot(p, basis.right), dot(p, basis.up)];
@@ -170,7 +210,7 @@ export function createAnimation(host, {spec, form, series, timeline}) {
     }
     g.setTransform(dpr, 0, 0, dpr, 0, 0);
     g.fillStyle = "#fbfbfc"; g.fillRect(0, 0, w, h);
-    const s = 0.44 * Math.min(w, h) / reach, cx = w / 2, cy = h / 2;
+    const s = 0.44 * zoom * Math.min(w, h) / reach, cx = w / 2 + pan[0], cy = h / 2 + pan[1];
     const toXY = (p) => { const [x, y] = project(p); return [cx + s * x, cy - s * y]; };
 
     g.strokeStyle = "#d5d9de"; g.lineWidth = 1;
@@ -197,7 +237,9 @@ export function createAnimation(host, {spec, form, series, timeline}) {
     const [bx, by] = toXY([0, 0, 0]);
     g.fillStyle = "#3d434a"; g.fillRect(bx - 7, by - 7, 14, 14);
 
-    if (ghost) chain(chainPose(layout, sampler(ts, ghost, t)), toXY, GHOST, 3, [7, 5], 0.85);
+    const ghostQ = ghost ? sampler(ts, ghost, t) : ghostOfLoop ? ghostOfLoop(t) : null;
+    if (ghostQ) chain(chainPose(layout, ghostQ), toXY, GHOST, 3, [7, 5], 0.85);
+    canvas.dataset.ghost = ghostQ ? "1" : "0";
     const pose = chainPose(layout, sampler(ts, series.q, t));
     if (loop) {
       /* the anchor, and the closing joint from the last body's closing point to it */
@@ -217,30 +259,55 @@ export function createAnimation(host, {spec, form, series, timeline}) {
     canvas.dataset.time = String(Math.round(t * 1e6) / 1e6);
   }
 
-  /* rotation of the spatial view */
+  /* the view: rotation (spatial), zoom and pan */
+  function setView(z, p) {
+    zoom = Math.min(50, Math.max(0.1, z));
+    pan = p;
+    canvas.dataset.zoom = String(Math.round(zoom * 1000) / 1000);
+    canvas.dataset.pan = `${Math.round(pan[0])},${Math.round(pan[1])}`;
+    draw();
+  }
   let drag = null;
   canvas.addEventListener("pointerdown", (ev) => {
-    if (!spatial) return;
-    drag = {x: ev.clientX, y: ev.clientY};
+    drag = {x: ev.clientX, y: ev.clientY, pan: !spatial || ev.shiftKey || ev.button !== 0};
     canvas.setPointerCapture(ev.pointerId);
   });
   canvas.addEventListener("pointermove", (ev) => {
     if (!drag) return;
-    yaw -= (ev.clientX - drag.x) * 0.01;
-    pitch = Math.min(1.55, Math.max(-1.55, pitch + (ev.clientY - drag.y) * 0.01));
-    drag = {x: ev.clientX, y: ev.clientY};
+    const dx = ev.clientX - drag.x, dy = ev.clientY - drag.y;
+    drag.x = ev.clientX;
+    drag.y = ev.clientY;
+    if (drag.pan) { setView(zoom, [pan[0] + dx, pan[1] + dy]); return; }
+    yaw -= dx * 0.01;
+    pitch = Math.min(1.55, Math.max(-1.55, pitch + dy * 0.01));
     draw();
   });
   canvas.addEventListener("pointerup", () => { drag = null; });
+  canvas.addEventListener("contextmenu", (ev) => ev.preventDefault());
+  canvas.addEventListener("wheel", (ev) => {
+    ev.preventDefault();
+    setView(zoom * Math.exp(-ev.deltaY * 0.0015), pan);
+  }, {passive: false});
   canvas.addEventListener("keydown", (ev) => {
-    if (!spatial) return;
+    if (ev.key === "+" || ev.key === "=") { ev.preventDefault(); setView(zoom * 1.25, pan); return; }
+    if (ev.key === "-") { ev.preventDefault(); setView(zoom / 1.25, pan); return; }
+    if (ev.key === "0") { ev.preventDefault(); resetView(); return; }
     const d = {ArrowLeft: [0.1, 0], ArrowRight: [-0.1, 0], ArrowUp: [0, -0.1], ArrowDown: [0, 0.1]}[ev.key];
     if (!d) return;
     ev.preventDefault();
+    if (ev.shiftKey || !spatial) { setView(zoom, [pan[0] - 200 * d[0], pan[1] - 200 * d[1]]); return; }
     yaw += d[0];
     pitch = Math.min(1.55, Math.max(-1.55, pitch + d[1]));
     draw();
   });
+  function resetView() {
+    yaw = -0.6;
+    pitch = 0.35;
+    setView(1, [0, 0]);
+  }
+  zoomIn.addEventListener("click", () => setView(zoom * 1.25, pan));
+  zoomOut.addEventListener("click", () => setView(zoom / 1.25, pan));
+  reset.addEventListener("click", resetView);
 
   const unsubscribe = timeline.subscribe(draw);
   window.addEventListener("resize", draw);
@@ -248,12 +315,13 @@ export function createAnimation(host, {spec, form, series, timeline}) {
   return {destroy() { unsubscribe(); window.removeEventListener("resize", draw); }};
 }
 
-/* button#play (aria-pressed) and select#speed (1, 0.5, 0.25, 0.1): plays the timeline from
- * its time to tEnd at the chosen speed; play at the end starts again from 0. */
+/* button#play (aria-pressed) and select#speed (4, 2, 1, 0.5, 0.25, 0.1; 1 at first): plays the
+ * timeline from its time to tEnd at the chosen speed; play at the end starts again from 0. */
 export function createPlayer(timeline, tEnd) {
   const button = el("button", {id: "play", type: "button", "aria-pressed": "false", text: "▶ Play"});
   const speed = el("select", {id: "speed", "aria-label": "playback speed"},
-    ...["1", "0.5", "0.25", "0.1"].map((v) => el("option", {value: v, text: `${v}×`})));
+    ...["4", "2", "1", "0.5", "0.25", "0.1"].map((v) => el("option", {value: v, text: `${v}×`})));
+  speed.value = "1";
   let frame = 0, last = 0;
 
   function stop() {

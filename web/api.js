@@ -46,11 +46,14 @@ export async function request(path, {method = "GET", body, signal} = {}) {
   return data;
 }
 
-/* One page of the job list: {jobs: [rows], next_cursor}. */
-export function listJobs({limit = 25, cursor = null, status = ""} = {}, signal) {
+/* One page of the job list: {jobs: [rows], next_cursor}; text searches the name, preset,
+ * controller and tags, tag is one tag exactly. */
+export function listJobs({limit = 25, cursor = null, status = "", text = "", tag = ""} = {}, signal) {
   const q = new URLSearchParams({limit: String(limit)});
   if (cursor !== null) q.set("cursor", String(cursor));
   if (status) q.set("status", status);
+  if (text) q.set("q", text);
+  if (tag) q.set("tag", tag);
   return request(`/api/jobs?${q}`, {signal});
 }
 

@@ -161,7 +161,7 @@ export async function jobView(root, ctx) {
   const m = job.metrics || {};
   const timeline = createTimeline(job.spec.duration);
   const plots = createPlots(plotsHost, [{label: `#${id}`, color: PALETTE[0], series: data.series,
-    joints: data.joints, coords: data.coords, loop: data.loop}], timeline);
+    joints: data.joints, coords: data.coords, loop: data.loop, spec: job.spec}], timeline);
   ctx.onCleanup(() => plots.destroy());
   const ncoord = Math.max(m.nv ?? 0, m.nq ?? 0);
   const coords = (data.joints || Array.from({length: ncoord}, (_, i) => i));

@@ -12,7 +12,8 @@
  * library does (src/include/model.h body_parent). Rotations are row-major 3x3 arrays. A closed
  * chain (scene.loop) ends its last body at the closing joint's centre (loop.joint.location, in the
  * last body's frame), which the loop keeps at loop.anchor: in the world, or with loop.body in that
- * body's frame (loopAnchor).
+ * body's frame (loopAnchor). closeLoop solves a loop's dependent coordinates for given
+ * independent ones (the desired pose of a closed chain).
  */
 import {JOINT_NQ as NQ} from "./joints.js";
 
@@ -140,6 +141,65 @@ export function loopAnchor(loop, pose) {
   const a = loop.anchor || [0, 0, 0];
   const b = Number.isInteger(loop.body) ? pose[loop.body] : null;
   return b ? add(b.origin, mulv(b.rot, a)) : a;
+}
+
+/* The loop closed by moving the coordinates free (rows of q) from q (an array, not modified):
+ * damped Gauss-Newton (Levenberg-Marquardt) on the gap between the last body's closing point
+ * and the anchor (loopAnchor), with a forward-difference Jacobian, at most 30 iterations.
+ * Returns {q, gap} (gap: the distance left, m). Used for a closed chain's desired pose, whose
+ * dependent coordinates are not recorded (server: q_des holds the independent ones). */
+export function closeLoop(layout, loop, q, free) {
+  const x = q.slice();
+  const gapOf = (v) => {
+    const pose = chainPose(layout, (i) => v[i] ?? 0);
+    const a = loopAnchor(loop, pose), e = pose[pose.length - 1].end;
+    return [e[0] - a[0], e[1] - a[1], e[2] - a[2]];
+  };
+  let r = gapOf(x);
+  let lambda = 1e-3;
+  const m = free.length;
+  for (let it = 0; it < 30 && m > 0 && norm(r) > 1e-12; it++) {
+    const J = free.map((i) => {
+      const h = 1e-7 * Math.max(1, Math.abs(x[i]));
+      const y = x.slice(); y[i] += h;
+      const ry = gapOf(y);
+      return [(ry[0] - r[0]) / h, (ry[1] - r[1]) / h, (ry[2] - r[2]) / h];
+    });
+    /* (J^T J + lambda diag) dx = -J^T r, J^T J is m x m (m: the dependent coordinates, a few) */
+    const A = J.map((ci, a) => J.map((cj, b) => dot(ci, cj) + (a === b ? lambda * (1 + dot(ci, ci)) : 0)));
+    const rhs = J.map((ci) => -dot(ci, r));
+    const dx = solveSmall(A, rhs);
+    if (!dx) break;
+    const y = x.slice();
+    free.forEach((i, k) => { y[i] += dx[k]; });
+    const ry = gapOf(y);
+    if (norm(ry) < norm(r)) { free.forEach((i) => { x[i] = y[i]; }); r = ry; lambda = Math.max(1e-9, lambda / 10); }
+    else lambda *= 10;
+  }
+  return {q: x, gap: norm(r)};
+}
+
+/* x with A x = b by Gaussian elimination with partial pivoting (A m x m, small); null if singular */
+function solveSmall(A, b) {
+  const m = b.length;
+  const M = A.map((row, i) => [...row, b[i]]);
+  for (let c = 0; c < m; c++) {
+    let p = c;
+    for (let r = c + 1; r < m; r++) if (Math.abs(M[r][c]) > Math.abs(M[p][c])) p = r;
+    if (!(Math.abs(M[p][c]) > 1e-300)) return null;
+    [M[c], M[p]] = [M[p], M[c]];
+    for (let r = c + 1; r < m; r++) {
+      const f = M[r][c] / M[c][c];
+      for (let k = c; k <= m; k++) M[r][k] -= f * M[c][k];
+    }
+  }
+  const x = new Array(m).fill(0);
+  for (let r = m - 1; r >= 0; r--) {
+    let v = M[r][m];
+    for (let k = r + 1; k < m; k++) v -= M[r][k] * x[k];
+    x[r] = v / M[r][r];
+  }
+  return x;
 }
 
 /* The plane a planar chain moves in: normal = the first rotation axis (z if none), "up" =

@@ -5,13 +5,16 @@
  * controller moving every joint 0.2 from q = 0 by minimum jerk); validate on the server, run,
  * follow the progress, and open the job.
  *
- * The textarea (textarea#job-json) holds the document that is sent. Form edits rewrite it;
+ * The textarea (textarea#job-json) holds the job. A job started from a preset is sent as that
+ * preset and a merge patch of the edits (names.js), so the server records the preset and names
+ * the job after what changed; any other is sent as it stands. Form edits rewrite it;
  * typing in it redraws the form once it parses. A server error is shown next to the field
  * whose name is its JSON path (.field-error[data-field=PATH]), or in #form-error above the
  * form when no field has that name. While the job runs, progress#submit-progress follows it
  * (polled every 0.3 s); when it finishes the page goes to #/jobs/ID.
  */
 import {getJob, getPreset, listPresets, postJob, validateJob} from "./api.js";
+import {presetRequest} from "./names.js";
 import {el, errorBox, isFinished, prettyJson, sleep} from "./dom.js";
 import {jobForm} from "./jobform.js";
 
@@ -32,6 +35,9 @@ function robotJob(urdf, fileName) {
 export async function submitView(root, ctx) {
   document.title = "New job - ctcsim";
   let doc = null;
+  /* the preset document the form started from ({preset, params, doc, name}), or null: a job
+   * from it is sent as the preset and a patch (names.js) */
+  let base = null;
   let presets = [];
 
   const presetSel = el("select", {id: "preset"}, el("option", {value: "", text: "(none: edit or paste the JSON)"}));
@@ -101,7 +107,10 @@ export async function submitView(root, ctx) {
     const values = {};
     for (const input of params.querySelectorAll("input")) if (input.value !== "") values[input.dataset.param] = input.value;
     try {
-      setDoc(await getPreset(name, values, ctx.signal));
+      const d = await getPreset(name, values, ctx.signal);
+      const numbers = Object.fromEntries(Object.entries(values).map(([k, v]) => [k, Number(v)]));
+      base = {preset: name, params: numbers, doc: structuredClone(d), name: d.name};
+      setDoc(d);
       history.replaceState(null, "", `#/submit?preset=${encodeURIComponent(name)}`);
     } catch (e) {
       if (e.name !== "AbortError") showError(e);
@@ -121,6 +130,7 @@ export async function submitView(root, ctx) {
   presetSel.addEventListener("change", () => {
     showParams(presetSel.value);
     if (presetSel.value) loadPreset(presetSel.value);
+    else base = null;
   });
   let typing = 0;
   textarea.addEventListener("input", () => {
@@ -141,6 +151,7 @@ export async function submitView(root, ctx) {
     const text = await f.text();
     presetSel.value = "";
     showParams("");
+    base = null;
     if (/\.(urdf|xml)$/i.test(f.name) || text.trimStart().startsWith("<")) {
       setDoc(robotJob(text, f.name));
       return;
@@ -157,7 +168,7 @@ export async function submitView(root, ctx) {
     if (!d) return;
     status.replaceChildren(el("p", {class: "muted", text: "Validating…"}));
     try {
-      const r = await validateJob(d, ctx.signal);
+      const r = await validateJob(presetRequest(base, d), ctx.signal);
       clearErrors();
       status.replaceChildren(el("p", {class: "ok", text: `Valid: ${r.spec.scene.bodies.length} bodies, controller ${r.spec.controller.type}, ${r.spec.duration} s.`}));
     } catch (e) {
@@ -173,7 +184,7 @@ export async function submitView(root, ctx) {
     validateBtn.disabled = submitBtn.disabled = true;
     status.replaceChildren(el("p", {class: "muted", text: "Sending…"}));
     try {
-      let job = await postJob(d, ctx.signal);
+      let job = await postJob(presetRequest(base, d), ctx.signal);
       clearErrors();
       const bar = el("progress", {id: "submit-progress", max: "1", value: String(job.progress)});
       const line = el("span");
@@ -207,7 +218,9 @@ export async function submitView(root, ctx) {
       const name = presets.some((p) => p.name === q.get("preset")) ? q.get("preset") : "triple_pendulum_pid";
       presetSel.value = name;
       showParams(name);
-      setDoc(await getPreset(name, {}, ctx.signal));
+      const d = await getPreset(name, {}, ctx.signal);
+      base = {preset: name, params: {}, doc: structuredClone(d), name: d.name};
+      setDoc(d);
       if (q.get("preset") && q.get("preset") !== name) formError.append(el("p", {class: "error", text: `No preset named "${q.get("preset")}"; showing ${name}.`}));
     }
   } catch (e) {

@@ -117,7 +117,7 @@ head -n 1 "$tmp/out" | grep -q 'e\[3\]' && fail "five-bar header has e[3]: three
 head -n 1 "$tmp/out" | grep -q ',loop\[position\],loop\[velocity\]$' && pass ||
     fail "five-bar header: no loop columns at the end: $(head -n 1 "$tmp/out")"
 [ "$(wc -l <"$tmp/out")" -eq 7 ] && pass || fail "run five_bar_pd: $(wc -l <"$tmp/out") lines, expected 7"
-expect_grep "five-bar summary" "$tmp/err" "Five-bar closed chain, PD (Kingsley et al. 2017, sec. 7.2): done, planar pd"
+expect_grep "five-bar summary" "$tmp/err" "five_bar_pd, duration = 0.5, output.interval = 0.1: done, planar pd"
 expect_grep "five-bar summary reports the loop" "$tmp/err" ", loop residual "
 expect_exit 0 "five-bar json" "$CTCSIM" run "$tmp/five_bar.json" --format json -o "$tmp/five_bar_out.json" --quiet
 expect_grep "json has the loop metrics" "$tmp/five_bar_out.json" '"loop":{"residual_max":'

@@ -1235,9 +1235,9 @@ Test(job_json, preset_name_names_an_overridden_controller)
     cr_assert_str_eq(j->name, "Four-bar linkage on a swinging arm, PID");
     job_free(j);
 
-    /* the same type with other gains, or a name given, keeps the name */
+    /* the same type with other gains is named after them (job_name.h); a name given is kept */
     j = parse_ok("{'preset':'triple_pendulum_pd','controller':{'kp':400,'kv':40}}");
-    cr_assert_str_eq(j->name, "Triple pendulum, PD (Kingsley et al. 2017, sec. 7.1)");
+    cr_assert_str_eq(j->name, "triple_pendulum_pd, kp = 400, kv = 40");
     job_free(j);
     j = parse_ok(
         "{'preset':'triple_pendulum_pid','name':'mine','controller':{'type':'pd','kp':1,'kv':2}}");

@@ -16,6 +16,7 @@
  * /tmp, removed at the end.
  */
 #include <criterion/criterion.h>
+#include <ctype.h>
 #include <dirent.h>
 #include <float.h>
 #include <math.h>
@@ -845,6 +846,125 @@ Test(store, recover_requeues_unfinished_jobs_and_drops_their_partial_series)
     ctc_sim_result_free(r);
     store_close(s);
     assert_integrity(path);
+}
+
+/* the jobs of search_finds_..., as inserted: name, preset, controller, tags (JSON or NULL) */
+static const struct {
+    const char *name, *preset, *controller, *tags;
+} search_jobs[] = {
+    {"triple_pendulum_pid, kp = 400", "triple_pendulum_pid", "pid", "[\"sweep\", \"kp\"]"},
+    {"Five-bar", "five_bar_lqr", "lqr", NULL},
+    {"mine", NULL, "pd", "[\"Sweep-2\"]"},
+    {"PID tuned", NULL, "pid", "[]"},
+    {"other", "n_link_pendulum", "pd", "[\"sweep\"]"},
+};
+
+/* whether hay holds needle, ASCII case ignored (a plain double loop) */
+static int contains_ci(const char *hay, const char *needle)
+{
+    size_t n = strlen(needle);
+    for (const char *h = hay; *h; h++) {
+        size_t i = 0;
+        while (i < n && h[i] && tolower((unsigned char)h[i]) == tolower((unsigned char)needle[i]))
+            i++;
+        if (i == n) return 1;
+    }
+    return n == 0;
+}
+
+/* the naive oracle: does job k match text (ASCII case ignored) and tag */
+static int search_match(int k, const char *text, const char *tag)
+{
+    if (text) {
+        int hit = contains_ci(search_jobs[k].name, text) ||
+                  (search_jobs[k].preset && contains_ci(search_jobs[k].preset, text)) ||
+                  contains_ci(search_jobs[k].controller, text);
+        cJSON *tags = search_jobs[k].tags ? cJSON_Parse(search_jobs[k].tags) : NULL;
+        for (cJSON *t = tags ? tags->child : NULL; t && !hit; t = t->next)
+            hit = contains_ci(t->valuestring, text);
+        cJSON_Delete(tags);
+        if (!hit) return 0;
+    }
+    if (tag) {
+        int hit = 0;
+        cJSON *tags = search_jobs[k].tags ? cJSON_Parse(search_jobs[k].tags) : NULL;
+        for (cJSON *t = tags ? tags->child : NULL; t && !hit; t = t->next)
+            hit = strcmp(t->valuestring, tag) == 0;
+        cJSON_Delete(tags);
+        if (!hit) return 0;
+    }
+    return 1;
+}
+
+Test(store, search_finds_text_in_name_preset_controller_and_tags_and_a_tag_exactly)
+{
+    char path[256], err[512] = "";
+    int64_t ids[5];
+    path_of(path, sizeof path, "ctcsim.db");
+    store *s = open_ok(path);
+    for (int k = 0; k < 5; k++) {
+        char spec[256];
+        if (search_jobs[k].tags)
+            snprintf(spec, sizeof spec, "{\"name\": \"x\", \"tags\": %s}", search_jobs[k].tags);
+        else
+            snprintf(spec, sizeof spec, "{\"name\": \"x\"}");
+        cr_assert_eq(store_insert(s, search_jobs[k].name, search_jobs[k].preset, 3, 3,
+                                  search_jobs[k].controller, spec, &ids[k], err, sizeof err),
+                     0, "%s", err);
+    }
+    /* job 0 finished with per-coordinate errors: the summaries the list shows */
+    cr_assert_eq(store_start(s, ids[0], err, sizeof err), 0, "%s", err);
+    cr_assert_eq(store_finish(s, ids[0], STORE_DONE, NULL,
+                              "{\"e_final\": [0.001, -0.004, null], \"e_rms\": [0.3, 0.4, 0]}",
+                              NULL, err, sizeof err),
+                 0, "%s", err);
+
+    const char *texts[] = {NULL, "sweep", "PID", "pendulum", "kp", "LQR", "nothing", "%", "_"};
+    const char *tags[] = {NULL, "sweep", "Sweep-2", "kp", "swe"};
+    for (size_t a = 0; a < sizeof texts / sizeof *texts; a++) {
+        for (size_t b = 0; b < sizeof tags / sizeof *tags; b++) {
+            store_filter f = {.status = -1, .text = texts[a], .tag = tags[b]};
+            store_job *rows = NULL;
+            int n = 0;
+            cr_assert_eq(store_search(s, 0, &f, 100, &rows, &n, err, sizeof err), 0, "%s", err);
+            int want = 0;
+            for (int k = 4; k >= 0; k--) {
+                if (!search_match(k, texts[a], tags[b])) continue;
+                cr_assert_lt(want, n, "q=%s tag=%s: job %d missing", texts[a], tags[b], k);
+                cr_assert_eq(rows[want].id, ids[k], "q=%s tag=%s: newest first", texts[a], tags[b]);
+                want++;
+            }
+            cr_assert_eq(n, want, "q=%s tag=%s: %d rows, the oracle %d", texts[a], tags[b], n,
+                         want);
+            store_jobs_free(rows, n);
+        }
+    }
+
+    /* the summaries: max |e_final|, the root of the mean of e_rms^2, the tags as JSON */
+    store_job *rows = NULL;
+    int n = 0;
+    cr_assert_eq(store_list(s, 0, -1, 10, &rows, &n, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(n, 5);
+    cr_assert_eq(rows[4].id, ids[0]);
+    cr_assert_float_eq(rows[4].e_final, 0.004, 1e-15);
+    cr_assert_float_eq(rows[4].e_rms, sqrt((0.09 + 0.16) / 3), 1e-15);
+    cJSON *t = cJSON_Parse(rows[4].tags);
+    cr_assert(cJSON_IsArray(t) && cJSON_GetArraySize(t) == 2, "tags %s", rows[4].tags);
+    cJSON_Delete(t);
+    cr_assert(isnan(rows[0].e_final) && isnan(rows[0].e_rms), "no metrics: NaN");
+    cr_assert_null(rows[3].tags, "no tags: NULL");
+    store_jobs_free(rows, n);
+
+    /* with a status */
+    store_filter f = {.status = STORE_DONE, .text = "pid", .tag = NULL};
+    cr_assert_eq(store_search(s, 0, &f, 10, &rows, &n, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(n, 1);
+    cr_assert_eq(rows[0].id, ids[0]);
+    store_jobs_free(rows, n);
+    f = (store_filter){.status = -1, .text = "x", .tag = NULL};
+    cr_assert_eq(store_search(s, 0, &f, 1001, &rows, &n, err, sizeof err), -1);
+    cr_assert_str_eq(err, "limit must be between 1 and 1000 (got 1001)");
+    store_close(s);
 }
 
 Test(store, list_pages_newest_first_with_a_status_filter)
