@@ -568,8 +568,8 @@ static int parse_controller(parser *p, const cJSON *doc)
 /* ---- the document ---- */
 
 static const char *const job_keys[] = {
-    "name",       "tags",     "scene",      "controller", "trajectory", "disturbance", "plant",
-    "wrenches",   "integrator", "duration", "output",     "limits",     "threads",     NULL};
+    "name",     "tags",       "scene",    "controller", "trajectory", "disturbance", "plant",
+    "wrenches", "integrator", "duration", "output",     "limits",     "threads",     NULL};
 
 /* ---- the controller's and the document's keys and defaults, as data (job_json.h) ---- */
 
@@ -652,9 +652,9 @@ static int parse_job(const cJSON *doc, const char *default_name, job **out, job_
         parse_scene(&p, doc) != 0 || parse_controller(&p, doc) != 0 ||
         parse_trajectory(&p, doc) != 0 || parse_disturbance(&p, doc) != 0 ||
         parse_plant(&p, doc) != 0 || parse_wrenches(&p, doc) != 0 ||
-        parse_integrator(&p, doc) != 0 ||
-        parse_duration(&p, doc) != 0 || parse_output(&p, doc) != 0 || parse_limits(&p, doc) != 0 ||
-        parse_threads(&p, doc) != 0 || check_spec(&p) != 0) {
+        parse_integrator(&p, doc) != 0 || parse_duration(&p, doc) != 0 ||
+        parse_output(&p, doc) != 0 || parse_limits(&p, doc) != 0 || parse_threads(&p, doc) != 0 ||
+        check_spec(&p) != 0) {
         if (p.norm == NULL) json_out_of_memory(err);
         job_free(j);
         return -1;
