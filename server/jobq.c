@@ -604,6 +604,14 @@ int jobq_cancel(jobq *q, int64_t id)
     return rc;
 }
 
+int jobq_position(jobq *q, int64_t id)
+{
+    pthread_mutex_lock(&q->lock);
+    int pos = ring_find(q, id);
+    pthread_mutex_unlock(&q->lock);
+    return pos + 1;
+}
+
 int jobq_wait(jobq *q, int64_t id, double timeout_s)
 {
     /* the deadline on the monotonic clock, which `finished` waits on */

@@ -79,6 +79,10 @@ int jobq_space(jobq *q);
  * records it cancelled). Returns 0 if the job is neither queued nor running here. */
 int jobq_cancel(jobq *q, int64_t id);
 
+/* The job's place in the queue: 1 for the next to start, 0 when it does not wait there
+ * (running, finished, or queued in the database only). */
+int jobq_position(jobq *q, int64_t id);
+
 /* Waits until the job is no longer queued or running here, or timeout_s passes. Returns 0 when it
  * finished (or was never here), 1 on timeout. */
 int jobq_wait(jobq *q, int64_t id, double timeout_s);

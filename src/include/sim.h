@@ -195,6 +195,8 @@ typedef struct ctc_sim_metrics {
     double wall_s, cpu_s; /* time spent in the run */
     double us_per_eval;   /* wall microseconds per right-hand-side evaluation */
     double t_end;         /* time reached */
+    double step_used;     /* rk4: the step taken (s), the spec's shortened to divide the output
+                             interval (h = dt / ceil(dt / step)); NaN for the adaptive methods */
     int diverged_joint;   /* joint index (0-based) when DIVERGED, else -1 */
     /* loop models (NaN / 0 otherwise) */
     double loop_res_max;  /* max position residual over the samples and over the ends of the

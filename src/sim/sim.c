@@ -546,6 +546,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     ctc_sim_metrics *mt = &r->metrics;
     r->status = status;
     mt->t_end = status != CTC_RUN_DONE ? t : r->nsamples ? r->t[r->nsamples - 1] : 0;
+    if (sp.is.method == CTC_INTEG_RK4) mt->step_used = sp.is.step;
     sim_metrics_finish(&c, &rec, ctc_integrator_stats(sp.integ), mt);
     mt->wall_s = now(CLOCK_MONOTONIC) - wall0;
     mt->cpu_s = now(CLOCK_THREAD_CPUTIME_ID) - cpu0;
