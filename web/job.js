@@ -26,13 +26,15 @@ import {el, errorBox, fmtNum, fmtTime, isFinished, prettyJson, sleep} from "./do
 import {createTimeline, timeSlider} from "./timeline.js";
 import {createPlots, jointToggles, zoomButtons, PALETTE} from "./plots.js";
 import {createAnimation, createPlayer} from "./animate.js";
-import {loadPlotSeries, loadAnimSeries, loadHeatSeries, MAX_PLOTTED} from "./series.js";
+import {loadPlotSeries, loadAnimSeries, loadHeatSeries, plotsCoverAnimation, MAX_PLOTTED} from "./series.js";
 import {jointSummary} from "./jointsummary.js";
 import {createHeatmap} from "./heatmap.js";
 import {confirmDialog} from "./confirm.js";
 
 /* coordinates from which the heat-map is drawn: fewer read well enough in the plots */
 const HEAT_MIN = 8;
+/* characters of spec JSON shown at once; a longer one is behind a <details> */
+const SPEC_OPEN_MAX = 200000;
 
 /* The metrics as a definition list (dl#metrics). */
 export function metricsList(m) {
@@ -184,8 +186,13 @@ export async function jobView(root, ctx) {
     el("p", {class: "status-line"}, "Status ", statusEl, " ", progress, " ", percent),
     message, stepCut, actions), failure);
   const metricsBox = el("section", {class: "panel"}, el("h2", {text: "Metrics"}));
+  /* a large spec (thousands of bodies) is laid out only when opened: a 1.4 MB <pre> would
+     cost its layout on every reflow of the page */
+  const specText = prettyJson(spec);
+  const specPre = el("pre", {id: "spec", tabindex: "0", text: specText});
   const specBox = el("section", {class: "panel"}, el("h2", {text: "Normalised job"}),
-    el("pre", {id: "spec", tabindex: "0", text: prettyJson(spec)}));
+    specText.length > SPEC_OPEN_MAX ? el("details", {class: "spec-details"},
+      el("summary", {text: `Show it (${(specText.length / 1e6).toFixed(1)} MB of JSON)`}), specPre) : specPre);
   const toolbar = el("div", {class: "sticky-toolbar"});
   const plotsHost = el("div", {class: "plots"});
   const heatBox = el("section", {class: "panel heat", hidden: true, "aria-labelledby": "heat-title"},
@@ -311,12 +318,13 @@ export async function jobView(root, ctx) {
   const nind = m.nind ?? 0;
   let data, anim, heat;
   try {
+    /* the three requests at once; the animation's only when the plots' does not serve it */
     [data, anim, heat] = await Promise.all([
       loadPlotSeries(job, width, ctx.signal),
-      null,
+      plotsCoverAnimation(job, width) ? null : loadAnimSeries(job, animBox.clientWidth || width, ctx.signal),
       nind >= HEAT_MIN ? loadHeatSeries(job, Math.round(width), ctx.signal) : null,
     ]);
-    anim = data.anim || await loadAnimSeries(job, animBox.clientWidth || width, ctx.signal);
+    anim = anim || data.anim;
   } catch (e) {
     if (e.name === "AbortError") return;
     plotsHost.replaceChildren(e.status === 404 ? el("p", {class: "empty", text: "This job has no series (it stopped before it ran)."})

@@ -77,6 +77,12 @@ function plotRows(samples, widthPx) {
     : {every: 1, maxPoints: rows, reduce: "minmax"};
 }
 
+/* Whether loadPlotSeries's answer serves the animation too (every coordinate, plain strides). */
+export function plotsCoverAnimation(job, widthPx, joints = defaultJoints(job)) {
+  const m = job.metrics || {};
+  return !joints && plotRows(m.samples || 1, widthPx).reduce === "stride";
+}
+
 /* -> {series (for the plots), joints (coordinate index of each plotted row, or null = all),
  *     coords (controlledCoordinates), loop (the job is a closed chain), anim (series with t, q,
  *     q_des of every coordinate, or null when q was not recorded)}. joints: the coordinates to
@@ -90,7 +96,7 @@ export async function loadPlotSeries(job, widthPx, signal, joints = defaultJoint
   const series = await getSeriesF32(job.id, {channels, joints, ...rows}, signal);
   const loop = Boolean(job.spec.scene && job.spec.scene.loop);
   return {series, joints, coords: controlledCoordinates(job), loop,
-    anim: !joints && rows.reduce === "stride" ? series : null};
+    anim: plotsCoverAnimation(job, widthPx, joints) ? series : null};
 }
 
 /* The animation's series: t, q and q_des of every coordinate, plain strides, at most
