@@ -252,6 +252,30 @@ test('a diverged job: how far it ran, why, a hint, and a re-run with BDF that po
     });
 });
 
+test('a long run is plotted from min/max buckets: at most two rows per pixel, the extremes kept', async () => {
+    /* 4001 samples: more than two per pixel of any plot on this page */
+    const long = await runJob(srv, { preset: 'triple_pendulum_pid', duration: 4, output: { interval: 0.001 } });
+    await withView(browser, srv, `#/jobs/${long.id}`, 'job-minmax', async (page) => {
+        const q = (await plots(page)).find((p) => p.channel === 'q');
+        const width = await page.evaluate(() => document.querySelector('div.plot[data-channel="q"]').clientWidth);
+        const fetched = await Promise.all(page.series);
+        const plotted = fetched.find((s) => /channels=q%2Cq_des%2Ce/.test(s.url) || /channels=q,q_des,e/.test(s.url));
+        assert.ok(plotted, JSON.stringify(fetched));
+        assert.equal(plotted.reduce, 'minmax', plotted.url);
+        assert.equal(q.points, plotted.samples, 'the plot draws the rows fetched');
+        assert.ok(q.points <= 2 * Math.max(200, width) + 1 && q.points < long.metrics.samples, `${q.points} rows for ${width} px`);
+        /* the page's f32 reader, on min/max buckets, finds the run's largest |tau| */
+        const all = (await srv.get(`/api/jobs/${long.id}/series?channels=tau`)).json.tau;
+        const want = Math.max(...all.map((col) => Math.max(...col.map(Math.abs))));
+        const bin = await page.evaluate(async (id) => {
+            const { getSeriesF32 } = await import('/api.js');
+            const s = await getSeriesF32(id, { channels: ['tau'], maxPoints: 400, reduce: 'minmax' });
+            return Math.max(...s.tau.map((col) => Math.max(...col.map(Math.abs))));
+        }, long.id);
+        assert.ok(Math.abs(bin - want) <= 1e-6 * want, `minmax keeps the peak |tau|: ${bin}, want ${want}`);
+    });
+});
+
 test('an RK4 step cut to the output interval is shown with what was asked', async () => {
     assert.deepEqual(cut.metrics.step_cut, { asked: 0.05, used: 0.01 });
     await withView(browser, srv, `#/jobs/${cut.id}`, 'job-step-cut', async (page) => {
