@@ -173,7 +173,8 @@ export async function jobView(root, ctx) {
   const statusEl = el("span", {id: "job-status"});
   const progress = el("progress", {id: "job-progress", max: "1", "aria-label": "job progress"});
   const percent = el("span", {id: "job-progress-text", class: "muted"});
-  const message = el("p", {class: "message", role: "status"});
+  const message = el("p", {class: "message", role: "status"}); /* what an action did */
+  const jobMessage = el("p", {id: "job-message", class: "muted"}); /* the server's word on the run */
   const actions = el("div", {class: "actions"});
   const cancel = el("button", {type: "button", id: "cancel-job", class: "danger", text: "Cancel job"});
   const remove = el("button", {type: "button", id: "delete-job", class: "danger", text: "Delete job"});
@@ -184,7 +185,7 @@ export async function jobView(root, ctx) {
   root.append(el("section", {class: "job-head"},
     el("h1", {text: job.name}), meta,
     el("p", {class: "status-line"}, "Status ", statusEl, " ", progress, " ", percent),
-    message, stepCut, actions), failure);
+    jobMessage, message, stepCut, actions), failure);
   const metricsBox = el("section", {class: "panel"}, el("h2", {text: "Metrics"}));
   /* a large spec (thousands of bodies) is laid out only when opened: a 1.4 MB <pre> would
      cost its layout on every reflow of the page */
@@ -244,7 +245,7 @@ export async function jobView(root, ctx) {
     if (running) progress.value = j.progress; else progress.remove();
     percent.textContent = running ? `${Math.round(100 * j.progress)} % · ${runningText(j, duration)}` :
       (ranText(j) || (j.status === "done" ? "" : `${Math.round(100 * j.progress)} %`));
-    message.textContent = running ? "" : j.message || "";
+    jobMessage.textContent = running ? "" : j.message || "";
     cancel.hidden = !running;
     remove.hidden = running;
     const cut = j.metrics && j.metrics.step_cut;
