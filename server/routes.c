@@ -36,7 +36,9 @@
  * serves the connection, from samples read through that thread's store connection in one short
  * read transaction per piece (store_series_begin .. end). So a reader holds a few windows of
  * samples, never the series, and no snapshot between pieces - a slow client holds up neither
- * WAL checkpoints nor a deletion, which the next piece reports, cutting the reply short.
+ * WAL checkpoints nor a deletion, which the next piece reports, cutting the reply short. A
+ * running job's samples so far (?partial=1) are read the same way from its worker's result
+ * (jobq_live_read), and from the store should the job finish while they are being sent.
  * Replies of more than ROUTES_LARGE_SERIES values hold one of --max-series-streams places from
  * the handler until the reply is freed (sent, failed, the client gone or the server stopped);
  * past them the answer is 503 TOO_MANY_STREAMS, since each costs its HTTP thread time while
@@ -749,6 +751,9 @@ static int query_joints(const http_request *req, http_reply *rep, long **list, i
 typedef struct series_download {
     routes_ctx *ctx;
     int64_t id;
+    int live;                 /* read from the running job's worker (jobq_live_read) */
+    int from;                 /* the first sample sent (?from) */
+    int width[CTC_NCHANNELS]; /* of each channel, to offset reads by from samples */
     series_stream *stream;
     int counted;   /* holds one of ctx->max_series_streams */
     store *s;      /* the connection of the piece being made */
@@ -759,6 +764,16 @@ typedef struct series_download {
 static int download_read(void *arg, int channel, uint64_t offset, void *buf, size_t len)
 {
     series_download *d = arg;
+    uint64_t width = channel < 0 ? 1 : (uint64_t)d->width[channel];
+    offset += (uint64_t)d->from * width * sizeof(double);
+    if (d->live) {
+        int live = jobq_live_read(d->ctx->queue, d->id, channel, offset, buf, len);
+        if (live < 0)
+            snprintf(d->err, sizeof d->err, "job %" PRId64 ": a read past the samples recorded",
+                     d->id);
+        if (live != 1) return live;
+        d->live = 0; /* finished meanwhile: its series is in the store now */
+    }
     int rc = store_series_read(d->s, d->id, channel, offset, buf, len, d->err, sizeof d->err);
     if (rc == 1) d->gone = 1;
     return rc;
@@ -851,22 +866,37 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
         }
         fmt = SERIES_F32_MINMAX;
     }
+    long long from, partial;
+    if (query_integer(req, rep, "from", 0, INT32_MAX, 0, &from) != 0) return;
+    if (query_integer(req, rep, "partial", 0, 1, 0, &partial) != 0) return;
     int njoints;
     if (query_joints(req, rep, &joints, &njoints) != 0) return;
 
-    /* the job: finished, with a series, whose shape is read without its samples */
+    /* the job: finished, with a series, whose shape is read without its samples; or running,
+       with ?partial=1, the samples its worker has recorded so far */
     if (path_job(req, rep, ctx, &row) != 0) goto done;
     have_row = 1;
+    store_series_info info;
+    int live = 0;
     if (!job_finished(row.status)) {
-        http_reply_error(rep, 409, "NOT_FINISHED", "id",
-                         "job %" PRId64 " is %s; its series is there once it has finished", id,
-                         store_status_name(row.status));
-        goto done;
+        live = partial && row.status == STORE_RUNNING && jobq_live_info(ctx->queue, id, &info) == 0;
+        if (!live && partial) {
+            http_reply_error(rep, 409, "NOT_FINISHED", "id",
+                             "job %" PRId64 " is %s and has recorded no samples yet", id,
+                             store_status_name(row.status));
+            goto done;
+        }
+        if (!live) {
+            http_reply_error(rep, 409, "NOT_FINISHED", "id",
+                             "job %" PRId64 " is %s; its series is there once it has finished "
+                             "(?partial=1: the samples recorded so far)",
+                             id, store_status_name(row.status));
+            goto done;
+        }
     }
     store *s = thread_store(ctx, rep);
     if (!s) goto done;
-    store_series_info info;
-    int rc = store_get_series_info(s, id, &info, err, sizeof err);
+    int rc = live ? 0 : store_get_series_info(s, id, &info, err, sizeof err);
     if (rc == 1) {
         http_reply_error(rep, 404, "NOT_FOUND", "id",
                          "job %" PRId64 " has no series (it was %s before it ran)", id,
@@ -911,14 +941,21 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
         }
     }
 
-    /* streamed as the command line writes it, a piece at a time */
-    series_layout lay = {.nsamples = info.nsamples, .nv = info.nv};
+    if (from > info.nsamples) {
+        http_reply_error(rep, 400, "INVALID_QUERY", "from",
+                         "from must be at most the number of samples, %d (got %lld)", info.nsamples,
+                         from);
+        goto done;
+    }
+
+    /* streamed as the command line writes it, a piece at a time, from sample `from` on */
+    series_layout lay = {.nsamples = info.nsamples - (int)from, .nv = info.nv};
     memcpy(lay.width, info.width, sizeof lay.width);
     result_select sel = {.channels = mask,
                          .every =
                              fmt == SERIES_F32_MINMAX
-                                 ? series_stream_buckets_stride(info.nsamples, every, max_points)
-                                 : series_stream_stride(info.nsamples, every, max_points),
+                                 ? series_stream_buckets_stride(lay.nsamples, every, max_points)
+                                 : series_stream_stride(lay.nsamples, every, max_points),
                          .coords = coords};
     d = calloc(1, sizeof *d);
     if (d) d->stream = series_stream_new(&lay, &sel, fmt, download_read, d);
@@ -928,6 +965,9 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
     }
     d->ctx = ctx;
     d->id = id;
+    d->live = live;
+    d->from = (int)from;
+    memcpy(d->width, info.width, sizeof d->width);
     uint64_t values = series_stream_values(d->stream);
     if (values > ROUTES_LARGE_SERIES) {
         int open = atomic_fetch_add(&ctx->series_streams, 1);

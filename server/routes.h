@@ -50,7 +50,9 @@
  *                            indices; default all) &every=N (default 1) &max_points=N (2..1e9:
  *                            at most N samples, first and last included, by the smallest stride
  *                            that does it, or every if larger) &format=json|csv|f32 (default
- *                            json) &reduce=stride|minmax (f32 only; series_stream.h). json: the
+ *                            json) &reduce=stride|minmax (f32 only; series_stream.h) &from=K
+ *                            (samples from K on) &partial=1 (a running job: the samples its
+ *                            worker has recorded so far, jobq_live_read). json: the
  *                            series object of `ctcsim run --format json`; csv: exactly the CSV
  *                            of `ctcsim run`; f32: float32 binary with a JSON header. Streamed
  * (chunked), a piece at a time from the store; cut short (closed without the last chunk) if the job

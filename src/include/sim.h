@@ -228,6 +228,11 @@ typedef struct ctc_sim_hooks {
     void (*progress)(void *ctx, double fraction);
     /* polled after each step: non-zero stops the run as CANCELLED */
     int (*cancelled)(void *ctx);
+    /* called after each output sample with the run's result so far: its first r->nsamples
+       samples of t and of each channel are final and stay so until ctc_sim_run returns (the
+       arrays are sized for the whole run; rows from r->nsamples on are written later, the
+       metrics only at the end). Read-only; the pointer is the one ctc_sim_run returns. */
+    void (*recorded)(void *ctx, const ctc_sim_result *r);
 } ctc_sim_hooks;
 
 /* Checks a spec without running it: the model builds, the arrays are consistent with the

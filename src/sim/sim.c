@@ -404,6 +404,7 @@ static void record_samples(sim_ctx *c, sim_stepper *sp, recorder *rec, const ctc
         sim_record_sample(c, rec, ts, rec->ysample);
         rec->next++;
         if (hooks->progress) hooks->progress(hooks->ctx, ts / spec->duration);
+        if (hooks->recorded) hooks->recorded(hooks->ctx, rec->r);
     }
 }
 
@@ -466,6 +467,7 @@ static ctc_run_status advance(sim_ctx *c, sim_stepper *sp, recorder *rec, double
             sim_record_sample(c, rec, *t, rec->ysample);
             rec->next++;
             if (hooks->progress) hooks->progress(hooks->ctx, *t / spec->duration);
+            if (hooks->recorded) hooks->recorded(hooks->ctx, rec->r);
         }
     }
     if (restart) {
@@ -534,6 +536,7 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     if (st != CTC_OK) goto cleanup;
     for (int i = c.nq + c.nv; i < c.ny; i++) y0[i] = 0;
     ctc_run_status status = start(&c, &sp, &rec, y0);
+    if (status == CTC_RUN_DONE && hooks->recorded) hooks->recorded(hooks->ctx, rec.r);
 
     /* the loop: one accepted step at a time */
     while (status == CTC_RUN_DONE && rec.next < rec.count) {

@@ -3,13 +3,14 @@
  * jobs: the series as float32 (?format=f32) equal to the JSON's numbers rounded to float32, and
  * with ?reduce=minmax the extremes of each bucket checked against a scan of the full JSON;
  * POST /api/jobs/{id}/cancel, which cancels a running or queued job and leaves a finished one
- * alone (409, never a deletion); queue_position and ?brief=1 on GET /api/jobs/{id}; and an RK4
- * step cut to the output interval reported as metrics.step_cut.
+ * alone (409, never a deletion); queue_position and ?brief=1 on GET /api/jobs/{id}; a running
+ * job's samples so far (?partial=1), only the new ones with ?from=; and an RK4 step cut to the
+ * output interval reported as metrics.step_cut.
  */
 import assert from 'node:assert/strict';
 import test from 'node:test';
 
-import { startServer, submit, waitJob } from './lib.mjs';
+import { startServer, submit, waitFor, waitJob } from './lib.mjs';
 
 /* runs for many minutes: only ever cancelled */
 const LONG = { preset: 'n_link_pendulum', n: 64, duration: 600, integrator: { method: 'rk4', step: 0.0001 }, output: { interval: 0.1 } };
@@ -144,6 +145,49 @@ test('queue_position counts from 1 while queued; ?brief=1 has no spec; /cancel s
     }
     for (const id of [a, b, d]) assert.equal((await waitJob(srv, id, { timeoutMs: 10000 })).status, 'cancelled');
     assert.equal((await srv.get(`/api/jobs/${a}`)).status, 200, 'a cancel never deletes');
+});
+
+test('a running job\'s series with ?partial=1: the samples so far, growing; ?from= sends only the new ones', async () => {
+    /* 64 links, RK4 at 1e-4 s: about 10 samples (0.1 s apart) a second of wall time */
+    const id = (await submit(srv, LONG)).id;
+    try {
+        await waitJob(srv, id, { until: running, timeoutMs: 10000 });
+        const plain = await srv.get(`/api/jobs/${id}/series`);
+        assert.equal(plain.status, 409, 'without ?partial a running job has no series');
+        assert.match(plain.json.error.message, /\?partial=1: the samples recorded so far/);
+        const q = `channels=q,e&joints=0,63&partial=1`;
+        let first;
+        await waitFor(async () => {
+            first = await srv.get(`/api/jobs/${id}/series?${q}`);
+            return first.status === 200 && first.json.t.length >= 3;
+        }, { timeoutMs: 20000, what: () => `partial series: ${first?.status} ${first?.text?.slice(0, 200)}` });
+        const n = first.json.t.length;
+        first.json.t.forEach((t, j) => assert.ok(Math.abs(t - 0.1 * j) < 1e-9, `t[${j}] = ${t}: every sample from 0 on`));
+        assert.equal(first.json.q.length, 2, 'the joints filter applies');
+        let later;
+        await waitFor(async () => {
+            later = await srv.get(`/api/jobs/${id}/series?${q}&from=${n}`);
+            return later.status === 200 && later.json.t.length >= 1;
+        }, { timeoutMs: 20000, what: () => `later samples: ${later?.status} ${later?.text?.slice(0, 200)}` });
+        assert.ok(Math.abs(later.json.t[0] - first.json.t[n - 1] - 0.1) < 1e-9, `from=${n} starts after ${first.json.t[n - 1]}: ${later.json.t[0]}`);
+        /* the samples sent first are final: a later read of them is the same */
+        const again = await srv.get(`/api/jobs/${id}/series?${q}`);
+        assert.deepEqual(again.json.q.map((c) => c.slice(0, n)), first.json.q);
+        const bin = await getBinary(`/api/jobs/${id}/series?${q}&format=f32&from=1`);
+        assert.equal(bin.status, 200);
+        assert.equal(decode(bin.buf).channels.t[0][0], Math.fround(0.1));
+        const past = await srv.get(`/api/jobs/${id}/series?${q}&from=100000`);
+        assert.equal(past.status, 400);
+        assert.equal(past.json.error.field, 'from');
+        assert.match(past.json.error.message, /from must be at most the number of samples, \d+ \(got 100000\)/);
+    } finally {
+        await srv.post(`/api/jobs/${id}/cancel`);
+        await waitJob(srv, id, { timeoutMs: 10000 });
+    }
+    const done = await srv.get(`/api/jobs/${small.id}/series?from=5`);
+    assert.equal(done.status, 200);
+    assert.ok(Math.abs(done.json.t[0] - 5 * small.spec.output.interval) < 1e-12, 'from works on a finished job');
+    assert.equal(done.json.t.length, small.metrics.samples - 5);
 });
 
 test('an RK4 step longer than the output interval is reported as metrics.step_cut', async () => {
