@@ -73,9 +73,13 @@ export function getSeries(id, {channels, joints, every = 1, maxPoints = SERIES_M
  * ..., rows, reduce}, columnar as getSeries gives it, non-finite values as null. reduce:
  * "stride" (every-th sample, at most maxPoints) or "minmax" (per bucket of samples, a row at its
  * first time with each column's minimum and one at its last time with the maximum: spikes
- * survive; at most maxPoints rows). */
-export async function getSeriesF32(id, {channels, joints, every = 1, maxPoints = SERIES_MAX_POINTS, reduce = "stride"} = {}, signal) {
+ * survive; at most maxPoints rows). from: the first sample; partial: a running job's samples so
+ * far (404/409 errors as ApiError). */
+export async function getSeriesF32(id, {channels, joints, every = 1, maxPoints = SERIES_MAX_POINTS, reduce = "stride",
+  from = 0, partial = false} = {}, signal) {
   const q = new URLSearchParams({every: String(every), max_points: String(maxPoints), format: "f32", reduce});
+  if (from) q.set("from", String(from));
+  if (partial) q.set("partial", "1");
   if (channels) q.set("channels", channels.join(","));
   if (joints) q.set("joints", joints.join(","));
   let reply;

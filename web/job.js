@@ -5,9 +5,10 @@
  * While the job waits or runs the view polls GET /api/jobs/{id}?brief=1 every second (the row,
  * without the spec, which for a 4096-link chain is large) and shows its place in the queue,
  * the simulated time (progress x duration) and an estimate of the time left (the wall time so
- * far scaled by what remains); the series exists only once the job has finished (the server
- * answers 409 before), so the plots come then. The view is ready (data-ready) once the job is
- * shown: at once for a queued or running job, and again after the plots are drawn.
+ * far scaled by what remains). A running job's plots grow: every PARTIAL_EVERY_MS the view asks
+ * for the samples recorded since the last ones it has (?partial=1&from=K, every k-th so that the
+ * whole run is about PARTIAL_ROWS rows) and redraws them. The view is ready (data-ready) once the
+ * job is shown: at once for a queued or running job, and again after the final plots are drawn.
  *
  * A run that stopped early (failed, diverged, cancelled) says how far it got ("ran 0.33 s of
  * 5 s"), why, with a hint, and offers re-runs - with BDF, with a smaller step - that post an
@@ -26,13 +27,17 @@ import {el, errorBox, fmtNum, fmtTime, isFinished, prettyJson, sleep} from "./do
 import {createTimeline, timeSlider} from "./timeline.js";
 import {createPlots, jointToggles, zoomButtons, PALETTE} from "./plots.js";
 import {createAnimation, createPlayer} from "./animate.js";
-import {loadPlotSeries, loadAnimSeries, loadHeatSeries, plotsCoverAnimation, MAX_PLOTTED} from "./series.js";
+import {loadPlotSeries, loadAnimSeries, loadHeatSeries, loadPartialSeries, appendSeries, controlledCoordinates,
+  plotsCoverAnimation, MAX_PLOTTED} from "./series.js";
 import {jointSummary} from "./jointsummary.js";
 import {createHeatmap} from "./heatmap.js";
 import {confirmDialog} from "./confirm.js";
 
 /* coordinates from which the heat-map is drawn: fewer read well enough in the plots */
 const HEAT_MIN = 8;
+/* a running job's plots: new samples at most this often, and about this many rows in all */
+const PARTIAL_EVERY_MS = 2000;
+const PARTIAL_ROWS = 2000;
 /* characters of spec JSON shown at once; a longer one is behind a <details> */
 const SPEC_OPEN_MAX = 200000;
 
@@ -292,9 +297,34 @@ export async function jobView(root, ctx) {
     el("a", {class: "button", href: `#/submit?job=${id}`, text: "Edit as a new job"}), cancel, remove);
   show(job);
 
-  /* wait for the end: the row only, every second */
-  if (!isFinished(job.status)) {
-    plotsHost.append(el("p", {class: "empty", text: "The plots and the animation appear when the job has finished."}));
+  /* wait for the end: the row only, every second, and the new samples every PARTIAL_EVERY_MS */
+  const waiting = el("p", {class: "empty", id: "plots-waiting",
+    text: "The plots grow as the job runs; the animation, the summary and the heat-map come when it has finished."});
+  if (!isFinished(job.status)) plotsHost.append(waiting);
+  const partial = {series: null, next: 0, at: 0, plots: null, timeline: createTimeline(duration),
+    every: Math.max(1, Math.ceil((duration / spec.output.interval + 1) / PARTIAL_ROWS))};
+  ctx.onCleanup(() => partial.plots && partial.plots.destroy());
+  async function growPlots() {
+    partial.at = Date.now();
+    let got;
+    try {
+      got = await loadPartialSeries(job, partial.next, partial.every, ctx.signal);
+    } catch (e) {
+      if (e.name === "AbortError") throw e;
+      return; /* no sample yet (409), or finished meanwhile: the next poll tells */
+    }
+    if (!got.series.t.length) return;
+    partial.series = appendSeries(partial.series, got.series);
+    partial.next = got.next;
+    if (partial.plots) partial.plots.destroy();
+    const t = partial.series.t;
+    waiting.textContent = `Running: the plots show t = 0 to ${fmtNum(t[t.length - 1])} s of ${fmtNum(duration)} s, ` +
+      "growing as the job runs.";
+    plotsHost.replaceChildren(waiting);
+    const host = el("div", {class: "plot-area", "data-partial": "1"});
+    plotsHost.append(host);
+    partial.plots = createPlots(host, [{label: `#${id}`, color: PALETTE[0], series: partial.series,
+      joints: got.joints, coords: controlledCoordinates(job), loop: Boolean(spec.scene.loop)}], partial.timeline);
   }
   while (!isFinished(job.status)) {
     ctx.ready();
@@ -303,11 +333,13 @@ export async function jobView(root, ctx) {
       const row = await getJobBrief(id, ctx.signal);
       job = isFinished(row.status) ? await getJob(id, ctx.signal) : {...job, ...row};
       show(job);
+      if (job.status === "running" && Date.now() - partial.at >= PARTIAL_EVERY_MS) await growPlots();
     } catch (e) {
       if (e.name === "AbortError") return;
       message.replaceChildren(errorBox("The job's status could not be refreshed", e));
     }
   }
+  if (partial.plots) { partial.plots.destroy(); partial.plots = null; }
   ctx.busy();
   plotsHost.replaceChildren(el("p", {class: "empty loading", role: "status", text: "Loading the series…"}));
   actions.prepend(

@@ -121,3 +121,27 @@ export function loadHeatSeries(job, buckets, signal) {
   return getSeriesF32(job.id, {channels: ["e"], maxPoints: 2 * Math.max(1, Math.min(buckets, most)),
     reduce: "minmax"}, signal);
 }
+
+/* A running job's samples from sample `from` on (?partial=1), every `every`-th (and the last),
+ * for the plots: the coordinates defaultJoints picks. -> {series, next (the sample to ask from
+ * next time), joints}. */
+export async function loadPartialSeries(job, from, every, signal) {
+  const recorded = (job.spec.output && job.spec.output.channels) || WANTED;
+  const channels = WANTED.filter((c) => recorded.includes(c) && c !== "energy" && c !== "loop");
+  const joints = defaultJoints(job);
+  const series = await getSeriesF32(job.id, {channels, joints, every, maxPoints: 1e9, from, partial: true}, signal);
+  const dt = job.spec.output.interval;
+  const last = series.t.length ? series.t[series.t.length - 1] : null;
+  return {series, joints, next: last === null ? from : Math.round(last / dt) + 1};
+}
+
+/* Appends the columns of b to those of a (both columnar series of the same channels). */
+export function appendSeries(a, b) {
+  if (!a) return b;
+  for (const [k, v] of Object.entries(b)) {
+    if (k === "t") a.t.push(...v);
+    else if (Array.isArray(v) && Array.isArray(a[k])) v.forEach((col, i) => a[k][i].push(...col));
+  }
+  a.rows = a.t.length;
+  return a;
+}

@@ -6,7 +6,8 @@
  * time heat-map whose rows are the chain's coordinates, and fetches every series in the compact
  * f32 form; at 390 x 844 no element of any view reaches past the viewport's right edge and the
  * plots come before the JSON; a queued job shows its place in the queue and a running one its
- * simulated time, polling the brief row; a diverged job says how far it got and why, and its
+ * simulated time and partial plots that grow from the samples recorded since the last fetch,
+ * polling the brief row; a diverged job says how far it got and why, and its
  * re-run posts an edited copy; an RK4 step cut to the output interval is shown; Cancel and
  * Delete are separate, each confirmed in a dialog naming the job and its status, and a cancel
  * confirmed after the job finished keeps the job. Screenshots of each view at 1400 x 900 and
@@ -305,6 +306,18 @@ test('queued and running jobs: queue place, simulated time and time left, polled
             await pollValue(() => text(run, '#job-progress-text'), (t) => /simulated [0-9.]+ s of 100 s, about .* left/.test(t || ''), 'simulated time and ETA');
             await poll(() => seen.some((u) => u === `/api/jobs/${a}?brief=1`), 'a brief poll');
             assert.ok(!seen.includes(`/api/jobs/${a}`), `no full job while running: ${seen.join(' ')}`);
+            /* partial plots: drawn while running, growing, each sample fetched once */
+            const points = () => run.evaluate(() => Number(document.querySelector('[data-partial] div.plot[data-channel="q"]')?.getAttribute('data-points') || 0));
+            const p1 = await pollValue(points, (n) => n >= 2, 'partial q plot');
+            await pollValue(points, (n) => n > p1, `partial q plot growing from ${p1} points`, 20000);
+            const partials = seen.filter((u) => u.startsWith(`/api/jobs/${a}/series?`) && u.includes('partial=1'));
+            const froms = partials.map((u) => Number(new URL(u, 'http://x').searchParams.get('from') || 0));
+            assert.ok(froms.length >= 2, partials.join(' '));
+            for (let k = 1; k < froms.length; k++) assert.ok(froms[k] >= froms[k - 1], `from goes forward: ${froms}`);
+            assert.ok(froms[froms.length - 1] > 0, `later fetches start past sample 0: ${froms}`);
+            await screenshot(run, 'job-running-phone.png');
+            await run.setViewportSize(DESKTOP);
+            await screenshot(run, 'job-running-desktop.png');
             await screenshot(run, 'job-running-phone.png');
         } finally {
             await run.context().close();
