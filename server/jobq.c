@@ -12,11 +12,15 @@
  * opened fails the start rather than a thread) and a slot that records the job it runs and a
  * cancel flag. A worker pops an id under the lock and does everything else outside it:
  * store_start (which refuses a job that is no longer queued, so an id queued twice runs once),
- * store_get and job_parse of the stored spec, ctc_sim_run with two hooks, and store_finish with
- * the status, the metrics JSON (result_out.h) and the series in one transaction. The hooks run on
- * the worker's thread between integrator steps: `progress` writes the fraction done at most every
- * JOBQ_PROGRESS_INTERVAL s of monotonic time, and `cancelled` reads the slot's cancel flag and
- * the queue's stopping flag, both C11 atomics, so polling costs two loads per step.
+ * store_get and job_parse of the stored spec, ctc_sim_run with three hooks, and store_finish
+ * with the status, the metrics JSON (result_out.h) and the series in one transaction. The hooks
+ * run on the worker's thread between integrator steps: `progress` writes the fraction done at
+ * most every JOBQ_PROGRESS_INTERVAL s of monotonic time, `cancelled` reads the slot's cancel
+ * flag and the queue's stopping flag, both C11 atomics, so polling costs two loads per step, and
+ * `recorded` publishes the run's result and its count of final samples in the slot under the
+ * lock, after each sample. jobq_live_read copies those samples under the same lock (a running
+ * job's series so far); the slot lets go of the result only after store_finish has stored it,
+ * so a reader that finds it gone finds the series in the store.
  *
  * A run that stopped because the queue is stopping (and not because its job was cancelled) is put
  * back to queued with store_requeue and restarts from t = 0 at the next jobq_start; the ids still
@@ -91,6 +95,10 @@ typedef struct jobq_worker {
     /* the job in hand, for the hooks (worker thread only) */
     int64_t job_id;
     double last_progress; /* monotonic s of the last progress write (or of the start) */
+    /* the run's result while it runs, for jobq_live_*: its first live_n samples are final
+       (guarded by q->lock; NULL when nothing is recorded yet or the result is gone) */
+    const ctc_sim_result *live;
+    int live_n;
 } jobq_worker;
 
 struct jobq {
@@ -189,6 +197,25 @@ static void hook_progress(void *ctx, double fraction)
     store_set_busy_timeout(w->db, 0);
     (void)store_progress(w->db, w->job_id, fraction, err, sizeof err);
     store_set_busy_timeout(w->db, JOBQ_BUSY_MS);
+}
+
+/* publishes the samples recorded so far (jobq_live_read copies them under the same lock) */
+static void hook_recorded(void *ctx, const ctc_sim_result *r)
+{
+    jobq_worker *w = ctx;
+    pthread_mutex_lock(&w->q->lock);
+    w->live = r;
+    w->live_n = r->nsamples;
+    pthread_mutex_unlock(&w->q->lock);
+}
+
+/* the result is about to be freed: no more reads of it */
+static void live_end(jobq_worker *w)
+{
+    pthread_mutex_lock(&w->q->lock);
+    w->live = NULL;
+    w->live_n = 0;
+    pthread_mutex_unlock(&w->q->lock);
 }
 
 static int hook_cancelled(void *ctx)
@@ -344,7 +371,10 @@ static worker_outcome run_job(jobq_worker *w, int64_t id)
 
     w->job_id = id;
     w->last_progress = monotonic_now();
-    ctc_sim_hooks hooks = {.ctx = w, .progress = hook_progress, .cancelled = hook_cancelled};
+    ctc_sim_hooks hooks = {.ctx = w,
+                           .progress = hook_progress,
+                           .cancelled = hook_cancelled,
+                           .recorded = hook_recorded};
     if (ctc_sim_run(&j->spec, &hooks, &r, err, sizeof err) != CTC_OK) {
         outcome = finish(w, id, STORE_FAILED, err, NULL, NULL);
         goto cleanup;
@@ -368,6 +398,7 @@ static worker_outcome run_job(jobq_worker *w, int64_t id)
 
 cleanup:
     cJSON_free(metrics);
+    live_end(w); /* after finish stored the series: a reader cut off here finds it there */
     ctc_sim_result_free(r);
     job_free(j);
     store_job_clear(&row);
@@ -602,6 +633,57 @@ int jobq_cancel(jobq *q, int64_t id)
     pthread_mutex_unlock(&q->lock);
     if (rc == 1 && q->config.left) q->config.left(q->config.left_arg, id);
     return rc;
+}
+
+int jobq_live_info(jobq *q, int64_t id, store_series_info *out)
+{
+    int rc = 1;
+    pthread_mutex_lock(&q->lock);
+    jobq_worker *w = slot_find(q, id);
+    if (w && w->live && w->live_n > 0) {
+        const ctc_sim_result *r = w->live;
+        memset(out, 0, sizeof *out);
+        out->nsamples = w->live_n;
+        out->nq = r->nq;
+        out->nv = r->nv;
+        out->channels = r->channels;
+        out->bytes = (int64_t)w->live_n * (int64_t)sizeof(double);
+        for (int c = 0; c < CTC_NCHANNELS; c++) {
+            out->width[c] = r->ch[c] ? r->width[c] : 0;
+            out->bytes += (int64_t)w->live_n * out->width[c] * (int64_t)sizeof(double);
+        }
+        rc = 0;
+    }
+    pthread_mutex_unlock(&q->lock);
+    return rc;
+}
+
+int jobq_live_read(jobq *q, int64_t id, int channel, uint64_t offset, void *buf, size_t len)
+{
+    int rc = 1;
+    pthread_mutex_lock(&q->lock);
+    jobq_worker *w = slot_find(q, id);
+    if (w && w->live && channel >= -1 && channel < CTC_NCHANNELS) {
+        const ctc_sim_result *r = w->live;
+        const double *base = channel < 0 ? r->t : r->ch[channel];
+        uint64_t width = channel < 0 ? 1 : (uint64_t)r->width[channel];
+        uint64_t size = (uint64_t)w->live_n * width * sizeof(double);
+        rc = -1;
+        if (base && offset <= size && len <= size - offset) {
+            memcpy(buf, (const char *)base + offset, len);
+            rc = 0;
+        }
+    }
+    pthread_mutex_unlock(&q->lock);
+    return rc;
+}
+
+int jobq_position(jobq *q, int64_t id)
+{
+    pthread_mutex_lock(&q->lock);
+    int pos = ring_find(q, id);
+    pthread_mutex_unlock(&q->lock);
+    return pos + 1;
 }
 
 int jobq_wait(jobq *q, int64_t id, double timeout_s)

@@ -31,6 +31,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "store.h"
+
 #define JOBQ_PROGRESS_INTERVAL 0.25 /* s between progress writes of one job */
 #define JOBQ_BUSY_MS 1000           /* ms one worker write waits for a lock before it is retried */
 #define JOBQ_RETRY_FIRST 0.01       /* s, the first pause before a retry */
@@ -78,6 +80,22 @@ int jobq_space(jobq *q);
  * cancelled), or asks the worker running it to stop at its next step (returns 2: the worker
  * records it cancelled). Returns 0 if the job is neither queued nor running here. */
 int jobq_cancel(jobq *q, int64_t id);
+
+/* The shape of what job id's run has recorded so far, while a worker here runs it: 0 with *out
+ * filled as store_get_series_info fills it (out->nsamples samples, all final), or 1 when no
+ * worker here runs it or it has recorded no sample yet. */
+int jobq_live_info(jobq *q, int64_t id, store_series_info *out);
+
+/* Copies len bytes at offset (store.h's layout: per channel, samples x width float64; -1 = t)
+ * of the samples job id's run has recorded so far. Returns 0; 1 when no worker here runs it
+ * any more (once finished, its series is in the store: the worker stores it before letting go
+ * of the run); -1 when the bytes lie past the samples recorded or the channel is not. Holds
+ * the queue's lock for the copy: callers read a few KiB at a time. */
+int jobq_live_read(jobq *q, int64_t id, int channel, uint64_t offset, void *buf, size_t len);
+
+/* The job's place in the queue: 1 for the next to start, 0 when it does not wait there
+ * (running, finished, or queued in the database only). */
+int jobq_position(jobq *q, int64_t id);
 
 /* Waits until the job is no longer queued or running here, or timeout_s passes. Returns 0 when it
  * finished (or was never here), 1 on timeout. */

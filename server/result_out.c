@@ -113,6 +113,14 @@ cJSON *result_metrics_json(const ctc_sim_result *r, const job *j)
     cJSON_AddNumberToObject(o, "wall_s", m->wall_s);
     cJSON_AddNumberToObject(o, "cpu_s", m->cpu_s);
     cJSON_AddNumberToObject(o, "us_per_eval", m->us_per_eval);
+    /* rk4's step cut to divide the output interval: what was asked and what ran */
+    if (j && isfinite(m->step_used) && m->step_used < j->spec.integrator.step * (1 - 1e-9)) {
+        cJSON *cut = cJSON_AddObjectToObject(o, "step_cut");
+        cJSON_AddNumberToObject(cut, "asked", j->spec.integrator.step);
+        cJSON_AddNumberToObject(cut, "used", m->step_used);
+    } else {
+        cJSON_AddNullToObject(o, "step_cut");
+    }
     if (m->diverged_joint >= 0)
         cJSON_AddNumberToObject(o, "diverged_joint", m->diverged_joint);
     else

@@ -36,7 +36,9 @@
  * serves the connection, from samples read through that thread's store connection in one short
  * read transaction per piece (store_series_begin .. end). So a reader holds a few windows of
  * samples, never the series, and no snapshot between pieces - a slow client holds up neither
- * WAL checkpoints nor a deletion, which the next piece reports, cutting the reply short.
+ * WAL checkpoints nor a deletion, which the next piece reports, cutting the reply short. A
+ * running job's samples so far (?partial=1) are read the same way from its worker's result
+ * (jobq_live_read), and from the store should the job finish while they are being sent.
  * Replies of more than ROUTES_LARGE_SERIES values hold one of --max-series-streams places from
  * the handler until the reply is freed (sent, failed, the client gone or the server stopped);
  * past them the answer is 503 TOO_MANY_STREAMS, since each costs its HTTP thread time while
@@ -335,7 +337,8 @@ static cJSON *job_full(const store_job *j)
     cJSON_AddItemToObject(o, "metrics", stored_json(j->metrics));
     cJSON_AddItemToObject(o, "message",
                           string_or_null(j->message && j->message[0] ? j->message : NULL));
-    if (!cJSON_GetObjectItemCaseSensitive(o, "message")) {
+    cJSON_AddNullToObject(o, "queue_position"); /* GET /api/jobs/{id} fills it in */
+    if (!cJSON_GetObjectItemCaseSensitive(o, "queue_position")) {
         cJSON_Delete(o);
         return NULL;
     }
@@ -681,11 +684,34 @@ static int path_job(const http_request *req, http_reply *rep, const routes_ctx *
     return rc == 0 ? 0 : -1;
 }
 
+/* GET /api/jobs/{id}: the whole job, with queue_position (1 = next to start; null unless it
+ * waits in this server's queue); ?brief=1 leaves out spec and metrics (a running job's page
+ * polls it every second). */
 static void get_job(const http_request *req, http_reply *rep, void *arg)
 {
+    routes_ctx *ctx = arg;
     store_job row = {0};
-    if (path_job(req, rep, arg, &row) != 0) return;
-    reply_job(rep, 200, &row, 1);
+    const char *brief = http_query(req, "brief");
+    if (brief && strcmp(brief, "0") != 0 && strcmp(brief, "1") != 0) {
+        http_reply_error(rep, 400, "INVALID_QUERY", "brief", "brief must be 0 or 1 (got \"%s\")",
+                         brief);
+        return;
+    }
+    if (path_job(req, rep, ctx, &row) != 0) return;
+    int full = !brief || strcmp(brief, "0") == 0;
+    cJSON *o = full ? job_full(&row) : job_row(&row);
+    if (o && !full)
+        cJSON_AddItemToObject(o, "message",
+                              string_or_null(row.message && row.message[0] ? row.message : NULL));
+    int pos = row.status == STORE_QUEUED ? jobq_position(ctx->queue, row.id) : 0;
+    cJSON *place = pos > 0 ? cJSON_CreateNumber(pos) : cJSON_CreateNull();
+    if (o && !(full ? cJSON_ReplaceItemInObjectCaseSensitive(o, "queue_position", place)
+                    : cJSON_AddItemToObject(o, "queue_position", place))) {
+        cJSON_Delete(o); /* place, not taken, is deleted below */
+        o = NULL;
+    }
+    if (!o) cJSON_Delete(place);
+    http_reply_json(rep, 200, o);
     store_job_clear(&row);
 }
 
@@ -750,6 +776,9 @@ static int query_joints(const http_request *req, http_reply *rep, long **list, i
 typedef struct series_download {
     routes_ctx *ctx;
     int64_t id;
+    int live;                 /* read from the running job's worker (jobq_live_read) */
+    int from;                 /* the first sample sent (?from) */
+    int width[CTC_NCHANNELS]; /* of each channel, to offset reads by from samples */
     series_stream *stream;
     int counted;   /* holds one of ctx->max_series_streams */
     store *s;      /* the connection of the piece being made */
@@ -760,6 +789,16 @@ typedef struct series_download {
 static int download_read(void *arg, int channel, uint64_t offset, void *buf, size_t len)
 {
     series_download *d = arg;
+    uint64_t width = channel < 0 ? 1 : (uint64_t)d->width[channel];
+    offset += (uint64_t)d->from * width * sizeof(double);
+    if (d->live) {
+        int live = jobq_live_read(d->ctx->queue, d->id, channel, offset, buf, len);
+        if (live < 0)
+            snprintf(d->err, sizeof d->err, "job %" PRId64 ": a read past the samples recorded",
+                     d->id);
+        if (live != 1) return live;
+        d->live = 0; /* finished meanwhile: its series is in the store now */
+    }
     int rc = store_series_read(d->s, d->id, channel, offset, buf, len, d->err, sizeof d->err);
     if (rc == 1) d->gone = 1;
     return rc;
@@ -830,27 +869,59 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
         return;
     const char *format = http_query(req, "format");
     if (!format) format = "json";
-    if (strcmp(format, "json") != 0 && strcmp(format, "csv") != 0) {
+    if (strcmp(format, "json") != 0 && strcmp(format, "csv") != 0 && strcmp(format, "f32") != 0) {
         http_reply_error(rep, 400, "INVALID_QUERY", "format",
-                         "format must be json or csv (got \"%s\")", format);
+                         "format must be json, csv or f32 (got \"%s\")", format);
         return;
     }
+    series_format fmt = strcmp(format, "csv") == 0   ? SERIES_CSV
+                        : strcmp(format, "f32") == 0 ? SERIES_F32
+                                                     : SERIES_JSON;
+    const char *reduce = http_query(req, "reduce");
+    if (reduce && strcmp(reduce, "stride") != 0 && strcmp(reduce, "minmax") != 0) {
+        http_reply_error(rep, 400, "INVALID_QUERY", "reduce",
+                         "reduce must be stride or minmax (got \"%s\")", reduce);
+        return;
+    }
+    if (reduce && strcmp(reduce, "minmax") == 0) {
+        if (fmt != SERIES_F32) {
+            http_reply_error(rep, 400, "INVALID_QUERY", "reduce",
+                             "reduce=minmax needs format=f32 (got format=%s)", format);
+            return;
+        }
+        fmt = SERIES_F32_MINMAX;
+    }
+    long long from, partial;
+    if (query_integer(req, rep, "from", 0, INT32_MAX, 0, &from) != 0) return;
+    if (query_integer(req, rep, "partial", 0, 1, 0, &partial) != 0) return;
     int njoints;
     if (query_joints(req, rep, &joints, &njoints) != 0) return;
 
-    /* the job: finished, with a series, whose shape is read without its samples */
+    /* the job: finished, with a series, whose shape is read without its samples; or running,
+       with ?partial=1, the samples its worker has recorded so far */
     if (path_job(req, rep, ctx, &row) != 0) goto done;
     have_row = 1;
+    store_series_info info;
+    int live = 0;
     if (!job_finished(row.status)) {
-        http_reply_error(rep, 409, "NOT_FINISHED", "id",
-                         "job %" PRId64 " is %s; its series is there once it has finished", id,
-                         store_status_name(row.status));
-        goto done;
+        live = partial && row.status == STORE_RUNNING && jobq_live_info(ctx->queue, id, &info) == 0;
+        if (!live && partial) {
+            http_reply_error(rep, 409, "NOT_FINISHED", "id",
+                             "job %" PRId64 " is %s and has recorded no samples yet", id,
+                             store_status_name(row.status));
+            goto done;
+        }
+        if (!live) {
+            http_reply_error(rep, 409, "NOT_FINISHED", "id",
+                             "job %" PRId64 " is %s; its series is there once it has finished "
+                             "(?partial=1: the samples recorded so far)",
+                             id, store_status_name(row.status));
+            goto done;
+        }
     }
     store *s = thread_store(ctx, rep);
     if (!s) goto done;
-    store_series_info info;
-    int rc = store_get_series_info(s, id, &info, err, sizeof err);
+    int rc = live ? 0 : store_get_series_info(s, id, &info, err, sizeof err);
     if (rc == 1) {
         http_reply_error(rep, 404, "NOT_FOUND", "id",
                          "job %" PRId64 " has no series (it was %s before it ran)", id,
@@ -895,21 +966,33 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
         }
     }
 
-    /* streamed as the command line writes it, a piece at a time */
-    series_layout lay = {.nsamples = info.nsamples, .nv = info.nv};
+    if (from > info.nsamples) {
+        http_reply_error(rep, 400, "INVALID_QUERY", "from",
+                         "from must be at most the number of samples, %d (got %lld)", info.nsamples,
+                         from);
+        goto done;
+    }
+
+    /* streamed as the command line writes it, a piece at a time, from sample `from` on */
+    series_layout lay = {.nsamples = info.nsamples - (int)from, .nv = info.nv};
     memcpy(lay.width, info.width, sizeof lay.width);
     result_select sel = {.channels = mask,
-                         .every = series_stream_stride(info.nsamples, every, max_points),
+                         .every =
+                             fmt == SERIES_F32_MINMAX
+                                 ? series_stream_buckets_stride(lay.nsamples, every, max_points)
+                                 : series_stream_stride(lay.nsamples, every, max_points),
                          .coords = coords};
-    int csv = strcmp(format, "csv") == 0;
     d = calloc(1, sizeof *d);
-    if (d) d->stream = series_stream_new(&lay, &sel, csv, download_read, d);
+    if (d) d->stream = series_stream_new(&lay, &sel, fmt, download_read, d);
     if (!d || !d->stream) {
         http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
         goto done;
     }
     d->ctx = ctx;
     d->id = id;
+    d->live = live;
+    d->from = (int)from;
+    memcpy(d->width, info.width, sizeof d->width);
     uint64_t values = series_stream_values(d->stream);
     if (values > ROUTES_LARGE_SERIES) {
         int open = atomic_fetch_add(&ctx->series_streams, 1);
@@ -925,8 +1008,11 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
         }
         d->counted = 1;
     }
-    http_reply_stream(rep, 200, csv ? "text/csv; charset=utf-8" : "application/json", download_body,
-                      download_free, d);
+    http_reply_stream(rep, 200,
+                      fmt == SERIES_CSV    ? "text/csv; charset=utf-8"
+                      : fmt == SERIES_JSON ? "application/json"
+                                           : "application/octet-stream",
+                      download_body, download_free, d);
     d = NULL; /* the reply's */
 done:
     if (d) download_free(d);
@@ -935,7 +1021,61 @@ done:
     free(joints);
 }
 
-/* ---- DELETE /api/jobs/{id} ---- */
+/* ---- DELETE /api/jobs/{id} and POST /api/jobs/{id}/cancel ---- */
+
+/* Cancels the queued or running job of *row and replies: 202 with its row when its worker will
+ * record it cancelled, 200 with the whole job when it was recorded cancelled here. Returns 0
+ * after replying, or 1 when the job turned out finished meanwhile (*row then holds it, nothing
+ * replied). */
+static int cancel_running(http_reply *rep, routes_ctx *ctx, store *s, store_job *row)
+{
+    char err[256] = "";
+    int64_t id = row->id;
+    int rc = jobq_cancel(ctx->queue, id);
+    if (rc == 2) { /* running: its worker records it cancelled */
+        reply_job(rep, 202, row, 0);
+        return 0;
+    }
+    /* taken out of the queue (1), or held by no worker here (0): record it ourselves,
+       unless it finished meanwhile */
+    store_job_clear(row);
+    if (store_get(s, id, row, err, sizeof err) != 0) {
+        database_failed(rep, "reading a job", err);
+        return 0;
+    }
+    if (rc != 1 && job_finished(row->status)) return 1;
+    if (store_finish(s, id, STORE_CANCELLED, "cancelled by request", NULL, NULL, err, sizeof err) !=
+        0) {
+        /* still queued in the database: back in the queue, so no job is stranded */
+        if (rc == 1 && jobq_submit(ctx->queue, id) != 0)
+            fprintf(stderr, "ctcsim-server: job %" PRId64 " stays queued until the next start\n",
+                    id);
+        database_failed(rep, "cancelling a job", err);
+        return 0;
+    }
+    store_job_clear(row);
+    if (store_get(s, id, row, err, sizeof err) != 0) {
+        database_failed(rep, "reading a job", err);
+        return 0;
+    }
+    reply_job(rep, 200, row, 1);
+    return 0;
+}
+
+/* POST /api/jobs/{id}/cancel: a queued or running job is cancelled as DELETE does; a finished
+ * one is left as it is, 409 ALREADY_FINISHED, so a cancel never deletes. */
+static void post_cancel(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    store_job row = {0};
+    if (path_job(req, rep, ctx, &row) != 0) return;
+    store *s = thread_store(ctx, rep);
+    if (s && (job_finished(row.status) || cancel_running(rep, ctx, s, &row) == 1))
+        http_reply_error(rep, 409, "ALREADY_FINISHED", "id",
+                         "job %" PRId64 " is %s: there is nothing to cancel (DELETE deletes it)",
+                         row.id, store_status_name(row.status));
+    store_job_clear(&row);
+}
 
 static void delete_job(const http_request *req, http_reply *rep, void *arg)
 {
@@ -946,40 +1086,7 @@ static void delete_job(const http_request *req, http_reply *rep, void *arg)
     store *s = thread_store(ctx, rep);
     if (!s) goto done;
     int64_t id = row.id;
-
-    if (!job_finished(row.status)) {
-        int rc = jobq_cancel(ctx->queue, id);
-        if (rc == 2) { /* running: its worker records it cancelled */
-            reply_job(rep, 202, &row, 0);
-            goto done;
-        }
-        /* taken out of the queue (1), or held by no worker here (0): record it ourselves,
-           unless it finished meanwhile */
-        store_job_clear(&row);
-        if (store_get(s, id, &row, err, sizeof err) != 0) {
-            database_failed(rep, "reading a job", err);
-            goto done;
-        }
-        if (rc == 1 || !job_finished(row.status)) {
-            if (store_finish(s, id, STORE_CANCELLED, "cancelled by request", NULL, NULL, err,
-                             sizeof err) != 0) {
-                /* still queued in the database: back in the queue, so no job is stranded */
-                if (rc == 1 && jobq_submit(ctx->queue, id) != 0)
-                    fprintf(stderr,
-                            "ctcsim-server: job %" PRId64 " stays queued until the next start\n",
-                            id);
-                database_failed(rep, "cancelling a job", err);
-                goto done;
-            }
-            store_job_clear(&row);
-            if (store_get(s, id, &row, err, sizeof err) != 0) {
-                database_failed(rep, "reading a job", err);
-                goto done;
-            }
-            reply_job(rep, 200, &row, 1);
-            goto done;
-        }
-    }
+    if (!job_finished(row.status) && cancel_running(rep, ctx, s, &row) == 0) goto done;
 
     /* finished: deleted with its series */
     int rc = store_delete(s, id, err, sizeof err);
@@ -1217,6 +1324,7 @@ const http_route routes_table[] = {
     {"POST", "/api/jobs", post_jobs},
     {"GET", "/api/jobs/{id}", get_job},
     {"DELETE", "/api/jobs/{id}", delete_job},
+    {"POST", "/api/jobs/{id}/cancel", post_cancel},
     {"GET", "/api/jobs/{id}/series", get_series},
     {"POST", "/api/validate", post_validate},
     {"GET", "/api/presets", get_presets},

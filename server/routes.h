@@ -13,7 +13,8 @@
  *       Transfer-Encoding headers, both, or a Content-Length not a number; http.c)
  *   401 UNAUTHORIZED (with --token: POST and DELETE need "Authorization: Bearer TOKEN")
  *   404 NOT_FOUND (route, job or file), UNKNOWN_PRESET (400 inside a job body, 404 as a path)
- *   405 METHOD_NOT_ALLOWED (with Allow)   409 NOT_FINISHED (series of an unfinished job)
+ *   405 METHOD_NOT_ALLOWED (with Allow)   409 NOT_FINISHED (series of an unfinished job),
+ *       ALREADY_FINISHED (a cancel of a finished job)
  *   413 BODY_TOO_LARGE   415 UNSUPPORTED_MEDIA_TYPE
  *   421 HOST_NOT_ALLOWED (the Host header names a host not in --allowed-hosts; http.h)
  *   429 TOO_MANY_JOBS (with Retry-After: the client's address has --max-jobs-per-client jobs
@@ -48,24 +49,28 @@
  *                            tag exactly; 400 INVALID_QUERY naming q or tag otherwise)
  *                            -> 200 {"jobs": [rows], "next_cursor": ID or null}
  * GET  /api/jobs/{id}        200 {row + "spec": normalised job, "metrics": {...} or null
- *                            (result_out.h), "message": text or null}
+ *                            (result_out.h), "message": text or null, "queue_position": 1 for
+ *                            the next to start, 2, ..., or null unless queued here}; ?brief=1:
+ *                            without spec and metrics (a running job's page polls it)
  * GET  /api/jobs/{id}/series ?channels=q,tau (default: all recorded) &joints=0,2 (coordinate
  *                            indices; default all) &every=N (default 1) &max_points=N (2..1e9:
  *                            at most N samples, first and last included, by the smallest stride
- *                            that does it, or every if larger) &format=json|csv (default json).
- *                            json: the series object of `ctcsim run --format json`; csv: exactly
- *                            the CSV of `ctcsim run`. Streamed (chunked), a piece at a time from
- *                            the store; cut short (closed without the last chunk) if the job is
- *                            deleted meanwhile. A reply of more than ROUTES_LARGE_SERIES values
- *                            counts against --max-series-streams: past them 503
- *                            TOO_MANY_STREAMS. 409 NOT_FINISHED while queued or running; 404 if
- *                            the job has no series (cancelled before it ran).
- * DELETE /api/jobs/{id}      queued: cancelled, 200 {job}; running: cancel requested, 202 {row}
- *                            (the worker stops at its next step and records "cancelled");
- *                            finished: deleted with its series, 204.
- * POST /api/validate         200 {"valid": true, "spec": normalised job} or the 400 error.
- * GET  /api/presets          200 {"presets": [{"name", "summary", "params": [...]}]}
- * GET  /api/presets/{name}   200 the preset's job document; query parameters are its params
+ *                            that does it, or every if larger) &format=json|csv|f32 (default
+ *                            json) &reduce=stride|minmax (f32 only; series_stream.h) &from=K
+ *                            (samples from K on) &partial=1 (a running job: the samples its
+ *                            worker has recorded so far, jobq_live_read). json: the
+ *                            series object of `ctcsim run --format json`; csv: exactly the CSV
+ *                            of `ctcsim run`; f32: float32 binary with a JSON header. Streamed
+ * (chunked), a piece at a time from the store; cut short (closed without the last chunk) if the job
+ * is deleted meanwhile. A reply of more than ROUTES_LARGE_SERIES values counts against
+ * --max-series-streams: past them 503 TOO_MANY_STREAMS. 409 NOT_FINISHED while queued or running;
+ * 404 if the job has no series (cancelled before it ran). DELETE /api/jobs/{id}      queued:
+ * cancelled, 200 {job}; running: cancel requested, 202 {row} (the worker stops at its next step and
+ * records "cancelled"); finished: deleted with its series, 204. POST /api/jobs/{id}/cancel queued
+ * or running: as DELETE; finished: 409 ALREADY_FINISHED, the job left as it is (a cancel never
+ * deletes). POST /api/validate         200 {"valid": true, "spec": normalised job} or the 400
+ * error. GET  /api/presets          200 {"presets": [{"name", "summary", "params": [...]}]} GET
+ * /api/presets/{name}   200 the preset's job document; query parameters are its params
  *                            (?n=16); 404 UNKNOWN_PRESET; 400 INVALID_QUERY for a bad param.
  * GET  /api/health           200 {"status": "ok", "version", "workers", "busy", "queued",
  *                            "database": {"state": "ok"}, "jobs": {status: count}}, in O(1)

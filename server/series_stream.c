@@ -13,6 +13,13 @@
  *
  * Samples come through one window per channel: a copy of up to SERIES_STREAM_WINDOW bytes of the
  * channel's samples, refilled from the offset of the value that missed it.
+ *
+ * The binary forms (SERIES_F32, SERIES_F32_MINMAX) write the header as one piece and then one
+ * float32 per piece, channel by channel and row by row, so each channel's samples are read in
+ * their stored order. With min/max, the first value of a bucket's first row reads the whole
+ * bucket of that channel once and keeps each kept column's minimum and maximum (two arrays as
+ * wide as the widest channel, allocated with the stream); the bucket's two rows are then
+ * written from them.
  */
 #include "series_stream.h"
 
@@ -24,14 +31,18 @@
 /* the longest piece: a column name with its comma ("energy[potential]", "tau[24575]") or a
  * number ("-2.2250738585072014e-308") with its separator, or a channel's opening */
 #define SERIES_PIECE 96
+/* the binary header: {"rows":..,"reduce":..,"channels":[[name,width],...]} with every channel */
+#define SERIES_HEADER (64 + 24 * (CTC_NCHANNELS + 1))
 
 typedef enum part {
-    PART_HEADER,  /* CSV: the column names */
-    PART_ROWS,    /* CSV: the samples, a row at a time */
-    PART_START,   /* JSON: {"t":[ */
-    PART_VALUES,  /* JSON: the values of the current column */
-    PART_COLUMN,  /* JSON: the next column of the current channel, or its closing */
-    PART_CHANNEL, /* JSON: the next channel, or the closing of the object */
+    PART_HEADER,     /* CSV: the column names */
+    PART_ROWS,       /* CSV: the samples, a row at a time */
+    PART_START,      /* JSON: {"t":[ */
+    PART_VALUES,     /* JSON: the values of the current column */
+    PART_COLUMN,     /* JSON: the next column of the current channel, or its closing */
+    PART_CHANNEL,    /* JSON: the next channel, or the closing of the object */
+    PART_BIN_HEADER, /* binary: the length and the JSON header */
+    PART_BIN_VALUES, /* binary: the values, channel by channel, row by row */
     PART_DONE,
 } part;
 
@@ -47,7 +58,10 @@ struct series_stream {
     unsigned channels; /* the channels written */
     char *coords;      /* (nv) columns kept of nv-wide channels, or NULL = all */
     int csv;
-    int stride;
+    int bin;         /* SERIES_F32 or SERIES_F32_MINMAX */
+    int minmax;      /* SERIES_F32_MINMAX: rows are the minima and maxima of buckets */
+    int stride;      /* the sample stride, or the bucket size with minmax */
+    double *lo, *hi; /* minmax: (widest channel) the current bucket's minima and maxima */
     series_stream_read_fn read;
     void *src;
     window win[CTC_NCHANNELS + 1]; /* t, then the channels */
@@ -56,7 +70,7 @@ struct series_stream {
     int c, i, j;      /* channel (-1 = t), column, sample of the next value */
     int first;        /* the next value is its column's first */
     int first_column; /* the next column is its channel's first */
-    char piece[SERIES_PIECE];
+    char piece[SERIES_HEADER];
     size_t piece_len, piece_pos; /* made, and copied out */
     int failed;
 };
@@ -243,13 +257,118 @@ static int step_json(series_stream *st)
     }
 }
 
-series_stream *series_stream_new(const series_layout *lay, const result_select *sel, int csv,
-                                 series_stream_read_fn read, void *src)
+/* the rows of the binary text: the samples the JSON keeps, or two per bucket */
+static uint64_t bin_rows(const series_stream *st)
+{
+    int ns = st->lay.nsamples;
+    if (ns <= 0) return 0;
+    if (st->minmax) return 2 * (((uint64_t)ns + (uint64_t)st->stride - 1) / (uint64_t)st->stride);
+    return (uint64_t)((ns - 1) / st->stride) + 1 + ((ns - 1) % st->stride != 0);
+}
+
+/* the kept columns of channel c (-1 = t) */
+static int kept_columns(const series_stream *st, int c)
+{
+    int n = 0;
+    for (int i = 0; i < width_of(st, c); i++) n += column_kept(st, c, i);
+    return n;
+}
+
+/* the binary header piece: 4 bytes of length, then the JSON padded to a multiple of 4 */
+static void put_bin_header(series_stream *st)
+{
+    char *h = st->piece + 4;
+    size_t cap = SERIES_HEADER - 4, n = 0;
+    n +=
+        (size_t)snprintf(h + n, cap - n, "{\"rows\":%llu,\"reduce\":\"%s\",\"channels\":[[\"t\",1]",
+                         (unsigned long long)bin_rows(st), st->minmax ? "minmax" : "stride");
+    for (int c = channel_after(st, -1); c < CTC_NCHANNELS; c = channel_after(st, c))
+        n += (size_t)snprintf(h + n, cap - n, ",[\"%s\",%d]", ctc_channel_name((ctc_channel)c),
+                              kept_columns(st, c));
+    n += (size_t)snprintf(h + n, cap - n, "]}");
+    while ((n + 4) % 4 != 0) h[n++] = ' ';
+    for (int k = 0; k < 4; k++) st->piece[k] = (char)((n >> (8 * k)) & 0xff);
+    st->piece_len = n + 4;
+}
+
+/* fills st->lo, st->hi with the minima and maxima of the kept columns of channel c (-1 = t)
+ * over bucket b; t's are its first and last times. 0, or -1 when a read fails. */
+static int read_bucket(series_stream *st, int c, int b)
+{
+    int j0 = b * st->stride, j1 = j0 + st->stride;
+    if (j1 > st->lay.nsamples) j1 = st->lay.nsamples;
+    if (c < 0) {
+        if (value_at(st, c, j0, 0, sizeof(double), &st->lo[0]) != 0) return -1;
+        return value_at(st, c, j1 - 1, 0, sizeof(double), &st->hi[0]);
+    }
+    int w = width_of(st, c);
+    for (int i = 0; i < w; i++) st->lo[i] = st->hi[i] = NAN;
+    for (int j = j0; j < j1; j++)
+        for (int i = kept_from(st, c, 0); i < w; i = kept_from(st, c, i + 1)) {
+            double x;
+            if (value_at(st, c, j, i, sizeof(double), &x) != 0) return -1;
+            if (isnan(x)) continue;
+            if (isnan(st->lo[i]) || x < st->lo[i]) st->lo[i] = x;
+            if (isnan(st->hi[i]) || x > st->hi[i]) st->hi[i] = x;
+        }
+    return 0;
+}
+
+/* one binary piece: the header, or one float32 (little-endian); st->j counts rows */
+static int step_bin(series_stream *st)
+{
+    if (st->at == PART_BIN_HEADER) {
+        put_bin_header(st);
+        st->c = -1, st->i = 0, st->j = 0;
+        st->at = bin_rows(st) > 0 ? PART_BIN_VALUES : PART_DONE;
+        return 0;
+    }
+    double x;
+    if (st->minmax) {
+        int b = st->j / 2;
+        if (st->j % 2 == 0 && st->i == kept_from(st, st->c, 0) && read_bucket(st, st->c, b) != 0)
+            return -1;
+        x = st->j % 2 == 0 ? st->lo[st->c < 0 ? 0 : st->i] : st->hi[st->c < 0 ? 0 : st->i];
+    } else {
+        int sample = st->j == 0 ? 0 : (int)((long long)st->j * st->stride);
+        if (sample >= st->lay.nsamples) sample = st->lay.nsamples - 1;
+        if (value_at(st, st->c, sample, st->i, sizeof(double), &x) != 0) return -1;
+    }
+    float f = (float)x;
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    for (int k = 0; k < 4; k++) st->piece[k] = (char)((u >> (8 * k)) & 0xff);
+    st->piece_len = 4;
+
+    /* the next column, row, channel */
+    st->i = kept_from(st, st->c, st->i + 1);
+    if (st->i < width_of(st, st->c)) return 0;
+    st->j++;
+    if ((uint64_t)st->j < bin_rows(st)) {
+        st->i = kept_from(st, st->c, 0);
+        return 0;
+    }
+    do {
+        st->c = channel_after(st, st->c);
+    } while (st->c < CTC_NCHANNELS && kept_columns(st, st->c) == 0);
+    if (st->c >= CTC_NCHANNELS) {
+        st->at = PART_DONE;
+        return 0;
+    }
+    st->j = 0;
+    st->i = kept_from(st, st->c, 0);
+    return 0;
+}
+
+series_stream *series_stream_new(const series_layout *lay, const result_select *sel,
+                                 series_format fmt, series_stream_read_fn read, void *src)
 {
     series_stream *st = calloc(1, sizeof *st);
     if (!st) return NULL;
     st->lay = *lay;
-    st->csv = csv != 0;
+    st->csv = fmt == SERIES_CSV;
+    st->bin = fmt == SERIES_F32 || fmt == SERIES_F32_MINMAX;
+    st->minmax = fmt == SERIES_F32_MINMAX;
     st->stride = sel && sel->every > 1 ? sel->every : 1;
     st->read = read;
     st->src = src;
@@ -264,8 +383,19 @@ series_stream *series_stream_new(const series_layout *lay, const result_select *
         }
         memcpy(st->coords, sel->coords, (size_t)lay->nv);
     }
+    if (st->minmax) {
+        int widest = 1;
+        for (int c = 0; c < CTC_NCHANNELS; c++)
+            if (lay->width[c] > widest) widest = lay->width[c];
+        st->lo = malloc(2 * (size_t)widest * sizeof(double));
+        if (!st->lo) {
+            series_stream_free(st);
+            return NULL;
+        }
+        st->hi = st->lo + widest;
+    }
     st->c = -1;
-    st->at = st->csv ? PART_HEADER : PART_START;
+    st->at = st->bin ? PART_BIN_HEADER : st->csv ? PART_HEADER : PART_START;
     return st;
 }
 
@@ -277,7 +407,7 @@ ptrdiff_t series_stream_fill(series_stream *st, char *buf, size_t max)
         if (st->piece_pos == st->piece_len) {
             if (st->at == PART_DONE) break;
             st->piece_len = st->piece_pos = 0;
-            int rc = st->csv ? step_csv(st) : step_json(st);
+            int rc = st->bin ? step_bin(st) : st->csv ? step_csv(st) : step_json(st);
             if (rc != 0) {
                 st->failed = 1;
                 return -1;
@@ -295,9 +425,7 @@ ptrdiff_t series_stream_fill(series_stream *st, char *buf, size_t max)
 
 uint64_t series_stream_values(const series_stream *st)
 {
-    int ns = st->lay.nsamples;
-    uint64_t rows = 0, columns = 1;
-    if (ns > 0) rows = (uint64_t)((ns - 1) / st->stride) + 1 + ((ns - 1) % st->stride != 0);
+    uint64_t rows = bin_rows(st), columns = 1;
     for (int c = 0; c < CTC_NCHANNELS; c++)
         for (int i = 0; (st->channels & CTC_CH_BIT(c)) && i < st->lay.width[c]; i++)
             columns += (uint64_t)column_kept(st, c, i);
@@ -309,6 +437,7 @@ void series_stream_free(series_stream *st)
     if (!st) return;
     for (int c = 0; c <= CTC_NCHANNELS; c++) free(st->win[c].data);
     free(st->coords);
+    free(st->lo);
     free(st);
 }
 
@@ -322,4 +451,15 @@ int series_stream_stride(int nsamples, long long every, long long max_points)
         if (need > stride) stride = need;
     }
     return (int)stride;
+}
+
+int series_stream_buckets_stride(int nsamples, long long every, long long max_points)
+{
+    long long size = every > 1 ? every : 1;
+    if (max_points >= 2 && nsamples > 0) {
+        long long buckets = max_points / 2;
+        long long need = ((long long)nsamples + buckets - 1) / buckets;
+        if (need > size) size = need;
+    }
+    return (int)size;
 }

@@ -10,6 +10,19 @@
  * are laid out as the store keeps them (store.h): per channel, nsamples x width float64,
  * row-major; "t" is a channel of width 1.
  *
+ * A third form, SERIES_F32, is compact binary for plotting (about 4 bytes a value instead of
+ * 20): a 4-byte little-endian length H, H bytes of JSON header padded with spaces so the
+ * values start at a multiple of 4,
+ *     {"rows":R,"reduce":"stride"|"minmax","channels":[["t",1],["q",K],...]}
+ * then, channel by channel in that order (t first), R rows of K float32 little-endian values,
+ * row-major: the kept columns in index order, as the JSON has them. Non-finite values stay
+ * non-finite (NaN, +-inf). "stride" keeps the rows the JSON keeps (0, stride, ..., the last).
+ * SERIES_F32_MINMAX cuts the samples into consecutive buckets of `stride` samples (the last
+ * may be shorter) and writes two rows per bucket: the first at the bucket's first time with
+ * each column's minimum over the bucket, the second at its last time with the maximum (NaNs
+ * ignored; NaN when a column has no number in the bucket). Drawn as a line this is the
+ * bucket's envelope, so a spike of one sample survives any decimation.
+ *
  * The CSV is written row by row and reads each channel's rows in order; the JSON is columnar and
  * reads one column at a time, every stride-th row of one channel, where a column's values are
  * width x 8 bytes apart: a window then holds the rows from the one asked for on, unless the
@@ -27,6 +40,14 @@
 #define SERIES_STREAM_WINDOW 16384 /* bytes of one channel's samples read at once, at most */
 #define SERIES_STREAM_SPARSE 512   /* bytes between values read apart, each alone */
 
+/* The forms of the text (SERIES_JSON and SERIES_CSV are 0 and 1: a csv flag reads as one). */
+typedef enum series_format {
+    SERIES_JSON = 0,
+    SERIES_CSV = 1,
+    SERIES_F32 = 2,        /* binary float32, the samples the JSON keeps */
+    SERIES_F32_MINMAX = 3, /* binary float32, min and max rows per bucket of stride samples */
+} series_format;
+
 /* The shape of a stored series: what the selection is checked against. */
 typedef struct series_layout {
     int nsamples;
@@ -43,18 +64,18 @@ typedef int (*series_stream_read_fn)(void *src, int channel, uint64_t offset, vo
 typedef struct series_stream series_stream;
 
 /* A new stream of the series of layout lay, selected by sel (NULL: everything; sel->coords, when
- * given, holds lay->nv flags and is copied), as CSV (csv non-zero) or JSON. src is passed to
- * read and is not owned. Returns NULL when out of memory. */
-series_stream *series_stream_new(const series_layout *lay, const result_select *sel, int csv,
-                                 series_stream_read_fn read, void *src);
+ * given, holds lay->nv flags and is copied), in the form fmt. src is passed to read and is not
+ * owned. Returns NULL when out of memory. */
+series_stream *series_stream_new(const series_layout *lay, const result_select *sel,
+                                 series_format fmt, series_stream_read_fn read, void *src);
 
 /* Writes the next at most max (>= 1) bytes of the text into buf. Returns the number written
  * (>= 1), 0 once the whole text has been written, or -1 when a read failed (the stream is then
  * failed for good; the text so far is a truncated one). */
 ptrdiff_t series_stream_fill(series_stream *st, char *buf, size_t max);
 
-/* The number of values (samples x columns, t included) the text holds: a measure of its size
- * (CSV and JSON spend about 20 bytes a value). */
+/* The number of values (rows x columns, t included) the text holds: a measure of its size
+ * (CSV and JSON spend about 20 bytes a value, SERIES_F32 4). */
 uint64_t series_stream_values(const series_stream *st);
 
 /* Frees a stream; NULL is allowed. */
@@ -65,5 +86,10 @@ void series_stream_free(series_stream *st);
  * keeps at most max_points samples, counting samples 0, stride, 2 stride, ... and always the
  * last (result_select.every). */
 int series_stream_stride(int nsamples, long long every, long long max_points);
+
+/* The bucket size for SERIES_F32_MINMAX of nsamples samples with ?every=every (>= 1) and
+ * ?max_points=max_points (>= 2, or 0 for none): the smallest of at least every whose rows, two
+ * per bucket (2 ceil(nsamples / size)), are at most max_points. */
+int series_stream_buckets_stride(int nsamples, long long every, long long max_points);
 
 #endif

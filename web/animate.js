@@ -179,24 +179,30 @@ export function createAnimation(host, {spec, form, series, timeline, id = "anim"
     g.strokeStyle = color;
     g.lineCap = "round";
     g.setLineDash(dash);
+    /* one path per kind of stroke: a 4096-link chain is then a few canvas calls, not 8000 */
+    g.lineWidth = 1.5;
+    g.beginPath();
     for (const b of poses) {
       const [ax, ay] = toXY(b.attach), [ox, oy] = toXY(b.origin);
-      if (Math.hypot(ax - ox, ay - oy) > 0.5) {
-        g.lineWidth = 1.5; g.beginPath(); g.moveTo(ax, ay); g.lineTo(ox, oy); g.stroke();
-      }
-      g.lineWidth = width;
-      for (const e of b.ends) {
-        const [ex, ey] = toXY(e);
-        g.beginPath(); g.moveTo(ox, oy); g.lineTo(ex, ey); g.stroke();
-      }
+      if (Math.hypot(ax - ox, ay - oy) > 0.5) { g.moveTo(ax, ay); g.lineTo(ox, oy); }
     }
-    g.setLineDash([]);
-    g.lineWidth = 2;
+    g.stroke();
+    g.lineWidth = width;
+    g.beginPath();
     for (const b of poses) {
       const [ox, oy] = toXY(b.origin);
-      g.beginPath(); g.arc(ox, oy, thin ? 2 : width + 1, 0, 2 * Math.PI);
-      g.fillStyle = "#ffffff"; g.fill(); g.stroke();
+      for (const e of b.ends) { const [ex, ey] = toXY(e); g.moveTo(ox, oy); g.lineTo(ex, ey); }
     }
+    g.stroke();
+    g.setLineDash([]);
+    g.lineWidth = 2;
+    g.beginPath();
+    for (const b of poses) {
+      const [ox, oy] = toXY(b.origin);
+      const r = thin ? 2 : width + 1;
+      g.moveTo(ox + r, oy); g.arc(ox, oy, r, 0, 2 * Math.PI);
+    }
+    g.fillStyle = "#ffffff"; g.fill(); g.stroke();
     g.restore();
   }
 

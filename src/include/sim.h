@@ -225,6 +225,8 @@ typedef struct ctc_sim_metrics {
     double wall_s, cpu_s; /* time spent in the run */
     double us_per_eval;   /* wall microseconds per right-hand-side evaluation */
     double t_end;         /* time reached */
+    double step_used;     /* rk4: the step taken (s), the spec's shortened to divide the output
+                             interval (h = dt / ceil(dt / step)); NaN for the adaptive methods */
     int diverged_joint;   /* joint index (0-based) when DIVERGED, else -1 */
     /* loop models (NaN / 0 otherwise) */
     double loop_res_max;  /* max position residual over the samples and over the ends of the
@@ -256,6 +258,11 @@ typedef struct ctc_sim_hooks {
     void (*progress)(void *ctx, double fraction);
     /* polled after each step: non-zero stops the run as CANCELLED */
     int (*cancelled)(void *ctx);
+    /* called after each output sample with the run's result so far: its first r->nsamples
+       samples of t and of each channel are final and stay so until ctc_sim_run returns (the
+       arrays are sized for the whole run; rows from r->nsamples on are written later, the
+       metrics only at the end). Read-only; the pointer is the one ctc_sim_run returns. */
+    void (*recorded)(void *ctx, const ctc_sim_result *r);
 } ctc_sim_hooks;
 
 /* Checks a spec without running it: the model builds, the arrays are consistent with the

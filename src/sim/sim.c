@@ -423,6 +423,7 @@ static void record_samples(sim_ctx *c, sim_stepper *sp, recorder *rec, const ctc
         sim_record_sample(c, rec, ts, rec->ysample);
         rec->next++;
         if (hooks->progress) hooks->progress(hooks->ctx, ts / spec->duration);
+        if (hooks->recorded) hooks->recorded(hooks->ctx, rec->r);
     }
 }
 
@@ -485,6 +486,7 @@ static ctc_run_status advance(sim_ctx *c, sim_stepper *sp, recorder *rec, double
             sim_record_sample(c, rec, *t, rec->ysample);
             rec->next++;
             if (hooks->progress) hooks->progress(hooks->ctx, *t / spec->duration);
+            if (hooks->recorded) hooks->recorded(hooks->ctx, rec->r);
         }
     }
     if (restart) {
@@ -566,6 +568,7 @@ ctc_status sim_run_once(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ct
     if (st != CTC_OK) goto cleanup;
     for (int i = c.nq + c.nv; i < c.ny; i++) y0[i] = 0;
     ctc_run_status status = start(&c, &sp, &rec, y0);
+    if (status == CTC_RUN_DONE && hooks->recorded) hooks->recorded(hooks->ctx, rec.r);
 
     /* the loop: one accepted step at a time */
     while (status == CTC_RUN_DONE && rec.next < rec.count) {
@@ -578,6 +581,7 @@ ctc_status sim_run_once(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ct
     ctc_sim_metrics *mt = &r->metrics;
     r->status = status;
     mt->t_end = status != CTC_RUN_DONE ? t : r->nsamples ? r->t[r->nsamples - 1] : 0;
+    if (sp.is.method == CTC_INTEG_RK4) mt->step_used = sp.is.step;
     sim_metrics_finish(&c, &rec, ctc_integrator_stats(sp.integ), mt);
     mt->wall_s = now(CLOCK_MONOTONIC) - wall0;
     mt->cpu_s = now(CLOCK_THREAD_CPUTIME_ID) - cpu0;

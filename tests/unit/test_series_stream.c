@@ -9,6 +9,8 @@
  * size of the pieces it is asked for (1 byte to 64 KiB). The reads it makes are checked too: in
  * bounds, at most SERIES_STREAM_WINDOW bytes each, and in total not much more than the bytes the
  * text needs. The stride for ?max_points is checked against a count of the samples it keeps.
+ * The binary forms (f32, and f32 with min/max per bucket) are checked byte for byte against a
+ * naive writer here, and min/max against a spike that a stride steps over.
  */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -108,12 +110,12 @@ static char *oracle(const ctc_sim_result *r, const result_select *sel, int csv, 
     return buf;
 }
 
-/* the stream's text, asked for in pieces of at most piece bytes */
-static char *streamed(const ctc_sim_result *r, const result_select *sel, int csv, size_t piece,
-                      memory_source *src, size_t *len)
+/* the stream's text in form fmt, asked for in pieces of at most piece bytes */
+static char *streamed_as(const ctc_sim_result *r, const result_select *sel, series_format fmt,
+                         size_t piece, memory_source *src, size_t *len)
 {
     series_layout lay = layout_of(r);
-    series_stream *st = series_stream_new(&lay, sel, csv, memory_read, src);
+    series_stream *st = series_stream_new(&lay, sel, fmt, memory_read, src);
     cr_assert_not_null(st);
     size_t cap = 1 << 16, n = 0;
     char *text = malloc(cap);
@@ -129,6 +131,12 @@ static char *streamed(const ctc_sim_result *r, const result_select *sel, int csv
     series_stream_free(st);
     *len = n;
     return text;
+}
+
+static char *streamed(const ctc_sim_result *r, const result_select *sel, int csv, size_t piece,
+                      memory_source *src, size_t *len)
+{
+    return streamed_as(r, sel, csv ? SERIES_CSV : SERIES_JSON, piece, src, len);
 }
 
 static void assert_same_text(const ctc_sim_result *r, const result_select *sel, int csv,
@@ -307,4 +315,155 @@ Test(series_stream, max_points_keeps_the_most_samples_it_allows_and_no_more)
         }
     cr_assert_eq(series_stream_stride(1000, 7, 0), 7, "no max_points: the stride is every");
     cr_assert_eq(series_stream_stride(1000, 1, 0), 1);
+}
+
+/* ---- the binary forms ---- */
+
+/* the oracle's binary text, built naively from the result: the header, then per channel (t
+ * first) its rows - the samples kept with stride s, or each bucket of s samples' min and max
+ * found by a plain scan - of float32 values of the kept columns */
+static unsigned char *oracle_f32(const ctc_sim_result *r, const result_select *sel, int minmax,
+                                 int s, size_t *len)
+{
+    int ns = r->nsamples;
+    int rows_of[2] = {0, 0}; /* stride, minmax */
+    for (int j = 0; j < ns; j++) rows_of[0] += j % s == 0 || j == ns - 1;
+    rows_of[1] = 2 * ((ns + s - 1) / s);
+    int rows = rows_of[minmax];
+    char json[1024];
+    int n = snprintf(json, sizeof json, "{\"rows\":%d,\"reduce\":\"%s\",\"channels\":[[\"t\",1]",
+                     rows, minmax ? "minmax" : "stride");
+    for (int c = 0; c < CTC_NCHANNELS; c++) {
+        if (!r->width[c] || (sel->channels && !(sel->channels & CTC_CH_BIT(c)))) continue;
+        int k = 0;
+        for (int i = 0; i < r->width[c]; i++)
+            k += !sel->coords || r->width[c] != r->nv || c == CTC_CH_ENERGY || sel->coords[i];
+        n += snprintf(json + n, sizeof json - (size_t)n, ",[\"%s\",%d]",
+                      ctc_channel_name((ctc_channel)c), k);
+    }
+    n += snprintf(json + n, sizeof json - (size_t)n, "]}");
+    while (n % 4) json[n++] = ' ';
+    size_t cap = 4 + (size_t)n + 4 * (size_t)rows * 64;
+    unsigned char *out = calloc(cap, 1);
+    out[0] = (unsigned char)(n & 0xff), out[1] = (unsigned char)(n >> 8);
+    memcpy(out + 4, json, (size_t)n);
+    size_t at = 4 + (size_t)n;
+    for (int c = -1; c < CTC_NCHANNELS; c++) {
+        if (c >= 0 && (!r->width[c] || (sel->channels && !(sel->channels & CTC_CH_BIT(c)))))
+            continue;
+        int w = c < 0 ? 1 : r->width[c];
+        const double *v = c < 0 ? r->t : r->ch[c];
+        for (int row = 0; row < rows; row++)
+            for (int i = 0; i < w; i++) {
+                if (c >= 0 && sel->coords && r->width[c] == r->nv && c != CTC_CH_ENERGY &&
+                    !sel->coords[i])
+                    continue;
+                double x;
+                if (!minmax) {
+                    int j = row * s < ns - 1 ? row * s : ns - 1;
+                    x = v[(size_t)j * (size_t)w + (size_t)i];
+                } else {
+                    int j0 = (row / 2) * s, j1 = j0 + s < ns ? j0 + s : ns;
+                    if (c < 0) {
+                        x = v[row % 2 ? j1 - 1 : j0];
+                    } else {
+                        x = NAN;
+                        for (int j = j0; j < j1; j++) {
+                            double y = v[(size_t)j * (size_t)w + (size_t)i];
+                            if (!isnan(y) && (isnan(x) || (row % 2 ? y > x : y < x))) x = y;
+                        }
+                    }
+                }
+                float f = (float)x;
+                memcpy(out + at, &f, 4); /* the test machine is little-endian (checked below) */
+                at += 4;
+            }
+    }
+    *len = at;
+    return out;
+}
+
+Test(series_stream, f32_holds_the_kept_samples_and_minmax_each_buckets_extremes)
+{
+    const uint32_t one = 1;
+    unsigned char first;
+    memcpy(&first, &one, 1);
+    cr_assert_eq(first, 1, "the oracle writes floats in the machine's order: little-endian");
+    static const size_t pieces[] = {1, 3, 4096};
+    static const int sizes[][4] = {{0, 3, 3, 3}, {1, 3, 3, 3}, {37, 3, 3, 2}, {400, 7, 6, 6}};
+    for (size_t z = 0; z < sizeof sizes / sizeof sizes[0]; z++) {
+        ctc_sim_result *r = make_result(sizes[z][0], sizes[z][1], sizes[z][2], sizes[z][3]);
+        char *odd_coords = calloc((size_t)r->nv, 1);
+        for (int i = 0; i < r->nv; i += 2) odd_coords[i] = 1;
+        const int strides[] = {1, 2, 3, 36, r->nsamples + 5};
+        for (size_t s = 0; s < sizeof strides / sizeof strides[0]; s++) {
+            const result_select sels[] = {
+                {.every = strides[s]},
+                {.every = strides[s], .coords = odd_coords},
+                {.channels = CTC_CH_BIT(CTC_CH_E) | CTC_CH_BIT(CTC_CH_ENERGY), .every = strides[s]},
+            };
+            for (size_t k = 0; k < sizeof sels / sizeof sels[0]; k++)
+                for (int minmax = 0; minmax <= 1; minmax++)
+                    for (size_t p = 0; p < sizeof pieces / sizeof pieces[0]; p++) {
+                        size_t want_len, got_len;
+                        unsigned char *want =
+                            oracle_f32(r, &sels[k], minmax, strides[s], &want_len);
+                        memory_source src = {.r = r, .fail_after = -1};
+                        series_layout lay = layout_of(r);
+                        series_stream *st = series_stream_new(
+                            &lay, &sels[k], minmax ? SERIES_F32_MINMAX : SERIES_F32, memory_read,
+                            &src);
+                        cr_assert_eq(series_stream_values(st) * 4,
+                                     want_len - 4 - (want[0] | want[1] << 8),
+                                     "values counts the floats written");
+                        series_stream_free(st);
+                        char *got =
+                            streamed_as(r, &sels[k], minmax ? SERIES_F32_MINMAX : SERIES_F32,
+                                        pieces[p], &src, &got_len);
+                        size_t b = 0;
+                        while (b < want_len && b < got_len && want[b] == (unsigned char)got[b]) b++;
+                        cr_assert(b == want_len && b == got_len,
+                                  "%d samples, stride %d, selection %zu, %s, pieces of %zu: "
+                                  "differ at byte %zu of %zu (stream: %zu)",
+                                  r->nsamples, strides[s], k, minmax ? "minmax" : "stride",
+                                  pieces[p], b, want_len, got_len);
+                        free(want);
+                        free(got);
+                    }
+        }
+        free(odd_coords);
+        ctc_sim_result_free(r);
+    }
+}
+
+Test(series_stream, minmax_keeps_a_one_sample_spike_that_a_stride_drops)
+{
+    ctc_sim_result *r = make_result(1000, 2, 2, 2);
+    for (int j = 0; j < 1000; j++) r->ch[CTC_CH_E][2 * j] = 0.0;
+    r->ch[CTC_CH_E][2 * 501] = 7.0; /* a spike at sample 501, between strides of 100 */
+    result_select sel = {.channels = CTC_CH_BIT(CTC_CH_E), .every = 100};
+    for (int minmax = 0; minmax <= 1; minmax++) {
+        memory_source src = {.r = r, .fail_after = -1};
+        size_t len;
+        char *text =
+            streamed_as(r, &sel, minmax ? SERIES_F32_MINMAX : SERIES_F32, 4096, &src, &len);
+        uint32_t h = (uint32_t)(unsigned char)text[0] | (uint32_t)(unsigned char)text[1] << 8;
+        int rows = minmax ? 20 : 11, seen = 0;
+        const char *e = text + 4 + h + 4 * rows; /* past t */
+        cr_assert_eq(len, 4 + h + 4 * (size_t)rows * 3, "%s: %zu bytes",
+                     minmax ? "minmax" : "stride", len);
+        for (int row = 0; row < rows; row++) {
+            float f;
+            memcpy(&f, e + 8 * row, 4);
+            seen |= f == 7.0f;
+        }
+        cr_assert_eq(seen, minmax, "%s: the spike is %s", minmax ? "minmax" : "stride",
+                     seen ? "kept" : "lost");
+        free(text);
+    }
+    cr_assert_eq(series_stream_buckets_stride(1000, 1, 20), 100, "10 buckets of 100 samples");
+    cr_assert_eq(series_stream_buckets_stride(1001, 1, 20), 101, "1001 samples in 10 buckets");
+    cr_assert_eq(series_stream_buckets_stride(1000, 300, 20), 300, "every is a lower bound");
+    cr_assert_eq(series_stream_buckets_stride(5, 1, 0), 1, "no max_points: every sample");
+    ctc_sim_result_free(r);
 }

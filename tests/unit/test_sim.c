@@ -546,6 +546,49 @@ Test(sim, cancellation_stops_between_steps)
     scene_free(s);
 }
 
+/* what the recorded hook saw: each call's sample count, and the last sample's t and q[0] then */
+typedef struct seen_samples {
+    const ctc_sim_result *r;
+    int calls, bad_order;
+    double t[512], q0[512];
+} seen_samples;
+
+static void note_recorded(void *ctx, const ctc_sim_result *r)
+{
+    seen_samples *s = ctx;
+    if (s->r && s->r != r) s->bad_order = 1;
+    s->r = r;
+    if (r->nsamples != s->calls + 1) s->bad_order = 1;
+    int j = r->nsamples - 1;
+    if (j >= 0 && j < 512) {
+        s->t[j] = r->t[j];
+        s->q0[j] = r->ch[CTC_CH_Q][(size_t)j * (size_t)r->width[CTC_CH_Q]];
+    }
+    s->calls++;
+}
+
+Test(sim, the_recorded_hook_sees_each_sample_once_as_it_stays)
+{
+    scene *s = triple_pendulum();
+    set_pd(s, 100, 20, 0);
+    s->spec.duration = 1;
+    s->spec.output_interval = 0.01;
+    static seen_samples seen;
+    ctc_sim_hooks hooks = {.ctx = &seen, .recorded = note_recorded};
+    ctc_sim_result *r = NULL;
+    cr_assert_eq(ctc_sim_run(&s->spec, &hooks, &r, NULL, 0), CTC_OK);
+    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    cr_expect_eq(seen.r, r, "the hook's result is the one returned");
+    cr_expect_eq(seen.calls, r->nsamples, "%d calls for %d samples", seen.calls, r->nsamples);
+    cr_expect_eq(seen.bad_order, 0, "each call adds one sample");
+    for (int j = 0; j < r->nsamples && j < 512; j++) {
+        cr_expect_eq(seen.t[j], r->t[j], "t[%d] changed after its call", j);
+        cr_expect_eq(seen.q0[j], r->ch[CTC_CH_Q][(size_t)j * 3], "q[0] of sample %d changed", j);
+    }
+    ctc_sim_result_free(r);
+    scene_free(s);
+}
+
 Test(sim, stiff_gains_run_with_bdf_in_fewer_steps_than_dopri5)
 {
     scene *s = triple_pendulum();

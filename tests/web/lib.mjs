@@ -79,6 +79,17 @@ export async function stopJob(srv, id) {
 
 /* ---- pages ---- */
 
+/* The rows of a series answer in the f32 form (its JSON header's "rows"), or null. */
+function rowsInF32(buf) {
+    if (buf.length < 4) return null;
+    const h = buf.readUInt32LE(0);
+    try {
+        return JSON.parse(buf.subarray(4, 4 + h).toString('utf8')).rows;
+    } catch {
+        return null;
+    }
+}
+
 /* The number of samples in a series answer (JSON: t's length; CSV: its rows). */
 function samplesIn(text) {
     try {
@@ -95,7 +106,8 @@ function samplesIn(text) {
 /* A new page (in its own browser context, so no state is shared between tests) that records:
  *   page.errors  uncaught exceptions and unhandled rejections of the page's scripts
  *   page.console its console errors and warnings (shown when a test fails, not asserted)
- *   page.series  promises of {url, every, channels, samples} for each series answer fetched */
+ *   page.series  promises of {url, every, channels, reduce (f32: "stride" or "minmax", else
+ *                null), bytes, samples (rows)} for each series answer fetched */
 export async function newPage(browser) {
     const context = await browser.newContext({ viewport: VIEWPORT, acceptDownloads: true });
     const page = await context.newPage();
@@ -109,13 +121,16 @@ export async function newPage(browser) {
     page.on('response', (res) => {
         const url = new URL(res.url());
         if (!/^\/api\/jobs\/[0-9]+\/series$/.test(url.pathname) || res.status() !== 200) return;
+        const f32 = url.searchParams.get('format') === 'f32';
         page.series.push(
-            res.text().then(
-                (text) => ({
+            res.body().then(
+                (buf) => ({
                     url: url.pathname + url.search,
                     every: Number(url.searchParams.get('every') || 1),
                     channels: url.searchParams.get('channels'),
-                    samples: samplesIn(text),
+                    reduce: f32 ? url.searchParams.get('reduce') || 'stride' : null,
+                    bytes: buf.length,
+                    samples: f32 ? rowsInF32(buf) : samplesIn(buf.toString('utf8')),
                 }),
                 () => ({ url: url.pathname + url.search, samples: null }),
             ),
