@@ -63,7 +63,7 @@ export async function browseView(root, ctx) {
   const tagNote = el("span", {class: "tag-filter"});
   const tbody = el("tbody");
   const heads = HEADS.map(([key, label]) => {
-    if (!SORTS[key]) return el("th", {scope: "col", text: label});
+    if (!SORTS[key]) return el("th", {scope: "col", "data-col": key, text: label});
     const b = el("button", {type: "button", class: "sort", "data-key": key, text: label,
       title: `sort the page by ${label}`});
     b.addEventListener("click", () => {
