@@ -315,7 +315,7 @@ DESTDIR ?=
 VERSION := $(shell sed -n 's/^\#define CTCSIM_VERSION "\(.*\)"/\1/p' server/routes.h)
 PUBLIC_HEADERS := $(wildcard src/include/*.h)
 INSTALL_DIRS := bin lib lib/pkgconfig include/ctcsim share/ctcsim/web share/ctcsim/web/vendor \
-	share/ctcsim/api share/ctcsim/api/examples
+	share/ctcsim/api share/ctcsim/api/examples share/ctcsim/api/examples/families
 
 install: $(LIB) $(CLI) $(SERVER) web
 	@for d in $(INSTALL_DIRS); do install -d "$(DESTDIR)$(PREFIX)/$$d" || exit 1; done
@@ -327,6 +327,8 @@ install: $(LIB) $(CLI) $(SERVER) web
 	install -m 644 $(wildcard $(WEB_OUT)/vendor/*) "$(DESTDIR)$(PREFIX)/share/ctcsim/web/vendor/"
 	install -m 644 api/openapi.yaml api/job.schema.json "$(DESTDIR)$(PREFIX)/share/ctcsim/api/"
 	install -m 644 $(wildcard api/examples/*.json) "$(DESTDIR)$(PREFIX)/share/ctcsim/api/examples/"
+	install -m 644 $(wildcard api/examples/families/*.json) \
+		"$(DESTDIR)$(PREFIX)/share/ctcsim/api/examples/families/"
 	printf '%s\n' 'prefix=$(PREFIX)' 'exec_prefix=$${prefix}' 'libdir=$${exec_prefix}/lib' \
 		'includedir=$${prefix}/include' '' 'Name: ctcsim' \
 		'Description: computed torque control of multibody chains with the GDCA and iGDCA' \

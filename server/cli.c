@@ -6,23 +6,33 @@
  *   ctcsim presets
  *   ctcsim preset NAME [KEY=VALUE ...]
  *   ctcsim import FILE.urdf | --dh FILE.json
+ *   ctcsim sweep FILE|- [--csv] [--threads N] [--validate] [--quiet]
  *
  * It reads a job (job_json.h) from a file or standard input, runs it with the library in this
  * thread, and writes the series as CSV or one JSON object (result_out.h) to standard output or
- * OUT; a one-line summary goes to standard error. Exit codes:
+ * OUT; a one-line summary goes to standard error. `sweep` expands a family of jobs (family.h) and
+ * runs its members on N threads (default: the processors online), each member from its stored
+ * normalised spec as the service's workers run it, with a progress bar on standard error when
+ * that is a terminal; it prints the family's table (family.h: CSV with --csv, else aligned
+ * columns), the same table GET /api/families/{id} gives. Exit codes:
  *   0  the run finished (status "done"), or the job is valid, or the listing or job was printed
  *   1  usage error (unknown command or option)
  *   2  the job is invalid: "FILE: FIELD: MESSAGE" on standard error
  *   3  the run stopped early: diverged, integrator failure, timeout, or singular (a loop's
- *      independent joints can no longer drive it) (the samples up to there are still written)
+ *      independent joints can no longer drive it) (the samples up to there are still written);
+ *      for sweep, a member did
  *   4  input or output error (file not found, disk full)
  */
 #include <errno.h>
 #include <limits.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
+#include "family.h"
 #include "job_json.h"
 #include "presets.h"
 #include "result_out.h"
@@ -31,6 +41,7 @@
 enum { EXIT_USAGE = 1, EXIT_INVALID = 2, EXIT_STOPPED = 3, EXIT_IO = 4 };
 
 #define CLI_MAX_INPUT (256L * 1024 * 1024)
+#define CLI_MAX_FAMILY 1000000 /* members of a family run by `ctcsim sweep` */
 
 static const char usage[] =
     "usage: ctcsim run FILE|- [--format csv|json] [-o OUT] [--channels LIST] [--every N] "
@@ -39,6 +50,7 @@ static const char usage[] =
     "       ctcsim presets\n"
     "       ctcsim preset NAME [KEY=VALUE ...]\n"
     "       ctcsim import FILE.urdf | --dh FILE.json\n"
+    "       ctcsim sweep FILE|- [--csv] [--threads N] [--validate] [--quiet]\n"
     "\n"
     "  run       run a job (JSON, see api/job.schema.json) and write its series: CSV by\n"
     "            default, or with --format json one object with the normalised spec, the\n"
@@ -49,6 +61,9 @@ static const char usage[] =
     "  import    print a complete job for a robot from a URDF file, or with --dh from a\n"
     "            Denavit-Hartenberg table (JSON, the format's scene.dh): its bodies, a PD\n"
     "            controller and a gentle minimum-jerk move of every joint, to edit and run\n"
+    "  sweep     run a family of jobs (a base job and axes; README \"Studies\") on N threads\n"
+    "            (default: every processor) and print its table, one row per member: aligned\n"
+    "            text, or CSV with --csv; --validate expands and checks it without running\n"
     "\n"
     "  --channels LIST  comma-separated subset of q,qdot,q_des,qdot_des,e,tau,w,energy,loop,\n"
     "                   end_effector,body_pose\n"
@@ -412,6 +427,256 @@ static int cmd_import(int argc, char **argv)
     return out ? 0 : EXIT_IO;
 }
 
+/* ---- sweep ---- */
+
+/* One member's outcome. */
+typedef struct sweep_result {
+    const char *status; /* the service's status name */
+    cJSON *metrics;     /* or NULL */
+    char message[1024];
+} sweep_result;
+
+typedef struct sweep_ctx {
+    const family *f;
+    sweep_result *results; /* (f->nmembers) */
+    atomic_long next;      /* the next member to take */
+    atomic_long done;
+} sweep_ctx;
+
+/* runs member m as a worker of the service does: parse its stored spec, run, metrics */
+static void sweep_member(const family_member *m, sweep_result *out)
+{
+    job *j = NULL;
+    job_error jerr;
+    ctc_sim_result *r = NULL;
+    out->status = "failed";
+    if (job_parse(m->spec, strlen(m->spec), &j, &jerr) != 0) {
+        snprintf(out->message, sizeof out->message, "%.250s: %.700s", jerr.field, jerr.message);
+        return;
+    }
+    if (ctc_sim_run(&j->spec, NULL, &r, out->message, sizeof out->message) != CTC_OK) {
+        job_free(j);
+        return;
+    }
+    out->status = r->status == CTC_RUN_DONE        ? "done"
+                  : r->status == CTC_RUN_DIVERGED  ? "diverged"
+                  : r->status == CTC_RUN_CANCELLED ? "cancelled"
+                                                   : "failed";
+    snprintf(out->message, sizeof out->message, "%s", r->message);
+    /* the metrics as the service stores them: printed by cJSON and read back (its print keeps
+       15 digits where they read back within DBL_EPSILON), so both tables show the same numbers */
+    cJSON *metrics = result_metrics_json(r, j);
+    char *text = metrics ? cJSON_PrintUnformatted(metrics) : NULL;
+    out->metrics = text ? cJSON_Parse(text) : NULL;
+    cJSON_free(text);
+    cJSON_Delete(metrics);
+    ctc_sim_result_free(r);
+    job_free(j);
+}
+
+static void *sweep_worker(void *arg)
+{
+    sweep_ctx *c = arg;
+    for (;;) {
+        long i = atomic_fetch_add(&c->next, 1);
+        if (i >= c->f->nmembers) break;
+        sweep_member(&c->f->members[i], &c->results[i]);
+        atomic_fetch_add(&c->done, 1);
+    }
+    return NULL;
+}
+
+/* the progress bar, on a terminal only */
+static void sweep_progress(long done, long total)
+{
+    int width = 40, filled = total ? (int)(width * done / total) : width;
+    fprintf(stderr, "\r[%.*s%*s] %ld/%ld", filled, "########################################",
+            width - filled, "", done, total);
+    fflush(stderr);
+}
+
+/* splits one CSV line in place into cells (quoted cells keep their quotes); the count */
+static int csv_cells(char *line, char **cells, int max)
+{
+    int n = 0, quoted = 0;
+    char *start = line;
+    for (char *p = line;; p++) {
+        if (*p == '"') quoted = !quoted;
+        if ((*p == ',' && !quoted) || *p == '\0') {
+            int end = *p == '\0';
+            *p = '\0';
+            if (n < max) cells[n++] = start;
+            start = p + 1;
+            if (end) break;
+        }
+    }
+    return n;
+}
+
+/* the CSV table as aligned columns (numbers to the right) */
+static int print_aligned(FILE *out, char *csv)
+{
+    enum { MAXCOLS = 64 };
+    int widths[MAXCOLS] = {0}, ncols = 0;
+    long nlines = 0;
+    for (char *p = csv; *p; p = strchr(p, '\n') + 1, nlines++)
+        if (!strchr(p, '\n')) break;
+    char **lines = calloc((size_t)nlines + 1, sizeof *lines);
+    if (!lines) return -1;
+    long k = 0;
+    for (char *save = NULL, *l = strtok_r(csv, "\n", &save); l && k <= nlines;
+         l = strtok_r(NULL, "\n", &save))
+        lines[k++] = l;
+    char *cells[MAXCOLS];
+    for (int pass = 0; pass < 2; pass++)
+        for (long i = 0; i < k; i++) {
+            char copy[8192];
+            snprintf(copy, sizeof copy, "%s", lines[i]);
+            int n = csv_cells(copy, cells, MAXCOLS);
+            if (n > ncols) ncols = n;
+            for (int c = 0; c < n; c++) {
+                int w = (int)strlen(cells[c]);
+                if (pass == 0 && w > widths[c]) widths[c] = w;
+                if (pass == 1)
+                    fprintf(out, "%s%*s", c ? "  " : "", i ? widths[c] : -widths[c], cells[c]);
+            }
+            if (pass == 1) fputc('\n', out);
+        }
+    free(lines);
+    return ferror(out) ? -1 : 0;
+}
+
+static int cmd_sweep(int argc, char **argv)
+{
+    const char *path = NULL;
+    int csv = 0, quiet = 0, validate = 0;
+    long threads = sysconf(_SC_NPROCESSORS_ONLN);
+    for (int i = 0; i < argc; i++) {
+        const char *a = argv[i];
+        if (strcmp(a, "--csv") == 0) {
+            csv = 1;
+        } else if (strcmp(a, "--quiet") == 0) {
+            quiet = 1;
+        } else if (strcmp(a, "--validate") == 0) {
+            validate = 1;
+        } else if (strcmp(a, "--threads") == 0 && i + 1 < argc) {
+            char *end;
+            threads = strtol(argv[++i], &end, 10);
+            if (*end || threads < 1 || threads > 1024) {
+                fprintf(stderr,
+                        "ctcsim: --threads must be an integer from 1 to 1024 (got "
+                        "\"%s\")\n",
+                        argv[i]);
+                return EXIT_USAGE;
+            }
+        } else if (!path && (a[0] != '-' || strcmp(a, "-") == 0)) {
+            path = a;
+        } else {
+            fprintf(stderr, "ctcsim: sweep: unexpected argument \"%s\"\n%s", a, usage);
+            return EXIT_USAGE;
+        }
+    }
+    if (!path) {
+        fprintf(stderr, "ctcsim: sweep: which family? (a FILE or - for standard input)\n%s", usage);
+        return EXIT_USAGE;
+    }
+    if (threads < 1) threads = 1;
+
+    size_t len = 0;
+    const char *why = "";
+    char *text = read_input(path, &len, &why);
+    if (!text) {
+        fprintf(stderr, "ctcsim: %s: %s\n", path, why);
+        return EXIT_IO;
+    }
+    family *f = NULL;
+    family_error ferr;
+    int rc = family_expand(text, len, CLI_MAX_FAMILY, &f, &ferr);
+    free(text);
+    if (rc != 0) {
+        fprintf(stderr, "ctcsim: %s: %s%s%s\n", path, ferr.field, ferr.field[0] ? ": " : "",
+                ferr.message);
+        return ferr.status == 503 ? EXIT_IO : EXIT_INVALID;
+    }
+    if (validate) {
+        fprintf(stderr, "%s: valid family \"%s\": %ld members\n", path, f->name, f->nmembers);
+        family_free(f);
+        return 0;
+    }
+
+    /* the members on the threads, the progress bar on this one */
+    sweep_ctx c = {.f = f, .results = calloc((size_t)f->nmembers + 1, sizeof *c.results)};
+    atomic_init(&c.next, 0);
+    atomic_init(&c.done, 0);
+    pthread_t *tids = calloc((size_t)threads, sizeof *tids);
+    family_row *rows = calloc((size_t)f->nmembers + 1, sizeof *rows);
+    cJSON **values = calloc((size_t)f->nmembers + 1, sizeof *values);
+    cJSON *paths = cJSON_Parse(f->paths);
+    if (!c.results || !tids || !rows || !values || !paths) {
+        fprintf(stderr, "ctcsim: out of memory\n");
+        rc = EXIT_IO;
+        goto done;
+    }
+    if (threads > f->nmembers) threads = f->nmembers > 0 ? f->nmembers : 1;
+    long started = 0;
+    for (; started < threads; started++)
+        if (pthread_create(&tids[started], NULL, sweep_worker, &c) != 0) break;
+    if (started == 0) sweep_worker(&c);
+    int bar = !quiet && isatty(STDERR_FILENO);
+    while (bar && atomic_load(&c.done) < f->nmembers) {
+        sweep_progress(atomic_load(&c.done), f->nmembers);
+        struct timespec ts = {.tv_sec = 0, .tv_nsec = 100000000L};
+        nanosleep(&ts, NULL);
+    }
+    for (long t = 0; t < started; t++) pthread_join(tids[t], NULL);
+    if (bar) {
+        sweep_progress(f->nmembers, f->nmembers);
+        fputc('\n', stderr);
+    }
+
+    /* the table */
+    long stopped = 0;
+    for (long i = 0; i < f->nmembers; i++) {
+        values[i] = cJSON_Parse(f->members[i].values);
+        rows[i] = (family_row){.index = f->members[i].index,
+                               .replica = f->members[i].replica,
+                               .status = c.results[i].status,
+                               .values = values[i],
+                               .metrics = c.results[i].metrics,
+                               .message = c.results[i].message};
+        stopped += strcmp(c.results[i].status, "done") != 0;
+    }
+    char *table = NULL;
+    size_t tlen = 0;
+    FILE *mem = open_memstream(&table, &tlen);
+    int wrc = mem ? family_write_csv(mem, paths, rows, f->nmembers) : -1;
+    if (mem && fclose(mem) != 0) wrc = -1;
+    if (wrc == 0) wrc = csv ? (fputs(table, stdout) < 0 ? -1 : 0) : print_aligned(stdout, table);
+    if (fflush(stdout) != 0) wrc = -1;
+    free(table);
+    if (wrc != 0) {
+        fprintf(stderr, "ctcsim: writing the table: %s\n", strerror(errno));
+        rc = EXIT_IO;
+        goto done;
+    }
+    if (!quiet)
+        fprintf(stderr, "%s: %ld members on %ld threads, %ld done, %ld stopped early\n", f->name,
+                f->nmembers, started ? started : 1, f->nmembers - stopped, stopped);
+    rc = stopped ? EXIT_STOPPED : 0;
+done:
+    for (long i = 0; c.results && values && i < f->nmembers; i++) {
+        cJSON_Delete(c.results[i].metrics);
+        cJSON_Delete(values[i]);
+    }
+    free(c.results);
+    free(tids);
+    free(rows);
+    free(values);
+    cJSON_Delete(paths);
+    family_free(f);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2 || strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0) {
@@ -424,6 +689,7 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "presets") == 0 && argc == 2) return cmd_presets();
     if (strcmp(cmd, "preset") == 0) return cmd_preset(argc - 2, argv + 2);
     if (strcmp(cmd, "import") == 0) return cmd_import(argc - 2, argv + 2);
+    if (strcmp(cmd, "sweep") == 0) return cmd_sweep(argc - 2, argv + 2);
     fprintf(stderr, "ctcsim: unknown command \"%s\"\n%s", cmd, usage);
     return EXIT_USAGE;
 }

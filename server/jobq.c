@@ -1,6 +1,14 @@
 /*
  * jobq.c - the bounded job queue and its worker threads (jobq.h).
  *
+ * Fair turns. Single jobs wait in the ring; the members of each family (family.h) wait in their
+ * family's lane, made when the family is submitted and dropped when it empties. Workers take
+ * jobs in turn from the ring and from each lane, one job at a time (round-robin over the places
+ * that have jobs), so a single job posted behind a family of 10^4 members waits for at most one
+ * member of each family, not for the family, and two families share the workers evenly. Within a
+ * place the order is first in, first out. Lanes are not bounded by max_queue (the service bounds
+ * a family's size by --max-family instead).
+ *
  * The queue is a ring of job ids under one mutex, with two condition variables: `work` (an id was
  * queued, or the queue is stopping) wakes idle workers, and `finished` (a job left the queue or a
  * worker) wakes jobq_wait. The ring holds max_queue ids, or more when start-up recovery brings
@@ -53,6 +61,7 @@
 #include "jobq.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdarg.h>
@@ -86,11 +95,19 @@ typedef enum worker_outcome {
     OUTCOME_REQUEUED,    /* interrupted by jobq_stop and put back to queued */
 } worker_outcome;
 
+/* the waiting members of one family, oldest first */
+typedef struct jobq_lane {
+    int64_t family;
+    int64_t *ids; /* (cap) ids[head .. head + count) */
+    long cap, head, count;
+} jobq_lane;
+
 typedef struct jobq_worker {
     jobq *q;
     store *db; /* this worker's connection; used by its thread only while it runs */
     pthread_t thread;
     int64_t running;   /* id of the job in hand, 0 = idle (guarded by q->lock) */
+    int64_t family;    /* the family of the job in hand, 0 = none (guarded by q->lock) */
     atomic_int cancel; /* set by jobq_cancel for the job in hand, cleared at each pop */
     /* the job in hand, for the hooks (worker thread only) */
     int64_t job_id;
@@ -107,8 +124,12 @@ struct jobq {
     pthread_mutex_t lock;
     pthread_cond_t work;     /* an id was queued, or stopping */
     pthread_cond_t finished; /* a job left the ring or a slot; CLOCK_MONOTONIC */
-    int64_t *ring;           /* (cap) ids, count of them from head, oldest first */
+    int64_t *ring;           /* (cap) ids, count of them from head, oldest first: single jobs */
     int cap, head, count;
+    jobq_lane *lanes; /* (nlanes) one per family with members waiting, oldest first */
+    int nlanes, lanes_cap;
+    long lane_jobs; /* the members waiting in every lane */
+    int turn;       /* the next place to serve: 0 = the ring, i = lanes[i - 1] */
     long done;
     atomic_int stopping;
     jobq_worker *workers; /* (config.workers) */
@@ -169,6 +190,131 @@ static void ring_remove(jobq *q, int pos)
     q->count--;
 }
 
+/* ---- the families' lanes (caller holds q->lock) ---- */
+
+/* The lane of family, or NULL. */
+static jobq_lane *lane_of(jobq *q, int64_t family)
+{
+    for (int i = 0; i < q->nlanes; i++)
+        if (q->lanes[i].family == family) return &q->lanes[i];
+    return NULL;
+}
+
+/* Appends n ids to the lane of family (made when absent); 0, or -1 out of memory. */
+static int lane_push(jobq *q, int64_t family, const int64_t *ids, long n)
+{
+    jobq_lane *l = lane_of(q, family);
+    if (!l) {
+        if (q->nlanes == q->lanes_cap) {
+            int grow = q->lanes_cap ? 2 * q->lanes_cap : 4;
+            jobq_lane *bigger = realloc(q->lanes, (size_t)grow * sizeof *bigger);
+            if (!bigger) return -1;
+            q->lanes = bigger;
+            q->lanes_cap = grow;
+        }
+        l = &q->lanes[q->nlanes];
+        memset(l, 0, sizeof *l);
+        l->family = family;
+        q->nlanes++;
+    }
+    if (l->head + l->count + n > l->cap) {
+        /* compact, then grow */
+        if (l->head > 0 && l->count > 0)
+            memmove(l->ids, l->ids + l->head, (size_t)l->count * sizeof *l->ids);
+        l->head = 0;
+        if (l->count + n > l->cap) {
+            long grow = l->count + n > 2 * l->cap ? l->count + n : 2 * l->cap;
+            int64_t *bigger = realloc(l->ids, (size_t)grow * sizeof *bigger);
+            if (!bigger) {
+                if (l->count == 0) q->nlanes--; /* the lane just made: no longer */
+                return -1;
+            }
+            l->ids = bigger;
+            l->cap = grow;
+        }
+    }
+    memcpy(l->ids + l->head + l->count, ids, (size_t)n * sizeof *ids);
+    l->count += n;
+    q->lane_jobs += n;
+    return 0;
+}
+
+/* Removes lane i (empty or not), keeping the others in order and the turn on the same place. */
+static void lane_drop(jobq *q, int i)
+{
+    q->lane_jobs -= q->lanes[i].count;
+    free(q->lanes[i].ids);
+    memmove(&q->lanes[i], &q->lanes[i + 1], (size_t)(q->nlanes - i - 1) * sizeof *q->lanes);
+    q->nlanes--;
+    if (q->turn > i + 1) q->turn--;
+    if (q->turn > q->nlanes) q->turn = 0;
+}
+
+/* Jobs waiting, single and in families. */
+static long waiting(const jobq *q)
+{
+    return q->count + q->lane_jobs;
+}
+
+/* Pops the next job in turn: the ring and each family's lane take turns, one job each, so a
+ * single job waits for at most one job of each family. *family receives its family (0: none).
+ * The caller checks that a job waits. */
+static int64_t next_job(jobq *q, int64_t *family)
+{
+    for (int k = 0; k <= q->nlanes; k++) {
+        int place = (q->turn + k) % (q->nlanes + 1);
+        if (place == 0) {
+            if (q->count == 0) continue;
+            q->turn = 1 % (q->nlanes + 1);
+            *family = 0;
+            return ring_pop(q);
+        }
+        jobq_lane *l = &q->lanes[place - 1];
+        if (l->count == 0) continue;
+        int64_t id = l->ids[l->head++];
+        l->count--;
+        q->lane_jobs--;
+        *family = l->family;
+        q->turn = (place + 1) % (q->nlanes + 1);
+        if (l->count == 0) {
+            /* the lane goes; the turn stays on the place after it */
+            q->turn = place;
+            lane_drop(q, place - 1);
+            if (q->turn > q->nlanes) q->turn = 0;
+        }
+        return id;
+    }
+    *family = 0;
+    return 0;
+}
+
+/* Takes id out of a lane; 1 when it was there. */
+static int lanes_remove(jobq *q, int64_t id)
+{
+    for (int i = 0; i < q->nlanes; i++) {
+        jobq_lane *l = &q->lanes[i];
+        for (long k = 0; k < l->count; k++)
+            if (l->ids[l->head + k] == id) {
+                memmove(&l->ids[l->head + k], &l->ids[l->head + k + 1],
+                        (size_t)(l->count - k - 1) * sizeof *l->ids);
+                l->count--;
+                q->lane_jobs--;
+                if (l->count == 0) lane_drop(q, i);
+                return 1;
+            }
+    }
+    return 0;
+}
+
+/* Whether id waits in a lane. */
+static int lanes_find(const jobq *q, int64_t id)
+{
+    for (int i = 0; i < q->nlanes; i++)
+        for (long k = 0; k < q->lanes[i].count; k++)
+            if (q->lanes[i].ids[q->lanes[i].head + k] == id) return 1;
+    return 0;
+}
+
 /* The worker whose slot holds id, or NULL (never an idle one: ids are positive). */
 static jobq_worker *slot_find(jobq *q, int64_t id)
 {
@@ -180,7 +326,7 @@ static jobq_worker *slot_find(jobq *q, int64_t id)
 /* Whether id is queued or running here. */
 static int job_here(jobq *q, int64_t id)
 {
-    return ring_find(q, id) >= 0 || slot_find(q, id) != NULL;
+    return ring_find(q, id) >= 0 || lanes_find(q, id) || slot_find(q, id) != NULL;
 }
 
 /* ---- the simulation's hooks (worker thread) ---- */
@@ -414,9 +560,9 @@ static void *worker_main(void *arg)
     pthread_mutex_lock(&q->lock);
     for (;;) {
         /* wait while empty; stop without taking more once stopping */
-        while (q->count == 0 && !atomic_load(&q->stopping)) pthread_cond_wait(&q->work, &q->lock);
+        while (waiting(q) == 0 && !atomic_load(&q->stopping)) pthread_cond_wait(&q->work, &q->lock);
         if (atomic_load(&q->stopping)) break;
-        int64_t id = ring_pop(q);
+        int64_t id = next_job(q, &w->family);
         w->running = id;
         atomic_store(&w->cancel, 0);
         pthread_mutex_unlock(&q->lock);
@@ -427,6 +573,7 @@ static void *worker_main(void *arg)
         /* the slot is free again; jobq_wait may be waiting for this job */
         pthread_mutex_lock(&q->lock);
         w->running = 0;
+        w->family = 0;
         if (outcome == OUTCOME_FINISHED) q->done++;
         pthread_cond_broadcast(&q->finished);
     }
@@ -453,6 +600,8 @@ static void jobq_free(jobq *q)
         pthread_mutex_destroy(&q->lock);
     }
     free(q->workers);
+    for (int i = 0; i < q->nlanes; i++) free(q->lanes[i].ids);
+    free(q->lanes);
     free(q->ring);
     free(q->db_path);
     free(q);
@@ -499,7 +648,7 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
 
     int rc = -1;
     store *db = NULL;
-    int64_t *ids = NULL;
+    int64_t *ids = NULL, *families = NULL;
     int nids = 0;
     char why[512];
     jobq *q = calloc(1, sizeof *q);
@@ -536,13 +685,33 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
         struct timespec pause = {.tv_sec = 1, .tv_nsec = 0};
         while (nanosleep(&pause, &pause) != 0 && errno == EINTR) continue;
     }
-    q->cap = nids > config->max_queue ? nids : config->max_queue;
+    /* the members of families go back to their family's lane, the others to the ring */
+    families = calloc(nids > 0 ? (size_t)nids : 1, sizeof *families);
+    if (!families) {
+        fail(err, errlen, "out of memory for %d recovered jobs", nids);
+        goto cleanup;
+    }
+    if (nids > 0 && store_job_families(db, ids, nids, families, why, sizeof why) != 0) {
+        fail(err, errlen, "recovering jobs: %s", why);
+        goto cleanup;
+    }
+    int singles = 0;
+    for (int i = 0; i < nids; i++) singles += families[i] == 0;
+    q->cap = singles > config->max_queue ? singles : config->max_queue;
     q->ring = malloc((size_t)q->cap * sizeof *q->ring);
     if (!q->ring) {
         fail(err, errlen, "out of memory for a queue of %d jobs", q->cap);
         goto cleanup;
     }
-    for (int i = 0; i < nids; i++) ring_push(q, ids[i]);
+    for (int i = 0; i < nids; i++) {
+        if (families[i] == 0) {
+            ring_push(q, ids[i]);
+        } else if (lane_push(q, families[i], &ids[i], 1) != 0) {
+            fail(err, errlen, "out of memory for the recovered members of family %lld",
+                 (long long)families[i]);
+            goto cleanup;
+        }
+    }
 
     /* one connection per worker, opened here so that a failure fails the start */
     for (int i = 0; i < config->workers; i++) {
@@ -587,6 +756,7 @@ cleanup:
     if (q) jobq_free(q);
     store_close(db);
     free(ids);
+    free(families);
     return rc;
 }
 
@@ -606,6 +776,50 @@ int jobq_submit(jobq *q, int64_t id)
     return rc;
 }
 
+int jobq_submit_family(jobq *q, int64_t family, const int64_t *ids, long n)
+{
+    int rc = 0;
+    pthread_mutex_lock(&q->lock);
+    if (atomic_load(&q->stopping))
+        rc = 2;
+    else if (n > 0 && lane_push(q, family, ids, n) != 0)
+        rc = -1;
+    else
+        pthread_cond_broadcast(&q->work);
+    pthread_mutex_unlock(&q->lock);
+    return rc;
+}
+
+int jobq_cancel_family(jobq *q, int64_t family, int64_t **removed, long *n)
+{
+    int running = 0;
+    *removed = NULL;
+    *n = 0;
+    pthread_mutex_lock(&q->lock);
+    jobq_lane *l = lane_of(q, family);
+    if (l) {
+        /* the lane's ids are handed to the caller, the lane goes */
+        if (l->head > 0 && l->count > 0)
+            memmove(l->ids, l->ids + l->head, (size_t)l->count * sizeof *l->ids);
+        *removed = l->ids;
+        *n = l->count;
+        q->lane_jobs -= l->count;
+        l->ids = NULL;
+        l->count = 0;
+        lane_drop(q, (int)(l - q->lanes));
+        pthread_cond_broadcast(&q->finished);
+    }
+    for (int i = 0; i < q->nstarted; i++)
+        if (q->workers[i].running && q->workers[i].family == family) {
+            atomic_store(&q->workers[i].cancel, 1);
+            running++;
+        }
+    pthread_mutex_unlock(&q->lock);
+    for (long i = 0; q->config.left && i < *n; i++)
+        q->config.left(q->config.left_arg, (*removed)[i]);
+    return running;
+}
+
 int jobq_space(jobq *q)
 {
     pthread_mutex_lock(&q->lock);
@@ -619,10 +833,11 @@ int jobq_cancel(jobq *q, int64_t id)
     int rc = 0;
     pthread_mutex_lock(&q->lock);
     int pos = ring_find(q, id);
-    jobq_worker *w = pos < 0 ? slot_find(q, id) : NULL;
-    if (pos >= 0) {
+    int in_lane = pos < 0 && lanes_remove(q, id);
+    jobq_worker *w = pos < 0 && !in_lane ? slot_find(q, id) : NULL;
+    if (pos >= 0 || in_lane) {
         /* the caller records it cancelled; jobq_wait need not wait for it any longer */
-        ring_remove(q, pos);
+        if (pos >= 0) ring_remove(q, pos);
         pthread_cond_broadcast(&q->finished);
         rc = 1;
     } else if (w) {
@@ -678,12 +893,36 @@ int jobq_live_read(jobq *q, int64_t id, int channel, uint64_t offset, void *buf,
     return rc;
 }
 
+/* The number of waiting jobs ahead of the k-th (0-based) of its place (the ring when self is
+   NULL, else lane self) while workers serve every place in turn: k of its own place and
+   min(count, k) of each other one (where the turn stands is ignored: at most one job off per
+   place). Caller holds q->lock. */
+static long ahead_in_turns(const jobq *q, long k, const jobq_lane *self)
+{
+    long ahead = k;
+    if (self != NULL) ahead += q->count < k ? q->count : k;
+    for (int i = 0; i < q->nlanes; i++)
+        if (&q->lanes[i] != self) ahead += q->lanes[i].count < k ? q->lanes[i].count : k;
+    return ahead;
+}
+
 int jobq_position(jobq *q, int64_t id)
 {
     pthread_mutex_lock(&q->lock);
+    long ahead = -1;
     int pos = ring_find(q, id);
+    if (pos >= 0) ahead = ahead_in_turns(q, pos, NULL);
+    for (int i = 0; ahead < 0 && i < q->nlanes; i++) {
+        const jobq_lane *l = &q->lanes[i];
+        for (long k = 0; k < l->count; k++)
+            if (l->ids[l->head + k] == id) {
+                ahead = ahead_in_turns(q, k, l);
+                break;
+            }
+    }
     pthread_mutex_unlock(&q->lock);
-    return pos + 1;
+    if (ahead < 0) return 0;
+    return ahead >= INT_MAX - 1 ? INT_MAX : (int)ahead + 1;
 }
 
 int jobq_wait(jobq *q, int64_t id, double timeout_s)
@@ -718,7 +957,7 @@ void jobq_get_stats(jobq *q, jobq_stats *out)
     out->workers = q->config.workers;
     out->busy = 0;
     for (int i = 0; i < q->nstarted; i++) out->busy += q->workers[i].running != 0;
-    out->queued = q->count;
+    out->queued = (int)waiting(q);
     out->done = q->done;
     pthread_mutex_unlock(&q->lock);
 }

@@ -19,9 +19,12 @@
  * A worker holds no lock of the queue's while it waits.
  *
  * The queue is a mutex + condition variable ring (wait while empty, pop under the lock, work
- * outside it). jobq_stop stops taking jobs, asks running ones to stop at their next step, puts
- * them back to queued in the database (they restart from t = 0 at the next start), and joins the
- * workers. A job answered 202 is therefore never lost: it is in the database before it is queued.
+ * outside it), with one lane per family of jobs beside it: workers serve the ring and the lanes
+ * in turn, one job each, so a family's members never hold up a single job for longer than one
+ * member's run per family (jobq.c). jobq_stop stops taking jobs, asks running ones to stop at their
+ * next step, puts them back to queued in the database (they restart from t = 0 at the next start),
+ * and joins the workers. A job answered 202 is therefore never lost: it is in the database before
+ * it is queued.
  *
  * All functions are thread-safe unless they say otherwise.
  */
@@ -60,7 +63,7 @@ typedef struct jobq_config {
 typedef struct jobq_stats {
     int workers;
     int busy;   /* workers running a job */
-    int queued; /* jobs waiting */
+    int queued; /* jobs waiting, single and in families */
     long done;  /* jobs finished since start (any final status) */
 } jobq_stats;
 
@@ -72,6 +75,17 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen);
 /* Queues a stored job. Returns 0, 1 when the queue is full (the caller answers 503 and should
  * mark the stored job cancelled or delete it), or 2 when the queue is stopping. */
 int jobq_submit(jobq *q, int64_t id);
+
+/* Queues the n stored members ids[0..n) of a family, in order, in that family's lane (made when
+ * absent; the lanes are not bounded by max_queue). Returns 0, 2 when the queue is stopping, or
+ * -1 out of memory (nothing queued). */
+int jobq_submit_family(jobq *q, int64_t family, const int64_t *ids, long n);
+
+/* Cancels a family: takes every member waiting in its lane out of the queue, handing their ids
+ * to the caller (*removed, a new array to free(), of *n; the caller records them cancelled;
+ * `left` is called for each), and asks the workers running its members to stop at their next
+ * step (they record them cancelled). Returns the number of members asked to stop. */
+int jobq_cancel_family(jobq *q, int64_t family, int64_t **removed, long *n);
 
 /* Free places in the queue now (a hint for the caller before it stores a job). */
 int jobq_space(jobq *q);
@@ -94,7 +108,10 @@ int jobq_live_info(jobq *q, int64_t id, store_series_info *out);
 int jobq_live_read(jobq *q, int64_t id, int channel, uint64_t offset, void *buf, size_t len);
 
 /* The job's place in the queue: 1 for the next to start, 0 when it does not wait there
- * (running, finished, or queued in the database only). */
+ * (running, finished, or queued in the database only). Workers serve the single jobs and each
+ * family's lane in turn, so a job k-th in its place has k of its place ahead of it and up to k
+ * of every other place: the place counts those (exact up to where the turn stands, one job per
+ * place). */
 int jobq_position(jobq *q, int64_t id);
 
 /* Waits until the job is no longer queued or running here, or timeout_s passes. Returns 0 when it

@@ -58,6 +58,7 @@ typedef struct server_settings {
     long long max_waiters;            /* POST /api/jobs?wait clients waiting at once */
     long long max_waiters_per_client; /* of which from one client address */
     long long max_jobs_per_client;    /* queued and running jobs of one client address */
+    long long max_family;             /* members of one family (POST /api/families) */
 
     long long max_series_streams; /* large GET /api/jobs/{id}/series replies sent at once */
     long long db_max_size;        /* bytes the database may grow to; 0 = as the disk allows */
@@ -127,6 +128,8 @@ static const setting settings[] = {
     {"--max-jobs-per-client", "CTCSIM_MAX_JOBS_PER_CLIENT", SETTING_INTEGER,
      AT(max_jobs_per_client), 1, 1000000, "N",
      "jobs queued or running at once from one client address; more are refused with 429"},
+    {"--max-family", "CTCSIM_MAX_FAMILY", SETTING_INTEGER, AT(max_family), 1, 1000000, "N",
+     "members one family (POST /api/families) may have; a larger one is refused with 413"},
     {"--max-series-streams", "CTCSIM_MAX_SERIES_STREAMS", SETTING_INTEGER, AT(max_series_streams),
      1, 100000, "N", "large series replies (over 1048576 values) sent at once; more get 503"},
     {"--db-max-size", "CTCSIM_DB_MAX_SIZE", SETTING_BYTES, AT(db_max_size), 0, 1LL << 50, "BYTES",
@@ -378,6 +381,7 @@ int main(int argc, char **argv)
         .max_waiters = 256,
         .max_waiters_per_client = 16,
         .max_jobs_per_client = 64,
+        .max_family = 10000,
         .max_series_streams = 4,
     };
     int rc = read_settings(argc, argv, &cfg);
@@ -420,6 +424,7 @@ int main(int argc, char **argv)
                       .job_threads = (int)cfg.job_threads,
                       .jobs_by_client = client_count_new(),
                       .max_jobs_per_client = (unsigned)cfg.max_jobs_per_client,
+                      .max_family = (long)cfg.max_family,
                       .max_series_streams = (int)cfg.max_series_streams,
                       .db_max_size = cfg.db_max_size,
                       .health = health};

@@ -71,6 +71,7 @@
 #include <microhttpd.h>
 
 #include "client_count.h"
+#include "family.h"
 #include "job_json.h"
 #include "presets.h"
 #include "result_out.h"
@@ -312,6 +313,8 @@ static cJSON *job_row(const store_job *j)
         tags = cJSON_CreateArray();
     }
     cJSON_AddItemToObject(o, "tags", tags);
+    cJSON_AddItemToObject(
+        o, "family", j->family > 0 ? cJSON_CreateNumber((double)j->family) : cJSON_CreateNull());
     cJSON_AddStringToObject(o, "location", location);
     /* cJSON's adders fail quietly: check the last of each kind once */
     if (!o || !scene || !cJSON_GetObjectItemCaseSensitive(o, "location")) {
@@ -454,6 +457,11 @@ static void finish_post(http_reply *rep, void *arg)
     free(d);
 }
 
+static void run_post_at(const http_request *req, http_reply *rep, const routes_ctx *ctx,
+                        double wait, long inline_max,
+                        void (*work)(http_reply *rep, const routes_ctx *ctx, const char *client,
+                                     const char *body, size_t len, double wait, int deferred));
+
 /* Runs work(...) here for a body up to ROUTES_INLINE_BODY bytes, else on a thread of the HTTP
  * layer (http_defer); past the places for those, 503 BUSY or, past the client's, 429
  * TOO_MANY_REQUESTS, both with Retry-After. */
@@ -461,9 +469,18 @@ static void run_post(const http_request *req, http_reply *rep, const routes_ctx 
                      void (*work)(http_reply *rep, const routes_ctx *ctx, const char *client,
                                   const char *body, size_t len, double wait, int deferred))
 {
+    run_post_at(req, rep, ctx, wait, ROUTES_INLINE_BODY, work);
+}
+
+/* run_post with the largest body parsed here: inline_max bytes (-1: none, always deferred) */
+static void run_post_at(const http_request *req, http_reply *rep, const routes_ctx *ctx,
+                        double wait, long inline_max,
+                        void (*work)(http_reply *rep, const routes_ctx *ctx, const char *client,
+                                     const char *body, size_t len, double wait, int deferred))
+{
     char client[CLIENT_KEY_MAX];
     http_client(req, client, sizeof client);
-    if (req->body_len <= ROUTES_INLINE_BODY) {
+    if (inline_max >= 0 && req->body_len <= (size_t)inline_max) {
         work(rep, ctx, client, req->body, req->body_len, wait, 0);
         return;
     }
@@ -489,11 +506,15 @@ static void run_post(const http_request *req, http_reply *rep, const routes_ctx 
                          "this client (%s) has as many requests being answered off the HTTP "
                          "threads as it may (--max-waiters-per-client); try again in a few seconds",
                          client);
+    else if (inline_max >= 0)
+        http_reply_error(rep, 503, "BUSY", "",
+                         "every place for a body of more than %ld bytes is taken (--max-waiters); "
+                         "try again in a few seconds",
+                         inline_max);
     else
         http_reply_error(rep, 503, "BUSY", "",
-                         "every place for a body of more than %d bytes is taken (--max-waiters); "
-                         "try again in a few seconds",
-                         ROUTES_INLINE_BODY);
+                         "every place for a request answered off the HTTP threads is taken "
+                         "(--max-waiters); try again in a few seconds");
 }
 
 /* POST /api/jobs once the request is checked: parse, the client's place, store, queue, reply
@@ -1226,6 +1247,335 @@ static void get_preset(const http_request *req, http_reply *rep, void *arg)
     cJSON_Delete(q.request);
 }
 
+/* ---- families: POST, GET, DELETE /api/families ---- */
+
+static void family_location(char *buf, size_t len, int64_t id)
+{
+    snprintf(buf, len, "/api/families/%" PRId64, id);
+}
+
+/* The row of a family as lists show it: {"id", "name", "members", "created", "counts": {status:
+ * n}, "location"}; NULL when out of memory. */
+static cJSON *family_row_json(const store_family *f)
+{
+    char location[64];
+    family_location(location, sizeof location, f->id);
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "id", (double)f->id);
+    cJSON_AddItemToObject(o, "name", string_or_null(f->name));
+    cJSON_AddNumberToObject(o, "members", (double)f->members);
+    cJSON_AddItemToObject(o, "created", time_json(f->created));
+    cJSON_AddItemToObject(o, "axes", stored_json(f->axes));
+    cJSON *counts = cJSON_AddObjectToObject(o, "counts");
+    for (int i = 0; i < STORE_NSTATUS; i++)
+        cJSON_AddNumberToObject(counts, store_status_name((store_status)i), (double)f->counts[i]);
+    cJSON_AddStringToObject(o, "location", location);
+    if (!o || !counts || !cJSON_GetObjectItemCaseSensitive(o, "location")) {
+        cJSON_Delete(o);
+        return NULL;
+    }
+    return o;
+}
+
+/* POST /api/families once the request is checked: expand and validate every member, store the
+ * family whole, queue its members in its lane, 202. Runs off the HTTP threads (deferred). */
+static void post_family_work(http_reply *rep, const routes_ctx *ctx, const char *client,
+                             const char *body, size_t len, double wait, int deferred)
+{
+    (void)client;
+    (void)wait;
+    (void)deferred;
+    char err[256] = "";
+    family *f = NULL;
+    family_error ferr;
+    store_new_member *members = NULL;
+    int64_t *ids = NULL, family_id = 0;
+    if (family_expand(body, len, ctx->max_family, &f, &ferr) != 0) {
+        http_reply_error(rep, ferr.status, ferr.code, ferr.field, "%s", ferr.message);
+        return;
+    }
+    for (long i = 0; i < f->nmembers; i++)
+        if (f->members[i].threads > ctx->job_threads) {
+            http_reply_error(rep, 400, "INVALID_FIELD", "base.threads",
+                             "must be at most %d on this server (its --job-threads; got %d)",
+                             ctx->job_threads, f->members[i].threads);
+            goto done;
+        }
+    members = calloc((size_t)f->nmembers + 1, sizeof *members);
+    ids = calloc((size_t)f->nmembers + 1, sizeof *ids);
+    if (!members || !ids) {
+        http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
+        goto done;
+    }
+    for (long i = 0; i < f->nmembers; i++) {
+        const family_member *m = &f->members[i];
+        members[i] = (store_new_member){.name = m->name,
+                                        .preset = m->preset,
+                                        .controller = m->controller,
+                                        .spec = m->spec,
+                                        .nbodies = m->nbodies,
+                                        .nv = m->nv,
+                                        .index = m->index,
+                                        .replica = m->replica,
+                                        .values = m->values};
+    }
+    store *s = thread_store(ctx, rep);
+    if (!s) goto done;
+    /* stored whole first, then queued: a family answered 202 is in the database */
+    if (store_family_insert(s, f->name, f->doc, f->paths, members, f->nmembers, &family_id, ids,
+                            err, sizeof err) != 0) {
+        database_failed(rep, "storing the family", err);
+        goto done;
+    }
+    int rc = jobq_submit_family(ctx->queue, family_id, ids, f->nmembers);
+    if (rc != 0) {
+        long n = 0;
+        if (store_family_cancel(s, family_id,
+                                rc == 2 ? "the server was shutting down" : "out of memory", &n, err,
+                                sizeof err) != 0 ||
+            store_family_delete(s, family_id, err, sizeof err) < 0)
+            fprintf(stderr, "ctcsim-server: database: withdrawing family %" PRId64 ": %s\n",
+                    family_id, err);
+        rep->retry_after = ROUTES_RETRY_AFTER;
+        if (rc == 2)
+            http_reply_error(rep, 503, "SHUTTING_DOWN", "", "the server is shutting down");
+        else
+            http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
+        goto done;
+    }
+    family_location(rep->location, sizeof rep->location, family_id);
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "id", (double)family_id);
+    cJSON_AddStringToObject(o, "name", f->name);
+    cJSON_AddNumberToObject(o, "members", (double)f->nmembers);
+    cJSON_AddItemToObject(
+        o, "first_job", f->nmembers > 0 ? cJSON_CreateNumber((double)ids[0]) : cJSON_CreateNull());
+    cJSON_AddStringToObject(o, "location", rep->location);
+    if (!cJSON_GetObjectItemCaseSensitive(o, "location")) {
+        cJSON_Delete(o);
+        o = NULL;
+    }
+    http_reply_json(rep, 202, o);
+done:
+    free(members);
+    free(ids);
+    family_free(f);
+}
+
+static void post_families(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    if (atomic_load(&ctx->stopping)) {
+        rep->retry_after = ROUTES_RETRY_AFTER;
+        http_reply_error(rep, 503, "SHUTTING_DOWN", "", "the server is shutting down");
+        return;
+    }
+    if (body_is_json(req, rep) != 0) return;
+    /* the expansion validates every member: off the HTTP threads, whatever the body's size */
+    run_post_at(req, rep, ctx, 0, -1, post_family_work);
+}
+
+static void get_families(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    long long limit, cursor;
+    if (query_integer(req, rep, "limit", 1, ROUTES_LIST_MAX, ROUTES_LIST_DEFAULT, &limit) != 0)
+        return;
+    if (query_integer(req, rep, "cursor", 1, INT64_MAX, 0, &cursor) != 0) return;
+    store *s = thread_store(ctx, rep);
+    if (!s) return;
+    store_family *rows = NULL;
+    int n = 0;
+    char err[256] = "";
+    if (store_family_list(s, cursor, (int)limit + 1, &rows, &n, err, sizeof err) != 0) {
+        database_failed(rep, "listing families", err);
+        return;
+    }
+    cJSON *o = cJSON_CreateObject();
+    cJSON *list = cJSON_AddArrayToObject(o, "families");
+    int shown = n > limit ? (int)limit : n;
+    for (int i = 0; i < shown; i++) cJSON_AddItemToArray(list, family_row_json(&rows[i]));
+    if (n > limit)
+        cJSON_AddNumberToObject(o, "next_cursor", (double)rows[shown - 1].id);
+    else
+        cJSON_AddNullToObject(o, "next_cursor");
+    int complete = list && cJSON_GetArraySize(list) == shown &&
+                   cJSON_GetObjectItemCaseSensitive(o, "next_cursor");
+    store_families_free(rows, n);
+    if (!complete) {
+        cJSON_Delete(o);
+        o = NULL;
+    }
+    http_reply_json(rep, 200, o);
+}
+
+/* The family id of the path; 0, or -1 after replying 400 INVALID_ID. */
+static int path_family_id(const http_request *req, http_reply *rep, int64_t *id)
+{
+    long long x;
+    if (parse_integer(req->params[0], 1, INT64_MAX, &x) != 0) {
+        http_reply_error(rep, 400, "INVALID_ID", "id",
+                         "a family id is a positive integer (got \"%s\")", req->params[0]);
+        return -1;
+    }
+    *id = x;
+    return 0;
+}
+
+/* Reads the family of the path; 0 with *row filled, or -1 after replying (400, 404, 503). */
+static int path_family(const http_request *req, http_reply *rep, const routes_ctx *ctx,
+                       store_family *row)
+{
+    int64_t id;
+    if (path_family_id(req, rep, &id) != 0) return -1;
+    store *s = thread_store(ctx, rep);
+    if (!s) return -1;
+    char err[256] = "";
+    int rc = store_family_get(s, id, row, err, sizeof err);
+    if (rc == 1) http_reply_error(rep, 404, "NOT_FOUND", "id", "no family %" PRId64, id);
+    if (rc < 0) database_failed(rep, "reading a family", err);
+    return rc == 0 ? 0 : -1;
+}
+
+/* ?format=json|csv, or Accept: text/csv; 1 for CSV, 0 for JSON, -1 after replying 400 */
+static int query_table_format(const http_request *req, http_reply *rep)
+{
+    const char *format = http_query(req, "format");
+    if (format) {
+        if (strcmp(format, "csv") == 0) return 1;
+        if (strcmp(format, "json") == 0) return 0;
+        http_reply_error(rep, 400, "INVALID_QUERY", "format",
+                         "format must be json or csv (got \"%s\")", format);
+        return -1;
+    }
+    const char *accept = http_header(req, "Accept");
+    return accept && strstr(accept, "text/csv") ? 1 : 0;
+}
+
+static void get_family(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    store_family row = {0};
+    store_member *members = NULL;
+    family_row *rows = NULL;
+    cJSON **values = NULL, **metrics = NULL, *paths = NULL;
+    long n = 0;
+    char err[256] = "";
+    int csv = query_table_format(req, rep);
+    if (csv < 0 || path_family(req, rep, ctx, &row) != 0) return;
+    store *s = thread_store(ctx, rep);
+    if (!s) goto done;
+    if (store_family_members(s, row.id, &members, &n, err, sizeof err) != 0) {
+        database_failed(rep, "reading a family's members", err);
+        goto done;
+    }
+    rows = calloc((size_t)n + 1, sizeof *rows);
+    values = calloc((size_t)n + 1, sizeof *values);
+    metrics = calloc((size_t)n + 1, sizeof *metrics);
+    paths = cJSON_Parse(row.axes ? row.axes : "[]");
+    if (!rows || !values || !metrics || !paths) {
+        http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
+        goto done;
+    }
+    for (long i = 0; i < n; i++) {
+        values[i] = members[i].values ? cJSON_Parse(members[i].values) : NULL;
+        metrics[i] = members[i].metrics ? cJSON_Parse(members[i].metrics) : NULL;
+        rows[i] = (family_row){.job = members[i].job,
+                               .index = members[i].index,
+                               .replica = members[i].replica,
+                               .status = store_status_name(members[i].status),
+                               .values = values[i],
+                               .metrics = metrics[i],
+                               .message = members[i].message};
+    }
+    if (csv) {
+        char *text = NULL;
+        size_t len = 0;
+        FILE *mem = open_memstream(&text, &len);
+        int wrc = mem ? family_write_csv(mem, paths, rows, n) : -1;
+        if (mem && fclose(mem) != 0) wrc = -1;
+        if (wrc != 0) {
+            free(text);
+            http_reply_error(rep, 503, "NO_MEMORY", "", "out of memory");
+            goto done;
+        }
+        http_reply_buffer(rep, 200, "text/csv; charset=utf-8", text, len);
+        goto done;
+    }
+    cJSON *o = family_row_json(&row);
+    cJSON *table = family_table_json(paths, rows, n);
+    if (!o || !table || !cJSON_AddItemToObject(o, "spec", stored_json(row.spec)) ||
+        !cJSON_AddItemToObject(o, "table", table)) {
+        cJSON_Delete(o);
+        cJSON_Delete(table);
+        o = NULL;
+    }
+    http_reply_json(rep, 200, o);
+done:
+    for (long i = 0; values && metrics && i < n; i++) {
+        cJSON_Delete(values[i]);
+        cJSON_Delete(metrics[i]);
+    }
+    free(values);
+    free(metrics);
+    free(rows);
+    cJSON_Delete(paths);
+    store_members_free(members, n);
+    store_family_clear(&row);
+}
+
+/* DELETE /api/families/{id}: a family with members queued or running has them cancelled (200
+ * with its row when none runs any more, 202 while running members stop); a family whose
+ * members have all finished is deleted with them, 204. */
+static void delete_family(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    char err[256] = "";
+    store_family row = {0};
+    if (path_family(req, rep, ctx, &row) != 0) return;
+    store *s = thread_store(ctx, rep);
+    if (!s) goto done;
+    int64_t id = row.id;
+    if (row.counts[STORE_QUEUED] + row.counts[STORE_RUNNING] > 0) {
+        int64_t *removed = NULL;
+        long nremoved = 0, ncancelled = 0;
+        int running = jobq_cancel_family(ctx->queue, id, &removed, &nremoved);
+        int rc = store_family_cancel(s, id, "cancelled by request", &ncancelled, err, sizeof err);
+        if (rc != 0) {
+            /* still queued in the database: back in their lane, so no member is stranded */
+            if (nremoved > 0 && jobq_submit_family(ctx->queue, id, removed, nremoved) != 0)
+                fprintf(stderr,
+                        "ctcsim-server: family %" PRId64 " stays queued until the next start\n",
+                        id);
+            free(removed);
+            database_failed(rep, "cancelling a family", err);
+            goto done;
+        }
+        free(removed);
+        store_family_clear(&row);
+        if (store_family_get(s, id, &row, err, sizeof err) != 0) {
+            database_failed(rep, "reading a family", err);
+            goto done;
+        }
+        http_reply_json(rep, running > 0 || row.counts[STORE_RUNNING] > 0 ? 202 : 200,
+                        family_row_json(&row));
+        goto done;
+    }
+    int rc = store_family_delete(s, id, err, sizeof err);
+    if (rc == 0)
+        http_reply_buffer(rep, 204, NULL, NULL, 0);
+    else if (rc == 1)
+        http_reply_error(rep, 404, "NOT_FOUND", "id", "no family %" PRId64, id);
+    else if (rc == 2)
+        http_reply_error(rep, 409, "NOT_FINISHED", "id",
+                         "family %" PRId64 " has members queued again meanwhile; cancel them first",
+                         id);
+    else
+        database_failed(rep, "deleting a family", err);
+done:
+    store_family_clear(&row);
+}
+
 /* ---- GET /api/health ---- */
 
 /* The database's state as health shows it: {"state"} when writes work, with "since",
@@ -1329,6 +1679,10 @@ const http_route routes_table[] = {
     {"POST", "/api/validate", post_validate},
     {"GET", "/api/presets", get_presets},
     {"GET", "/api/presets/{name}", get_preset},
+    {"GET", "/api/families", get_families},
+    {"POST", "/api/families", post_families},
+    {"GET", "/api/families/{id}", get_family},
+    {"DELETE", "/api/families/{id}", delete_family},
     {"GET", "/api/health", get_health},
     {"GET", "/api/openapi.yaml", get_openapi},
     {NULL, NULL, NULL},

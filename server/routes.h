@@ -15,7 +15,8 @@
  *   404 NOT_FOUND (route, job or file), UNKNOWN_PRESET (400 inside a job body, 404 as a path)
  *   405 METHOD_NOT_ALLOWED (with Allow)   409 NOT_FINISHED (series of an unfinished job),
  *       ALREADY_FINISHED (a cancel of a finished job)
- *   413 BODY_TOO_LARGE   415 UNSUPPORTED_MEDIA_TYPE
+ *   413 BODY_TOO_LARGE, FAMILY_TOO_LARGE (POST /api/families past --max-family)
+ *   415 UNSUPPORTED_MEDIA_TYPE
  *   421 HOST_NOT_ALLOWED (the Host header names a host not in --allowed-hosts; http.h)
  *   429 TOO_MANY_JOBS (with Retry-After: the client's address has --max-jobs-per-client jobs
  *       queued or running; the loopback address counts like any other), TOO_MANY_REQUESTS (with
@@ -35,7 +36,8 @@
  *    coordinates, or null; for a CTC run, the initial error), "wall_s" (or null), "e_final"
  *    (max over the coordinates of |e| at the end, or null), "e_rms" (the RMS of e over the run
  *    and the coordinates: the root of the mean of metrics.e_rms squared, or null), "tags" (the
- *    job's tags, [] when none), "location": "/api/jobs/ID"}
+ *    job's tags, [] when none), "family" (the family it belongs to, or null),
+ *    "location": "/api/jobs/ID"}
  *
  * POST /api/jobs             body: a job or {"preset": ...} (job_json.h). Validates first (400
  *                            with the parser's code, field and message; a "threads" above the
@@ -58,19 +60,46 @@
  *                            that does it, or every if larger) &format=json|csv|f32 (default
  *                            json) &reduce=stride|minmax (f32 only; series_stream.h) &from=K
  *                            (samples from K on) &partial=1 (a running job: the samples its
- *                            worker has recorded so far, jobq_live_read). json: the
- *                            series object of `ctcsim run --format json`; csv: exactly the CSV
- *                            of `ctcsim run`; f32: float32 binary with a JSON header. Streamed
- * (chunked), a piece at a time from the store; cut short (closed without the last chunk) if the job
- * is deleted meanwhile. A reply of more than ROUTES_LARGE_SERIES values counts against
- * --max-series-streams: past them 503 TOO_MANY_STREAMS. 409 NOT_FINISHED while queued or running;
- * 404 if the job has no series (cancelled before it ran). DELETE /api/jobs/{id}      queued:
- * cancelled, 200 {job}; running: cancel requested, 202 {row} (the worker stops at its next step and
- * records "cancelled"); finished: deleted with its series, 204. POST /api/jobs/{id}/cancel queued
- * or running: as DELETE; finished: 409 ALREADY_FINISHED, the job left as it is (a cancel never
- * deletes). POST /api/validate         200 {"valid": true, "spec": normalised job} or the 400
- * error. GET  /api/presets          200 {"presets": [{"name", "summary", "params": [...]}]} GET
- * /api/presets/{name}   200 the preset's job document; query parameters are its params
+ *                            worker has recorded so far, jobq_live_read). json: the series
+ *                            object of `ctcsim run --format json`; csv: exactly the CSV of
+ *                            `ctcsim run`; f32: float32 binary with a JSON header. Streamed
+ *                            (chunked), a piece at a time from the store; cut short (closed
+ *                            without the last chunk) if the job is deleted meanwhile. A reply of
+ *                            more than ROUTES_LARGE_SERIES values counts against
+ *                            --max-series-streams: past them 503 TOO_MANY_STREAMS. 409
+ *                            NOT_FINISHED while queued or running; 404 if the job has no series
+ *                            (cancelled before it ran).
+ * DELETE /api/jobs/{id}      queued: cancelled, 200 {job}; running: cancel requested, 202 {row}
+ *                            (the worker stops at its next step and records "cancelled");
+ *                            finished: deleted with its series, 204.
+ * POST /api/jobs/{id}/cancel queued or running: as DELETE; finished: 409 ALREADY_FINISHED, the
+ *                            job left as it is (a cancel never deletes).
+ * POST /api/validate         200 {"valid": true, "spec": normalised job} or the 400 error.
+ * POST /api/families         body: a family (family.h). Every member is expanded and validated
+ *                            before anything is stored (off the HTTP threads, taking one of
+ *                            --max-waiters: past them 503 BUSY); a bad member is 400 with the
+ *                            axis values and the member's error ("axis integrator.rtol = -1
+ *                            (member 1): integrator: rtol must be in (0, 1) (got -1)"), more
+ *                            than --max-family members 413 FAMILY_TOO_LARGE. The family and
+ *                            its members are stored in one transaction, the members queued in
+ *                            the family's lane (jobq.h: served in turn with single jobs and
+ *                            the other families), then 202 {"id", "name", "members",
+ *                            "first_job", "location": "/api/families/ID"} with Location. A
+ *                            family's members do not count against --max-jobs-per-client.
+ * GET  /api/families         ?limit=N (1..200, default 50) &cursor=ID -> 200 {"families":
+ *                            [{"id", "name", "members", "created", "axes": [paths], "counts":
+ *                            {status: n}, "location"}], "next_cursor"}
+ * GET  /api/families/{id}    200 {family row + "spec": the family's document, "table":
+ *                            {"columns", "rows": [{"member", "replica", "job", "values",
+ *                            "status", "message", metrics...}]}} (family.h's table);
+ *                            ?format=csv or Accept: text/csv: the table as CSV (text/csv).
+ * DELETE /api/families/{id}  members queued or running: the queued ones cancelled, the
+ *                            running ones asked to stop; 202 {family row} while some run,
+ *                            200 when none does. Every member finished: the family and its
+ *                            members deleted with their series, 204 (so a second DELETE
+ *                            deletes what the first cancelled).
+ * GET  /api/presets          200 {"presets": [{"name", "summary", "params": [...]}]}
+ * GET  /api/presets/{name}   200 the preset's job document; query parameters are its params
  *                            (?n=16); 404 UNKNOWN_PRESET; 400 INVALID_QUERY for a bad param.
  * GET  /api/health           200 {"status": "ok", "version", "workers", "busy", "queued",
  *                            "database": {"state": "ok"}, "jobs": {status: count}}, in O(1)
@@ -108,6 +137,8 @@ typedef struct routes_ctx {
     int job_threads;              /* the most "threads" a job may ask for (--job-threads) */
     client_count *jobs_by_client; /* each client address's queued and running jobs */
     unsigned max_jobs_per_client; /* past them POST /api/jobs answers 429 (0 = no limit) */
+    long max_family;              /* members of one family at most (--max-family); past them
+                                     POST /api/families answers 413 */
     long long db_max_size;        /* bytes each connection may grow the database to; 0 = no cap */
     struct store_health *health;  /* the database's state, shared with the workers (store.h) */
     atomic_int stopping;          /* set at shutdown (read by the HTTP threads, hence atomic): POST

@@ -141,6 +141,21 @@ static const char *const migrations[STORE_SCHEMA_VERSION] = {
     "  UPDATE job_counts SET n = n - 1 WHERE status = OLD.status;"
     "  UPDATE job_counts SET n = n + 1 WHERE status = NEW.status; END;"
     "PRAGMA user_version = 2;",
+    /* 2 -> 3: families of jobs (family.h); a member is an ordinary job that names its family,
+     * its number in it, its replica and its axis values. Jobs stored before have none */
+    "CREATE TABLE families ("
+    "  id INTEGER PRIMARY KEY AUTOINCREMENT,"
+    "  name TEXT NOT NULL,"
+    "  spec TEXT NOT NULL,"
+    "  axes TEXT NOT NULL,"
+    "  members INTEGER NOT NULL CHECK (members >= 0),"
+    "  created REAL NOT NULL);"
+    "ALTER TABLE jobs ADD COLUMN family_id INTEGER REFERENCES families (id);"
+    "ALTER TABLE jobs ADD COLUMN family_member INTEGER;"
+    "ALTER TABLE jobs ADD COLUMN family_replica INTEGER;"
+    "ALTER TABLE jobs ADD COLUMN family_values TEXT;"
+    "CREATE INDEX jobs_by_family ON jobs (family_id, family_member) WHERE family_id IS NOT NULL;"
+    "PRAGMA user_version = 3;",
 };
 
 /* the statements of a connection, prepared once at open */
@@ -170,13 +185,24 @@ typedef enum stmt_id {
     ST_DELETE,
     ST_COUNT,
     ST_PROBE,
+    ST_FAMILY_INSERT,
+    ST_MEMBER_INSERT,
+    ST_FAMILY_GET,
+    ST_FAMILY_LIST,
+    ST_FAMILY_COUNTS,
+    ST_FAMILY_MEMBERS,
+    ST_FAMILY_ACTIVE,
+    ST_FAMILY_DELETE_JOBS,
+    ST_FAMILY_DELETE,
+    ST_FAMILY_OF,
+    ST_FAMILY_CANCEL,
     ST_NSTMT
 } stmt_id;
 
 /* the columns of a row as store_job holds them; store_get adds spec and metrics */
 #define JOB_COLUMNS                                                                                \
     "id, name, preset, status, progress, created, started, finished, nbodies, nv, controller, "    \
-    "message, e_max, wall_s, " SUMMARY_COLUMNS
+    "message, e_max, wall_s, family_id, " SUMMARY_COLUMNS
 /* the summaries a list shows, read from the stored JSON (no column of their own, so the schema
    stays as it is): metrics.e_final and metrics.e_rms as JSON text, reduced in C (read_job; for
    4096 coordinates SQLite's json_each took 4 ms a row, json_extract 0.7 ms), and the tags of
@@ -232,6 +258,25 @@ static const char *const stmt_sql[ST_NSTMT] = {
     [ST_DELETE] = "DELETE FROM jobs WHERE id = ?1",
     [ST_COUNT] = "SELECT status, n FROM job_counts",
     [ST_PROBE] = "UPDATE job_counts SET n = n WHERE status = 'queued'",
+    [ST_FAMILY_INSERT] = "INSERT INTO families (name, spec, axes, members, created) "
+                         "VALUES (?1, ?2, ?3, ?4, ?5)",
+    [ST_MEMBER_INSERT] =
+        "INSERT INTO jobs (name, preset, status, progress, created, nbodies, nv, controller, "
+        "spec, family_id, family_member, family_replica, family_values) "
+        "VALUES (?1, ?2, 'queued', 0, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)",
+#define FAMILY_COLUMNS "id, name, spec, axes, members, created"
+    [ST_FAMILY_GET] = "SELECT " FAMILY_COLUMNS " FROM families WHERE id = ?1",
+    [ST_FAMILY_LIST] = "SELECT " FAMILY_COLUMNS " FROM families WHERE id < ?1 "
+                       "ORDER BY id DESC LIMIT ?2",
+    [ST_FAMILY_COUNTS] = "SELECT status, count(*) FROM jobs WHERE family_id = ?1 GROUP BY status",
+    [ST_FAMILY_MEMBERS] = "SELECT id, family_member, family_replica, status, family_values, "
+                          "metrics, message FROM jobs WHERE family_id = ?1 ORDER BY family_member",
+    [ST_FAMILY_ACTIVE] = "SELECT id FROM jobs WHERE family_id = ?1 AND " ACTIVE,
+    [ST_FAMILY_DELETE_JOBS] = "DELETE FROM jobs WHERE family_id = ?1",
+    [ST_FAMILY_DELETE] = "DELETE FROM families WHERE id = ?1",
+    [ST_FAMILY_OF] = "SELECT family_id FROM jobs WHERE id = ?1",
+    [ST_FAMILY_CANCEL] = "UPDATE jobs SET status = 'cancelled', message = ?2, finished = ?3 "
+                         "WHERE family_id = ?1 AND status = 'queued'",
 };
 
 struct store {
@@ -548,12 +593,12 @@ static double real_or_nan(sqlite3_stmt *q, int i)
 }
 
 /* j->e_final = max |e_final| and j->e_rms = sqrt(mean e_rms^2) over the coordinates, from the
- * JSON arrays in columns 14 and 15 (NaN when absent, unreadable or without a finite entry;
+ * JSON arrays in columns 15 and 16 (NaN when absent, unreadable or without a finite entry;
  * non-finite entries, written as null, are left out) */
 static void summarise_errors(sqlite3_stmt *q, store_job *j)
 {
     j->e_final = j->e_rms = NAN;
-    for (int c = 14; c <= 15; c++) {
+    for (int c = 15; c <= 16; c++) {
         const char *text = (const char *)sqlite3_column_text(q, c);
         cJSON *a = text ? cJSON_Parse(text) : NULL;
         double acc = 0;
@@ -561,12 +606,12 @@ static void summarise_errors(sqlite3_stmt *q, store_job *j)
         for (const cJSON *v = cJSON_IsArray(a) ? a->child : NULL; v; v = v->next) {
             if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble)) continue;
             double x = fabs(v->valuedouble);
-            acc = c == 14 ? (n == 0 || x > acc ? x : acc) : acc + x * x;
+            acc = c == 15 ? (n == 0 || x > acc ? x : acc) : acc + x * x;
             n++;
         }
         cJSON_Delete(a);
-        if (n > 0 && c == 14) j->e_final = acc;
-        if (n > 0 && c == 15) j->e_rms = sqrt(acc / n);
+        if (n > 0 && c == 15) j->e_final = acc;
+        if (n > 0 && c == 16) j->e_rms = sqrt(acc / n);
     }
 }
 
@@ -592,11 +637,12 @@ static int read_job(sqlite3_stmt *q, int with_spec, store_job *j, char *err, siz
     j->nv = sqlite3_column_int(q, 9);
     j->e_max = real_or_nan(q, 12);
     j->wall_s = real_or_nan(q, 13);
+    j->family = sqlite3_column_type(q, 14) == SQLITE_NULL ? 0 : sqlite3_column_int64(q, 14);
     summarise_errors(q, j);
     if (dup_column(q, 1, &j->name) || dup_column(q, 2, &j->preset) ||
         dup_column(q, 10, &j->controller) || dup_column(q, 11, &j->message) ||
-        dup_column(q, 16, &j->tags) ||
-        (with_spec && (dup_column(q, 17, &j->spec) || dup_column(q, 18, &j->metrics)))) {
+        dup_column(q, 17, &j->tags) ||
+        (with_spec && (dup_column(q, 18, &j->spec) || dup_column(q, 19, &j->metrics)))) {
         set_err(err, errlen, "job %lld: out of memory", (long long)j->id);
         goto done;
     }
@@ -1747,4 +1793,422 @@ done:
 long store_count_vm_steps(const store *s)
 {
     return s->count_vm_steps;
+}
+
+/* ---- families ---- */
+
+static int insert_family(store *s, const char *name, const char *spec, const char *axes,
+                         const store_new_member *members, long n, int64_t *family_id, int64_t *ids,
+                         char *err, size_t errlen)
+{
+    sqlite3_stmt *fq = s->stmt[ST_FAMILY_INSERT], *mq = s->stmt[ST_MEMBER_INSERT];
+    int rc = -1, in_tx = 0;
+    double now = now_s();
+    if (!name || !spec || !axes || n < 0) {
+        set_err(err, errlen, "cannot store a family without a name, a spec and its axes");
+        return -1;
+    }
+    if (tx_step(s, ST_BEGIN) != SQLITE_OK) {
+        db_err(s, err, errlen, "cannot store family '%s'", name);
+        goto done;
+    }
+    in_tx = 1;
+    if (sqlite3_bind_text(fq, 1, name, -1, SQLITE_STATIC) != SQLITE_OK ||
+        sqlite3_bind_text(fq, 2, spec, -1, SQLITE_STATIC) != SQLITE_OK ||
+        sqlite3_bind_text(fq, 3, axes, -1, SQLITE_STATIC) != SQLITE_OK ||
+        sqlite3_bind_int64(fq, 4, n) != SQLITE_OK || sqlite3_bind_double(fq, 5, now) != SQLITE_OK ||
+        sqlite3_step(fq) != SQLITE_DONE) {
+        db_err(s, err, errlen, "cannot store family '%s'", name);
+        goto done;
+    }
+    *family_id = sqlite3_last_insert_rowid(s->db);
+    for (long i = 0; i < n; i++) {
+        const store_new_member *m = &members[i];
+        if (!m->name || !m->controller || !m->spec || !m->values || m->nbodies < 1 || m->nv < 0) {
+            set_err(err, errlen, "cannot store member %ld of family '%s': a field is missing", i,
+                    name);
+            goto done;
+        }
+        if (sqlite3_bind_text(mq, 1, m->name, -1, SQLITE_STATIC) != SQLITE_OK ||
+            (m->preset ? sqlite3_bind_text(mq, 2, m->preset, -1, SQLITE_STATIC)
+                       : sqlite3_bind_null(mq, 2)) != SQLITE_OK ||
+            sqlite3_bind_double(mq, 3, now) != SQLITE_OK ||
+            sqlite3_bind_int(mq, 4, m->nbodies) != SQLITE_OK ||
+            sqlite3_bind_int(mq, 5, m->nv) != SQLITE_OK ||
+            sqlite3_bind_text(mq, 6, m->controller, -1, SQLITE_STATIC) != SQLITE_OK ||
+            sqlite3_bind_text(mq, 7, m->spec, -1, SQLITE_STATIC) != SQLITE_OK ||
+            sqlite3_bind_int64(mq, 8, *family_id) != SQLITE_OK ||
+            sqlite3_bind_int64(mq, 9, m->index) != SQLITE_OK ||
+            sqlite3_bind_int(mq, 10, m->replica) != SQLITE_OK ||
+            sqlite3_bind_text(mq, 11, m->values, -1, SQLITE_STATIC) != SQLITE_OK ||
+            sqlite3_step(mq) != SQLITE_DONE) {
+            db_err(s, err, errlen, "cannot store member %ld of family '%s'", i, name);
+            goto done;
+        }
+        ids[i] = sqlite3_last_insert_rowid(s->db);
+        release(mq);
+    }
+    if (tx_step(s, ST_COMMIT) != SQLITE_OK) {
+        db_err(s, err, errlen, "cannot store family '%s'", name);
+        goto done;
+    }
+    in_tx = 0;
+    rc = 0;
+done:
+    release(fq);
+    release(mq);
+    if (in_tx) tx_rollback(s);
+    return rc;
+}
+
+int store_family_insert(store *s, const char *name, const char *spec, const char *axes,
+                        const store_new_member *members, long n, int64_t *family_id, int64_t *ids,
+                        char *err, size_t errlen)
+{
+    call_begin(s);
+    return write_end(s, insert_family(s, name, spec, axes, members, n, family_id, ids, err, errlen),
+                     1);
+}
+
+/* the status counts of family f->id into f->counts */
+static int family_counts(store *s, store_family *f, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_FAMILY_COUNTS];
+    int rc = -1, step;
+    for (int i = 0; i < STORE_NSTATUS; i++) f->counts[i] = 0;
+    sqlite3_bind_int64(q, 1, f->id);
+    while ((step = sqlite3_step(q)) == SQLITE_ROW) {
+        int st = store_status_parse((const char *)sqlite3_column_text(q, 0));
+        if (st >= 0) f->counts[st] = (long)sqlite3_column_int64(q, 1);
+    }
+    if (step != SQLITE_DONE) {
+        db_err(s, err, errlen, "counting the members of family %lld", (long long)f->id);
+        goto done;
+    }
+    rc = 0;
+done:
+    release(q);
+    return rc;
+}
+
+/* fills f from the current row of a FAMILY_COLUMNS query (the spec when with_spec) */
+static int read_family(sqlite3_stmt *q, int with_spec, store_family *f, char *err, size_t errlen)
+{
+    memset(f, 0, sizeof *f);
+    f->id = sqlite3_column_int64(q, 0);
+    f->members = (long)sqlite3_column_int64(q, 4);
+    f->created = sqlite3_column_double(q, 5);
+    if (dup_column(q, 1, &f->name) || dup_column(q, 3, &f->axes) ||
+        (with_spec && dup_column(q, 2, &f->spec))) {
+        set_err(err, errlen, "family %lld: out of memory", (long long)f->id);
+        store_family_clear(f);
+        return -1;
+    }
+    return 0;
+}
+
+void store_family_clear(store_family *f)
+{
+    if (!f) return;
+    free(f->name);
+    free(f->spec);
+    free(f->axes);
+    memset(f, 0, sizeof *f);
+}
+
+int store_family_get(store *s, int64_t id, store_family *out, char *err, size_t errlen)
+{
+    call_begin(s);
+    sqlite3_stmt *q = s->stmt[ST_FAMILY_GET];
+    int rc = -1, in_tx = 0;
+    memset(out, 0, sizeof *out);
+    /* the row and its counts from one snapshot */
+    if (tx_step(s, ST_BEGIN_READ) != SQLITE_OK) {
+        db_err(s, err, errlen, "cannot read family %lld", (long long)id);
+        goto done;
+    }
+    in_tx = 1;
+    sqlite3_bind_int64(q, 1, id);
+    int step = sqlite3_step(q);
+    if (step == SQLITE_DONE) {
+        rc = 1;
+        goto done;
+    }
+    if (step != SQLITE_ROW) {
+        db_err(s, err, errlen, "cannot read family %lld", (long long)id);
+        goto done;
+    }
+    if (read_family(q, 1, out, err, errlen)) goto done;
+    release(q);
+    if (family_counts(s, out, err, errlen)) {
+        store_family_clear(out);
+        goto done;
+    }
+    rc = 0;
+done:
+    release(q);
+    if (in_tx) tx_rollback(s);
+    return rc;
+}
+
+int store_family_list(store *s, int64_t before, int limit, store_family **rows, int *n, char *err,
+                      size_t errlen)
+{
+    call_begin(s);
+    sqlite3_stmt *q = s->stmt[ST_FAMILY_LIST];
+    int rc = -1, count = 0, step, in_tx = 0;
+    store_family *list = NULL;
+    *rows = NULL;
+    *n = 0;
+    if (limit < 1 || limit > STORE_MAX_LIST) {
+        set_err(err, errlen, "limit must be between 1 and %d (got %d)", STORE_MAX_LIST, limit);
+        goto done;
+    }
+    list = calloc((size_t)limit, sizeof *list);
+    if (!list) {
+        set_err(err, errlen, "listing families: out of memory");
+        goto done;
+    }
+    if (tx_step(s, ST_BEGIN_READ) != SQLITE_OK) {
+        db_err(s, err, errlen, "listing families");
+        goto done;
+    }
+    in_tx = 1;
+    sqlite3_bind_int64(q, 1, before > 0 ? before : INT64_MAX);
+    sqlite3_bind_int(q, 2, limit);
+    while (count < limit && (step = sqlite3_step(q)) == SQLITE_ROW) {
+        if (read_family(q, 0, &list[count], err, errlen)) goto done;
+        count++;
+    }
+    if (count < limit && step != SQLITE_DONE) {
+        db_err(s, err, errlen, "listing families");
+        goto done;
+    }
+    release(q);
+    for (int i = 0; i < count; i++)
+        if (family_counts(s, &list[i], err, errlen)) goto done;
+    *rows = list;
+    *n = count;
+    list = NULL;
+    rc = 0;
+done:
+    release(q);
+    if (in_tx) tx_rollback(s);
+    store_families_free(list, count);
+    return rc;
+}
+
+void store_families_free(store_family *rows, int n)
+{
+    for (int i = 0; rows && i < n; i++) store_family_clear(&rows[i]);
+    free(rows);
+}
+
+int store_family_members(store *s, int64_t id, store_member **rows, long *n, char *err,
+                         size_t errlen)
+{
+    call_begin(s);
+    sqlite3_stmt *q = s->stmt[ST_FAMILY_MEMBERS];
+    int rc = -1, step;
+    long count = 0, cap = 0;
+    store_member *list = NULL;
+    *rows = NULL;
+    *n = 0;
+    sqlite3_bind_int64(q, 1, id);
+    while ((step = sqlite3_step(q)) == SQLITE_ROW) {
+        if (count == cap) {
+            long grow = cap ? 2 * cap : 64;
+            store_member *bigger = realloc(list, (size_t)grow * sizeof *list);
+            if (!bigger) {
+                set_err(err, errlen, "family %lld: out of memory", (long long)id);
+                goto done;
+            }
+            list = bigger;
+            cap = grow;
+        }
+        store_member *m = &list[count];
+        memset(m, 0, sizeof *m);
+        m->job = sqlite3_column_int64(q, 0);
+        m->index = (long)sqlite3_column_int64(q, 1);
+        m->replica = sqlite3_column_int(q, 2);
+        int st = store_status_parse((const char *)sqlite3_column_text(q, 3));
+        m->status = st < 0 ? STORE_FAILED : (store_status)st;
+        count++;
+        if (dup_column(q, 4, &m->values) || dup_column(q, 5, &m->metrics) ||
+            dup_column(q, 6, &m->message)) {
+            set_err(err, errlen, "family %lld: out of memory", (long long)id);
+            goto done;
+        }
+    }
+    if (step != SQLITE_DONE) {
+        db_err(s, err, errlen, "reading the members of family %lld", (long long)id);
+        goto done;
+    }
+    *rows = list;
+    *n = count;
+    list = NULL;
+    rc = 0;
+done:
+    release(q);
+    store_members_free(list, count);
+    return rc;
+}
+
+void store_members_free(store_member *rows, long n)
+{
+    for (long i = 0; rows && i < n; i++) {
+        free(rows[i].values);
+        free(rows[i].metrics);
+        free(rows[i].message);
+    }
+    free(rows);
+}
+
+int store_family_active(store *s, int64_t id, int64_t **ids, long *n, char *err, size_t errlen)
+{
+    call_begin(s);
+    sqlite3_stmt *q = s->stmt[ST_FAMILY_ACTIVE];
+    int rc = -1, step;
+    long count = 0, cap = 0;
+    int64_t *list = NULL;
+    *ids = NULL;
+    *n = 0;
+    sqlite3_bind_int64(q, 1, id);
+    while ((step = sqlite3_step(q)) == SQLITE_ROW) {
+        if (count == cap) {
+            long grow = cap ? 2 * cap : 64;
+            int64_t *bigger = realloc(list, (size_t)grow * sizeof *list);
+            if (!bigger) {
+                set_err(err, errlen, "family %lld: out of memory", (long long)id);
+                goto done;
+            }
+            list = bigger;
+            cap = grow;
+        }
+        list[count++] = sqlite3_column_int64(q, 0);
+    }
+    if (step != SQLITE_DONE) {
+        db_err(s, err, errlen, "reading the members of family %lld", (long long)id);
+        goto done;
+    }
+    *ids = list;
+    *n = count;
+    list = NULL;
+    rc = 0;
+done:
+    release(q);
+    free(list);
+    return rc;
+}
+
+static int delete_family(store *s, int64_t id, char *err, size_t errlen)
+{
+    sqlite3_stmt *get = s->stmt[ST_FAMILY_GET], *active = s->stmt[ST_FAMILY_ACTIVE];
+    int rc = -1, in_tx = 0;
+    if (tx_step(s, ST_BEGIN) != SQLITE_OK) {
+        db_err(s, err, errlen, "cannot delete family %lld", (long long)id);
+        goto done;
+    }
+    in_tx = 1;
+    sqlite3_bind_int64(get, 1, id);
+    int step = sqlite3_step(get);
+    if (step == SQLITE_DONE) {
+        rc = 1;
+        goto done;
+    }
+    if (step != SQLITE_ROW) {
+        db_err(s, err, errlen, "cannot delete family %lld", (long long)id);
+        goto done;
+    }
+    sqlite3_bind_int64(active, 1, id);
+    step = sqlite3_step(active);
+    if (step == SQLITE_ROW) {
+        rc = 2;
+        goto done;
+    }
+    if (step != SQLITE_DONE) {
+        db_err(s, err, errlen, "cannot delete family %lld", (long long)id);
+        goto done;
+    }
+    release(get);
+    release(active);
+    /* the members first (their series follow by ON DELETE CASCADE), then the family */
+    sqlite3_bind_int64(s->stmt[ST_FAMILY_DELETE_JOBS], 1, id);
+    sqlite3_bind_int64(s->stmt[ST_FAMILY_DELETE], 1, id);
+    if (tx_step(s, ST_FAMILY_DELETE_JOBS) != SQLITE_OK ||
+        tx_step(s, ST_FAMILY_DELETE) != SQLITE_OK || tx_step(s, ST_COMMIT) != SQLITE_OK) {
+        db_err(s, err, errlen, "cannot delete family %lld", (long long)id);
+        goto done;
+    }
+    in_tx = 0;
+    rc = 0;
+done:
+    release(get);
+    release(active);
+    sqlite3_clear_bindings(s->stmt[ST_FAMILY_DELETE_JOBS]);
+    sqlite3_clear_bindings(s->stmt[ST_FAMILY_DELETE]);
+    if (in_tx) tx_rollback(s);
+    return rc;
+}
+
+int store_family_delete(store *s, int64_t id, char *err, size_t errlen)
+{
+    call_begin(s);
+    return write_end(s, delete_family(s, id, err, errlen), 1);
+}
+
+int store_job_families(store *s, const int64_t *ids, int n, int64_t *families, char *err,
+                       size_t errlen)
+{
+    call_begin(s);
+    sqlite3_stmt *q = s->stmt[ST_FAMILY_OF];
+    int rc = -1;
+    if (tx_step(s, ST_BEGIN_READ) != SQLITE_OK) {
+        db_err(s, err, errlen, "reading the jobs' families");
+        return -1;
+    }
+    for (int i = 0; i < n; i++) {
+        sqlite3_bind_int64(q, 1, ids[i]);
+        int step = sqlite3_step(q);
+        if (step != SQLITE_ROW && step != SQLITE_DONE) {
+            db_err(s, err, errlen, "reading the family of job %lld", (long long)ids[i]);
+            goto done;
+        }
+        families[i] = step == SQLITE_ROW && sqlite3_column_type(q, 0) != SQLITE_NULL
+                          ? sqlite3_column_int64(q, 0)
+                          : 0;
+        release(q);
+    }
+    rc = 0;
+done:
+    release(q);
+    tx_rollback(s);
+    return rc;
+}
+
+static int cancel_family(store *s, int64_t id, const char *message, long *n, char *err,
+                         size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[ST_FAMILY_CANCEL];
+    int rc = -1;
+    *n = 0;
+    if (sqlite3_bind_int64(q, 1, id) != SQLITE_OK ||
+        (message ? sqlite3_bind_text(q, 2, message, -1, SQLITE_STATIC) : sqlite3_bind_null(q, 2)) !=
+            SQLITE_OK ||
+        sqlite3_bind_double(q, 3, now_s()) != SQLITE_OK || sqlite3_step(q) != SQLITE_DONE) {
+        db_err(s, err, errlen, "cannot cancel family %lld", (long long)id);
+        goto done;
+    }
+    *n = (long)sqlite3_changes64(s->db);
+    rc = 0;
+done:
+    release(q);
+    return rc;
+}
+
+int store_family_cancel(store *s, int64_t id, const char *message, long *n, char *err,
+                        size_t errlen)
+{
+    call_begin(s);
+    return write_end(s, cancel_family(s, id, message, n, err, errlen), 0);
 }

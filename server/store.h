@@ -13,6 +13,10 @@
  *   jobs(id INTEGER PRIMARY KEY, name, preset, status, progress, created, started, finished,
  *        nbodies, nv, controller, spec TEXT (normalised job JSON), metrics TEXT (JSON, NULL until
  *        finished), message, e_max REAL, wall_s REAL)
+ *        family_id (NULL, or its family), family_member, family_replica, family_values (JSON
+ *        array of its axis values) - the four are NULL for a job posted alone)
+ *   families(id INTEGER PRIMARY KEY, name, spec TEXT (the family's document), axes TEXT (JSON
+ *        array of the axes' paths), members, created)  - version 3 (family.h)
  *   series(job_id, channel, width, nsamples, data BLOB)  - one row per recorded channel ("t" is a
  *        channel of width 1); data is nsamples x width float64, row-major, little-endian
  * A job's series and its final status are written in one transaction (store_finish), so a job is
@@ -46,7 +50,7 @@
 
 #include "sim.h"
 
-#define STORE_SCHEMA_VERSION 2
+#define STORE_SCHEMA_VERSION 3
 
 /* Job statuses as stored (and as the API shows them). */
 typedef enum store_status {
@@ -105,6 +109,7 @@ typedef struct store_job {
     double e_rms;     /* sqrt of the mean over coordinates of metrics.e_rms^2 (the RMS over the
                          run and the coordinates), NaN if none */
     char *tags;       /* the normalised job's "tags" as JSON text, NULL when it has none */
+    int64_t family;   /* the family it belongs to, 0 for none */
 } store_job;
 
 /* Opens (creating if absent) the database at path, sets WAL mode, foreign keys and a busy
@@ -275,6 +280,85 @@ int store_count(store *s, long counts[STORE_NSTATUS], char *err, size_t errlen);
 /* The SQLite virtual-machine steps (SQLITE_STMTSTATUS_VM_STEP) the last store_count took on s, 0
  * before the first: the measure of its work that tests and benchmarks check. */
 long store_count_vm_steps(const store *s);
+
+/* ---- families (family.h) ---- */
+
+/* A family's row with the number of its members in each status. */
+typedef struct store_family {
+    int64_t id;
+    char *name;
+    char *spec; /* the family's document (JSON) */
+    char *axes; /* JSON array of its axes' paths */
+    long members;
+    double created; /* s since the epoch */
+    long counts[STORE_NSTATUS];
+} store_family;
+
+/* A member to store (store_family_insert): the fields of store_insert and its place. */
+typedef struct store_new_member {
+    const char *name, *preset, *controller, *spec; /* as store_insert's; preset may be NULL */
+    int nbodies, nv;
+    long index;         /* its number in the family, 0-based */
+    int replica;        /* its replica, 0-based */
+    const char *values; /* JSON array of its axis values */
+} store_new_member;
+
+/* One member's result (store_family_members). */
+typedef struct store_member {
+    int64_t job;
+    long index;
+    int replica;
+    store_status status;
+    char *values;  /* JSON array */
+    char *metrics; /* metrics JSON or NULL */
+    char *message; /* or NULL */
+} store_member;
+
+/* Stores a family and its n (>= 0) members, queued, in one transaction: the family is stored
+ * whole or not at all. *family_id receives its id and ids[0..n) the members' job ids, which
+ * increase with the member's index. name, spec and axes must not be NULL. */
+int store_family_insert(store *s, const char *name, const char *spec, const char *axes,
+                        const store_new_member *members, long n, int64_t *family_id, int64_t *ids,
+                        char *err, size_t errlen);
+
+/* Reads one family with its status counts. Returns 1 if there is no such family, 0 when found
+ * (clear *out with store_family_clear), -1 on error. */
+int store_family_get(store *s, int64_t id, store_family *out, char *err, size_t errlen);
+
+/* Frees the strings of a family row and zeroes it; NULL is allowed. */
+void store_family_clear(store_family *f);
+
+/* Lists families newest first, those with id < before (0 = from the newest), at most limit
+ * (1..1000), each with its counts and without its spec (NULL). *rows receives a new array (free
+ * with store_families_free), *n its length. */
+int store_family_list(store *s, int64_t before, int limit, store_family **rows, int *n, char *err,
+                      size_t errlen);
+void store_families_free(store_family *rows, int n);
+
+/* Reads every member of a family, in member order, into a new array *rows (free with
+ * store_members_free) of *n. A family without members (or no such family) gives 0 rows. */
+int store_family_members(store *s, int64_t id, store_member **rows, long *n, char *err,
+                         size_t errlen);
+void store_members_free(store_member *rows, long n);
+
+/* The ids of a family's members that are queued or running, into a new array *ids (free()) of
+ * *n. */
+int store_family_active(store *s, int64_t id, int64_t **ids, long *n, char *err, size_t errlen);
+
+/* Records every queued member of a family cancelled (finished = now, message) in one
+ * transaction; running members are left to their workers. *n receives how many were. */
+int store_family_cancel(store *s, int64_t id, const char *message, long *n, char *err,
+                        size_t errlen);
+
+/* Deletes a family, its members and their series in one transaction. Returns 1 if there is no
+ * such family, 2 if a member is queued or running (cancel them first), 0 on success, -1 on
+ * error. */
+int store_family_delete(store *s, int64_t id, char *err, size_t errlen);
+
+/* The family of each of the n jobs ids[i] into families[i] (0: none, or no such job), read in
+ * one snapshot (start-up recovery sorts the queued jobs into the queue's lanes with it). */
+int store_job_families(store *s, const int64_t *ids, int n, int64_t *families, char *err,
+                       size_t errlen);
 
 /* "queued", "running", "done", "failed", "diverged", "cancelled"; and back (-1 if unknown). */
 const char *store_status_name(store_status st);

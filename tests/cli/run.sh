@@ -224,4 +224,38 @@ for example in api/examples/*.json; do
     expect_exit 0 "validate $example" "$CTCSIM" validate "$example"
 done
 
+# every example family is valid (the 4096-link one is only expanded here, not run)
+for example in api/examples/families/*.json; do
+    expect_exit 0 "sweep --validate $example" "$CTCSIM" sweep "$example" --validate
+    expect_grep "$example is valid" "$tmp/err" "$example: valid family "
+done
+
+# sweep: a family run on two threads prints its table, one row per member in member order,
+# the same cells as CSV and aligned; no progress bar when standard error is not a terminal
+gains=api/examples/families/gains_triple_pendulum.json
+expect_exit 0 "sweep --csv" "$CTCSIM" sweep "$gains" --csv --threads 2
+cp "$tmp/out" "$tmp/sweep.csv"
+expect_grep "the table's header" "$tmp/sweep.csv" \
+    "member,replica,controller.kp,controller.kv,status,e_final,e_rms,e_max,tau_peak,energy_drift,us_per_eval,steps,wall_s"
+expect_grep "member 0: kp 10, kv 5" "$tmp/sweep.csv" "0,0,10,5,done,"
+expect_grep "member 24: kp 1000, kv 65" "$tmp/sweep.csv" "24,0,1000,65,done,"
+expect_grep "the summary" "$tmp/err" "Tracking error against kp and kv, triple pendulum: 25 members on 2 threads, 25 done, 0 stopped early"
+if [ "$(wc -l <"$tmp/sweep.csv")" -eq 26 ]; then pass; else fail "sweep --csv: $(wc -l <"$tmp/sweep.csv") lines, not 26"; fi
+if [ "$(cut -d, -f1 "$tmp/sweep.csv" | tail -n +2 | tr '\n' ' ')" = "$(seq 0 24 | tr '\n' ' ')" ]; then pass; else fail "sweep --csv: members out of order"; fi
+if tr -d '\n' <"$tmp/err" | grep -q "$(printf '\r')"; then fail "sweep drew a progress bar into a pipe"; else pass; fi
+expect_exit 0 "sweep aligned" "$CTCSIM" sweep "$gains" --threads 1 --quiet
+if [ "$(awk 'NR > 1 { print $1 "," $2 "," $3 "," $4 "," $5 }' "$tmp/out")" = \
+    "$(tail -n +2 "$tmp/sweep.csv" | cut -d, -f1-5)" ]; then pass; else fail "sweep: aligned cells differ from the CSV"; fi
+if [ -s "$tmp/err" ]; then fail "sweep --quiet wrote to standard error"; else pass; fi
+printf '{"base": {"preset": "triple_pendulum_pd"}, "axes": [{"path": "integrator.rtol", "values": [1e-6, 2]}]}' >"$tmp/bad_family.json"
+expect_exit 2 "sweep an invalid family" "$CTCSIM" sweep "$tmp/bad_family.json"
+expect_grep "the bad member is named" "$tmp/err" \
+    "bad_family.json: axes[0]: axis integrator.rtol = 2 (member 1): integrator: rtol must be in (0, 1) (got 2)"
+printf '{"base": {"preset": "triple_pendulum_pd", "duration": 0.5, "limits": {"max_speed": 0.01}}, "replicas": 2}' >"$tmp/stop_family.json"
+expect_exit 3 "sweep with members stopped early" "$CTCSIM" sweep "$tmp/stop_family.json"
+expect_grep "stopped members are rows too" "$tmp/out" "diverged"
+expect_exit 1 "sweep without a family" "$CTCSIM" sweep
+expect_exit 1 "sweep --threads 0" "$CTCSIM" sweep "$gains" --threads 0
+expect_exit 4 "sweep a missing file" "$CTCSIM" sweep "$tmp/nope.json"
+
 finish cli

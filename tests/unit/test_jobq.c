@@ -11,6 +11,8 @@
  *    and metrics as the workers wrote them, and counts by status (each of 100 jobs done once);
  *  - wall-clock bounds: a cancelled run stops within a step (well under a second of a run that
  *    would take a minute), jobq_wait's timeout holds.
+ * Families are made as POST /api/families makes them (family_expand, store_family_insert); the
+ * order of the workers' turns is read back from the jobs' stored start times.
  * The long job is the paper's triple pendulum under RK4 with a 10 us step for 60 s of simulated
  * time (about a minute of work, 10 us a step), so cancellation is polled often and no test lets
  * it finish. The file runs in about 6 s (17 s under AddressSanitizer), 5.5 s of it a lock held
@@ -28,6 +30,7 @@
 #include <cjson/cJSON.h>
 #include <sqlite3.h>
 
+#include "family.h"
 #include "job_json.h"
 #include "jobq.h"
 #include "sim.h"
@@ -761,4 +764,128 @@ Test(jobq, left_is_called_once_for_each_job_that_leaves_finished_or_cancelled)
     cr_assert_eq(log.n, 3, "left was called %d times", log.n);
     cr_assert_eq(log.ids[1], running);
     cr_assert_eq(log.ids[2], after);
+}
+
+/* ---- families' lanes ---- */
+
+/* Stores a family of n members of the request base (a kp axis), as POST /api/families does;
+ * their ids into ids (n). The family's id. */
+static int64_t insert_family(const char *base, int n, int64_t *ids)
+{
+    char text[1024], err[256] = "";
+    snprintf(text, sizeof text,
+             "{\"base\": %s, \"axes\": [{\"path\": \"controller.kp\", \"linspace\": [50, 150, "
+             "%d]}]}",
+             base, n);
+    family *f = NULL;
+    family_error ferr;
+    cr_assert_eq(family_expand(text, strlen(text), 100000, &f, &ferr), 0, "%s", ferr.message);
+    store_new_member *m = calloc((size_t)n, sizeof *m);
+    cr_assert_not_null(m);
+    for (int i = 0; i < n; i++)
+        m[i] = (store_new_member){.name = f->members[i].name,
+                                  .preset = f->members[i].preset,
+                                  .controller = f->members[i].controller,
+                                  .spec = f->members[i].spec,
+                                  .nbodies = f->members[i].nbodies,
+                                  .nv = f->members[i].nv,
+                                  .index = i,
+                                  .values = f->members[i].values};
+    int64_t id = 0;
+    cr_assert_eq(
+        store_family_insert(db, f->name, f->doc, f->paths, m, n, &id, ids, err, sizeof err), 0,
+        "%s", err);
+    free(m);
+    family_free(f);
+    return id;
+}
+
+typedef struct started_job {
+    double started;
+    int place; /* 0 single, 1 family A, 2 family B */
+} started_job;
+
+static int by_start(const void *a, const void *b)
+{
+    double x = ((const started_job *)a)->started, y = ((const started_job *)b)->started;
+    return (x > y) - (x < y);
+}
+
+Test(jobq, single_jobs_and_each_family_take_turns_one_job_each)
+{
+    /* everything stored before the start, then recovered: the one worker's order is the turns'
+       order alone */
+    enum { NA = 6, NB = 3, NS = 4, N = NA + NB + NS };
+    int64_t a[NA], b[NB], single[NS];
+    started_job runs[N];
+    insert_family(SHORT_JOB, NA, a);
+    for (int i = 0; i < NS; i++) single[i] = insert_job(SHORT_JOB);
+    insert_family(SHORT_JOB, NB, b);
+    jobq *q = start_queue(1, 1, 0);
+    jobq_stats st;
+    jobq_get_stats(q, &st);
+    cr_assert_eq(st.queued + st.busy + st.done, N, "every job recovered");
+    int k = 0;
+    for (int i = 0; i < NA; i++) runs[k++].place = 1;
+    for (int i = 0; i < NB; i++) runs[k++].place = 2;
+    for (int i = 0; i < NS; i++) runs[k++].place = 0;
+    const int64_t *ids[3] = {single, a, b};
+    const int count[3] = {NS, NA, NB};
+    k = 0;
+    for (int p = 1; p <= 2; p++)
+        for (int i = 0; i < count[p]; i++, k++) {
+            cr_assert_eq(jobq_wait(q, ids[p][i], WAIT_S), 0);
+            store_job row = get_row(ids[p][i]);
+            cr_assert_eq(row.status, STORE_DONE);
+            cr_assert_eq(row.family, p == 1 ? 1 : 2);
+            runs[k].started = row.started;
+            store_job_clear(&row);
+        }
+    for (int i = 0; i < NS; i++, k++) {
+        cr_assert_eq(jobq_wait(q, single[i], WAIT_S), 0);
+        store_job row = get_row(single[i]);
+        cr_assert_eq(row.family, 0);
+        runs[k].started = row.started;
+        store_job_clear(&row);
+    }
+    jobq_stop(q);
+    qsort(runs, N, sizeof runs[0], by_start);
+    /* single, A, B, single, A, B, single, A, B, single, A, then A's last two */
+    const int want[N] = {0, 1, 2, 0, 1, 2, 0, 1, 2, 0, 1, 1, 1};
+    for (int i = 0; i < N; i++)
+        cr_assert_eq(runs[i].place, want[i], "run %d was from place %d, not %d", i, runs[i].place,
+                     want[i]);
+}
+
+Test(jobq, cancelling_a_family_takes_its_queue_and_stops_its_running_member)
+{
+    int64_t ids[3];
+    int64_t fam = insert_family(LONG_JOB, 3, ids);
+    int64_t other = insert_job(SHORT_JOB);
+    jobq *q = start_queue(1, 4, 0);
+    /* the single job first, then the family's first member runs */
+    await_status(ids[0], STORE_RUNNING, WAIT_S);
+    int64_t *removed = NULL;
+    long n = 0;
+    double t0 = now();
+    cr_assert_eq(jobq_cancel_family(q, fam, &removed, &n), 1, "one member was running");
+    cr_assert(n == 2 && removed[0] == ids[1] && removed[1] == ids[2]);
+    free(removed);
+    char err[256] = "";
+    long cancelled = 0;
+    cr_assert_eq(store_family_cancel(db, fam, "cancelled by request", &cancelled, err, sizeof err),
+                 0, "%s", err);
+    cr_assert_eq(cancelled, 2);
+    cr_assert_eq(jobq_wait(q, ids[0], WAIT_S), 0);
+    cr_assert(now() - t0 < 5, "the running member stopped within a step");
+    cr_assert_eq(get_status(ids[0]), STORE_CANCELLED);
+    cr_assert_eq(get_status(ids[1]), STORE_CANCELLED);
+    cr_assert_eq(get_status(other), STORE_DONE);
+    jobq_stats st;
+    jobq_get_stats(q, &st);
+    cr_assert(st.queued == 0 && st.busy == 0);
+    /* a family no longer queued: nothing to take */
+    cr_assert_eq(jobq_cancel_family(q, fam, &removed, &n), 0);
+    cr_assert(n == 0 && removed == NULL);
+    jobq_stop(q);
 }

@@ -498,12 +498,253 @@ Test(store, a_version_1_database_is_migrated_with_its_counts)
              "  ('c', 'queued', 0, 1, 1, 'none', '{}'), ('d', 'failed', 0, 1, 1, 'none', '{}');"
              "PRAGMA user_version = 1;");
     store *s = open_ok(path);
-    cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), 2);
+    cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), STORE_SCHEMA_VERSION);
     long counts[STORE_NSTATUS];
     cr_assert_eq(store_count(s, counts, err, sizeof err), 0, "%s", err);
     cr_assert(counts[STORE_DONE] == 2 && counts[STORE_QUEUED] == 1 && counts[STORE_FAILED] == 1 &&
               counts[STORE_RUNNING] == 0);
     finished_job(s, "e", STORE_DIVERGED, NULL);
+    assert_counts_match_the_table(s, path);
+    store_close(s);
+}
+
+/* the schema of version 2 as that version of store.c created it (migrations 0 -> 1 -> 2) */
+static const char v2_schema[] =
+    "CREATE TABLE jobs (id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT NOT NULL,"
+    "  preset TEXT, status TEXT NOT NULL DEFAULT 'queued' CHECK (status IN ('queued',"
+    "  'running', 'done', 'failed', 'diverged', 'cancelled')),"
+    "  progress REAL NOT NULL DEFAULT 0, created REAL NOT NULL,"
+    "  started REAL NOT NULL DEFAULT 0, finished REAL NOT NULL DEFAULT 0,"
+    "  nbodies INTEGER NOT NULL, nv INTEGER NOT NULL, controller TEXT NOT NULL,"
+    "  spec TEXT NOT NULL, metrics TEXT, message TEXT, e_max REAL, wall_s REAL);"
+    "CREATE INDEX jobs_by_status ON jobs (status);"
+    "CREATE TABLE series (job_id INTEGER NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,"
+    "  channel TEXT NOT NULL, width INTEGER NOT NULL CHECK (width > 0),"
+    "  nsamples INTEGER NOT NULL CHECK (nsamples >= 0), data BLOB NOT NULL,"
+    "  PRIMARY KEY (job_id, channel));"
+    "CREATE TABLE job_counts (status TEXT PRIMARY KEY, n INTEGER NOT NULL CHECK (n >= 0))"
+    "  WITHOUT ROWID;"
+    "INSERT INTO job_counts (status, n) VALUES ('queued', 0), ('running', 0), ('done', 0),"
+    "  ('failed', 0), ('diverged', 0), ('cancelled', 0);"
+    "CREATE TRIGGER job_counts_insert AFTER INSERT ON jobs BEGIN"
+    "  UPDATE job_counts SET n = n + 1 WHERE status = NEW.status; END;"
+    "CREATE TRIGGER job_counts_delete AFTER DELETE ON jobs BEGIN"
+    "  UPDATE job_counts SET n = n - 1 WHERE status = OLD.status; END;"
+    "CREATE TRIGGER job_counts_update AFTER UPDATE OF status ON jobs"
+    "  WHEN OLD.status <> NEW.status BEGIN"
+    "  UPDATE job_counts SET n = n - 1 WHERE status = OLD.status;"
+    "  UPDATE job_counts SET n = n + 1 WHERE status = NEW.status; END;"
+    "PRAGMA user_version = 2;";
+
+Test(store, a_version_2_database_is_migrated_and_keeps_every_job)
+{
+    /* a version 2 file with jobs of every kind, one with a series: open adds families and the
+     * members' columns, and every old job reads back as it was, in no family */
+    char path[256], err[512] = "";
+    path_of(path, sizeof path, "ctcsim.db");
+    raw_exec(path, v2_schema);
+    raw_exec(path,
+             "INSERT INTO jobs (name, preset, status, progress, created, started, finished,"
+             "  nbodies, nv, controller, spec, metrics, message, e_max, wall_s) VALUES"
+             "  ('old done', 'triple_pendulum_pid', 'done', 1, 100.5, 101, 102, 3, 3, 'pid',"
+             "   '{\"name\": \"old done\"}', '{\"steps\": 7}', NULL, 0.25, 1.5),"
+             "  ('old queued', NULL, 'queued', 0, 103, 0, 0, 2, 2, 'pd', '{}', NULL, NULL, NULL,"
+             "   NULL),"
+             "  ('old failed', NULL, 'failed', 0.5, 104, 105, 106, 1, 1, 'none', '{}', NULL,"
+             "   'it broke', NULL, 2);"
+             "INSERT INTO series (job_id, channel, width, nsamples, data) VALUES"
+             "  (1, 't', 1, 1, x'0000000000000000');");
+    store *s = open_ok(path);
+    cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), 3);
+    assert_integrity(path);
+
+    store_job j;
+    cr_assert_eq(store_get(s, 1, &j, err, sizeof err), 0, "%s", err);
+    cr_assert_str_eq(j.name, "old done");
+    cr_assert_str_eq(j.preset, "triple_pendulum_pid");
+    cr_assert_eq(j.status, STORE_DONE);
+    cr_assert(j.created == 100.5 && j.started == 101 && j.finished == 102);
+    cr_assert(j.nbodies == 3 && j.nv == 3 && j.e_max == 0.25 && j.wall_s == 1.5);
+    cr_assert_str_eq(j.spec, "{\"name\": \"old done\"}");
+    cr_assert_str_eq(j.metrics, "{\"steps\": 7}");
+    cr_assert_eq(j.family, 0);
+    store_job_clear(&j);
+    cr_assert_eq(store_get(s, 3, &j, err, sizeof err), 0, "%s", err);
+    cr_assert_str_eq(j.message, "it broke");
+    cr_assert_eq(j.family, 0);
+    store_job_clear(&j);
+    store_series_info info;
+    cr_assert_eq(store_get_series_info(s, 1, &info, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(info.nsamples, 1);
+
+    /* the old queued job is recovered as before; counts are the table's */
+    int64_t *ids = NULL;
+    int n = 0;
+    cr_assert_eq(store_recover(s, &ids, &n, err, sizeof err), 0, "%s", err);
+    cr_assert(n == 1 && ids[0] == 2);
+    int64_t fam = -1;
+    cr_assert_eq(store_job_families(s, ids, n, &fam, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(fam, 0);
+    free(ids);
+    assert_counts_match_the_table(s, path);
+
+    /* and a family can be stored beside them, its ids after theirs */
+    store_new_member m = {
+        .name = "m", .controller = "pd", .spec = "{}", .nbodies = 1, .nv = 1, .values = "[1]"};
+    int64_t family_id = 0, member = 0;
+    cr_assert_eq(
+        store_family_insert(s, "f", "{}", "[\"n\"]", &m, 1, &family_id, &member, err, sizeof err),
+        0, "%s", err);
+    cr_assert(family_id == 1 && member == 4);
+    store_close(s);
+    assert_integrity(path);
+}
+
+/* n members of one family, member i with values [i] */
+static int64_t insert_family(store *s, long n, int64_t *ids)
+{
+    char err[512] = "";
+    store_new_member *m = calloc((size_t)n + 1, sizeof *m);
+    char(*names)[32] = calloc((size_t)n + 1, sizeof *names);
+    char(*values)[32] = calloc((size_t)n + 1, sizeof *values);
+    cr_assert(m && names && values);
+    for (long i = 0; i < n; i++) {
+        snprintf(names[i], sizeof names[i], "member %ld", i);
+        snprintf(values[i], sizeof values[i], "[%ld]", i);
+        m[i] = (store_new_member){.name = names[i],
+                                  .preset = i % 2 ? "p" : NULL,
+                                  .controller = "pd",
+                                  .spec = "{\"s\": 1}",
+                                  .nbodies = 2,
+                                  .nv = 2,
+                                  .index = i,
+                                  .replica = (int)(i % 3),
+                                  .values = values[i]};
+    }
+    int64_t id = 0;
+    cr_assert_eq(store_family_insert(s, "sweep", "{\"base\": {}}", "[\"controller.kp\"]", m, n, &id,
+                                     ids, err, sizeof err),
+                 0, "%s", err);
+    free(m);
+    free(names);
+    free(values);
+    return id;
+}
+
+Test(store, a_family_round_trips_with_its_members_counts_and_table)
+{
+    char path[256], err[512] = "";
+    path_of(path, sizeof path, "ctcsim.db");
+    store *s = open_ok(path);
+    int64_t lone = insert_job(s, "alone");
+    int64_t ids[5];
+    double before = wall_now();
+    int64_t fam = insert_family(s, 5, ids);
+    double after = wall_now();
+    for (int i = 0; i < 5; i++)
+        cr_assert_eq(ids[i], lone + 1 + i, "member %d has id %lld", i, (long long)ids[i]);
+    /* the members are ordinary jobs that name their family; the lone job names none */
+    store_job j;
+    cr_assert_eq(store_get(s, ids[3], &j, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(j.family, fam);
+    cr_assert_str_eq(j.name, "member 3");
+    cr_assert_str_eq(j.preset, "p");
+    cr_assert_eq(j.status, STORE_QUEUED);
+    store_job_clear(&j);
+    cr_assert_eq(store_get(s, lone, &j, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(j.family, 0);
+    store_job_clear(&j);
+
+    /* two members run: the counts and the member table follow */
+    cr_assert_eq(store_start(s, ids[0], err, sizeof err), 0, "%s", err);
+    cr_assert_eq(store_finish(s, ids[0], STORE_DONE, NULL, "{\"steps\": 9}", NULL, err, sizeof err),
+                 0, "%s", err);
+    cr_assert_eq(store_start(s, ids[1], err, sizeof err), 0, "%s", err);
+    store_family f;
+    cr_assert_eq(store_family_get(s, fam, &f, err, sizeof err), 0, "%s", err);
+    cr_assert_str_eq(f.name, "sweep");
+    cr_assert_str_eq(f.spec, "{\"base\": {}}");
+    cr_assert_str_eq(f.axes, "[\"controller.kp\"]");
+    cr_assert_eq(f.members, 5);
+    cr_assert(f.created >= before && f.created <= after);
+    cr_assert(f.counts[STORE_DONE] == 1 && f.counts[STORE_RUNNING] == 1 &&
+              f.counts[STORE_QUEUED] == 3 && f.counts[STORE_CANCELLED] == 0);
+    store_family_clear(&f);
+    store_member *rows = NULL;
+    long n = 0;
+    cr_assert_eq(store_family_members(s, fam, &rows, &n, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(n, 5);
+    for (long i = 0; i < n; i++) {
+        char want[32];
+        snprintf(want, sizeof want, "[%ld]", i);
+        cr_assert(rows[i].job == ids[i] && rows[i].index == i && rows[i].replica == i % 3);
+        cr_assert_str_eq(rows[i].values, want);
+    }
+    cr_assert_str_eq(rows[0].metrics, "{\"steps\": 9}");
+    cr_assert_null(rows[1].metrics);
+    cr_assert_eq(rows[1].status, STORE_RUNNING);
+    store_members_free(rows, n);
+
+    /* the active members; a cancel records the queued ones and leaves the running one */
+    int64_t *active = NULL;
+    cr_assert_eq(store_family_active(s, fam, &active, &n, err, sizeof err), 0, "%s", err);
+    cr_assert(n == 4 && active[0] == ids[1]);
+    free(active);
+    cr_assert_eq(store_family_delete(s, fam, err, sizeof err), 2);
+    cr_assert_eq(store_family_cancel(s, fam, "cancelled by request", &n, err, sizeof err), 0, "%s",
+                 err);
+    cr_assert_eq(n, 3);
+    cr_assert_eq(store_start(s, ids[4], err, sizeof err), 1, "a cancelled member does not start");
+    cr_assert_eq(store_family_delete(s, fam, err, sizeof err), 2, "a member still runs");
+    cr_assert_eq(store_finish(s, ids[1], STORE_CANCELLED, "cancelled", NULL, NULL, err, sizeof err),
+                 0, "%s", err);
+    assert_counts_match_the_table(s, path);
+
+    /* deleted whole: the family, its members; the lone job stays */
+    cr_assert_eq(store_family_delete(s, fam, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(store_family_get(s, fam, &f, err, sizeof err), 1);
+    cr_assert_eq(store_family_delete(s, fam, err, sizeof err), 1);
+    cr_assert_eq(raw_int(path, "SELECT count(*) FROM jobs", 0), 1);
+    cr_assert_eq(raw_int(path, "SELECT count(*) FROM families", 0), 0);
+    assert_counts_match_the_table(s, path);
+    store_close(s);
+    assert_integrity(path);
+}
+
+Test(store, families_list_newest_first_with_counts_and_ten_thousand_members_insert_at_once)
+{
+    char path[256], err[512] = "";
+    path_of(path, sizeof path, "ctcsim.db");
+    store *s = open_ok(path);
+    int64_t *ids = calloc(10000, sizeof *ids);
+    cr_assert_not_null(ids);
+    int64_t a = insert_family(s, 2, ids);
+    int64_t b = insert_family(s, 10000, ids);
+    int64_t c = insert_family(s, 0, ids);
+    cr_assert_eq(ids[9999] - ids[0], 9999, "the members' ids increase with their index");
+    store_family *rows = NULL;
+    int n = 0;
+    cr_assert_eq(store_family_list(s, 0, 2, &rows, &n, err, sizeof err), 0, "%s", err);
+    cr_assert(n == 2 && rows[0].id == c && rows[1].id == b);
+    cr_assert_null(rows[0].spec, "lists leave the spec out");
+    cr_assert(rows[1].members == 10000 && rows[1].counts[STORE_QUEUED] == 10000);
+    store_families_free(rows, n);
+    cr_assert_eq(store_family_list(s, b, 10, &rows, &n, err, sizeof err), 0, "%s", err);
+    cr_assert(n == 1 && rows[0].id == a && rows[0].counts[STORE_QUEUED] == 2);
+    store_families_free(rows, n);
+    cr_assert_eq(store_family_list(s, 0, 0, &rows, &n, err, sizeof err), -1);
+    cr_assert_str_eq(err, "limit must be between 1 and 1000 (got 0)");
+
+    /* recovery sorts the members from the single jobs */
+    int64_t lone = insert_job(s, "alone");
+    int64_t *rec = NULL, fams[10003];
+    cr_assert_eq(store_recover(s, &rec, &n, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(n, 10003);
+    cr_assert_eq(store_job_families(s, rec, n, fams, err, sizeof err), 0, "%s", err);
+    cr_assert(fams[0] == a && fams[1] == a && fams[2] == b && fams[10001] == b);
+    cr_assert(rec[10002] == lone && fams[10002] == 0);
+    free(rec);
+    free(ids);
     assert_counts_match_the_table(s, path);
     store_close(s);
 }
@@ -514,7 +755,7 @@ Test(store, refuses_a_newer_schema)
     path_of(path, sizeof path, "ctcsim.db");
     raw_exec(path, "CREATE TABLE jobs (id INTEGER PRIMARY KEY, future TEXT); "
                    "PRAGMA user_version = 7;");
-    assert_open_fails(path, "database %s has schema version 7, newer than this ctcsim (2): "
+    assert_open_fails(path, "database %s has schema version 7, newer than this ctcsim (3): "
                             "upgrade ctcsim");
     cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), 7);
 }
