@@ -1171,6 +1171,10 @@ int store_pg_heartbeat(store *s, int64_t id, double progress, double lease_s, in
         rc = 1;
     }
     PQclear(r);
+    /* a worker's connection listens (it waits on it when idle); what came while it runs a job
+       only said that something changed, which its next claim learns anyway */
+    PGnotify *n;
+    while ((n = PQnotifies(p->conn)) != NULL) PQfreemem(n);
     return write_end(p, rc, 0);
 }
 
