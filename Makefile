@@ -67,8 +67,8 @@ endif
 # sets also need node (>= 18) and npm for uPlot and playwright-core: Debian's nodejs and npm are
 # installed when the machine has no node.
 RUN_PACKAGES := gcc make libc6-dev libcjson-dev liblapacke-dev libsundials-dev libmicrohttpd-dev \
-	libsqlite3-dev libxml2-dev ca-certificates
-TEST_PACKAGES := libcriterion-dev clang-19 libclang-rt-19-dev chromium sqlite3 curl jq
+	libsqlite3-dev libxml2-dev libpq-dev ca-certificates
+TEST_PACKAGES := libcriterion-dev clang-19 libclang-rt-19-dev chromium sqlite3 curl jq postgresql
 DEB_PACKAGES := $(RUN_PACKAGES) $(TEST_PACKAGES)
 # npm trusts the system's CA bundle too (a TLS-inspecting proxy whose CA is in the system store),
 # unless NODE_EXTRA_CA_CERTS is set already
@@ -93,7 +93,10 @@ SERVER := $(BUILD)/ctcsim-server
 # numbers that its messages name
 XML_CFLAGS := $(shell pkg-config --cflags libxml-2.0 2>/dev/null || echo -I/usr/include/libxml2)
 XML_LIBS := $(shell pkg-config --libs libxml-2.0 2>/dev/null || echo -lxml2)
-SERVER_LDLIBS := -lmicrohttpd -lsqlite3 $(XML_LIBS)
+# libpq talks to PostgreSQL (server/store_pg.c, --db postgres://...)
+PQ_CFLAGS := $(shell pkg-config --cflags libpq 2>/dev/null || echo -I/usr/include/postgresql)
+PQ_LIBS := $(shell pkg-config --libs libpq 2>/dev/null || echo -lpq)
+SERVER_LDLIBS := -lmicrohttpd -lsqlite3 $(XML_LIBS) $(PQ_LIBS)
 # the served page: web/ plus uPlot's files from npm ci (nothing from node_modules is committed)
 WEB_OUT := build/web
 WEB_NPM := build/web-npm
@@ -135,7 +138,7 @@ $(BUILD)/obj/%.o: src/%.c $(FLAGS_STAMP)
 
 $(BUILD)/obj/server/%.o: server/%.c $(FLAGS_STAMP)
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) $(XML_CFLAGS) -Iserver -MMD -MP -c $< -o $@
+	$(CC) $(CFLAGS) $(XML_CFLAGS) $(PQ_CFLAGS) -Iserver -MMD -MP -c $< -o $@
 
 $(BUILD)/obj/support/%.o: tests/support/%.c $(FLAGS_STAMP)
 	@mkdir -p $(@D)

@@ -77,6 +77,7 @@
 #include "result_out.h"
 #include "sim.h"
 #include "store.h"
+#include "store_pg.h"
 
 #define JOBQ_MAX_WAIT 1e9            /* s: longer waits are cut to this (about 31 years) */
 #define JOBQ_RETRY_SLICE 0.05        /* s: a pause is slept in slices this long, stopping checked */
@@ -116,6 +117,7 @@ typedef struct jobq_worker {
        (guarded by q->lock; NULL when nothing is recorded yet or the result is gone) */
     const ctc_sim_result *live;
     int live_n;
+    int lost; /* a shared queue: the job's lease was taken over (store nothing) */
 } jobq_worker;
 
 struct jobq {
@@ -135,6 +137,14 @@ struct jobq {
     jobq_worker *workers; /* (config.workers) */
     int nstarted;         /* threads running */
     int sync_ready;       /* lock and conditions initialised */
+    /* a shared queue (PostgreSQL): the queue is the database (jobq.h) */
+    int shared;
+    store *ctl;               /* for space, cancel and counts, under ctl_lock */
+    pthread_mutex_t ctl_lock; /* initialised with the other sync objects */
+    pthread_t listener;       /* follows the jobs in pending (config.listen) */
+    int listener_started;
+    int64_t *pending; /* (cap_pending) jobs submitted here and not yet seen final, under lock */
+    int npending, cap_pending;
 };
 
 static double monotonic_now(void)
@@ -337,6 +347,20 @@ static void hook_progress(void *ctx, double fraction)
     double t = monotonic_now();
     if (t - w->last_progress < JOBQ_PROGRESS_INTERVAL) return;
     w->last_progress = t;
+    if (w->q->shared) {
+        /* the heartbeat: the lease renewed with the progress; a cancel or a lost lease stops
+           the run at its next step (a failed write is followed by the next one) */
+        char why[256];
+        int cancel = 0;
+        int rc = store_pg_heartbeat(w->db, w->job_id, fraction, w->q->config.lease_s, &cancel, why,
+                                    sizeof why);
+        if (rc == 1) {
+            fprintf(stderr, "jobq: %s; stopping it\n", why);
+            w->lost = 1;
+        }
+        if (rc == 1 || (rc == 0 && cancel)) atomic_store(&w->cancel, 1);
+        return;
+    }
     /* progress is a hint: it does not wait for a lock, and a failed write is followed by the
      * next one rather than retried */
     char err[256];
@@ -480,8 +504,9 @@ static worker_outcome run_job(jobq_worker *w, int64_t id)
     worker_outcome outcome = OUTCOME_SKIPPED;
 
     /* a stop between the pop and here leaves the job queued, as it is stored */
-    if (atomic_load(&q->stopping)) return OUTCOME_SKIPPED;
-    int rc = start_retrying(w, id, err, sizeof err);
+    if (atomic_load(&q->stopping) && !q->shared) return OUTCOME_SKIPPED;
+    /* a shared queue's claim has marked it running already */
+    int rc = q->shared ? 0 : start_retrying(w, id, err, sizeof err);
     if (rc == 1) return OUTCOME_SKIPPED; /* cancelled or deleted meanwhile */
     if (rc != 0) {
         fprintf(stderr, "jobq: job %lld: marking it running: %s\n", (long long)id, err);
@@ -516,6 +541,7 @@ static worker_outcome run_job(jobq_worker *w, int64_t id)
     }
 
     w->job_id = id;
+    w->lost = 0;
     w->last_progress = monotonic_now();
     ctc_sim_hooks hooks = {.ctx = w,
                            .progress = hook_progress,
@@ -526,6 +552,8 @@ static worker_outcome run_job(jobq_worker *w, int64_t id)
         goto cleanup;
     }
 
+    /* a shared queue's lease taken over: the job's result is its new holder's */
+    if (w->lost) goto cleanup;
     /* stopped by jobq_stop rather than by a cancel: back to queued, to restart from t = 0 */
     if (r->status == CTC_RUN_CANCELLED && !atomic_load(&w->cancel) && atomic_load(&q->stopping)) {
         if (store_requeue(w->db, id, err, sizeof err) == 0) {
@@ -581,6 +609,163 @@ static void *worker_main(void *arg)
     return NULL;
 }
 
+/* Sleeps up to seconds in slices, returning early when the queue stops. */
+static void pause_unless_stopping(jobq *q, double seconds)
+{
+    for (double left = seconds; left > 0 && !atomic_load(&q->stopping); left -= JOBQ_RETRY_SLICE) {
+        double slice = left < JOBQ_RETRY_SLICE ? left : JOBQ_RETRY_SLICE;
+        struct timespec ts = {.tv_sec = 0, .tv_nsec = (long)(slice * 1e9)};
+        nanosleep(&ts, NULL);
+    }
+}
+
+static void ignore_note(void *arg, int64_t id, int status)
+{
+    (void)arg, (void)id, (void)status;
+}
+
+/* A worker of a shared queue: claims, runs, and claims again; idle, it waits for a notification
+ * or JOBQ_CLAIM_IDLE s. A claim that fails for a transient fault (the connection lost, say)
+ * pauses claiming, the pause doubling from JOBQ_RETRY_FIRST to JOBQ_RETRY_MAX; the next claim
+ * reconnects. */
+static void *claim_main(void *arg)
+{
+    jobq_worker *w = arg;
+    jobq *q = w->q;
+    char err[512];
+    int failures = 0;
+    while (!atomic_load(&q->stopping)) {
+        int64_t id = 0;
+        int cancel = 0;
+        int rc = store_pg_claim(w->db, q->config.lease_s, &id, &cancel, err, sizeof err);
+        if (rc < 0) {
+            if (failures % JOBQ_RETRY_LOG == 0)
+                fprintf(stderr, "jobq: claiming a job (try %d, paused): %s\n", failures + 1, err);
+            double pause = JOBQ_RETRY_FIRST * ldexp(1.0, failures < 30 ? failures : 30);
+            if (!store_fault_transient(store_last_fault(w->db)) || pause > JOBQ_RETRY_MAX)
+                pause = JOBQ_RETRY_MAX;
+            failures++;
+            pause_unless_stopping(q, pause);
+            continue;
+        }
+        if (failures > 0) fprintf(stderr, "jobq: claiming again after %d failed tries\n", failures);
+        failures = 0;
+        if (rc == 1) {
+            /* nothing to claim: a notification (a new job, a change) or the idle time */
+            if (store_pg_notifications(w->db, JOBQ_CLAIM_IDLE, ignore_note, NULL, err, sizeof err) <
+                0) {
+                fprintf(stderr, "jobq: waiting for jobs (paused): %s\n", err);
+                failures++;
+                pause_unless_stopping(q, JOBQ_RETRY_FIRST);
+            }
+            continue;
+        }
+        pthread_mutex_lock(&q->lock);
+        w->running = id;
+        atomic_store(&w->cancel, cancel);
+        pthread_mutex_unlock(&q->lock);
+
+        worker_outcome outcome = run_job(w, id);
+
+        pthread_mutex_lock(&q->lock);
+        w->running = 0;
+        if (outcome == OUTCOME_FINISHED) q->done++;
+        pthread_cond_broadcast(&q->finished);
+        pthread_mutex_unlock(&q->lock);
+    }
+    return NULL;
+}
+
+/* Position of id among the jobs followed here, or -1 (caller holds q->lock). */
+static int pending_find(const jobq *q, int64_t id)
+{
+    for (int i = 0; i < q->npending; i++)
+        if (q->pending[i] == id) return i;
+    return -1;
+}
+
+/* Stops following id: 1 when it was followed (the caller calls `left`), else 0. */
+static int pending_drop(jobq *q, int64_t id)
+{
+    pthread_mutex_lock(&q->lock);
+    int pos = pending_find(q, id);
+    if (pos >= 0) {
+        q->pending[pos] = q->pending[--q->npending];
+        pthread_cond_broadcast(&q->finished);
+    }
+    pthread_mutex_unlock(&q->lock);
+    return pos >= 0;
+}
+
+/* a notification on the listener's connection: a job that reached a final status leaves */
+static void listener_note(void *arg, int64_t id, int status)
+{
+    jobq *q = arg;
+    if (status < STORE_DONE) return;
+    if (pending_drop(q, id) && q->config.left) q->config.left(q->config.left_arg, id);
+}
+
+/* One query for the statuses of the jobs followed here; those final or gone leave. 0 or -1. */
+static int listener_reconcile(jobq *q, store *db, char *err, size_t errlen)
+{
+    pthread_mutex_lock(&q->lock);
+    int n = q->npending;
+    int64_t *ids = n ? malloc((size_t)n * sizeof *ids) : NULL;
+    int *st = n ? malloc((size_t)n * sizeof *st) : NULL;
+    if (ids) memcpy(ids, q->pending, (size_t)n * sizeof *ids);
+    pthread_mutex_unlock(&q->lock);
+    int rc = 0;
+    if (n && (!ids || !st)) {
+        snprintf(err, errlen, "out of memory");
+        rc = -1;
+    } else if (n && store_pg_statuses(db, ids, n, st, err, errlen) != 0) {
+        rc = -1;
+    }
+    for (int i = 0; rc == 0 && i < n; i++)
+        if (st[i] < 0 || st[i] >= STORE_DONE) listener_note(q, ids[i], STORE_DONE);
+    free(ids);
+    free(st);
+    return rc;
+}
+
+/* The listener of a shared queue (config.listen): wakes jobq_wait and calls `left` for the jobs
+ * submitted here as their notifications come, reading their statuses every JOBQ_RECONCILE s and
+ * after its connection was lost (reconnecting with the retry pause). */
+static void *listener_main(void *arg)
+{
+    jobq *q = arg;
+    char err[512];
+    store *db = NULL;
+    int failures = 0;
+    double last = 0;
+    while (!atomic_load(&q->stopping)) {
+        if (!db && (store_open(q->db_path, &db, err, sizeof err) != 0 ||
+                    store_pg_listen(db, err, sizeof err) != 0)) {
+            store_close(db);
+            db = NULL;
+        }
+        int ok = db != NULL;
+        /* listening from here on: what finished before is read, once now and then regularly */
+        if (ok && (last == 0 || monotonic_now() - last >= JOBQ_RECONCILE)) {
+            ok = listener_reconcile(q, db, err, sizeof err) == 0;
+            last = monotonic_now();
+        }
+        if (ok) ok = store_pg_notifications(db, 0.25, listener_note, q, err, sizeof err) >= 0;
+        if (ok) {
+            failures = 0;
+            continue;
+        }
+        if (failures % JOBQ_RETRY_LOG == 0)
+            fprintf(stderr, "jobq: listening for finished jobs (try %d): %s\n", failures + 1, err);
+        failures++;
+        last = 0; /* read the statuses again once back */
+        double pause = JOBQ_RETRY_FIRST * ldexp(1.0, failures < 30 ? failures : 30);
+        pause_unless_stopping(q, pause < JOBQ_RETRY_MAX ? pause : JOBQ_RETRY_MAX);
+    }
+    store_close(db);
+    return NULL;
+}
+
 /* Stops and joins the started workers, closes every connection and frees q (jobq_stop, and a
  * jobq_start that failed half way). */
 static void jobq_free(jobq *q)
@@ -593,8 +778,12 @@ static void jobq_free(jobq *q)
         pthread_mutex_unlock(&q->lock);
     }
     for (int i = 0; i < q->nstarted; i++) pthread_join(q->workers[i].thread, NULL);
+    if (q->listener_started) pthread_join(q->listener, NULL);
     for (int i = 0; q->workers && i < q->config.workers; i++) store_close(q->workers[i].db);
+    store_close(q->ctl);
+    free(q->pending);
     if (q->sync_ready) {
+        pthread_mutex_destroy(&q->ctl_lock);
         pthread_cond_destroy(&q->finished);
         pthread_cond_destroy(&q->work);
         pthread_mutex_destroy(&q->lock);
@@ -619,13 +808,18 @@ static int init_sync(jobq *q, char *err, size_t errlen)
         return fail(err, errlen, "condition clock: %s", strerror(rc));
     }
     rc = pthread_mutex_init(&q->lock, NULL);
+    if (rc == 0 && (rc = pthread_mutex_init(&q->ctl_lock, NULL)) != 0)
+        pthread_mutex_destroy(&q->lock);
     if (rc == 0) {
         rc = pthread_cond_init(&q->work, NULL);
         if (rc == 0) {
             rc = pthread_cond_init(&q->finished, &attr);
             if (rc != 0) pthread_cond_destroy(&q->work);
         }
-        if (rc != 0) pthread_mutex_destroy(&q->lock);
+        if (rc != 0) {
+            pthread_mutex_destroy(&q->ctl_lock);
+            pthread_mutex_destroy(&q->lock);
+        }
     }
     pthread_condattr_destroy(&attr);
     if (rc != 0) return fail(err, errlen, "queue lock: %s", strerror(rc));
@@ -638,8 +832,11 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
     *out = NULL;
     if (!config->db_path || !config->db_path[0])
         return fail(err, errlen, "db_path must name the database file");
-    if (config->workers < 1)
-        return fail(err, errlen, "workers must be >= 1 (got %d)", config->workers);
+    int shared = store_pg_url(config->db_path);
+    if (config->workers < (shared ? 0 : 1))
+        return fail(err, errlen, "workers must be >= %d (got %d)", shared ? 0 : 1, config->workers);
+    if (shared && !(config->lease_s >= 1 && config->lease_s <= 86400))
+        return fail(err, errlen, "the lease must be from 1 to 86400 s (got %g s)", config->lease_s);
     if (config->max_queue < 1)
         return fail(err, errlen, "max_queue must be >= 1 (got %d)", config->max_queue);
     if (!(config->job_time_limit >= 0) || isinf(config->job_time_limit))
@@ -656,7 +853,8 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
     q->config = *config;
     atomic_init(&q->stopping, 0);
     q->db_path = strdup(config->db_path);
-    q->workers = calloc((size_t)config->workers, sizeof *q->workers);
+    q->shared = shared;
+    q->workers = calloc((size_t)(config->workers > 0 ? config->workers : 1), sizeof *q->workers);
     if (!q->db_path || !q->workers) {
         fail(err, errlen, "out of memory");
         goto cleanup;
@@ -685,6 +883,8 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
         struct timespec pause = {.tv_sec = 1, .tv_nsec = 0};
         while (nanosleep(&pause, &pause) != 0 && errno == EINTR) continue;
     }
+    /* a shared queue's jobs stay in the database, which the workers claim from */
+    if (shared) nids = 0;
     /* the members of families go back to their family's lane, the others to the ring */
     families = calloc(nids > 0 ? (size_t)nids : 1, sizeof *families);
     if (!families) {
@@ -712,6 +912,10 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
             goto cleanup;
         }
     }
+    if (shared) {
+        q->ctl = db; /* recovery's connection serves space, cancel and counts from here on */
+        db = NULL;
+    }
 
     /* one connection per worker, opened here so that a failure fails the start */
     for (int i = 0; i < config->workers; i++) {
@@ -726,18 +930,23 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
         }
         store_set_busy_timeout(w->db, JOBQ_BUSY_MS);
         store_attach(w->db, config->health);
+        if (shared && store_pg_listen(w->db, why, sizeof why) != 0) {
+            fail(err, errlen, "worker %d: %s", i, why);
+            goto cleanup;
+        }
     }
 
     /* room for the log on a full disk, so that DELETE can still free space: as much of
      * JOBQ_LOG_RESERVE as the disk gives (the log lives while the workers' connections do) */
     long long reserve = JOBQ_LOG_RESERVE;
-    while (store_reserve(q->workers[0].db, reserve, why, sizeof why) != 0 &&
+    while (!shared && store_reserve(q->workers[0].db, reserve, why, sizeof why) != 0 &&
            reserve > JOBQ_LOG_RESERVE_MIN)
         reserve /= 2;
 
     /* the threads inherit the caller's signal mask (main.c blocks SIGINT and SIGTERM first) */
     for (int i = 0; i < config->workers; i++) {
-        int e = pthread_create(&q->workers[i].thread, NULL, worker_main, &q->workers[i]);
+        int e = pthread_create(&q->workers[i].thread, NULL, shared ? claim_main : worker_main,
+                               &q->workers[i]);
         if (e != 0) {
             fail(err, errlen, "starting worker %d: %s", i, strerror(e));
             break;
@@ -747,6 +956,14 @@ int jobq_start(const jobq_config *config, jobq **out, char *err, size_t errlen)
         pthread_mutex_unlock(&q->lock);
     }
     if (q->nstarted < config->workers) goto cleanup;
+    if (shared && config->listen) {
+        int e = pthread_create(&q->listener, NULL, listener_main, q);
+        if (e != 0) {
+            fail(err, errlen, "starting the listener: %s", strerror(e));
+            goto cleanup;
+        }
+        q->listener_started = 1;
+    }
 
     *out = q;
     q = NULL;
@@ -760,8 +977,40 @@ cleanup:
     return rc;
 }
 
+/* a shared queue's submission: the job is in the database already (its insert notified the
+ * workers); this process follows it when it listens */
+static int shared_submit(jobq *q, int64_t id)
+{
+    int rc = 0;
+    pthread_mutex_lock(&q->lock);
+    if (atomic_load(&q->stopping)) {
+        rc = 2;
+    } else if (q->config.listen && q->npending == q->cap_pending) {
+        int cap = q->cap_pending ? 2 * q->cap_pending : 64;
+        int64_t *grown = cap > 0 ? realloc(q->pending, (size_t)cap * sizeof *grown) : NULL;
+        if (grown)
+            q->pending = grown, q->cap_pending = cap;
+        else
+            rc = 3;
+    }
+    if (rc == 0 && q->config.listen) q->pending[q->npending++] = id;
+    pthread_mutex_unlock(&q->lock);
+    return rc;
+}
+
+/* a shared queue's counts of the whole database, read on the control connection; 0 or -1 */
+static int shared_counts(jobq *q, long counts[STORE_NSTATUS])
+{
+    char err[256];
+    pthread_mutex_lock(&q->ctl_lock);
+    int rc = store_count(q->ctl, counts, err, sizeof err);
+    pthread_mutex_unlock(&q->ctl_lock);
+    return rc;
+}
+
 int jobq_submit(jobq *q, int64_t id)
 {
+    if (q->shared) return shared_submit(q, id);
     int rc = 0;
     pthread_mutex_lock(&q->lock);
     if (atomic_load(&q->stopping)) {
@@ -822,6 +1071,14 @@ int jobq_cancel_family(jobq *q, int64_t family, int64_t **removed, long *n)
 
 int jobq_space(jobq *q)
 {
+    if (q->shared) {
+        /* the database's queued jobs against the bound; a failed read lets the insert say why */
+        long counts[STORE_NSTATUS];
+        if (atomic_load(&q->stopping)) return 0;
+        if (shared_counts(q, counts) != 0) return 1;
+        long space = q->config.max_queue - counts[STORE_QUEUED];
+        return space > 0 ? (int)(space < INT_MAX ? space : INT_MAX) : 0;
+    }
     pthread_mutex_lock(&q->lock);
     int space = atomic_load(&q->stopping) ? 0 : q->config.max_queue - q->count;
     pthread_mutex_unlock(&q->lock);
@@ -830,6 +1087,18 @@ int jobq_space(jobq *q)
 
 int jobq_cancel(jobq *q, int64_t id)
 {
+    if (q->shared) {
+        /* flagged in the database: a running job's worker sees it at its next heartbeat, a
+           queued one is no longer claimed and the caller records it */
+        char err[256];
+        pthread_mutex_lock(&q->ctl_lock);
+        int rc = store_pg_request_cancel(q->ctl, id, err, sizeof err);
+        pthread_mutex_unlock(&q->ctl_lock);
+        if (rc < 0) fprintf(stderr, "jobq: job %lld: %s\n", (long long)id, err);
+        if (rc == 1 && pending_drop(q, id) && q->config.left)
+            q->config.left(q->config.left_arg, id);
+        return rc < 0 ? 0 : rc;
+    }
     int rc = 0;
     pthread_mutex_lock(&q->lock);
     int pos = ring_find(q, id);
@@ -941,10 +1210,11 @@ int jobq_wait(jobq *q, int64_t id, double timeout_s)
     }
 
     pthread_mutex_lock(&q->lock);
-    int here = job_here(q, id);
+    /* a shared queue: while it is followed here (the listener drops it when it is final) */
+    int here = q->shared ? pending_find(q, id) >= 0 : job_here(q, id);
     while (here) {
         int e = pthread_cond_timedwait(&q->finished, &q->lock, &deadline);
-        here = job_here(q, id);
+        here = q->shared ? pending_find(q, id) >= 0 : job_here(q, id);
         if (e == ETIMEDOUT) break;
     }
     pthread_mutex_unlock(&q->lock);
@@ -960,6 +1230,11 @@ void jobq_get_stats(jobq *q, jobq_stats *out)
     out->queued = (int)waiting(q);
     out->done = q->done;
     pthread_mutex_unlock(&q->lock);
+    long counts[STORE_NSTATUS];
+    if (q->shared && shared_counts(q, counts) == 0) {
+        out->busy = (int)counts[STORE_RUNNING];
+        out->queued = (int)counts[STORE_QUEUED];
+    }
 }
 
 void jobq_stop(jobq *q)

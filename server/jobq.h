@@ -26,6 +26,25 @@
  * and joins the workers. A job answered 202 is therefore never lost: it is in the database before
  * it is queued.
  *
+ * Shared queue (PostgreSQL, store_pg.h). When db_path names a PostgreSQL database the queue is
+ * the database: the ring is not used, and each worker claims the oldest claimable job itself
+ * (store_pg_claim, FOR UPDATE SKIP LOCKED) under a lease of config.lease_s, renewed by a
+ * heartbeat at each progress write (at most every JOBQ_PROGRESS_INTERVAL s); an idle worker
+ * waits for the database's notification of a change (LISTEN) or JOBQ_CLAIM_IDLE s, whichever
+ * comes first, and claims again, which also takes over a job whose lease expired (its worker
+ * died). A worker whose claim fails for a transient fault (the connection lost included) stops
+ * claiming and tries again after the retry pause, reconnecting; one that learns at a heartbeat
+ * that its lease was taken over stops the job and stores nothing (the new holder's result is the
+ * job's one result). Any number of processes on any machines may run workers on one database.
+ * With config.listen, one thread of the process listens for the notifications of finished jobs
+ * on a connection of its own: jobq_wait and the `left` hook follow the jobs submitted through
+ * this process (jobq_submit) without a query per waiting request; every JOBQ_RECONCILE s, and
+ * after the listening connection was lost, it reads the status of those jobs in one query, so a
+ * notification missed while disconnected delays nothing for long. jobq_space, jobq_cancel and the
+ * counters of jobq_get_stats then read the database (one small query each, on a connection the
+ * process shares under a lock): queued and busy are the whole database's queued and running
+ * jobs, workers this process's.
+ *
  * All functions are thread-safe unless they say otherwise.
  */
 #ifndef JOBQ_H
@@ -40,6 +59,8 @@
 #define JOBQ_BUSY_MS 1000           /* ms one worker write waits for a lock before it is retried */
 #define JOBQ_RETRY_FIRST 0.01       /* s, the first pause before a retry */
 #define JOBQ_RETRY_MAX 2.0          /* s, the longest pause between retries */
+#define JOBQ_CLAIM_IDLE 1.0         /* s an idle worker of a shared queue waits before claiming */
+#define JOBQ_RECONCILE 5.0          /* s between the listener's reads of its jobs' statuses */
 
 struct store_health;
 
@@ -47,7 +68,9 @@ typedef struct jobq jobq;
 
 typedef struct jobq_config {
     const char *db_path;   /* the database each worker opens */
-    int workers;           /* >= 1 */
+    int workers;           /* >= 1; >= 0 on a shared queue (PostgreSQL) */
+    double lease_s;        /* s, a shared queue's lease of a claimed job (>= 1) */
+    int listen;            /* a shared queue: follow submitted jobs (jobq_wait, `left`) */
     int max_queue;         /* >= 1: jobs waiting (not running) at most */
     double job_time_limit; /* s of wall time per job; 0 = none */
     /* called with each job that leaves the queue and the workers (finished, cancelled while

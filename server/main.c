@@ -31,6 +31,7 @@
 #include "pool.h"
 #include "routes.h"
 #include "store.h"
+#include "store_pg.h"
 
 enum { EXIT_BAD_SETTING = 2, EXIT_DATABASE = 3, EXIT_LISTEN = 4 };
 
@@ -62,6 +63,8 @@ typedef struct server_settings {
 
     long long max_series_streams; /* large GET /api/jobs/{id}/series replies sent at once */
     long long db_max_size;        /* bytes the database may grow to; 0 = as the disk allows */
+    const char *role;             /* "all", "api" or "worker" */
+    double lease;                 /* s, a claimed job's lease (PostgreSQL) */
 } server_settings;
 
 typedef enum setting_kind {
@@ -89,8 +92,15 @@ static const setting settings[] = {
      "address to listen on (numeric IPv4 or IPv6; 0.0.0.0 for all)"},
     {"--port", "CTCSIM_PORT", SETTING_INTEGER, AT(port), 0, 65535, "PORT",
      "port to listen on (0: any free port, printed at start)"},
-    {"--db", "CTCSIM_DB", SETTING_TEXT, AT(db), 0, 0, "FILE",
-     "SQLite database of the jobs (created when absent)"},
+    {"--db", "CTCSIM_DB", SETTING_TEXT, AT(db), 0, 0, "FILE|URL",
+     "SQLite database of the jobs (created when absent), or a PostgreSQL database shared by "
+     "several processes (postgres://user@host:port/dbname; its tables are created when absent)"},
+    {"--role", "CTCSIM_ROLE", SETTING_TEXT, AT(role), 0, 0, "ROLE",
+     "all (HTTP and workers), api (HTTP only) or worker (workers only); api and worker need a "
+     "PostgreSQL --db"},
+    {"--lease", "CTCSIM_LEASE", SETTING_SECONDS, AT(lease), 1, 86400, "SECONDS",
+     "PostgreSQL: a running job's lease, renewed while it runs; a job whose worker died runs "
+     "again elsewhere once it expires"},
     {"--workers", "CTCSIM_WORKERS", SETTING_INTEGER, AT(workers), 1, 1024, "N",
      "simulations run at once"},
     {"--job-threads", "CTCSIM_JOB_THREADS", SETTING_INTEGER, AT(job_threads), 1, CTC_MAX_THREADS,
@@ -383,10 +393,35 @@ int main(int argc, char **argv)
         .max_jobs_per_client = 64,
         .max_family = 10000,
         .max_series_streams = 4,
+        .role = "all",
+        .lease = 30,
     };
     int rc = read_settings(argc, argv, &cfg);
     if (rc != 0) return rc > 0 ? 0 : EXIT_BAD_SETTING;
     if (cfg.token_file && cfg.token_file[0] && read_token_file(&cfg) != 0) return EXIT_BAD_SETTING;
+    int shared = store_pg_url(cfg.db);
+    int serve_http = strcmp(cfg.role, "worker") != 0, run_workers = strcmp(cfg.role, "api") != 0;
+    if (strcmp(cfg.role, "all") != 0 && strcmp(cfg.role, "api") != 0 &&
+        strcmp(cfg.role, "worker") != 0) {
+        fprintf(stderr, "ctcsim-server: --role must be all, api or worker (got \"%s\")\n",
+                cfg.role);
+        return EXIT_BAD_SETTING;
+    }
+    if (!shared && (!serve_http || !run_workers)) {
+        fprintf(stderr,
+                "ctcsim-server: --role %s needs a PostgreSQL database (--db postgres://...): "
+                "an SQLite file is not shared between processes\n",
+                cfg.role);
+        return EXIT_BAD_SETTING;
+    }
+    if (shared && cfg.db_max_size > 0) {
+        fprintf(stderr, "ctcsim-server: --db-max-size applies to SQLite only: PostgreSQL's size "
+                        "is the database server's to limit\n");
+        return EXIT_BAD_SETTING;
+    }
+    /* the database as messages show it: a URL's password is not printed */
+    char shown[512];
+    store_pg_redact(cfg.db, shown, sizeof shown);
 
     /* signals: SIGINT and SIGTERM for sigwait below, in every thread started from here on */
     sigset_t stop_signals;
@@ -401,12 +436,12 @@ int main(int argc, char **argv)
     char err[512] = "";
     store *check = NULL;
     if (store_open(cfg.db, &check, err, sizeof err) != 0) {
-        database_error(cfg.db, err);
+        database_error(shown, err);
         return EXIT_DATABASE;
     }
     store_close(check);
     struct stat st;
-    if (stat(cfg.web, &st) != 0 || !S_ISDIR(st.st_mode))
+    if (serve_http && (stat(cfg.web, &st) != 0 || !S_ISDIR(st.st_mode)))
         fprintf(stderr,
                 "ctcsim-server: warning: web root %s is not a directory (pages answer 404)\n",
                 cfg.web);
@@ -434,7 +469,9 @@ int main(int argc, char **argv)
         return EXIT_DATABASE;
     }
     jobq_config qc = {.db_path = cfg.db,
-                      .workers = (int)cfg.workers,
+                      .workers = run_workers ? (int)cfg.workers : 0,
+                      .lease_s = cfg.lease,
+                      .listen = serve_http,
                       .max_queue = (int)cfg.max_queue,
                       .job_time_limit = cfg.job_time_limit,
                       .db_max_size = cfg.db_max_size,
@@ -443,7 +480,7 @@ int main(int argc, char **argv)
                       .left_arg = &ctx};
     jobq *queue = NULL;
     if (jobq_start(&qc, &queue, err, sizeof err) != 0) {
-        database_error(cfg.db, err);
+        database_error(shown, err);
         client_count_free(ctx.jobs_by_client);
         store_health_free(health);
         return EXIT_DATABASE;
@@ -464,7 +501,12 @@ int main(int argc, char **argv)
                       .routes = routes_table,
                       .ctx = &ctx};
     http_server *http = NULL;
-    if (http_start(&hc, &http, err, sizeof err) != 0) {
+    if (!serve_http) {
+        fprintf(stderr,
+                "ctcsim-server " CTCSIM_VERSION " worker: %lld worker%s, database %s, lease %g s\n",
+                cfg.workers, cfg.workers == 1 ? "" : "s", shown, cfg.lease);
+        fflush(stderr);
+    } else if (http_start(&hc, &http, err, sizeof err) != 0) {
         fprintf(stderr, "ctcsim-server: %s\n", err);
         jobq_stop(queue);
         client_count_free(ctx.jobs_by_client);
@@ -472,12 +514,15 @@ int main(int argc, char **argv)
         return EXIT_LISTEN;
     }
     int v6 = strchr(cfg.bind, ':') != NULL;
-    fprintf(stderr,
-            "ctcsim-server " CTCSIM_VERSION " listening on http://%s%s%s:%d (%lld worker%s, "
-            "database %s)\n",
-            v6 ? "[" : "", cfg.bind, v6 ? "]" : "", http_port(http), cfg.workers,
-            cfg.workers == 1 ? "" : "s", cfg.db);
-    fflush(stderr);
+    if (http) {
+        long long nw = run_workers ? cfg.workers : 0;
+        fprintf(stderr,
+                "ctcsim-server " CTCSIM_VERSION " listening on http://%s%s%s:%d (%lld worker%s, "
+                "database %s)\n",
+                v6 ? "[" : "", cfg.bind, v6 ? "]" : "", http_port(http), nw, nw == 1 ? "" : "s",
+                shown);
+        fflush(stderr);
+    }
 
     /* until SIGINT or SIGTERM */
     int sig = 0;

@@ -81,6 +81,8 @@
 #include <cjson/cJSON.h>
 #include <sqlite3.h>
 
+#include "store_pg.h"
+
 /* series blobs are the host's doubles byte for byte: they must be IEEE 754 binary64 and
  * little-endian, as on x86_64 and little-endian ARM */
 #if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__ ||                       \
@@ -280,6 +282,7 @@ static const char *const stmt_sql[ST_NSTMT] = {
 };
 
 struct store {
+    store_pg *pg; /* non-NULL: a PostgreSQL store, every call forwards to it (store_pg.h) */
     sqlite3 *db;
     sqlite3_stmt *stmt[ST_NSTMT];
     long count_vm_steps;          /* SQLite VM steps of the last store_count */
@@ -392,6 +395,7 @@ static double monotonic_s(void)
 
 store_fault store_last_fault(const store *s)
 {
+    if (s->pg) return store_pg_last_fault(s->pg);
     return s->fault;
 }
 
@@ -436,6 +440,7 @@ void store_health_free(store_health *h)
 
 void store_attach(store *s, store_health *h)
 {
+    if (s->pg) store_pg_attach(s->pg, h);
     s->health = h;
 }
 
@@ -496,6 +501,21 @@ static void health_ok(store_health *h, int room)
     }
     h->state.last_ok = t;
     pthread_mutex_unlock(&h->lock);
+}
+
+void store_health_report_fault(store_health *h, store_fault f, const char *message)
+{
+    health_fault(h, f, message);
+}
+
+void store_health_report_ok(store_health *h, int room)
+{
+    health_ok(h, room);
+}
+
+store_pg *store_pg_of(store *s)
+{
+    return s->pg;
 }
 
 /* the end of a public write call: its outcome told to the health state (a transient fault sets
@@ -809,6 +829,10 @@ int store_open(const char *path, store **out, char *err, size_t errlen)
         set_err(err, errlen, "cannot open database %s: out of memory", path);
         goto done;
     }
+    if (store_pg_url(path)) {
+        rc = store_pg_open(path, &s->pg, err, errlen);
+        goto done;
+    }
     if (sqlite3_open_v2(path, &s->db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, NULL) !=
         SQLITE_OK) {
         open_err(s->db, path, err, errlen);
@@ -853,21 +877,28 @@ int store_open(const char *path, store **out, char *err, size_t errlen)
                     sqlite3_errmsg(s->db));
             goto done;
         }
-    *out = s;
     rc = 0;
 done:
-    if (rc) store_close(s);
+    if (rc)
+        store_close(s);
+    else
+        *out = s;
     return rc;
 }
 
 void store_set_busy_timeout(store *s, int ms)
 {
+    if (s->pg) {
+        store_pg_set_busy_timeout(s->pg, ms);
+        return;
+    }
     s->busy_ms = ms > 0 ? ms : 0;
     sqlite3_busy_timeout(s->db, s->busy_ms);
 }
 
 int store_set_max_size(store *s, long long max_bytes, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_set_max_size(s->pg, max_bytes, err, errlen);
     int page = 0, count = 0;
     char sql[64];
     call_begin(s);
@@ -910,6 +941,7 @@ static long long room_bytes(store *s)
 
 int store_probe(store *s, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_probe(s->pg, err, errlen);
     int rc = -1, in_tx = 0;
     store_state st = {.fault = STORE_FAULT_NONE};
     call_begin(s);
@@ -944,6 +976,7 @@ done:
 
 int store_reserve(store *s, long long bytes, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_reserve(s->pg, bytes, err, errlen);
     const char *db = sqlite3_db_filename(s->db, "main");
     const char *wal = db && *db ? sqlite3_filename_wal(db) : NULL;
     call_begin(s);
@@ -972,6 +1005,11 @@ int store_reserve(store *s, long long bytes, char *err, size_t errlen)
 void store_close(store *s)
 {
     if (!s) return;
+    store_pg_close(s->pg);
+    if (s->pg) {
+        free(s);
+        return;
+    }
     store_series_end(s);
     for (int i = 0; i < ST_NSTMT; i++) sqlite3_finalize(s->stmt[i]);
     sqlite3_close(s->db);
@@ -1018,6 +1056,8 @@ done:
 int store_insert(store *s, const char *name, const char *preset, int nbodies, int nv,
                  const char *controller, const char *spec, int64_t *id, char *err, size_t errlen)
 {
+    if (s->pg)
+        return store_pg_insert(s->pg, name, preset, nbodies, nv, controller, spec, id, err, errlen);
     call_begin(s);
     return write_end(s, insert_job(s, name, preset, nbodies, nv, controller, spec, id, err, errlen),
                      1);
@@ -1081,6 +1121,7 @@ done:
 
 int store_recover(store *s, int64_t **ids, int *n, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_recover(s->pg, ids, n, err, errlen);
     call_begin(s);
     return write_end(s, recover_jobs(s, ids, n, err, errlen), 0);
 }
@@ -1103,6 +1144,7 @@ done:
 
 int store_start(store *s, int64_t id, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_start(s->pg, id, err, errlen);
     call_begin(s);
     return write_end(s, start_job(s, id, err, errlen), 0);
 }
@@ -1135,6 +1177,7 @@ done:
 
 int store_progress(store *s, int64_t id, double progress, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_progress(s->pg, id, progress, err, errlen);
     call_begin(s);
     return write_end(s, record_progress(s, id, progress, err, errlen), 0);
 }
@@ -1161,6 +1204,7 @@ done:
 
 int store_requeue(store *s, int64_t id, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_requeue(s->pg, id, err, errlen);
     call_begin(s);
     return write_end(s, requeue_job(s, id, err, errlen), 0);
 }
@@ -1295,12 +1339,14 @@ done:
 int store_finish(store *s, int64_t id, store_status status, const char *message,
                  const char *metrics, const ctc_sim_result *r, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_finish(s->pg, id, status, message, metrics, r, err, errlen);
     call_begin(s);
     return write_end(s, finish_job(s, id, status, message, metrics, r, err, errlen), r != NULL);
 }
 
 int store_get(store *s, int64_t id, store_job *out, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_get(s->pg, id, out, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_GET];
     int rc = -1;
@@ -1371,6 +1417,13 @@ done:
     return rc;
 }
 
+/* An operation the PostgreSQL backend does not have yet (store_pg.h): -1 with a message. */
+static int pg_missing(char *err, size_t errlen, const char *what)
+{
+    set_err(err, errlen, "%s: not available with a PostgreSQL database yet", what);
+    return -1;
+}
+
 /* the checks store_list and store_search share; 0 or -1 */
 static int list_args(int64_t before, int status, int limit, char *err, size_t errlen)
 {
@@ -1392,6 +1445,7 @@ static int list_args(int64_t before, int status, int limit, char *err, size_t er
 int store_list(store *s, int64_t before, int status, int limit, store_job **rows, int *n, char *err,
                size_t errlen)
 {
+    if (s->pg) return store_pg_list(s->pg, before, status, limit, rows, n, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[status < 0 ? ST_LIST_ANY : ST_LIST_STATUS];
     int rc = -1;
@@ -1411,6 +1465,7 @@ done:
 int store_search(store *s, int64_t before, const store_filter *f, int limit, store_job **rows,
                  int *n, char *err, size_t errlen)
 {
+    if (s->pg) return pg_missing(err, errlen, "searching jobs");
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_SEARCH];
     int rc = -1;
@@ -1520,8 +1575,20 @@ static int check_series_row(series_rows *rows, const char *name, int width, sqli
     return 0;
 }
 
+int store_series_check_row(int64_t id, int *nv, int *nind, int *nsamples, const char *name,
+                           int width, int64_t row_nsamples, int64_t bytes, int *c, char *err,
+                           size_t errlen)
+{
+    series_rows rows = {.id = id, .nv = *nv, .nind = *nind, .nsamples = *nsamples};
+    int rc = check_series_row(&rows, name, width, row_nsamples, bytes, c, err, errlen);
+    *nind = rows.nind;
+    *nsamples = rows.nsamples;
+    return rc;
+}
+
 int store_get_series(store *s, int64_t id, ctc_sim_result **out, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_get_series(s->pg, id, out, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_SERIES_GET];
     ctc_sim_result *r = NULL;
@@ -1590,6 +1657,7 @@ done:
 
 int store_get_series_info(store *s, int64_t id, store_series_info *out, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_get_series_info(s->pg, id, out, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_SERIES_INFO];
     series_rows rows = {.id = id, .nsamples = -1};
@@ -1638,6 +1706,7 @@ done:
 
 int store_series_begin(store *s, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_series_begin(s->pg, err, errlen);
     call_begin(s);
     if (s->reading) {
         set_err(err, errlen, "reading a series: a read is already under way");
@@ -1664,6 +1733,7 @@ static void close_blobs(store *s)
 int store_series_read(store *s, int64_t id, int channel, uint64_t offset, void *buf, size_t len,
                       char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_series_read(s->pg, id, channel, offset, buf, len, err, errlen);
     call_begin(s);
     const char *name = channel < 0 ? "t" : ctc_channel_name((ctc_channel)channel);
     if (!s->reading || channel < -1 || channel >= CTC_NCHANNELS) {
@@ -1715,6 +1785,10 @@ int store_series_read(store *s, int64_t id, int channel, uint64_t offset, void *
 
 void store_series_end(store *s)
 {
+    if (s && s->pg) {
+        store_pg_series_end(s->pg);
+        return;
+    }
     if (!s || !s->reading) return;
     close_blobs(s);
     if (!sqlite3_get_autocommit(s->db) && tx_step(s, ST_COMMIT) != SQLITE_OK) tx_rollback(s);
@@ -1760,12 +1834,14 @@ done:
 
 int store_delete(store *s, int64_t id, char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_delete(s->pg, id, err, errlen);
     call_begin(s);
     return write_end(s, delete_job(s, id, err, errlen), 1);
 }
 
 int store_count(store *s, long counts[STORE_NSTATUS], char *err, size_t errlen)
 {
+    if (s->pg) return store_pg_count(s->pg, counts, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_COUNT];
     int rc = -1, step;
@@ -1792,6 +1868,7 @@ done:
 
 long store_count_vm_steps(const store *s)
 {
+    if (s->pg) return 0;
     return s->count_vm_steps;
 }
 
@@ -1865,6 +1942,7 @@ int store_family_insert(store *s, const char *name, const char *spec, const char
                         const store_new_member *members, long n, int64_t *family_id, int64_t *ids,
                         char *err, size_t errlen)
 {
+    if (s->pg) return pg_missing(err, errlen, "families");
     call_begin(s);
     return write_end(s, insert_family(s, name, spec, axes, members, n, family_id, ids, err, errlen),
                      1);
@@ -1918,6 +1996,7 @@ void store_family_clear(store_family *f)
 
 int store_family_get(store *s, int64_t id, store_family *out, char *err, size_t errlen)
 {
+    if (s->pg) return pg_missing(err, errlen, "families");
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_FAMILY_GET];
     int rc = -1, in_tx = 0;
@@ -1954,6 +2033,7 @@ done:
 int store_family_list(store *s, int64_t before, int limit, store_family **rows, int *n, char *err,
                       size_t errlen)
 {
+    if (s->pg) return pg_missing(err, errlen, "families");
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_FAMILY_LIST];
     int rc = -1, count = 0, step, in_tx = 0;
@@ -2007,6 +2087,7 @@ void store_families_free(store_family *rows, int n)
 int store_family_members(store *s, int64_t id, store_member **rows, long *n, char *err,
                          size_t errlen)
 {
+    if (s->pg) return pg_missing(err, errlen, "families");
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_FAMILY_MEMBERS];
     int rc = -1, step;
@@ -2066,6 +2147,7 @@ void store_members_free(store_member *rows, long n)
 
 int store_family_active(store *s, int64_t id, int64_t **ids, long *n, char *err, size_t errlen)
 {
+    if (s->pg) return pg_missing(err, errlen, "families");
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_FAMILY_ACTIVE];
     int rc = -1, step;
@@ -2153,6 +2235,7 @@ done:
 
 int store_family_delete(store *s, int64_t id, char *err, size_t errlen)
 {
+    if (s->pg) return pg_missing(err, errlen, "families");
     call_begin(s);
     return write_end(s, delete_family(s, id, err, errlen), 1);
 }
@@ -2160,6 +2243,7 @@ int store_family_delete(store *s, int64_t id, char *err, size_t errlen)
 int store_job_families(store *s, const int64_t *ids, int n, int64_t *families, char *err,
                        size_t errlen)
 {
+    if (s->pg) return pg_missing(err, errlen, "families");
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_FAMILY_OF];
     int rc = -1;
@@ -2209,6 +2293,7 @@ done:
 int store_family_cancel(store *s, int64_t id, const char *message, long *n, char *err,
                         size_t errlen)
 {
+    if (s->pg) return pg_missing(err, errlen, "families");
     call_begin(s);
     return write_end(s, cancel_family(s, id, message, n, err, errlen), 0);
 }

@@ -22,6 +22,11 @@
  * A job's series and its final status are written in one transaction (store_finish), so a job is
  * either fully stored or still unfinished. Times are seconds since the Unix epoch (UTC).
  *
+ * PostgreSQL. store_open of a "postgres://" or "postgresql://" URL opens a PostgreSQL database
+ * instead (store_pg.h): the same tables and the same contracts, with the few differences listed
+ * there (size cap, log reserve, recovery under leases), and what a queue shared by several
+ * processes needs (claims, leases, notifications).
+ *
  * Every function returns 0 on success and -1 on failure with a message in err (errlen bytes; err
  * may be NULL), except where it says otherwise. Strings returned in structs are owned by the
  * struct and freed by its clear function.

@@ -4,12 +4,16 @@
  * polling, and the `ctcsim` command line as the reference the service must agree with.
  *
  * The binaries come from the environment: CTCSIM_SERVER (default build/ctcsim-server) and CTCSIM
- * (default build/ctcsim). Each test file starts its own servers; every server and temporary
+ * (default build/ctcsim). With CTCSIM_TEST_PG set to the URL of a PostgreSQL database (one that
+ * tests/pg/start.sh started), every server's database is a PostgreSQL database of its own, made
+ * for its directory, and a server is a cluster: one `--role api` process and
+ * CTCSIM_TEST_PG_WORKERS (default 2) `--role worker` processes sharing the --workers between them
+ * (BACKEND says which; a test that is about SQLite itself skips on PostgreSQL, saying why). Each test file starts its own servers; every server and temporary
  * directory made here is killed and removed when the process exits, whatever happened
  * (CTCSIM_API_KEEP=1 keeps the directories for a post-mortem). Only Node 18 APIs are used, and no
  * npm packages.
  */
-import { spawn } from 'node:child_process';
+import { spawn, spawnSync } from 'node:child_process';
 import { mkdtempSync, rmSync, statSync } from 'node:fs';
 import { mkdir, writeFile } from 'node:fs/promises';
 import http from 'node:http';
@@ -30,6 +34,27 @@ const FLAG = {
     web: '--web',
     api: '--api',
 };
+
+/* the backend under test: 'sqlite', or 'postgres' with CTCSIM_TEST_PG (see above) */
+const PG = process.env.CTCSIM_TEST_PG || '';
+export const BACKEND = PG ? 'postgres' : 'sqlite';
+const PG_WORKERS = Number(process.env.CTCSIM_TEST_PG_WORKERS || 2);
+/* the lease of the tests' worker processes: short, so that a killed worker's job comes back soon */
+export const PG_LEASE = 2;
+
+/* The PostgreSQL database of a test directory (made on first use): the URL of CTCSIM_TEST_PG with
+ * the database name ctcsim_<directory's name>, so a server restarted on the same dir finds its
+ * jobs again. */
+export function pgDatabase(dir) {
+    const name = `ctcsim_${path.basename(dir).toLowerCase().replace(/[^a-z0-9]/g, '_')}`;
+    const r = spawnSync('psql', [PG, '-qAtc', `SELECT 1 FROM pg_database WHERE datname = '${name}'`], { encoding: 'utf8' });
+    if (r.status !== 0) throw new Error(`psql ${PG}: ${r.stderr}`);
+    if (r.stdout.trim() !== '1') {
+        const c = spawnSync('psql', [PG, '-qc', `CREATE DATABASE ${name}`], { encoding: 'utf8' });
+        if (c.status !== 0 && !/already exists/.test(c.stderr)) throw new Error(`psql: ${c.stderr}`);
+    }
+    return PG.replace(/\/[^/?]*(\?|$)/, `/${name}$1`);
+}
 
 export const FINAL = new Set(['done', 'failed', 'diverged', 'cancelled']);
 
@@ -213,7 +238,7 @@ export class Server {
 
     /* what the server printed, last 64 KiB */
     output() {
-        return this.out;
+        return this.out + (this.workers || []).map((w, i) => `\n--- worker process ${i} ---\n${w.out}`).join('');
     }
 
     request(method, urlPath, opts) {
@@ -238,6 +263,8 @@ export class Server {
 
     /* Sends signal and waits for the exit, SIGKILL after timeoutMs. Resolves {code, signal, ms}. */
     async stop(signal = 'SIGTERM', timeoutMs = 10000) {
+        /* a cluster's worker processes first, then the API process's answer */
+        await Promise.all((this.workers || []).map((w) => w.stop(signal, timeoutMs)));
         const t0 = Date.now();
         if (!this.exited) this.proc.kill(signal);
         let timer;
@@ -288,7 +315,8 @@ function serverEnv() {
 export async function startServer(opts = {}) {
     const dir = opts.dir || tempDir();
     await mkdir(dir, { recursive: true });
-    const db = path.join(dir, 'jobs.db');
+    const db = PG ? pgDatabase(dir) : path.join(dir, 'jobs.db');
+    const cluster = PG && PG_WORKERS > 0;
     const web = opts.web || (await webRoot());
     const api = opts.api || path.join(ROOT, 'api');
     const timeoutMs = opts.timeoutMs || 10000;
@@ -300,11 +328,24 @@ export async function startServer(opts = {}) {
             FLAG.workers, String(opts.workers || 2),
             FLAG.web, web,
             FLAG.api, api,
+            ...(cluster ? ['--role', 'api'] : []),
+            ...(PG ? ['--lease', String(PG_LEASE)] : []),
             ...(opts.args || []),
         ];
         const proc = spawn(SERVER, args, { stdio: ['ignore', 'pipe', 'pipe'], env: serverEnv() });
         live.add(proc);
         const srv = new Server(proc, port, dir, db);
+        /* a cluster: the --workers shared among PG_WORKERS worker processes */
+        srv.workers = [];
+        const total = opts.workers || 2;
+        for (let i = 0; cluster && i < PG_WORKERS; i++) {
+            const n = Math.floor(total / PG_WORKERS) + (i < total % PG_WORKERS ? 1 : 0);
+            if (n === 0) continue;
+            const wargs = [FLAG.db, db, FLAG.workers, String(n), '--role', 'worker', '--lease', String(PG_LEASE), ...(opts.args || [])];
+            const wp = spawn(SERVER, wargs, { stdio: ['ignore', 'pipe', 'pipe'], env: serverEnv() });
+            live.add(wp);
+            srv.workers.push(new Server(wp, 0, dir, db));
+        }
         const spawnError = new Promise((resolve) => proc.on('error', resolve));
         const t0 = Date.now();
         let why = null;

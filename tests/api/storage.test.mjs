@@ -20,9 +20,12 @@ import { closeSync, openSync, rmSync, writeSync } from 'node:fs';
 import path from 'node:path';
 import test from 'node:test';
 
-import { FINAL, sleep, startServer, submit, tempDir, waitFor, waitJob } from './lib.mjs';
+import { BACKEND, FINAL, sleep, startServer, submit, tempDir, waitFor, waitJob } from './lib.mjs';
 
 const haveSqlite = spawnSync('sqlite3', ['-version']).status === 0;
+/* every test here is about SQLite's file: its write lock held by another process, its size cap
+   (--db-max-size, SQLite only) and its disk; PostgreSQL's faults are tests/api/cluster.test.mjs's */
+const SQLITE_ONLY = BACKEND !== 'sqlite' && "SQLite's file (lock, size cap, disk): not the PostgreSQL backend's";
 
 /* one short job: 0.5 s of the triple pendulum */
 const SMALL = { preset: 'triple_pendulum_pid', name: 'small', duration: 0.5 };
@@ -54,7 +57,7 @@ async function holdWriteLock(db) {
 }
 
 test('a write lock held by another process stalls no request and drops no job',
-    { skip: !haveSqlite && 'no sqlite3 command' }, async () => {
+    { skip: SQLITE_ONLY || (!haveSqlite && 'no sqlite3 command') }, async () => {
     /* one HTTP thread: a request that waited for the lock would hold up every other one */
     const srv = await startServer({ workers: 1, args: ['--http-threads', '1'] });
     /* a job of about 0.5 s (5 s under ASan) that finishes while the lock is held */
@@ -117,7 +120,7 @@ test('a write lock held by another process stalls no request and drops no job',
 });
 
 test('a server started while another process holds the lock waits for it and recovers its jobs',
-    { skip: !haveSqlite && 'no sqlite3 command' }, async () => {
+    { skip: SQLITE_ONLY || (!haveSqlite && 'no sqlite3 command') }, async () => {
     /* a queued job left in the database by a server stopped before it ran */
     const dir = tempDir();
     const first = await startServer({ dir, workers: 1 });
@@ -143,7 +146,7 @@ test('a server started while another process holds the lock waits for it and rec
 });
 
 test('--db-max-size: a result past the cap fails its job, health says full, DELETE makes room',
-    async () => {
+    { skip: SQLITE_ONLY }, async () => {
     /* 256 KiB: the schema and two jobs of 96 KiB of series (501 samples) each, not a third */
     const srv = await startServer({ workers: 1, args: ['--db-max-size', '256K'] });
     const ids = [];
@@ -195,13 +198,13 @@ function fillDisk(dir) {
     return file;
 }
 
-const mnt = haveSqlite ? mountTmpfs('16m') : null;
+const mnt = haveSqlite && !SQLITE_ONLY ? mountTmpfs('16m') : null;
 test.after(() => {
     if (mnt) spawnSync('umount', ['-l', mnt]);
 });
 
 test('a full disk: DELETE frees room, a result too large fails its job, health tells',
-    { skip: !mnt && 'cannot mount a tmpfs here (needs root) or no sqlite3 command' }, async () => {
+    { skip: SQLITE_ONLY || (!mnt && 'cannot mount a tmpfs here (needs root) or no sqlite3 command') }, async () => {
     const srv = await startServer({ dir: mnt, workers: 1 });
     const first = await submit(srv, SMALL);
     const second = await submit(srv, { ...SMALL, name: 'kept' });

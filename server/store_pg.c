@@ -1,0 +1,1278 @@
+/*
+ * store_pg.c - the PostgreSQL backend of store.h (store_pg.h): one libpq connection per store,
+ * the schema migrated under an advisory lock, claims under a lease for worker processes.
+ *
+ * Statements. Every statement is sent with PQexecParams (parameters as text, never written into
+ * SQL text; series blobs as binary parameters), so nothing is prepared per connection and a
+ * reconnect (PQreset) needs only the session's settings again: lock_timeout and, on a
+ * listening connection, LISTEN. Results are text, except the series', which come back binary
+ * (the blob's bytes as they are, the integers cast to int4 in network order) so that a sample
+ * is never printed and parsed. Reals go out as "%.17g" and come back in PostgreSQL's shortest
+ * exact form (extra_float_digits 1, the default since version 12), so they round-trip; NaN is
+ * stored as NULL as on SQLite. Times of rows are the writer's clock, as on SQLite; leases are
+ * the database's clock (extract(epoch from clock_timestamp())), so that workers on machines whose
+ * clocks differ agree on when a lease has expired.
+ *
+ * Transactions. A write of more than one statement runs inside BEGIN .. COMMIT at the default
+ * isolation (read committed); the updates that move a job between statuses say which status
+ * they need in their WHERE clause, so a concurrent change shows as zero rows changed, as on
+ * SQLite. store_series_begin opens a REPEATABLE READ READ ONLY transaction (one snapshot) and
+ * store_series_read reads one range of a row with substring() (the column's storage is
+ * EXTERNAL, uncompressed, so PostgreSQL reads only the chunks of the range).
+ *
+ * Faults and health are store.c's (store_health_report_*), with the classification of
+ * store_pg.h; a call on a connection libpq reports bad first tries PQreset once.
+ *
+ * Errors: the message of the failing step prefixed with what was being done and the job's id,
+ * as on SQLite ("cannot finish job 3: no such job"); libpq's message with its line end trimmed.
+ */
+#define _GNU_SOURCE /* gethostname's HOST_NAME_MAX, endian.h */
+
+#include "store_pg.h"
+
+#include <endian.h>
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <poll.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <libpq-fe.h>
+
+#define PG_MAX_LIST 1000
+
+/* migrations[v] takes the schema from version v to v + 1, in one transaction */
+static const char *const migrations[STORE_PG_SCHEMA_VERSION] = {
+    /* 0 -> 1: jobs (with the claim's columns) and their series */
+    "CREATE TABLE jobs ("
+    "  id BIGINT GENERATED ALWAYS AS IDENTITY PRIMARY KEY,"
+    "  name TEXT NOT NULL,"
+    "  preset TEXT,"
+    "  status TEXT NOT NULL DEFAULT 'queued' CHECK (status IN ('queued', 'running', 'done',"
+    "    'failed', 'diverged', 'cancelled')),"
+    "  progress DOUBLE PRECISION NOT NULL DEFAULT 0,"
+    "  created DOUBLE PRECISION NOT NULL,"
+    "  started DOUBLE PRECISION NOT NULL DEFAULT 0,"
+    "  finished DOUBLE PRECISION NOT NULL DEFAULT 0,"
+    "  nbodies INTEGER NOT NULL,"
+    "  nv INTEGER NOT NULL,"
+    "  controller TEXT NOT NULL,"
+    "  spec TEXT NOT NULL,"
+    "  metrics TEXT,"
+    "  message TEXT,"
+    "  e_max DOUBLE PRECISION,"
+    "  wall_s DOUBLE PRECISION,"
+    "  worker TEXT,"
+    "  lease_until DOUBLE PRECISION,"
+    "  cancel_requested BOOLEAN NOT NULL DEFAULT false);"
+    "CREATE INDEX jobs_by_status ON jobs (status);"
+    "CREATE INDEX jobs_active ON jobs (id) WHERE status IN ('queued', 'running');"
+    "CREATE TABLE series ("
+    "  job_id BIGINT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,"
+    "  channel TEXT NOT NULL,"
+    "  width INTEGER NOT NULL CHECK (width > 0),"
+    "  nsamples INTEGER NOT NULL CHECK (nsamples >= 0),"
+    "  data BYTEA NOT NULL,"
+    "  PRIMARY KEY (job_id, channel));"
+    "ALTER TABLE series ALTER COLUMN data SET STORAGE EXTERNAL;"
+    "UPDATE schema_version SET version = 1;",
+    /* 1 -> 2: the count of each status, kept by a trigger that also notifies listeners */
+    "CREATE TABLE job_counts ("
+    "  status TEXT PRIMARY KEY,"
+    "  n BIGINT NOT NULL CHECK (n >= 0));"
+    "INSERT INTO job_counts (status, n) VALUES ('queued', 0), ('running', 0), ('done', 0),"
+    "  ('failed', 0), ('diverged', 0), ('cancelled', 0);"
+    "UPDATE job_counts SET n = (SELECT count(*) FROM jobs WHERE jobs.status = job_counts.status);"
+    "CREATE FUNCTION ctcsim_job_change() RETURNS trigger LANGUAGE plpgsql AS $$ BEGIN"
+    "  IF TG_OP = 'INSERT' THEN"
+    "    UPDATE job_counts SET n = n + 1 WHERE status = NEW.status;"
+    "    PERFORM pg_notify('" STORE_PG_CHANNEL "', NEW.id || ' ' || NEW.status);"
+    "  ELSIF TG_OP = 'DELETE' THEN"
+    "    UPDATE job_counts SET n = n - 1 WHERE status = OLD.status;"
+    "  ELSIF OLD.status <> NEW.status THEN"
+    "    UPDATE job_counts SET n = n + CASE WHEN status = NEW.status THEN 1 ELSE -1 END"
+    "      WHERE status IN (OLD.status, NEW.status);"
+    "    PERFORM pg_notify('" STORE_PG_CHANNEL "', NEW.id || ' ' || NEW.status);"
+    "  END IF;"
+    "  RETURN NULL; END $$;"
+    "CREATE TRIGGER job_change AFTER INSERT OR DELETE OR UPDATE OF status ON jobs"
+    "  FOR EACH ROW EXECUTE FUNCTION ctcsim_job_change();"
+    "UPDATE schema_version SET version = 2;",
+};
+
+#define JOB_COLUMNS                                                                                \
+    "id, name, preset, status, progress, created, started, finished, nbodies, nv, controller, "    \
+    "message, e_max, wall_s"
+#define ACTIVE "status IN ('queued', 'running')"
+#define DB_NOW "extract(epoch from clock_timestamp())::float8"
+
+struct store_pg {
+    PGconn *conn;
+    char *url;
+    int busy_ms;
+    int listening;        /* LISTEN again after a reconnect */
+    store_fault fault;    /* of the current (or last) call */
+    char fault_msg[256];  /* its message */
+    int changed;          /* rows the current call changed */
+    store_health *health; /* NULL = not attached */
+    int reading;          /* inside store_series_begin .. end */
+    char owner[160];      /* the current claim's token, "" = none */
+    unsigned long claims; /* claims made, for the tokens */
+};
+
+/* ---- helpers ---- */
+
+static void set_err(char *err, size_t errlen, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static void set_err(char *err, size_t errlen, const char *fmt, ...)
+{
+    if (!err || errlen == 0) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, errlen, fmt, ap);
+    va_end(ap);
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int store_pg_url(const char *path)
+{
+    return path &&
+           (strncmp(path, "postgres://", 11) == 0 || strncmp(path, "postgresql://", 13) == 0);
+}
+
+void store_pg_redact(const char *url, char *out, size_t outlen)
+{
+    /* postgres://user:password@host/...: the password is between the first ':' after the
+       scheme and the '@' of the authority */
+    const char *scheme = strstr(url, "://");
+    const char *at = scheme ? strchr(scheme + 3, '@') : NULL;
+    const char *slash = scheme ? strchr(scheme + 3, '/') : NULL;
+    const char *colon = scheme ? strchr(scheme + 3, ':') : NULL;
+    if (at && (!slash || at < slash) && colon && colon < at)
+        snprintf(out, outlen, "%.*s:***%s", (int)(colon - url), url, at);
+    else
+        snprintf(out, outlen, "%s", url);
+}
+
+/* libpq's message without its line end */
+static const char *pg_message(const PGconn *c, const PGresult *r, char *buf, size_t len)
+{
+    const char *m = r ? PQresultErrorMessage(r) : NULL;
+    if (!m || !*m) m = PQerrorMessage(c);
+    if (!m || !*m) m = "unknown error";
+    snprintf(buf, len, "%s", m);
+    size_t n = strlen(buf);
+    while (n > 0 && (buf[n - 1] == '\n' || buf[n - 1] == ' ')) buf[--n] = '\0';
+    return buf;
+}
+
+/* the fault of a failed result (r may be NULL: no result at all) */
+static store_fault fault_of(PGconn *c, const PGresult *r)
+{
+    if (PQstatus(c) == CONNECTION_BAD) return STORE_FAULT_IO;
+    const char *st = r ? PQresultErrorField(r, PG_DIAG_SQLSTATE) : NULL;
+    if (!st) return r ? STORE_FAULT_OTHER : STORE_FAULT_IO;
+    if (strncmp(st, "08", 2) == 0 || strcmp(st, "57P01") == 0 || strcmp(st, "57P02") == 0 ||
+        strcmp(st, "57P03") == 0 || strcmp(st, "58030") == 0)
+        return STORE_FAULT_IO;
+    if (strcmp(st, "40001") == 0 || strcmp(st, "40P01") == 0 || strcmp(st, "55P03") == 0 ||
+        strcmp(st, "53300") == 0)
+        return STORE_FAULT_LOCKED;
+    if (strcmp(st, "53100") == 0) return STORE_FAULT_FULL;
+    if (strcmp(st, "25006") == 0) return STORE_FAULT_READONLY;
+    return STORE_FAULT_OTHER;
+}
+
+/* "WHAT: postgres's message"; records the call's fault (the first one of the call) */
+static void db_err(store_pg *p, const PGresult *r, char *err, size_t errlen, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+
+static void db_err(store_pg *p, const PGresult *r, char *err, size_t errlen, const char *fmt, ...)
+{
+    char what[256], msg[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
+    pg_message(p->conn, r, msg, sizeof msg);
+    if (p->fault == STORE_FAULT_NONE) {
+        p->fault = fault_of(p->conn, r);
+        set_err(p->fault_msg, sizeof p->fault_msg, "%s: %s", what, msg);
+    }
+    set_err(err, errlen, "%s: %s", what, msg);
+}
+
+/* the session's settings, after a connect or reconnect; 0 or -1 */
+static int session_setup(store_pg *p)
+{
+    char sql[160];
+    snprintf(sql, sizeof sql, "SET lock_timeout = %d; SET client_min_messages = warning%s",
+             STORE_PG_LOCK_MS, p->listening ? "; LISTEN " STORE_PG_CHANNEL : "");
+    PGresult *r = PQexec(p->conn, sql);
+    int ok = PQresultStatus(r) == PGRES_COMMAND_OK;
+    PQclear(r);
+    return ok ? 0 : -1;
+}
+
+/* the start of a public call: no fault yet, nothing changed; a lost connection is reset once
+ * (a failed reset leaves the connection bad, and the call's first statement reports it) */
+static void call_begin(store_pg *p)
+{
+    p->fault = STORE_FAULT_NONE;
+    p->fault_msg[0] = '\0';
+    p->changed = 0;
+    /* an idle connection the server has ended (a restart, pg_terminate_backend) has its FATAL
+       message and end of file waiting on the socket: reading them (without blocking) marks it
+       bad, so the call reconnects instead of failing on it */
+    for (int i = 0; i < 2 && PQstatus(p->conn) == CONNECTION_OK &&
+                    PQtransactionStatus(p->conn) == PQTRANS_IDLE;
+         i++)
+        if (!PQconsumeInput(p->conn)) break; /* the message, then the end of file */
+    if (PQstatus(p->conn) == CONNECTION_BAD) {
+        PQreset(p->conn);
+        p->reading = 0;
+        if (PQstatus(p->conn) == CONNECTION_OK) session_setup(p);
+    }
+}
+
+/* the end of a public write: its outcome told to health (store.c's rules) */
+static int write_end(store_pg *p, int rc, int room)
+{
+    if (!p->health) return rc;
+    if (store_fault_transient(p->fault) && !(p->fault == STORE_FAULT_LOCKED && p->busy_ms == 0))
+        store_health_report_fault(p->health, p->fault, p->fault_msg);
+    else if (p->fault == STORE_FAULT_NONE && p->changed > 0)
+        store_health_report_ok(p->health, room);
+    return rc;
+}
+
+/* Runs sql with n text parameters (NULL = SQL NULL); binary asks for binary results. Returns the
+ * result when its status is PGRES_COMMAND_OK or PGRES_TUPLES_OK (rows changed added to
+ * p->changed), else NULL after db_err with what. */
+static PGresult *run(store_pg *p, const char *sql, int n, const char *const *vals, int binary,
+                     char *err, size_t errlen, const char *what)
+{
+    /* PQexec takes several statements (the schema's), PQexecParams one */
+    PGresult *r = n == 0 && !binary ? PQexec(p->conn, sql)
+                                    : PQexecParams(p->conn, sql, n, NULL, vals, NULL, NULL, binary);
+    ExecStatusType st = PQresultStatus(r);
+    if (st != PGRES_COMMAND_OK && st != PGRES_TUPLES_OK) {
+        db_err(p, r, err, errlen, "%s", what);
+        PQclear(r);
+        return NULL;
+    }
+    const char *rows = PQcmdTuples(r);
+    if (rows && *rows && strncmp(sql, "SELECT", 6) != 0) p->changed += atoi(rows);
+    return r;
+}
+
+/* a statement without parameters or rows (BEGIN, COMMIT, ROLLBACK); 0 or -1 */
+static int run_simple(store_pg *p, const char *sql, char *err, size_t errlen, const char *what)
+{
+    PGresult *r = run(p, sql, 0, NULL, 0, err, errlen, what);
+    PQclear(r);
+    return r ? 0 : -1;
+}
+
+static void rollback(store_pg *p)
+{
+    if (PQtransactionStatus(p->conn) != PQTRANS_IDLE) PQclear(PQexec(p->conn, "ROLLBACK"));
+}
+
+/* rows changed by a result */
+static int changes(const PGresult *r)
+{
+    const char *rows = PQcmdTuples((PGresult *)r);
+    return rows && *rows ? atoi(rows) : 0;
+}
+
+static void fmt_i64(char *buf, size_t len, int64_t x)
+{
+    snprintf(buf, len, "%lld", (long long)x);
+}
+
+/* a real as text, NULL for NaN (SQL NULL) */
+static const char *fmt_real(char *buf, size_t len, double x)
+{
+    if (isnan(x)) return NULL;
+    if (isinf(x)) {
+        snprintf(buf, len, "%s", x > 0 ? "Infinity" : "-Infinity");
+        return buf;
+    }
+    snprintf(buf, len, "%.17g", x);
+    return buf;
+}
+
+static double real_col(const PGresult *r, int row, int col)
+{
+    if (PQgetisnull(r, row, col)) return NAN;
+    return strtod(PQgetvalue(r, row, col), NULL);
+}
+
+static int dup_col(const PGresult *r, int row, int col, char **out)
+{
+    *out = NULL;
+    if (PQgetisnull(r, row, col)) return 0;
+    *out = strdup(PQgetvalue(r, row, col));
+    return *out ? 0 : -1;
+}
+
+/* big-endian binary columns of the series queries */
+static int32_t be_i32(const PGresult *r, int row, int col)
+{
+    uint32_t v;
+    memcpy(&v, PQgetvalue(r, row, col), 4);
+    return (int32_t)be32toh(v);
+}
+
+static int read_job(const PGresult *r, int row, int with_spec, store_job *j, char *err,
+                    size_t errlen)
+{
+    memset(j, 0, sizeof *j);
+    j->id = strtoll(PQgetvalue(r, row, 0), NULL, 10);
+    int status = store_status_parse(PQgetvalue(r, row, 3));
+    if (status < 0) {
+        set_err(err, errlen, "job %lld has an unknown status '%s'", (long long)j->id,
+                PQgetvalue(r, row, 3));
+        return -1;
+    }
+    j->status = (store_status)status;
+    j->progress = real_col(r, row, 4);
+    j->created = real_col(r, row, 5);
+    j->started = real_col(r, row, 6);
+    j->finished = real_col(r, row, 7);
+    j->nbodies = atoi(PQgetvalue(r, row, 8));
+    j->nv = atoi(PQgetvalue(r, row, 9));
+    j->e_max = real_col(r, row, 12);
+    j->wall_s = real_col(r, row, 13);
+    if (dup_col(r, row, 1, &j->name) || dup_col(r, row, 2, &j->preset) ||
+        dup_col(r, row, 10, &j->controller) || dup_col(r, row, 11, &j->message) ||
+        (with_spec && (dup_col(r, row, 14, &j->spec) || dup_col(r, row, 15, &j->metrics)))) {
+        set_err(err, errlen, "job %lld: out of memory", (long long)j->id);
+        store_job_clear(j);
+        return -1;
+    }
+    return 0;
+}
+
+/* a job's status: 1 when there is no such job, 0 with *st, -1 on error */
+static int status_of(store_pg *p, int64_t id, store_status *st, char *err, size_t errlen)
+{
+    char ids[24];
+    fmt_i64(ids, sizeof ids, id);
+    const char *v[] = {ids};
+    char what[64];
+    snprintf(what, sizeof what, "job %lld: reading its status", (long long)id);
+    PGresult *r = run(p, "SELECT status FROM jobs WHERE id = $1", 1, v, 0, err, errlen, what);
+    if (!r) return -1;
+    int rc = 1;
+    if (PQntuples(r) == 1) {
+        int parsed = store_status_parse(PQgetvalue(r, 0, 0));
+        if (parsed < 0) {
+            set_err(err, errlen, "job %lld has an unknown status '%s'", (long long)id,
+                    PQgetvalue(r, 0, 0));
+            rc = -1;
+        } else {
+            *st = (store_status)parsed;
+            rc = 0;
+        }
+    }
+    PQclear(r);
+    return rc;
+}
+
+static void not_running_err(store_pg *p, int64_t id, const char *what, char *err, size_t errlen)
+{
+    store_status st;
+    int found = status_of(p, id, &st, err, errlen);
+    if (found == 1)
+        set_err(err, errlen, "cannot %s job %lld: no such job", what, (long long)id);
+    else if (found == 0 && st == STORE_RUNNING)
+        set_err(err, errlen, "cannot %s job %lld: another worker holds it", what, (long long)id);
+    else if (found == 0)
+        set_err(err, errlen, "cannot %s job %lld: it is %s, not running", what, (long long)id,
+                store_status_name(st));
+}
+
+/* ---- opening ---- */
+
+/* brings the schema to STORE_PG_SCHEMA_VERSION, or refuses a database that is not ctcsim's */
+static int migrate(store_pg *p, const char *shown, char *err, size_t errlen)
+{
+    int rc = -1, version = 0;
+    PGresult *r = NULL;
+    if (run_simple(p, "BEGIN", err, errlen, "cannot open the database") != 0) goto done;
+    /* one migration at a time across every process that opens the database */
+    r = run(p, "SELECT pg_advisory_xact_lock(7237151624)", 0, NULL, 0, err, errlen,
+            "locking the schema");
+    if (!r) goto done;
+    PQclear(r);
+    r = run(p,
+            "SELECT to_regclass('schema_version') IS NOT NULL, (SELECT count(*) FROM pg_tables "
+            "WHERE schemaname = current_schema())",
+            0, NULL, 0, err, errlen, "reading the schema");
+    if (!r) goto done;
+    int have_version = PQgetvalue(r, 0, 0)[0] == 't';
+    long tables = atol(PQgetvalue(r, 0, 1));
+    PQclear(r);
+    r = NULL;
+    if (!have_version && tables > 0) {
+        set_err(err, errlen,
+                "database %s is not a ctcsim database (it has tables but no schema_version)",
+                shown);
+        goto done;
+    }
+    if (!have_version && run_simple(p,
+                                    "CREATE TABLE schema_version (version INTEGER NOT NULL);"
+                                    "INSERT INTO schema_version VALUES (0)",
+                                    err, errlen, "creating the schema") != 0)
+        goto done;
+    r = run(p, "SELECT version FROM schema_version", 0, NULL, 0, err, errlen,
+            "reading the schema version");
+    if (!r) goto done;
+    if (PQntuples(r) != 1) {
+        set_err(err, errlen, "database %s is not a ctcsim database (schema_version has %d rows)",
+                shown, PQntuples(r));
+        goto done;
+    }
+    version = atoi(PQgetvalue(r, 0, 0));
+    PQclear(r);
+    r = NULL;
+    if (version > STORE_PG_SCHEMA_VERSION || version < 0) {
+        set_err(err, errlen,
+                "database %s has schema version %d, newer than this ctcsim (%d): upgrade ctcsim",
+                shown, version, STORE_PG_SCHEMA_VERSION);
+        goto done;
+    }
+    for (int v = version; v < STORE_PG_SCHEMA_VERSION; v++) {
+        PGresult *m = PQexec(p->conn, migrations[v]);
+        if (PQresultStatus(m) != PGRES_COMMAND_OK) {
+            char what[640];
+            snprintf(what, sizeof what, "database %s: migrating the schema from version %d to %d",
+                     shown, v, v + 1);
+            db_err(p, m, err, errlen, "%s", what);
+            PQclear(m);
+            goto done;
+        }
+        PQclear(m);
+    }
+    if (run_simple(p, "COMMIT", err, errlen, "committing the schema") != 0) goto done;
+    rc = 0;
+done:
+    PQclear(r);
+    if (rc) rollback(p);
+    return rc;
+}
+
+int store_pg_open(const char *url, store_pg **out, char *err, size_t errlen)
+{
+    char shown[512];
+    store_pg_redact(url, shown, sizeof shown);
+    *out = NULL;
+    store_pg *p = calloc(1, sizeof *p);
+    if (!p || !(p->url = strdup(url))) {
+        free(p);
+        set_err(err, errlen, "cannot open database %s: out of memory", shown);
+        return -1;
+    }
+    const char *keys[] = {"dbname", "connect_timeout", "application_name", NULL};
+    const char *vals[] = {url, "5", "ctcsim", NULL};
+    p->conn = PQconnectdbParams(keys, vals, 1);
+    p->busy_ms = STORE_PG_LOCK_MS;
+    if (!p->conn || PQstatus(p->conn) != CONNECTION_OK) {
+        char msg[512];
+        set_err(err, errlen, "cannot open database %s: %s", shown,
+                p->conn ? pg_message(p->conn, NULL, msg, sizeof msg) : "out of memory");
+        store_pg_close(p);
+        return -1;
+    }
+    if (session_setup(p) != 0 || migrate(p, shown, err, errlen) != 0) {
+        if (err && !*err) set_err(err, errlen, "cannot open database %s", shown);
+        store_pg_close(p);
+        return -1;
+    }
+    *out = p;
+    return 0;
+}
+
+void store_pg_close(store_pg *p)
+{
+    if (!p) return;
+    PQfinish(p->conn);
+    free(p->url);
+    free(p);
+}
+
+void store_pg_set_busy_timeout(store_pg *p, int ms)
+{
+    p->busy_ms = ms > 0 ? ms : 0;
+}
+
+int store_pg_set_max_size(store_pg *p, long long max_bytes, char *err, size_t errlen)
+{
+    p->fault = STORE_FAULT_NONE;
+    if (max_bytes == 0) return 0;
+    set_err(err, errlen,
+            "a size limit (--db-max-size) applies to SQLite only: PostgreSQL's size is the "
+            "database server's to limit");
+    return -1;
+}
+
+store_fault store_pg_last_fault(const store_pg *p)
+{
+    return p->fault;
+}
+
+void store_pg_attach(store_pg *p, store_health *h)
+{
+    p->health = h;
+}
+
+int store_pg_probe(store_pg *p, char *err, size_t errlen)
+{
+    call_begin(p);
+    /* a write that changes nothing a reader sees; on PostgreSQL it needs room in the log, so
+       its success also says the disk has room again */
+    PGresult *r = run(p, "UPDATE job_counts SET n = n WHERE status = 'queued'", 0, NULL, 0, err,
+                      errlen, "probing the database");
+    PQclear(r);
+    return write_end(p, r ? 0 : -1, 1);
+}
+
+int store_pg_reserve(store_pg *p, long long bytes, char *err, size_t errlen)
+{
+    (void)bytes;
+    p->fault = STORE_FAULT_NONE;
+    set_err(err, errlen, "reserving room for the log: PostgreSQL keeps its own write-ahead log");
+    return -1;
+}
+
+/* ---- jobs ---- */
+
+int store_pg_insert(store_pg *p, const char *name, const char *preset, int nbodies, int nv,
+                    const char *controller, const char *spec, int64_t *id, char *err, size_t errlen)
+{
+    call_begin(p);
+    if (!name || !controller || !spec) {
+        set_err(err, errlen, "cannot store a job without %s",
+                !name         ? "a name"
+                : !controller ? "a controller"
+                              : "a spec");
+        return -1;
+    }
+    if (nbodies < 1 || nv < 0) {
+        set_err(err, errlen, "cannot store a job of %d bodies and %d coordinates", nbodies, nv);
+        return -1;
+    }
+    char created[40], nb[16], nvs[16], what[300];
+    fmt_real(created, sizeof created, now_s());
+    snprintf(nb, sizeof nb, "%d", nbodies);
+    snprintf(nvs, sizeof nvs, "%d", nv);
+    snprintf(what, sizeof what, "cannot store job '%.200s'", name);
+    const char *v[] = {name, preset, created, nb, nvs, controller, spec};
+    PGresult *r = run(p,
+                      "INSERT INTO jobs (name, preset, status, progress, created, nbodies, nv, "
+                      "controller, spec) VALUES ($1, $2, 'queued', 0, $3, $4, $5, $6, $7) "
+                      "RETURNING id",
+                      7, v, 0, err, errlen, what);
+    if (r) *id = strtoll(PQgetvalue(r, 0, 0), NULL, 10);
+    PQclear(r);
+    return write_end(p, r ? 0 : -1, 1);
+}
+
+int store_pg_recover(store_pg *p, int64_t **ids, int *n, char *err, size_t errlen)
+{
+    call_begin(p);
+    int rc = -1;
+    PGresult *r = NULL;
+    *ids = NULL;
+    *n = 0;
+    if (run_simple(p, "BEGIN", err, errlen, "recovering jobs") != 0) goto done;
+    /* a running job whose lease has expired restarts from t = 0 */
+    r = run(p,
+            "UPDATE jobs SET status = 'queued', progress = 0, started = 0, worker = NULL, "
+            "lease_until = NULL WHERE status = 'running' AND (lease_until IS NULL OR "
+            "lease_until < " DB_NOW ")",
+            0, NULL, 0, err, errlen, "recovering jobs");
+    if (!r) goto done;
+    PQclear(r);
+    /* a queued job whose cancel was asked for and not recorded (its API process died) */
+    char fin[40];
+    const char *fv[] = {fmt_real(fin, sizeof fin, now_s())};
+    r = run(p,
+            "UPDATE jobs SET status = 'cancelled', message = 'cancelled by request', finished = "
+            "$1 WHERE status = 'queued' AND cancel_requested",
+            1, fv, 0, err, errlen, "recovering jobs");
+    if (!r) goto done;
+    PQclear(r);
+    r = run(p, "SELECT id FROM jobs WHERE status = 'queued' ORDER BY id", 0, NULL, 0, err, errlen,
+            "recovering jobs");
+    if (!r) goto done;
+    int count = PQntuples(r);
+    int64_t *list = malloc((size_t)(count > 0 ? count : 1) * sizeof *list);
+    if (!list) {
+        set_err(err, errlen, "recovering jobs: out of memory");
+        goto done;
+    }
+    for (int i = 0; i < count; i++) list[i] = strtoll(PQgetvalue(r, i, 0), NULL, 10);
+    if (run_simple(p, "COMMIT", err, errlen, "recovering jobs") != 0) {
+        free(list);
+        goto done;
+    }
+    *ids = list;
+    *n = count;
+    rc = 0;
+done:
+    PQclear(r);
+    if (rc) rollback(p);
+    return write_end(p, rc, 0);
+}
+
+int store_pg_start(store_pg *p, int64_t id, char *err, size_t errlen)
+{
+    call_begin(p);
+    char ids[24], started[40], what[64];
+    fmt_i64(ids, sizeof ids, id);
+    fmt_real(started, sizeof started, now_s());
+    snprintf(what, sizeof what, "cannot start job %lld", (long long)id);
+    const char *v[] = {ids, started, p->owner[0] ? p->owner : NULL};
+    PGresult *r = run(p,
+                      "UPDATE jobs SET status = 'running', started = $2, progress = 0, worker = "
+                      "$3 WHERE id = $1 AND status = 'queued'",
+                      3, v, 0, err, errlen, what);
+    int rc = r ? (changes(r) == 1 ? 0 : 1) : -1;
+    PQclear(r);
+    return write_end(p, rc, 0);
+}
+
+/* the condition that a running job is this connection's: its claim's token, or no claim at all
+ * on either side (a job started with store_start by a connection that never claimed) */
+#define HELD "worker IS NOT DISTINCT FROM $3"
+
+int store_pg_progress(store_pg *p, int64_t id, double progress, char *err, size_t errlen)
+{
+    call_begin(p);
+    int rc = -1;
+    if (isnan(progress)) {
+        set_err(err, errlen, "job %lld: progress is NaN", (long long)id);
+        return write_end(p, -1, 0);
+    }
+    char ids[24], pr[40], what[64];
+    fmt_i64(ids, sizeof ids, id);
+    fmt_real(pr, sizeof pr, fmin(fmax(progress, 0.0), 1.0));
+    snprintf(what, sizeof what, "job %lld: cannot record progress", (long long)id);
+    const char *v[] = {ids, pr, p->owner[0] ? p->owner : NULL};
+    PGresult *r =
+        run(p, "UPDATE jobs SET progress = $2 WHERE id = $1 AND status = 'running' AND " HELD, 3, v,
+            0, err, errlen, what);
+    if (r && changes(r) == 1)
+        rc = 0;
+    else if (r)
+        not_running_err(p, id, "record progress of", err, errlen);
+    PQclear(r);
+    return write_end(p, rc, 0);
+}
+
+int store_pg_requeue(store_pg *p, int64_t id, char *err, size_t errlen)
+{
+    call_begin(p);
+    int rc = -1;
+    char ids[24], what[64];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(what, sizeof what, "cannot requeue job %lld", (long long)id);
+    const char *v[] = {ids, p->owner[0] ? p->owner : NULL};
+    PGresult *r = run(p,
+                      "UPDATE jobs SET status = 'queued', progress = 0, started = 0, worker = "
+                      "NULL, lease_until = NULL WHERE id = $1 AND status = 'running' AND worker "
+                      "IS NOT DISTINCT FROM $2",
+                      2, v, 0, err, errlen, what);
+    if (r && changes(r) == 1)
+        rc = 0, p->owner[0] = '\0';
+    else if (r)
+        not_running_err(p, id, "requeue", err, errlen);
+    PQclear(r);
+    return write_end(p, rc, 0);
+}
+
+static double result_e_max(const ctc_sim_result *r)
+{
+    double m = NAN;
+    if (!r || !r->metrics.e_max) return m;
+    for (int i = 0; i < r->metrics.nv; i++)
+        if (!isnan(r->metrics.e_max[i]) && (isnan(m) || r->metrics.e_max[i] > m))
+            m = r->metrics.e_max[i];
+    return m;
+}
+
+/* one series row; data holds nsamples x width doubles, sent as a binary parameter */
+static int put_series(store_pg *p, int64_t id, const char *channel, int width, int nsamples,
+                      const double *data, char *err, size_t errlen)
+{
+    char ids[24], ws[16], ns[16], what[96];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(ws, sizeof ws, "%d", width);
+    snprintf(ns, sizeof ns, "%d", nsamples);
+    snprintf(what, sizeof what, "job %lld: storing series %s", (long long)id, channel);
+    size_t bytes = (size_t)nsamples * (size_t)width * sizeof(double);
+    if (bytes > INT_MAX) {
+        set_err(err, errlen, "%s: %zu bytes, more than PostgreSQL takes in one value", what, bytes);
+        return -1;
+    }
+    const char *v[] = {ids, channel, ws, ns, data ? (const char *)data : ""};
+    int lens[] = {0, 0, 0, 0, (int)bytes};
+    int fmts[] = {0, 0, 0, 0, 1};
+    PGresult *r = PQexecParams(p->conn,
+                               "INSERT INTO series (job_id, channel, width, nsamples, data) "
+                               "VALUES ($1, $2, $3, $4, $5)",
+                               5, NULL, v, lens, fmts, 0);
+    if (PQresultStatus(r) != PGRES_COMMAND_OK) {
+        db_err(p, r, err, errlen, "%s", what);
+        PQclear(r);
+        return -1;
+    }
+    p->changed++;
+    PQclear(r);
+    return 0;
+}
+
+int store_pg_finish(store_pg *p, int64_t id, store_status status, const char *message,
+                    const char *metrics, const ctc_sim_result *r, char *err, size_t errlen)
+{
+    call_begin(p);
+    int rc = -1;
+    PGresult *q = NULL;
+    char what[64];
+    snprintf(what, sizeof what, "cannot finish job %lld", (long long)id);
+    if (status < STORE_DONE || status >= STORE_NSTATUS) {
+        set_err(err, errlen,
+                "cannot finish job %lld as %s: the status must be done, failed, diverged or "
+                "cancelled",
+                (long long)id, store_status_name(status));
+        goto done;
+    }
+    if (r && (r->nsamples < 0 || (r->nsamples > 0 && !r->t))) {
+        set_err(err, errlen, "cannot finish job %lld: the result has %s", (long long)id,
+                r->nsamples < 0 ? "a negative sample count" : "samples but no times");
+        goto done;
+    }
+    if (run_simple(p, "BEGIN", err, errlen, what) != 0) goto done;
+    char ids[24], emax[40], wall[40], fin[40];
+    fmt_i64(ids, sizeof ids, id);
+    fmt_real(fin, sizeof fin, now_s());
+    const char *v[] = {ids,
+                       store_status_name(status),
+                       message && *message ? message : NULL,
+                       metrics,
+                       fmt_real(emax, sizeof emax, result_e_max(r)),
+                       fmt_real(wall, sizeof wall, r ? r->metrics.wall_s : NAN),
+                       fin,
+                       p->owner[0] ? p->owner : NULL};
+    /* a queued job, or a running one that this connection's claim holds */
+    q = run(p,
+            "UPDATE jobs SET status = $2, message = $3, metrics = $4, e_max = $5, wall_s = $6, "
+            "finished = $7, progress = CASE WHEN $2 = 'done' THEN 1 ELSE progress END, "
+            "lease_until = NULL WHERE id = $1 AND (status = 'queued' OR (status = 'running' AND "
+            "worker IS NOT DISTINCT FROM $8))",
+            8, v, 0, err, errlen, what);
+    if (!q) goto done;
+    if (changes(q) != 1) {
+        store_status st;
+        int found = status_of(p, id, &st, err, errlen);
+        if (found == 1)
+            set_err(err, errlen, "cannot finish job %lld: no such job", (long long)id);
+        else if (found == 0 && st == STORE_RUNNING)
+            set_err(err, errlen, "cannot finish job %lld: another worker holds it", (long long)id);
+        else if (found == 0)
+            set_err(err, errlen, "cannot finish job %lld: it is already %s", (long long)id,
+                    store_status_name(st));
+        goto done;
+    }
+    PQclear(q);
+    const char *dv[] = {ids};
+    char dwhat[64];
+    snprintf(dwhat, sizeof dwhat, "job %lld: clearing its series", (long long)id);
+    q = run(p, "DELETE FROM series WHERE job_id = $1", 1, dv, 0, err, errlen, dwhat);
+    if (!q) goto done;
+    if (r) {
+        if (put_series(p, id, "t", 1, r->nsamples, r->t, err, errlen)) goto done;
+        for (int c = 0; c < CTC_NCHANNELS; c++) {
+            if (!r->ch[c] || r->width[c] <= 0) continue;
+            if (put_series(p, id, ctc_channel_name((ctc_channel)c), r->width[c], r->nsamples,
+                           r->ch[c], err, errlen))
+                goto done;
+        }
+    }
+    if (run_simple(p, "COMMIT", err, errlen, what) != 0) goto done;
+    if (p->owner[0]) p->owner[0] = '\0'; /* the claim ends with its result */
+    rc = 0;
+done:
+    PQclear(q);
+    if (rc) rollback(p);
+    return write_end(p, rc, r != NULL);
+}
+
+int store_pg_get(store_pg *p, int64_t id, store_job *out, char *err, size_t errlen)
+{
+    call_begin(p);
+    memset(out, 0, sizeof *out);
+    char ids[24], what[48];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(what, sizeof what, "cannot read job %lld", (long long)id);
+    const char *v[] = {ids};
+    PGresult *r = run(p, "SELECT " JOB_COLUMNS ", spec, metrics FROM jobs WHERE id = $1", 1, v, 0,
+                      err, errlen, what);
+    if (!r) return -1;
+    int rc = PQntuples(r) == 0 ? 1 : read_job(r, 0, 1, out, err, errlen);
+    PQclear(r);
+    return rc;
+}
+
+int store_pg_list(store_pg *p, int64_t before, int status, int limit, store_job **rows, int *n,
+                  char *err, size_t errlen)
+{
+    call_begin(p);
+    *rows = NULL;
+    *n = 0;
+    if (limit < 1 || limit > PG_MAX_LIST) {
+        set_err(err, errlen, "limit must be between 1 and %d (got %d)", PG_MAX_LIST, limit);
+        return -1;
+    }
+    if (before < 0) {
+        set_err(err, errlen, "before must be 0 or a job id (got %lld)", (long long)before);
+        return -1;
+    }
+    if (status < -1 || status >= STORE_NSTATUS) {
+        set_err(err, errlen, "unknown job status %d", status);
+        return -1;
+    }
+    char bs[24], ls[16];
+    fmt_i64(bs, sizeof bs, before > 0 ? before : INT64_MAX);
+    snprintf(ls, sizeof ls, "%d", limit);
+    const char *v[] = {bs, ls, status >= 0 ? store_status_name((store_status)status) : NULL};
+    PGresult *r = run(p,
+                      status >= 0 ? "SELECT " JOB_COLUMNS " FROM jobs WHERE status = $3 AND id < "
+                                    "$1 ORDER BY id DESC LIMIT $2"
+                                  : "SELECT " JOB_COLUMNS " FROM jobs WHERE id < $1 ORDER BY id "
+                                    "DESC LIMIT $2",
+                      status >= 0 ? 3 : 2, v, 0, err, errlen, "listing jobs");
+    if (!r) return -1;
+    int count = PQntuples(r), rc = -1, got = 0;
+    store_job *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
+    if (!list) {
+        set_err(err, errlen, "listing jobs: out of memory");
+        goto done;
+    }
+    for (; got < count; got++)
+        if (read_job(r, got, 0, &list[got], err, errlen)) goto done;
+    *rows = list;
+    *n = count;
+    list = NULL;
+    rc = 0;
+done:
+    PQclear(r);
+    store_jobs_free(list, got);
+    return rc;
+}
+
+#define SERIES_SHAPE                                                                               \
+    "SELECT s.channel, s.width::int4, s.nsamples::int4, length(s.data)::int4, j.nv::int4"
+#define SERIES_FROM " FROM series AS s JOIN jobs AS j ON j.id = s.job_id WHERE s.job_id = $1"
+
+int store_pg_get_series(store_pg *p, int64_t id, ctc_sim_result **out, char *err, size_t errlen)
+{
+    call_begin(p);
+    *out = NULL;
+    char ids[24], what[64];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(what, sizeof what, "job %lld: reading its series", (long long)id);
+    const char *v[] = {ids};
+    PGresult *r = run(p, SERIES_SHAPE ", s.data" SERIES_FROM, 1, v, 1, err, errlen, what);
+    if (!r) return -1;
+    int rows = PQntuples(r), rc = -1, nv = 0, nind = 0, nsamples = -1;
+    ctc_sim_result *res = NULL;
+    if (rows == 0) {
+        rc = 1;
+        goto done;
+    }
+    nv = be_i32(r, 0, 4);
+    res = calloc(1, sizeof *res);
+    if (!res) {
+        set_err(err, errlen, "job %lld: reading its series: out of memory", (long long)id);
+        goto done;
+    }
+    for (int i = 0; i < rows; i++) {
+        const char *name = PQgetvalue(r, i, 0);
+        int width = be_i32(r, i, 1), c;
+        int64_t bytes = PQgetlength(r, i, 5);
+        if (store_series_check_row(id, &nv, &nind, &nsamples, name, width, be_i32(r, i, 2), bytes,
+                                   &c, err, errlen))
+            goto done;
+        double *data = malloc(bytes > 0 ? (size_t)bytes : sizeof(double));
+        if (!data) {
+            set_err(err, errlen, "job %lld: reading series %s: out of memory", (long long)id, name);
+            goto done;
+        }
+        if (bytes > 0) memcpy(data, PQgetvalue(r, i, 5), (size_t)bytes);
+        if (c == -1) {
+            free(res->t);
+            res->t = data;
+        } else {
+            res->ch[c] = data;
+            res->width[c] = width;
+            res->channels |= CTC_CH_BIT(c);
+        }
+    }
+    if (!res->t) {
+        set_err(err, errlen, "job %lld: series has no t", (long long)id);
+        goto done;
+    }
+    res->nsamples = nsamples;
+    res->nv = nv;
+    res->nq = res->width[CTC_CH_Q] ? res->width[CTC_CH_Q] : nv;
+    res->metrics.nv = nv;
+    *out = res;
+    res = NULL;
+    rc = 0;
+done:
+    PQclear(r);
+    ctc_sim_result_free(res);
+    return rc;
+}
+
+int store_pg_get_series_info(store_pg *p, int64_t id, store_series_info *out, char *err,
+                             size_t errlen)
+{
+    call_begin(p);
+    memset(out, 0, sizeof *out);
+    char ids[24], what[64];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(what, sizeof what, "job %lld: reading its series", (long long)id);
+    const char *v[] = {ids};
+    PGresult *r = run(p, SERIES_SHAPE SERIES_FROM, 1, v, 1, err, errlen, what);
+    if (!r) return -1;
+    int rows = PQntuples(r), rc = -1, nv = 0, nind = 0, nsamples = -1, have_t = 0;
+    if (rows == 0) {
+        rc = 1;
+        goto done;
+    }
+    nv = be_i32(r, 0, 4);
+    for (int i = 0; i < rows; i++) {
+        int width = be_i32(r, i, 1), c;
+        int64_t bytes = be_i32(r, i, 3);
+        if (store_series_check_row(id, &nv, &nind, &nsamples, PQgetvalue(r, i, 0), width,
+                                   be_i32(r, i, 2), bytes, &c, err, errlen))
+            goto done;
+        if (c == -1) {
+            have_t = 1;
+        } else {
+            out->width[c] = width;
+            out->channels |= CTC_CH_BIT(c);
+        }
+        out->bytes += bytes;
+    }
+    if (!have_t) {
+        set_err(err, errlen, "job %lld: series has no t", (long long)id);
+        goto done;
+    }
+    out->nsamples = nsamples;
+    out->nv = nv;
+    out->nq = out->width[CTC_CH_Q] ? out->width[CTC_CH_Q] : nv;
+    rc = 0;
+done:
+    PQclear(r);
+    if (rc) memset(out, 0, sizeof *out);
+    return rc;
+}
+
+int store_pg_series_begin(store_pg *p, char *err, size_t errlen)
+{
+    call_begin(p);
+    if (p->reading) {
+        set_err(err, errlen, "reading a series: a read is already under way");
+        return -1;
+    }
+    if (run_simple(p, "BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY", err, errlen,
+                   "reading a series") != 0)
+        return -1;
+    p->reading = 1;
+    return 0;
+}
+
+int store_pg_series_read(store_pg *p, int64_t id, int channel, uint64_t offset, void *buf,
+                         size_t len, char *err, size_t errlen)
+{
+    call_begin(p);
+    const char *name = channel < 0 ? "t" : ctc_channel_name((ctc_channel)channel);
+    if (!p->reading || channel < -1 || channel >= CTC_NCHANNELS) {
+        set_err(err, errlen, "job %lld: reading series %s: %s", (long long)id, name,
+                p->reading ? "no such channel" : "not inside store_series_begin");
+        return -1;
+    }
+    char ids[24], off[24], ln[24], what[96];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(off, sizeof off, "%llu", (unsigned long long)offset + 1);
+    snprintf(ln, sizeof ln, "%zu", len);
+    snprintf(what, sizeof what, "job %lld: reading series %s", (long long)id, name);
+    const char *v[] = {ids, name, off, ln};
+    PGresult *r = run(p,
+                      "SELECT substring(data FROM $3::int4 FOR $4::int4), length(data)::int4 "
+                      "FROM series WHERE job_id = $1 AND channel = $2",
+                      4, v, 1, err, errlen, what);
+    if (!r) return -1;
+    int rc = -1;
+    if (PQntuples(r) == 0) {
+        set_err(err, errlen, "job %lld: series %s is gone", (long long)id, name);
+        rc = 1;
+        goto done;
+    }
+    int64_t bytes = be_i32(r, 0, 1);
+    if (offset > (uint64_t)bytes || len > (uint64_t)bytes - offset ||
+        (size_t)PQgetlength(r, 0, 0) != len) {
+        set_err(err, errlen,
+                "job %lld: series %s holds %lld bytes, not the %zu asked for at byte %llu",
+                (long long)id, name, (long long)bytes, len, (unsigned long long)offset);
+        goto done;
+    }
+    memcpy(buf, PQgetvalue(r, 0, 0), len);
+    rc = 0;
+done:
+    PQclear(r);
+    return rc;
+}
+
+void store_pg_series_end(store_pg *p)
+{
+    if (!p || !p->reading) return;
+    if (PQtransactionStatus(p->conn) != PQTRANS_IDLE) PQclear(PQexec(p->conn, "COMMIT"));
+    p->reading = 0;
+}
+
+int store_pg_delete(store_pg *p, int64_t id, char *err, size_t errlen)
+{
+    call_begin(p);
+    char ids[24], what[48];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(what, sizeof what, "cannot delete job %lld", (long long)id);
+    const char *v[] = {ids};
+    /* only a finished job goes (its series by ON DELETE CASCADE), decided in one statement */
+    PGresult *r = run(p,
+                      "WITH doomed AS (SELECT id, status FROM jobs WHERE id = $1 FOR UPDATE), "
+                      "gone AS (DELETE FROM jobs WHERE id IN (SELECT id FROM doomed WHERE NOT "
+                      "" ACTIVE ") RETURNING id) SELECT (SELECT status FROM doomed), (SELECT "
+                      "count(*) FROM gone)",
+                      1, v, 0, err, errlen, what);
+    if (!r) return write_end(p, -1, 1);
+    int rc;
+    if (PQgetisnull(r, 0, 0))
+        rc = 1;
+    else if (atoi(PQgetvalue(r, 0, 1)) == 1)
+        rc = 0, p->changed++;
+    else
+        rc = 2;
+    PQclear(r);
+    return write_end(p, rc, 1);
+}
+
+int store_pg_count(store_pg *p, long counts[STORE_NSTATUS], char *err, size_t errlen)
+{
+    call_begin(p);
+    for (int i = 0; i < STORE_NSTATUS; i++) counts[i] = 0;
+    PGresult *r =
+        run(p, "SELECT status, n FROM job_counts", 0, NULL, 0, err, errlen, "counting jobs");
+    if (!r) return -1;
+    int rc = 0;
+    for (int i = 0; i < PQntuples(r); i++) {
+        int st = store_status_parse(PQgetvalue(r, i, 0));
+        if (st < 0) {
+            set_err(err, errlen, "counting jobs: unknown status '%s'", PQgetvalue(r, i, 0));
+            rc = -1;
+            break;
+        }
+        counts[st] = atol(PQgetvalue(r, i, 1));
+    }
+    PQclear(r);
+    return rc;
+}
+
+/* ---- claims, heartbeats, notifications ---- */
+
+int store_pg_claim(store *s, double lease_s, int64_t *id, int *cancel, char *err, size_t errlen)
+{
+    store_pg *p = store_pg_of(s);
+    call_begin(p);
+    char host[128] = "", lease[40];
+    gethostname(host, sizeof host - 1);
+    p->claims++;
+    /* a token no other claim has: host, process, connection, claim */
+    snprintf(p->owner, sizeof p->owner, "%.100s:%ld:%p:%lu", host, (long)getpid(), (void *)p,
+             p->claims);
+    fmt_real(lease, sizeof lease, lease_s);
+    char started[40];
+    fmt_real(started, sizeof started, now_s());
+    const char *v[] = {p->owner, lease, started};
+    PGresult *r = run(p,
+                      "UPDATE jobs SET status = 'running', worker = $1, lease_until = " DB_NOW
+                      " + $2::float8, started = $3::float8, progress = 0 WHERE id = (SELECT id "
+                      "FROM jobs WHERE (status = 'queued' AND NOT cancel_requested) OR (status = "
+                      "'running' AND lease_until < " DB_NOW ") ORDER BY id LIMIT 1 "
+                      "FOR UPDATE SKIP LOCKED) "
+                      "RETURNING id, cancel_requested",
+                      3, v, 0, err, errlen, "claiming a job");
+    int rc = -1;
+    if (r && PQntuples(r) == 1) {
+        *id = strtoll(PQgetvalue(r, 0, 0), NULL, 10);
+        *cancel = PQgetvalue(r, 0, 1)[0] == 't';
+        rc = 0;
+    } else if (r) {
+        p->owner[0] = '\0';
+        rc = 1;
+    } else {
+        p->owner[0] = '\0';
+    }
+    PQclear(r);
+    return write_end(p, rc, 0);
+}
+
+int store_pg_heartbeat(store *s, int64_t id, double progress, double lease_s, int *cancel,
+                       char *err, size_t errlen)
+{
+    store_pg *p = store_pg_of(s);
+    call_begin(p);
+    char ids[24], pr[40], lease[40], what[64];
+    fmt_i64(ids, sizeof ids, id);
+    fmt_real(pr, sizeof pr, isnan(progress) ? 0.0 : fmin(fmax(progress, 0.0), 1.0));
+    fmt_real(lease, sizeof lease, lease_s);
+    snprintf(what, sizeof what, "job %lld: renewing its lease", (long long)id);
+    const char *v[] = {ids, pr, p->owner, lease};
+    PGresult *r = run(p,
+                      "UPDATE jobs SET progress = $2, lease_until = " DB_NOW " + $4::float8 "
+                      "WHERE id = $1 AND status = 'running' AND worker = $3 "
+                      "RETURNING cancel_requested",
+                      4, v, 0, err, errlen, what);
+    int rc = -1;
+    if (r && PQntuples(r) == 1) {
+        *cancel = PQgetvalue(r, 0, 0)[0] == 't';
+        rc = 0;
+    } else if (r) {
+        set_err(err, errlen, "job %lld: the lease is lost (another worker holds it)",
+                (long long)id);
+        rc = 1;
+    }
+    PQclear(r);
+    /* a worker's connection listens (it waits on it when idle); what came while it runs a job
+       only said that something changed, which its next claim learns anyway */
+    PGnotify *n;
+    while ((n = PQnotifies(p->conn)) != NULL) PQfreemem(n);
+    return write_end(p, rc, 0);
+}
+
+int store_pg_request_cancel(store *s, int64_t id, char *err, size_t errlen)
+{
+    store_pg *p = store_pg_of(s);
+    call_begin(p);
+    char ids[24], what[64];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(what, sizeof what, "cannot cancel job %lld", (long long)id);
+    const char *v[] = {ids};
+    PGresult *r = run(
+        p, "UPDATE jobs SET cancel_requested = true WHERE id = $1 AND " ACTIVE " RETURNING status",
+        1, v, 0, err, errlen, what);
+    int rc = -1;
+    if (r) rc = PQntuples(r) == 0 ? 0 : strcmp(PQgetvalue(r, 0, 0), "running") == 0 ? 2 : 1;
+    PQclear(r);
+    return write_end(p, rc, 0);
+}
+
+int store_pg_listen(store *s, char *err, size_t errlen)
+{
+    store_pg *p = store_pg_of(s);
+    call_begin(p);
+    p->listening = 1;
+    return run_simple(p, "LISTEN " STORE_PG_CHANNEL, err, errlen, "listening for job changes");
+}
+
+int store_pg_notifications(store *s, double timeout_s,
+                           void (*fn)(void *arg, int64_t id, int status), void *arg, char *err,
+                           size_t errlen)
+{
+    store_pg *p = store_pg_of(s);
+    call_begin(p);
+    if (PQstatus(p->conn) != CONNECTION_OK) {
+        db_err(p, NULL, err, errlen, "listening for job changes");
+        return -1;
+    }
+    int count = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        if (!PQconsumeInput(p->conn)) {
+            db_err(p, NULL, err, errlen, "listening for job changes");
+            return -1;
+        }
+        PGnotify *n;
+        while ((n = PQnotifies(p->conn)) != NULL) {
+            char status[16] = "";
+            long long id = 0;
+            if (sscanf(n->extra, "%lld %15s", &id, status) == 2)
+                fn(arg, (int64_t)id, store_status_parse(status));
+            PQfreemem(n);
+            count++;
+        }
+        if (count > 0 || pass == 1) break;
+        /* nothing yet: wait on the socket */
+        struct pollfd pfd = {.fd = PQsocket(p->conn), .events = POLLIN};
+        int ms = timeout_s > 0 ? (int)(timeout_s * 1000.0) : 0;
+        if (pfd.fd < 0) {
+            db_err(p, NULL, err, errlen, "listening for job changes");
+            return -1;
+        }
+        if (poll(&pfd, 1, ms) < 0 && errno != EINTR) {
+            set_err(err, errlen, "listening for job changes: %s", strerror(errno));
+            return -1;
+        }
+    }
+    return count;
+}
+
+int store_pg_statuses(store *s, const int64_t *ids, int n, int *out, char *err, size_t errlen)
+{
+    store_pg *p = store_pg_of(s);
+    call_begin(p);
+    if (n <= 0) return 0;
+    /* the ids as a PostgreSQL array literal: {1,2,3} */
+    size_t cap = (size_t)n * 21 + 3, used = 0;
+    char *list = malloc(cap);
+    if (!list) {
+        set_err(err, errlen, "reading job statuses: out of memory");
+        return -1;
+    }
+    list[used++] = '{';
+    for (int i = 0; i < n; i++)
+        used +=
+            (size_t)snprintf(list + used, cap - used, "%s%lld", i ? "," : "", (long long)ids[i]);
+    snprintf(list + used, cap - used, "}");
+    const char *v[] = {list};
+    PGresult *r = run(p, "SELECT id, status FROM jobs WHERE id = ANY($1::bigint[])", 1, v, 0, err,
+                      errlen, "reading job statuses");
+    free(list);
+    if (!r) return -1;
+    for (int i = 0; i < n; i++) out[i] = -1;
+    for (int k = 0; k < PQntuples(r); k++) {
+        long long id = strtoll(PQgetvalue(r, k, 0), NULL, 10);
+        int st = store_status_parse(PQgetvalue(r, k, 1));
+        for (int i = 0; i < n; i++)
+            if (ids[i] == id) out[i] = st;
+    }
+    PQclear(r);
+    return 0;
+}

@@ -1,0 +1,137 @@
+/*
+ * The PostgreSQL cluster's faults: one `--role api` process and worker processes (lib.mjs, with
+ * CTCSIM_TEST_PG), each killed or cut off while jobs run. A worker killed with SIGKILL during a
+ * job: the job's lease expires and another worker runs it again, to the byte-identical series of
+ * the command line. The API process killed with SIGKILL: the workers go on, and a new API process
+ * answers for every job. PostgreSQL restarted during a batch: every accepted job finishes done,
+ * once (one done row each, counted in the database), and the workers, whose connections were
+ * lost, reconnect and take new jobs (the API process answers 503 while the database is down). A worker whose connection the database ends
+ * (pg_terminate_backend) reconnects and claims again. Skipped on SQLite, whose file is not shared
+ * between processes.
+ */
+import assert from 'node:assert/strict';
+import { spawnSync } from 'node:child_process';
+import test from 'node:test';
+
+import { BACKEND, cliCsv, sleep, startServer, submit, waitFor, waitJob } from './lib.mjs';
+
+const SKIP = BACKEND !== 'postgres' && 'needs PostgreSQL (tests/api/run.sh runs it with CTCSIM_TEST_PG)';
+
+/* about 1-3 s of one worker's time: 300000 steps of the triple pendulum */
+const MEDIUM = { preset: 'triple_pendulum_pid', name: 'medium', duration: 12, integrator: { method: 'rk4', step: 0.00004 }, output: { interval: 0.05 } };
+const SMALL = { preset: 'triple_pendulum_pid', name: 'small', duration: 0.5 };
+
+/* one query's rows as text (psql -At), on a server's database */
+function sql(srv, query) {
+    const r = spawnSync('psql', [srv.db, '-qAtc', query], { encoding: 'utf8' });
+    if (r.status !== 0) throw new Error(`psql: ${r.stderr}`);
+    return r.stdout.trim();
+}
+
+/* the process id in a claim's token (host:pid:connection:claim), or null */
+function workerPid(srv, id) {
+    const token = sql(srv, `SELECT coalesce(worker, '') FROM jobs WHERE id = ${id}`);
+    const m = /^[^:]*:([0-9]+):/.exec(token);
+    return m ? Number(m[1]) : null;
+}
+
+test('a worker killed with SIGKILL mid-job: the job runs again elsewhere, same series', { skip: SKIP }, async () => {
+    const srv = await startServer({ workers: 2 });
+    try {
+        const id = (await submit(srv, MEDIUM)).id;
+        await waitJob(srv, id, { until: (j) => j.status === 'running' && j.progress > 0, timeoutMs: 20000 });
+        const pid = workerPid(srv, id);
+        const victim = srv.workers.find((w) => w.proc.pid === pid);
+        assert.ok(victim, `job ${id} is held by process ${pid}, not one of the workers`);
+        await victim.kill();
+        const done = await waitJob(srv, id, { timeoutMs: 60000 });
+        assert.equal(done.status, 'done', JSON.stringify(done));
+        const other = workerPid(srv, id) ?? -1;
+        assert.notEqual(other, pid, 'the job finished under the killed worker');
+        const res = await srv.get(`/api/jobs/${id}/series?format=csv`);
+        assert.equal(res.status, 200);
+        assert.equal(res.text, await cliCsv(MEDIUM), 'the series differs from the CLI run');
+        assert.equal(sql(srv, `SELECT count(*) FROM series WHERE job_id = ${id} AND channel = 't'`), '1');
+    } finally {
+        await srv.stop();
+    }
+});
+
+test('the API process killed with SIGKILL: the workers go on, a new API process answers', { skip: SKIP }, async () => {
+    const first = await startServer({ workers: 2 });
+    const ids = [];
+    for (let i = 0; i < 6; i++) ids.push((await submit(first, { ...SMALL, name: `small ${i}` })).id);
+    const workers = first.workers;
+    first.workers = []; /* killed alone: its worker processes stay */
+    await first.kill();
+    /* an API process on the same database, without workers of its own */
+    const second = await startServer({ dir: first.dir, workers: 1, args: [] });
+    try {
+        for (const id of ids) {
+            const job = await waitJob(second, id, { timeoutMs: 30000 });
+            assert.equal(job.status, 'done', JSON.stringify(job));
+        }
+        /* ?wait through the new process, answered by a notification */
+        const res = await second.post('/api/jobs?wait=30', SMALL);
+        assert.equal(res.status, 200, res.text);
+        assert.equal(res.json.status, 'done');
+    } finally {
+        await Promise.all(workers.map((w) => w.stop()));
+        await second.stop();
+    }
+});
+
+test('PostgreSQL restarted during a batch: every job finishes once, the workers reconnect', { skip: SKIP || (!process.env.CTCSIM_TEST_PG_DIR && 'CTCSIM_TEST_PG_DIR is not set') }, async () => {
+    const srv = await startServer({ workers: 2 });
+    try {
+        const ids = [];
+        for (let i = 0; i < 12; i++) ids.push((await submit(srv, { ...MEDIUM, duration: 1, name: `batch ${i}` })).id);
+        await waitFor(async () => (await srv.get('/api/health')).json?.busy > 0, { timeoutMs: 20000 });
+        const r = spawnSync('sh', ['tests/pg/restart.sh', process.env.CTCSIM_TEST_PG_DIR], { encoding: 'utf8' });
+        assert.equal(r.status, 0, r.stderr);
+        /* while the database restarts the API answers 503 (DATABASE_IO_ERROR): asked again */
+        for (const id of ids) {
+            const job = await waitFor(async () => {
+                const res = await srv.get(`/api/jobs/${id}`);
+                if (res.status === 503) return null;
+                assert.equal(res.status, 200, res.text);
+                return ['done', 'failed', 'diverged', 'cancelled'].includes(res.json.status) ? res.json : null;
+            }, { timeoutMs: 90000, intervalMs: 200, what: () => `job ${id} to finish` });
+            assert.equal(job.status, 'done', JSON.stringify(job));
+        }
+        /* one done row each, one t series each: nothing lost, nothing stored twice */
+        assert.equal(sql(srv, `SELECT count(*) FROM jobs WHERE status = 'done' AND id IN (${ids})`), String(ids.length));
+        assert.equal(sql(srv, `SELECT count(*) FROM series WHERE channel = 't' AND job_id IN (${ids})`), String(ids.length));
+        const res = await srv.get(`/api/jobs/${ids[ids.length - 1]}/series?format=csv`);
+        assert.equal(res.text, await cliCsv({ ...MEDIUM, duration: 1, name: `batch ${ids.length - 1}` }));
+        /* the workers lost their connections and claim again */
+        const after = await srv.post('/api/jobs?wait=30', SMALL);
+        assert.equal(after.status, 200, after.text);
+    } finally {
+        await srv.stop();
+    }
+});
+
+test('a worker whose connection the database ends reconnects and claims again', { skip: SKIP }, async () => {
+    const srv = await startServer({ workers: 1 });
+    try {
+        assert.equal((await srv.post('/api/jobs?wait=30', SMALL)).json.status, 'done');
+        /* every ctcsim connection to this database but psql's own */
+        const name = sql(srv, 'SELECT current_database()');
+        const ended = sql(srv, `SELECT count(*) FROM (SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE datname = '${name}' AND application_name = 'ctcsim') AS t`);
+        assert.ok(Number(ended) >= 2, `ended ${ended} connections`);
+        await sleep(200);
+        const res = await srv.post('/api/jobs?wait=30', SMALL);
+        /* the API process's own connections reconnect at their next call; the first answer may
+           be 503 while they do, a retry works */
+        const again = res.status === 200 ? res : await srv.post('/api/jobs?wait=30', SMALL);
+        assert.equal(again.status, 200, again.text);
+        assert.equal(again.json.status, 'done');
+        /* run by the one worker there is, the one whose connection was ended */
+        assert.equal(srv.workers.length, 1);
+        assert.equal(srv.workers[0].exited, null);
+        assert.equal(workerPid(srv, again.json.id), srv.workers[0].proc.pid);
+    } finally {
+        await srv.stop();
+    }
+});
