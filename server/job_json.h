@@ -172,9 +172,10 @@
  *                 (0 = none)}
  *   "threads"     optional whole number 1..CTC_MAX_THREADS (64), default 1: the threads the run's
  *                 GDCA passes may use, its own thread included (sim.h); heights of the assembly
- *                 tree too small to pay for the split still run serially, and the samples are
- *                 bitwise the same for every count (but on open chains of 4096 planar or 1024
- *                 spatial bodies or more, where 1 and 2 threads agree to rounding: sim.h).
+ *                 tree too small to pay for the split, and passes whose split measures slower
+ *                 than one thread, run serially, and the samples are bitwise the same for every
+ *                 count (but on open chains of 2048 planar or 512 spatial bodies or more, where
+ *                 the counts agree to rounding: sim.h).
  *                 Each run has its own workers.
  *
  * Or a preset with overrides: {"preset": NAME, PARAMS..., OVERRIDES...}. The preset's own

@@ -138,9 +138,10 @@ typedef struct ctc_sim_spec {
     /* threads of the GDCA passes, the calling thread included (data.h ctc_data_set_threads):
        0 or 1 = serial; up to CTC_MAX_THREADS. The run owns its workers (one set for the plant and
        the controller's model, started at the first pass that splits a tree height), so runs in
-       different threads never share them; the results are bitwise the same for every count (but
-       for open chains of 4096 planar or 1024 spatial bodies or more, whose forward pass changes
-       its assembly order from one thread to two: there 1 and 2 threads agree to rounding, data.h
+       different threads never share them; each pass splits only where that is measured to pay
+       (gdca_par.h), and the results are bitwise the same for every count (but for open chains of
+       2048 planar or 512 spatial bodies or more, whose forward pass may take another assembly
+       order on two threads, as measured: there the counts agree to rounding, data.h
        ctc_data_set_threads), and metrics.cpu_s counts the calling thread only */
     int threads;
 } ctc_sim_spec;

@@ -5,6 +5,7 @@
 #include "data.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 ctc_data *ctc_data_new(const ctc_model *m)
 {
@@ -103,6 +104,7 @@ ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t err
         d->pool = NULL;
         d->pool_failed = 0;
         d->threads = nthreads;
+        memset(d->gate, 0, sizeof d->gate);
     }
     return CTC_OK;
 }
@@ -110,4 +112,5 @@ ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t err
 void ctc_data_share_pool(ctc_data *d, ctc_data *owner)
 {
     d->pool_owner = owner == d ? NULL : owner;
+    memset(d->gate, 0, sizeof d->gate);
 }
