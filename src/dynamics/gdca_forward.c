@@ -491,6 +491,40 @@ void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, doub
     }
 }
 
+/* the accelerations and the joint loads before a refinement step, to undo it */
+static void keep_before_step(const ctc_model *m, ctc_data *d, const double *qacc)
+{
+    memcpy(d->fwd_res + 2 * m->nvx, qacc, (size_t)m->nvx * sizeof *qacc);
+    memcpy(d->fwd_load_prev, d->jnt_load, (size_t)m->njoints * (size_t)m->dim * sizeof(double));
+}
+
+/* The refinement's guard on an open model (gdca_refine.h): 0 when the residual r of qacc is
+ * below *rlast, the residual before the last step (then *rlast becomes it); else (it grew, or
+ * is not finite) 1, after undoing the last step, if one was made: qacc and d->jnt_load as
+ * before it. */
+static int refine_undo_if_grown(const ctc_model *m, ctc_data *d, double *qacc, const double *r,
+                                double *rlast)
+{
+    double rmax = 0;
+    int finite = 1;
+    for (int i = 0; i < m->nv; i++) {
+        double a = fabs(r[i]);
+        if (a > rmax) rmax = a;
+        finite &= isfinite(r[i]);
+    }
+    if (finite && rmax < *rlast) {
+        *rlast = rmax;
+        return 0;
+    }
+    if (d->fwd_refine_done > 0) {
+        memcpy(qacc, d->fwd_res + 2 * m->nvx, (size_t)m->nvx * sizeof *qacc);
+        memcpy(d->jnt_load, d->fwd_load_prev, (size_t)m->njoints * (size_t)m->dim * sizeof(double));
+        d->fwd_refine_done--;
+        d->fwd_refine_undone = 1;
+    }
+    return 1;
+}
+
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
 {
     if (m->has_loop) { /* dependent joints carry no driving force */
@@ -512,12 +546,16 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
     if (g != NULL) ctc_pool_gate_record(g, d->fwd_split, ctc_pool_clock() - t0);
 
     /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r,
-       until the correction converges or stalls */
-    const int steps = gdca_refine_steps(m, d);
-    double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, last = INFINITY;
+       until the correction converges or stalls; on an open model a step whose residual grew is
+       undone, and on a long one the last step is checked by one more residual */
+    const int steps = gdca_refine_steps(m, d), guard = !m->has_loop;
+    double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, last = INFINITY, rlast = INFINITY;
     d->fwd_refine_done = 0;
+    d->fwd_refine_undone = 0;
     for (int s = 0; s < steps && d->singular_joint < 0; s++) {
         gdca_refine_residual(m, d, f, qacc, r);
+        if (guard && refine_undo_if_grown(m, d, qacc, r, &rlast)) return;
+        if (guard) keep_before_step(m, d, qacc);
         gdca_forward_correct(m, d, r, dq);
         /* the largest |qacc| and |dq|: plain comparisons, not libm's fmax (a call each); a NaN
            is skipped either way */
@@ -531,5 +569,10 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         d->fwd_refine_done++;
         if (dmax <= CTC_REFINE_CONVERGED * amax || dmax * CTC_REFINE_STALL > last) break;
         last = dmax;
+    }
+    if (guard && d->fwd_refine_done > 0 && m->nbodies >= CTC_REFINE_CHECK_MIN_BODIES &&
+        d->singular_joint < 0) {
+        gdca_refine_residual(m, d, f, qacc, r);
+        refine_undo_if_grown(m, d, qacc, r, &rlast);
     }
 }

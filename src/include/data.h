@@ -86,17 +86,21 @@ typedef struct ctc_data {
     double *hbody; /* (n x hsize) */
 
     /* GDCA tree records and joint solutions */
-    double *hfwd;        /* (ntree x hsize; 2n x hsize for a branched tree) forward assemblies;
-                            in the sequential order slot i holds S_i or B_i and their joint's K
-                            (gdca_forward_seq.c, gdca_forward_tseq.c) */
-    double *hinv;        /* (ntree x hsize) inverse assemblies of the mobility form */
-    double *fwd_E;       /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
-    double *fwd_z;       /* (n x dim)   joint k: W Y + P f */
-    int fwd_refine_done; /* steps the last ctc_gdca_forward made */
-    double *fwd_res;     /* (2 nvx) the refinement's force residual and correction */
-    double *inv_E;       /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
-    double *inv_z;       /* (n x dim)   joint k: X Y' (mobility form) */
-    int csize;           /* doubles in one composite record: dim^2 + 2 dim + 3 */
+    double *hfwd;          /* (ntree x hsize; 2n x hsize for a branched tree) forward assemblies;
+                              in the sequential order slot i holds S_i or B_i and their joint's K
+                              (gdca_forward_seq.c, gdca_forward_tseq.c) */
+    double *hinv;          /* (ntree x hsize) inverse assemblies of the mobility form */
+    double *fwd_E;         /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
+    double *fwd_z;         /* (n x dim)   joint k: W Y + P f */
+    int fwd_refine_done;   /* steps the last ctc_gdca_forward made and kept */
+    int fwd_refine_undone; /* 1: the last ctc_gdca_forward undid a step whose residual grew
+                              (gdca_refine.h) */
+    double *fwd_res;       /* (3 nvx) the refinement's force residual, its correction, and the
+                              accelerations before the last step */
+    double *fwd_load_prev; /* (njoints x dim) jnt_load before the refinement's last step */
+    double *inv_E;         /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
+    double *inv_z;         /* (n x dim)   joint k: X Y' (mobility form) */
+    int csize;             /* doubles in one composite record: dim^2 + 2 dim + 3 */
     double *icomp;   /* ((2n - 1) x csize) inverse assemblies in composite form (gdca_inverse.c):
                         I (dim x dim), w (dim), c (dim), r12 (3) */
     double *icomp_e; /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */
