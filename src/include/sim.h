@@ -189,14 +189,24 @@ typedef struct ctc_sim_metrics {
                              |E(t) - expm(Ac t) E(0)| for the error state (int e, e, de), the
                              deviation from the linear error dynamics; NaN otherwise */
     long steps, rejected;
-    long rhs_evals;       /* evaluations of the dynamics with the forward pass: the integrator's
-                             right-hand sides and, for a loop model, one per sample not at a
-                             step's end (an open chain's samples need no forward pass) */
-    double err_estimate;  /* the integrator's accumulated error estimate (integrator.h) */
-    double wall_s, cpu_s; /* time spent in the run */
-    double us_per_eval;   /* wall microseconds per right-hand-side evaluation */
-    double t_end;         /* time reached */
-    int diverged_joint;   /* joint index (0-based) when DIVERGED, else -1 */
+    long rhs_evals;      /* evaluations of the dynamics with the forward pass: the integrator's
+                            right-hand sides and, for a loop model, one per sample not at a
+                            step's end (an open chain's samples need no forward pass) */
+    double err_estimate; /* the integrator's accumulated error estimate (integrator.h) */
+    /* the tolerance floor of an adaptive run on an open model (sim_tol.c): the tolerances never
+       ask for more than the accelerations' rounding allows */
+    double accel_rounding;     /* rad/s^2, m/s^2: max |GDCA(iGDCA(a0)) - a0| for the accelerations
+                                  a0 at the initial state, their rounding; NaN when not estimated
+                                  (rk4, loop models) */
+    double tol_rtol, tol_atol; /* the tolerances the run used: the spec's, or raised to the
+                                  floor; NaN for rk4 */
+    int tol_floored;           /* bit 0: atol was raised, bit 1: rtol was raised */
+    char tol_reason[256];      /* why, when raised (e.g. "atol 1e-10 raised to 1.7e-07: ..."),
+                                  else empty */
+    double wall_s, cpu_s;      /* time spent in the run */
+    double us_per_eval;        /* wall microseconds per right-hand-side evaluation */
+    double t_end;              /* time reached */
+    int diverged_joint;        /* joint index (0-based) when DIVERGED, else -1 */
     /* loop models (NaN / 0 otherwise) */
     double loop_res_max;  /* max position residual over the samples and over the ends of the
                              accepted steps before any projection - the drift of one step

@@ -535,6 +535,14 @@ ctc_status ctc_sim_run(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ctc
     for (int i = c.nq + c.nv; i < c.ny; i++) y0[i] = 0;
     ctc_run_status status = start(&c, &sp, &rec, y0);
 
+    /* the tolerance floor, from the accelerations at the start */
+    if (status == CTC_RUN_DONE) {
+        st = sim_tolerance_floor(&c, y0, &sp.is, &rec.r->metrics, err, errlen);
+        if (st == CTC_OK && rec.r->metrics.tol_floored)
+            st = ctc_integrator_set_tolerances(sp.integ, sp.is.rtol, sp.is.atol, err, errlen);
+        if (st != CTC_OK) goto cleanup;
+    }
+
     /* the loop: one accepted step at a time */
     while (status == CTC_RUN_DONE && rec.next < rec.count) {
         status = advance(&c, &sp, &rec, rec.ysample + c.ny + 1, hooks, &t);
