@@ -498,7 +498,7 @@ static void keep_before_step(const ctc_model *m, ctc_data *d, const double *qacc
     memcpy(d->fwd_load_prev, d->jnt_load, (size_t)m->njoints * (size_t)m->dim * sizeof(double));
 }
 
-/* The refinement's guard on an open model (gdca_refine.h): 0 when the residual r of qacc is
+/* The refinement's guard on a long open chain (gdca_refine.h): 0 when the residual r of qacc is
  * below *rlast, the residual before the last step (then *rlast becomes it); else (it grew, or
  * is not finite) 1, after undoing the last step, if one was made: qacc and d->jnt_load as
  * before it. */
@@ -506,13 +506,12 @@ static int refine_undo_if_grown(const ctc_model *m, ctc_data *d, double *qacc, c
                                 double *rlast)
 {
     double rmax = 0;
-    int finite = 1;
     for (int i = 0; i < m->nv; i++) {
         double a = fabs(r[i]);
-        if (a > rmax) rmax = a;
-        finite &= isfinite(r[i]);
+        if (!(a <= rmax)) rmax = a; /* a NaN stays, as an infinity would */
+        if (rmax != rmax) break;
     }
-    if (finite && rmax < *rlast) {
+    if (rmax < *rlast) {
         *rlast = rmax;
         return 0;
     }
@@ -546,9 +545,10 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
     if (g != NULL) ctc_pool_gate_record(g, d->fwd_split, ctc_pool_clock() - t0);
 
     /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r,
-       until the correction converges or stalls; on an open model a step whose residual grew is
-       undone, and on a long one the last step is checked by one more residual */
-    const int steps = gdca_refine_steps(m, d), guard = !m->has_loop;
+       until the correction converges or stalls; on a long open chain a step whose residual grew
+       is undone, and the last step is checked by one more residual */
+    const int steps = gdca_refine_steps(m, d);
+    const int guard = !m->has_loop && m->nbodies >= CTC_REFINE_CHECK_MIN_BODIES;
     double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, last = INFINITY, rlast = INFINITY;
     d->fwd_refine_done = 0;
     d->fwd_refine_undone = 0;
@@ -570,8 +570,7 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         if (dmax <= CTC_REFINE_CONVERGED * amax || dmax * CTC_REFINE_STALL > last) break;
         last = dmax;
     }
-    if (guard && d->fwd_refine_done > 0 && m->nbodies >= CTC_REFINE_CHECK_MIN_BODIES &&
-        d->singular_joint < 0) {
+    if (guard && d->fwd_refine_done > 0 && d->singular_joint < 0) {
         gdca_refine_residual(m, d, f, qacc, r);
         refine_undo_if_grown(m, d, qacc, r, &rlast);
     }

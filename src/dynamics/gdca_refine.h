@@ -40,18 +40,20 @@
 #define CTC_REFINE_CONVERGED 1e-8
 #define CTC_REFINE_STALL 10.0
 
-/* The refinement never makes the residual larger on an open model: before each step past the
+/* On an open chain of CTC_REFINE_CHECK_MIN_BODIES bodies or more, whose conditioning approaches
+ * 1 / rounding, the refinement never makes the residual larger: before each step past the
  * first, the residual of the last step's result (which the step computes anyway) is compared
  * with the one before it (max |r|), and if it did not shrink, or is not finite, the last step is
  * undone - the accelerations and d->jnt_load restored bitwise - and the refinement stops
- * (d->fwd_refine_undone = 1). The residual is the backward error; on chains so long that M's
- * conditioning approaches 1 / rounding (bench/NOTEBOOK.md, "Long chains to 65536") a step can
- * fit the equations better and the exact accelerations worse, which no residual can see: the
- * round trip there is compared with the oracle's in test_hard. From CTC_REFINE_CHECK_MIN_BODIES
- * bodies the last step is checked too, by one more residual pass (a repeat of the composite
- * inverse, which keeps its composite inertias: about a fifth of a right-hand side); d->jnt_load_inv
- * then holds that pass's loads. Loop models keep their own stopping rules (their residual
- * includes the closure, and the correction moves the closing load with qacc). */
+ * (d->fwd_refine_undone = 1); the last step is checked too, by one more residual pass (a repeat
+ * of the composite inverse, which keeps its composite inertias: 14% of a CTC right-hand
+ * side), after which d->jnt_load_inv holds that pass's loads. Shorter chains were measured to
+ * shrink the residual at every step, and the guard's copies would cost them 1-3% of a right-hand
+ * side (bench/NOTEBOOK.md, "Long chains to 65536"). The residual is the backward error: a step
+ * can still fit the equations better and the exact accelerations worse, which no residual can
+ * see; the round trip of the longest chains is compared with the oracle's in test_hard. Loop
+ * models keep their own stopping rules (their residual includes the closure, and the correction
+ * moves the closing load with qacc). */
 #define CTC_REFINE_CHECK_MIN_BODIES 16384
 
 /* A model with a singular or a slender body (model.h "singular bodies", "slender bodies")
