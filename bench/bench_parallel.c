@@ -25,7 +25,11 @@
  *             count has its own ctc_data (and pool). Beside them the forward pass and the CTC
  *             evaluation on 1 thread in the sequential order, which an unthreaded forward pass
  *             takes (gdca_forward_seq.h), and "vs seq" = that time / time on k threads: where
- *             the split tree beats it, the library may take the tree on threads.
+ *             the split tree beats it, the library may take the tree on threads. The split
+ *             columns force the split (options.h par_split); a last table times one CTC
+ *             evaluation with the library's defaults on each count, whose gates choose between
+ *             one thread and the split by measured cost (pool.h ctc_pool_gate), against one
+ *             thread, with the gates' choices and the pass depth against log2 n.
  *             The same speed-up table follows for Featherstone's autoTree (branching factors 2 and
  *             4, planar and spatial, n = 1024, 4096, 16384), whose plan (model.c) splits as the
  *             chains' tree does and whose sequential order is the tip runs (gdca_forward_tseq.c),
@@ -40,6 +44,7 @@
  *        parts: any of b (barrier), g (grain), c (speed-up on chains), t (speed-up on trees)
  * Environment: CTC_BENCH_THREADS="2,4,8" thread counts beside 1 (default "2", each 2..64);
  *              CTC_BENCH_QUICK=1: max_n 4096 and 5 batches unless given;
+ *              CTC_BENCH_MIN_N: the least n of the chains' speed-up table (default 64);
  *              CTC_BENCH_WAIT="spin_ns,block_ns": the waiting phases of the passes' pools
  *              (ctc_pool_set_wait; default: the pool's own).
  */
@@ -318,11 +323,14 @@ static void bench_barrier(int nthreads, int batches)
 
 typedef struct chain_case {
     const ctc_model *m;
-    ctc_data *d[MAXK + 2]; /* d[0] serial, d[i] on kthreads[i - 1] threads, all with the
-                              forward pass in the balanced tree's order; d[nk + 1] serial in
-                              the sequential order (gdca_forward_seq.h) */
+    ctc_data *d[2 * MAXK + 2]; /* d[0] serial, d[i] on kthreads[i - 1] threads, all with the
+                                  forward pass in the balanced tree's order and every pass
+                                  split (options.h par_split); d[nk + 1] serial in the
+                                  sequential order (gdca_forward_seq.h); d[nk + 1 + i] on
+                                  kthreads[i - 1] threads with the library's defaults (the
+                                  gates choose: pool.h ctc_pool_gate) */
     double *q, *v, *u;
-    double *f[MAXK + 2], *a[MAXK + 2];
+    double *f[2 * MAXK + 2], *a[2 * MAXK + 2];
 } chain_case;
 
 static void run_pass(const ctc_model *m, ctc_data *d, int pass, const double *q, const double *v,
@@ -351,6 +359,7 @@ static void run_speedup(void *arg, int w)
     chain_case *c = arg;
     int k = w / NP;
     if (k == nk + 1 && w % NP == P_INV) return; /* the order is the forward pass's: not timed */
+    if (k > nk + 1 && w % NP != P_CTC) return;  /* the defaults: one CTC evaluation only */
     run_pass(c->m, c->d[k], w % NP, c->q, c->v, c->u, c->f[k], c->a[k]);
     sink += c->a[k][0];
 }
@@ -371,7 +380,7 @@ static ctc_model *build(const test_chain *chain)
  * (d[nthreads + 1]); its state and results */
 static chain_case *case_new(const ctc_model *m, const int *threads, int nthreads)
 {
-    const int ndata = 2 + nthreads;
+    const int ndata = 2 + 2 * nthreads;
     chain_case *c = calloc(1, sizeof *c);
     if (!c) abort();
     c->m = m;
@@ -386,18 +395,21 @@ static chain_case *case_new(const ctc_model *m, const int *threads, int nthreads
         c->d[k] = ctc_data_new(m);
         c->f[k] = calloc(nv, sizeof(double)), c->a[k] = calloc(nv, sizeof(double));
         if (!c->d[k] || !c->f[k] || !c->a[k]) abort();
-        if (k > 0 && k <= nthreads &&
-            ctc_data_set_threads(c->d[k], threads[k - 1], NULL, 0) != CTC_OK) {
-            abort();
+        const int kt = k > 0 && k <= nthreads ? threads[k - 1]
+                       : k > nthreads + 1     ? threads[k - nthreads - 2]
+                                              : 1;
+        if (kt > 1 && ctc_data_set_threads(c->d[k], kt, NULL, 0) != CTC_OK) abort();
+        if (k <= nthreads + 1) {
+            c->d[k]->opt.fwd_order = k <= nthreads ? CTC_ORDER_TREE : CTC_ORDER_SEQ;
+            c->d[k]->opt.par_split = 1;
         }
-        c->d[k]->opt.fwd_order = k <= nthreads ? CTC_ORDER_TREE : CTC_ORDER_SEQ;
     }
     return c;
 }
 
 static void case_free(chain_case *c)
 {
-    for (int k = 0; k <= MAXK + 1; k++) {
+    for (int k = 0; k < 2 * MAXK + 2; k++) {
         ctc_data_free(c->d[k]);
         free(c->f[k]), free(c->a[k]);
     }
@@ -468,8 +480,11 @@ static void bench_sweep(const char *label, test_chain *chain, int batches)
 typedef struct speed_row {
     char label[8];
     int n;
-    int height;             /* the depth of the split passes: the plan's height (model.h) */
-    double t[MAXK + 2][NP]; /* s per call: 1 thread, each count, 1 thread sequential */
+    int height;                 /* the depth of the split passes: the plan's height (model.h) */
+    double t[2 * MAXK + 2][NP]; /* s per call: 1 thread, each count, 1 thread sequential, each
+                                   count with the defaults (ctc only) */
+    int way[MAXK][2]; /* the defaults' choices on each count: the forward order's gate, the
+                         inverse's (-1 measuring, 0 alone, 1 split) */
 } speed_row;
 
 static int bench_speedup(const char *label, test_chain *chain, int batches, speed_row *row)
@@ -486,8 +501,14 @@ static int bench_speedup(const char *label, test_chain *chain, int batches, spee
     }
     for (int k = 1; k <= nk; k++)
         if (c->d[k]->pool) ctc_pool_set_wait(c->d[k]->pool, wait_spin, wait_block);
-    double med[(MAXK + 2) * NP];
-    measure(run_speedup, c, (2 + nk) * NP, batches, med);
+    double med[(2 * MAXK + 2) * NP];
+    measure(run_speedup, c, (2 + 2 * nk) * NP, batches, med);
+    for (int k = 0; k < nk; k++) {
+        const ctc_data *d = c->d[nk + 2 + k];
+        const ctc_pool_gate *g[2] = {&d->gate[CTC_GATE_FWD_ORDER], &d->gate[CTC_GATE_INVERSE]};
+        for (int i = 0; i < 2; i++) row->way[k][i] = g[i]->decided ? g[i]->way : -1;
+    }
+    for (int k = nk + 2; k < 2 * nk + 2; k++) row->t[k][P_CTC] = med[k * NP + P_CTC];
     snprintf(row->label, sizeof row->label, "%s", label);
     row->n = m->nbodies;
     row->height = m->height;
@@ -581,6 +602,30 @@ static void print_speedup(const speed_row *rows, int nrows, int trees)
     }
 }
 
+/* the library's defaults on k threads against one thread (the sequential order): one CTC
+   evaluation, with the gates' choices and the pass depth (the plan's height) beside log2 n */
+static void print_defaults(const speed_row *rows, int nrows)
+{
+    static const char *const way_names[] = {"measuring", "alone", "split"};
+    printf("| chain   |     n | height | log2 n | ctc 1T seq (us) |");
+    for (int k = 0; k < nk; k++)
+        printf(" %dT auto (us) | 1T / %dT | fwd, inv |", kthreads[k], kthreads[k]);
+    printf("\n| ------- | ----: | -----: | -----: | --------: |");
+    for (int k = 0; k < nk; k++) printf(" ------: | ----: | ---- |");
+    printf("\n");
+    for (int i = 0; i < nrows; i++) {
+        const speed_row *r = &rows[i];
+        printf("| %-7s | %5d | %6d | %6.1f | %9.1f |", r->label, r->n, r->height,
+               log2((double)r->n), 1e6 * r->t[nk + 1][P_CTC]);
+        for (int k = 0; k < nk; k++) {
+            double t = r->t[nk + 2 + k][P_CTC];
+            printf(" %7.1f | %5.2f | %s, %s |", 1e6 * t, r->t[nk + 1][P_CTC] / t,
+                   way_names[r->way[k][0] + 1], way_names[r->way[k][1] + 1]);
+        }
+        printf("\n");
+    }
+}
+
 /* ---- main ---- */
 
 /* CTC_BENCH_THREADS: a comma-separated list of thread counts 2..64 */
@@ -610,6 +655,9 @@ int main(int argc, char **argv)
     const char *quick = getenv("CTC_BENCH_QUICK");
     int is_quick = quick && *quick && strcmp(quick, "0") != 0;
     int max_n = argc > 1 ? atoi(argv[1]) : is_quick ? 4096 : 65536;
+    const char *min_env = getenv("CTC_BENCH_MIN_N");
+    int min_n = min_env ? atoi(min_env) : 64;
+    if (min_n < 64) min_n = 64;
     int batches = argc > 2 ? atoi(argv[2]) : is_quick ? 5 : 11;
     const char *parts = argc > 3 ? argv[3] : "bgct";
     if (max_n < 64 || batches < 1 || !*parts || strspn(parts, "bgct") != strlen(parts)) {
@@ -672,7 +720,7 @@ int main(int argc, char **argv)
             "\nOne pass and one CTC right-hand side on 1 thread and on k threads (us), speed-up = "
             "1 thread / k threads:\n\n");
         for (int form = 0; form < 2; form++) {
-            for (int n = 64; n <= max_n && nrows < MAXROWS; n *= 2) {
+            for (int n = min_n; n <= max_n && nrows < MAXROWS; n *= 2) {
                 test_chain *c = form ? test_chain_random_spatial(n, 7, 1u << CTC_JOINT_REVOLUTE)
                                      : test_chain_random_planar(n, 7, 0, 1);
                 failed |= bench_speedup(form ? "spatial" : "planar", c, batches, &rows[nrows++]);
@@ -680,6 +728,11 @@ int main(int argc, char **argv)
             }
         }
         print_speedup(rows, nrows, 0);
+        printf("\nThe library's defaults on k threads (each pass's gate times it alone and split, "
+               "then takes the faster: pool.h) against 1 thread (the sequential order), one CTC "
+               "right-hand side; the gates' choices at the end (fwd: the forward order, inv: the "
+               "inverse), and the split passes' depth (the tree's height) beside log2 n:\n\n");
+        print_defaults(rows, nrows);
     }
     if (strchr(parts, 't')) {
         printf("\nThe same on Featherstone's autoTree (taper 1; pl: planar, no skew; sp: spatial, "

@@ -154,6 +154,7 @@ static void print_summary(const job *j, const ctc_sim_result *r)
     if (j->spec.chain.loop && m->loop_res_max == m->loop_res_max)
         fprintf(stderr, ", loop residual %.2g, %ld projections", m->loop_res_max, m->projections);
     fputc('\n', stderr);
+    if (m->tol_floored) fprintf(stderr, "%s: tolerance floor: %s\n", j->name, m->tol_reason);
     if (r->message[0]) fprintf(stderr, "%s: %s\n", j->name, r->message);
 }
 

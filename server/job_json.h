@@ -194,9 +194,10 @@
  *                 (0 = none)}
  *   "threads"     optional whole number 1..CTC_MAX_THREADS (64), default 1: the threads the run's
  *                 GDCA passes may use, its own thread included (sim.h); heights of the assembly
- *                 tree too small to pay for the split still run serially, and the samples are
- *                 bitwise the same for every count (but on open chains of 4096 planar or 1024
- *                 spatial bodies or more, where 1 and 2 threads agree to rounding: sim.h).
+ *                 tree too small to pay for the split, and passes whose split measures slower
+ *                 than one thread, run serially, and the samples are bitwise the same for every
+ *                 count (but on open chains of 2048 planar or 512 spatial bodies or more, where
+ *                 the counts agree to rounding: sim.h).
  *                 Each run has its own workers.
  *
  * Or a preset with overrides: {"preset": NAME, PARAMS..., OVERRIDES...}. The preset's own
@@ -234,7 +235,13 @@
 
 #include "sim.h"
 
-#define JOB_MAX_BODIES 4096
+/* The job format's longest chain: what the tests check against the oracle and run (round trip
+ * within 2.2x of ABA's at 16384 and 65536 planar bodies, test_hard; a CTC run at 65536,
+ * tests/cli). The library's own bound, CTC_MAX_BODIES (model.h, 10^6), is its allocation and
+ * index bound: beyond 65536 rods the accelerations keep no digit (bench/NOTEBOOK.md, "Long chains
+ * to 65536"). A scene of 65536 bodies is about 6.4 MB of JSON, within the service's default
+ * --max-body (8 MiB); JOB_MAX_WORK and the job time limit bound what it may cost a worker. */
+#define JOB_MAX_BODIES 65536
 #define JOB_MAX_DURATION 3600.0 /* s of simulated time */
 #define JOB_MAX_SAMPLES 200000  /* output samples */
 #define JOB_MAX_VALUES 20000000 /* samples x values per sample over the recorded channels */

@@ -1142,7 +1142,7 @@ static const preset preset_table[] = {
     {"spatial_double_pendulum_lqr", SPATIAL_SUMMARY(LQR_WEIGHTS), no_params,
      build_spatial_double_pendulum_lqr},
     {"n_link_pendulum",
-     "Pendulum of n rods (\"n\" 2..4096, default 8) from +-pi/6 to rest, " PD_GAINS, n_link_params,
+     "Pendulum of n rods (\"n\" 2..65536, default 8) from +-pi/6 to rest, " PD_GAINS, n_link_params,
      n_link_pendulum},
     {"five_bar_pd", FIVE_BAR_SUMMARY(PD_GAINS), no_params, build_five_bar_pd},
     {"five_bar_pid", FIVE_BAR_SUMMARY(PID_GAINS), no_params, build_five_bar_pid},

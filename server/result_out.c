@@ -107,6 +107,16 @@ cJSON *result_metrics_json(const ctc_sim_result *r, const job *j)
     cJSON_AddItemToObject(o, "errdyn_dev", number_or_null(m->errdyn_dev));
     cJSON_AddItemToObject(o, "energy_drift", number_or_null(m->energy_drift));
     cJSON_AddItemToObject(o, "err_estimate", number_or_null(m->err_estimate));
+    if (isnan(m->accel_rounding)) {
+        cJSON_AddNullToObject(o, "tolerance_floor");
+    } else {
+        cJSON *fl = cJSON_AddObjectToObject(o, "tolerance_floor");
+        cJSON_AddItemToObject(fl, "accel_rounding", number_or_null(m->accel_rounding));
+        cJSON_AddItemToObject(fl, "rtol", number_or_null(m->tol_rtol));
+        cJSON_AddItemToObject(fl, "atol", number_or_null(m->tol_atol));
+        cJSON_AddBoolToObject(fl, "raised", m->tol_floored != 0);
+        cJSON_AddStringToObject(fl, "reason", m->tol_reason);
+    }
     cJSON_AddNumberToObject(o, "steps", (double)m->steps);
     cJSON_AddNumberToObject(o, "rejected", (double)m->rejected);
     cJSON_AddNumberToObject(o, "rhs_evals", (double)m->rhs_evals);

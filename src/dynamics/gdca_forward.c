@@ -60,13 +60,14 @@
 #define FORWARD_MIN_BODIES_PLANAR 512
 #define FORWARD_MIN_BODIES_SPATIAL 128
 
-/* The least chain length from which an open chain's forward pass takes the balanced tree, split
- * over threads, instead of the sequential order on one thread (gdca_forward_seq.h), when the
- * data has two threads or more: where a CTC evaluation on 2 threads first gains over the
- * sequential order (bench/NOTEBOOK.md, "Threads against the sequential order" and "Corrections
- * found in review"). */
-#define FORWARD_TREE_MIN_BODIES_PLANAR 4096
-#define FORWARD_TREE_MIN_BODIES_SPATIAL 1024
+/* The least chain length from which an open chain's forward pass may take the balanced tree,
+ * split over threads, instead of the sequential order on one thread (gdca_forward_seq.h), when
+ * the data has two threads or more; from there the gate d->gate[CTC_GATE_FWD_ORDER] times both
+ * ways and takes the faster (pool.h ctc_pool_gate). Half the length where a CTC evaluation on 2
+ * threads first gained over the sequential order on a loaded 2-core machine (bench/NOTEBOOK.md,
+ * "Threads against the sequential order"), so that a quieter or wider machine can gain below it. */
+#define FORWARD_TREE_MIN_BODIES_PLANAR 2048
+#define FORWARD_TREE_MIN_BODIES_SPATIAL 512
 
 /* What the stages of one forward pass share (gdca_par.h). The same pass, with correct = 1 (a
  * constant in each stage function, so each mode compiles without the other's branches), is
@@ -460,17 +461,25 @@ static void forward_plan(const ctc_model *m, ctc_data *d, const double *f, doubl
                           .root_takes_top = 1,
                           .min_bodies =
                               sp ? FORWARD_MIN_BODIES_SPATIAL : FORWARD_MIN_BODIES_PLANAR};
+    /* a loop model's pass is gated here; an open model's tree order was chosen by its gate */
+    if (m->has_loop) pass.gate = correct ? CTC_GATE_FWD_CORRECT : CTC_GATE_FWD_TREE;
     gdca_par_run(m, d, &pass);
+}
+
+int gdca_forward_tree_candidate(const ctc_model *m, const ctc_data *d)
+{
+    if (m->has_loop || d->opt.fwd_order != CTC_ORDER_AUTO) return 0;
+    const ctc_data *o = d->pool_owner != NULL ? d->pool_owner : d;
+    const int min = m->form == CTC_FORM_PLANAR ? FORWARD_TREE_MIN_BODIES_PLANAR
+                                               : FORWARD_TREE_MIN_BODIES_SPATIAL;
+    return o->threads >= 2 && m->nbodies >= min;
 }
 
 int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d)
 {
     if (m->has_loop || d->opt.fwd_order == CTC_ORDER_TREE) return 0;
     if (d->opt.fwd_order == CTC_ORDER_SEQ) return 1;
-    const ctc_data *o = d->pool_owner != NULL ? d->pool_owner : d;
-    const int min = m->form == CTC_FORM_PLANAR ? FORWARD_TREE_MIN_BODIES_PLANAR
-                                               : FORWARD_TREE_MIN_BODIES_SPATIAL;
-    return o->threads < 2 || m->nbodies < min;
+    return !(gdca_forward_tree_candidate(m, d) && d->fwd_split);
 }
 
 void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, double *dq)
@@ -482,6 +491,39 @@ void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, doub
     }
 }
 
+/* the accelerations and the joint loads before a refinement step, to undo it */
+static void keep_before_step(const ctc_model *m, ctc_data *d, const double *qacc)
+{
+    memcpy(d->fwd_res + 2 * m->nvx, qacc, (size_t)m->nvx * sizeof *qacc);
+    memcpy(d->fwd_load_prev, d->jnt_load, (size_t)m->njoints * (size_t)m->dim * sizeof(double));
+}
+
+/* The refinement's guard on a long open chain (gdca_refine.h): 0 when the residual r of qacc is
+ * below *rlast, the residual before the last step (then *rlast becomes it); else (it grew, or
+ * is not finite) 1, after undoing the last step, if one was made: qacc and d->jnt_load as
+ * before it. */
+static int refine_undo_if_grown(const ctc_model *m, ctc_data *d, double *qacc, const double *r,
+                                double *rlast)
+{
+    double rmax = 0;
+    for (int i = 0; i < m->nv; i++) {
+        double a = fabs(r[i]);
+        if (!(a <= rmax)) rmax = a; /* a NaN stays, as an infinity would */
+        if (rmax != rmax) break;
+    }
+    if (rmax < *rlast) {
+        *rlast = rmax;
+        return 0;
+    }
+    if (d->fwd_refine_done > 0) {
+        memcpy(qacc, d->fwd_res + 2 * m->nvx, (size_t)m->nvx * sizeof *qacc);
+        memcpy(d->jnt_load, d->fwd_load_prev, (size_t)m->njoints * (size_t)m->dim * sizeof(double));
+        d->fwd_refine_done--;
+        d->fwd_refine_undone = 1;
+    }
+    return 1;
+}
+
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
 {
     if (m->has_loop) { /* dependent joints carry no driving force */
@@ -490,19 +532,30 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         for (int i = 0; i < m->nind; i++) fm[m->ind_coord[i]] = f[m->ind_coord[i]];
         f = fm;
     }
+    /* the order: by the setting, or where the tree on threads may pay, by the gate's timings */
+    const int candidate = gdca_forward_tree_candidate(m, d);
+    ctc_pool_gate *g = candidate && !d->opt.par_split ? &d->gate[CTC_GATE_FWD_ORDER] : NULL;
+    d->fwd_split = candidate && (g == NULL || ctc_pool_gate_way(g));
+    const double t0 = g != NULL ? ctc_pool_clock() : 0;
     if (gdca_forward_order_seq(m, d)) {
         (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, f, qacc, 0);
     } else {
         forward_plan(m, d, f, qacc, 0);
     }
+    if (g != NULL) ctc_pool_gate_record(g, d->fwd_split, ctc_pool_clock() - t0);
 
     /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r,
-       until the correction converges or stalls */
+       until the correction converges or stalls; on a long open chain a step whose residual grew
+       is undone, and the last step is checked by one more residual */
     const int steps = gdca_refine_steps(m, d);
-    double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, last = INFINITY;
+    const int guard = !m->has_loop && m->nbodies >= CTC_REFINE_CHECK_MIN_BODIES;
+    double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, last = INFINITY, rlast = INFINITY;
     d->fwd_refine_done = 0;
+    d->fwd_refine_undone = 0;
     for (int s = 0; s < steps && d->singular_joint < 0; s++) {
         gdca_refine_residual(m, d, f, qacc, r);
+        if (guard && refine_undo_if_grown(m, d, qacc, r, &rlast)) return;
+        if (guard) keep_before_step(m, d, qacc);
         gdca_forward_correct(m, d, r, dq);
         /* the largest |qacc| and |dq|: plain comparisons, not libm's fmax (a call each); a NaN
            is skipped either way */
@@ -516,5 +569,9 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         d->fwd_refine_done++;
         if (dmax <= CTC_REFINE_CONVERGED * amax || dmax * CTC_REFINE_STALL > last) break;
         last = dmax;
+    }
+    if (guard && d->fwd_refine_done > 0 && d->singular_joint < 0) {
+        gdca_refine_residual(m, d, f, qacc, r);
+        refine_undo_if_grown(m, d, qacc, r, &rlast);
     }
 }

@@ -9,7 +9,8 @@
  * below wrote (the nodes of one height are stored left to right along the chain, and the left
  * half of one height has its children in the left half of the heights below). A run of
  * consecutive stages that do not split becomes one stage of one chunk, done by one thread in
- * stage order without waiting between them.
+ * stage order without waiting between them. A gated pass (gdca_par.h) times each run that could
+ * split, on the caller's thread, from before the split's hand-off to after its last chunk.
  */
 #include "gdca_par.h"
 
@@ -174,6 +175,16 @@ static ctc_pool *data_pool(ctc_data *d)
     return o->pool;
 }
 
+/* the pass on the caller's thread: the same callbacks over whole ranges, in the same order */
+static void run_serial(const ctc_model *m, ctc_data *d, const gdca_par_pass *pass)
+{
+    const int nodes = m->height_start[pass_heights(m, pass)];
+    if (pass->bodies) pass->bodies(pass->ctx, 0, m->nbodies);
+    set_singular(m, d, pass->assemble(pass->ctx, 0, nodes));
+    pass->root(pass->ctx);
+    pass->disassemble(pass->ctx, 0, nodes);
+}
+
 void gdca_par_run(const ctc_model *m, ctc_data *d, const gdca_par_pass *pass)
 {
     const ctc_data *o = d->pool_owner ? d->pool_owner : d;
@@ -185,16 +196,19 @@ void gdca_par_run(const ctc_model *m, ctc_data *d, const gdca_par_pass *pass)
         int chunks = plan_pass(&r);
         ctc_pool *pool = chunks > 1 ? data_pool(d) : NULL;
         if (pool != NULL) {
-            ctc_pool_job job = {r.ngroups, r.group_first, chunk_work, &r};
-            ctc_pool_run(pool, &job);
+            const int forced = d->opt.par_grain > 0 || d->opt.par_split;
+            ctc_pool_gate *g = forced || pass->gate == CTC_GATE_NONE ? NULL : &d->gate[pass->gate];
+            const int split = g == NULL || ctc_pool_gate_way(g);
+            const double t0 = g != NULL ? ctc_pool_clock() : 0;
+            if (split) {
+                ctc_pool_job job = {r.ngroups, r.group_first, chunk_work, &r};
+                ctc_pool_run(pool, &job);
+            } else {
+                run_serial(m, d, pass);
+            }
+            if (g != NULL) ctc_pool_gate_record(g, split, ctc_pool_clock() - t0);
             return;
         }
     }
-
-    /* serial: the same callbacks over whole ranges, in the same order */
-    const int nodes = m->height_start[pass_heights(m, pass)];
-    if (pass->bodies) pass->bodies(pass->ctx, 0, m->nbodies);
-    set_singular(m, d, pass->assemble(pass->ctx, 0, nodes));
-    pass->root(pass->ctx);
-    pass->disassemble(pass->ctx, 0, nodes);
+    run_serial(m, d, pass);
 }

@@ -20,6 +20,13 @@
  * done. A pass none of whose stages splits, a chain of fewer than min_bodies bodies, or a data
  * with threads = 1 runs without the pool on the caller's thread.
  *
+ * A pass that could split runs split only where that is measured to pay: its gate (data.h
+ * d->gate[pass->gate], pool.h ctc_pool_gate) times its first runs alone and split in turn, then
+ * takes the faster way, so that threads never make a pass slower than one thread does (beyond
+ * the few runs it measures). Both ways give bitwise the same results. A pass with gate
+ * CTC_GATE_NONE, or a data with d->opt.par_grain > 0 or d->opt.par_split (a forced split, for
+ * tests and benchmarks), splits whenever its plan does.
+ *
  * The pass's callbacks must write only what belongs to the items they are given (a node's own
  * record, its joint's solution, the loads of its two children; a body's record), so that the
  * result does not depend on the split: every item does the same arithmetic in the same order
@@ -52,6 +59,8 @@ typedef struct gdca_par_pass {
     int grain;      /* the least items per chunk: a stage of fewer than 2 grain items runs whole */
     int min_bodies; /* chains of fewer bodies run the whole pass serially: below it the pass is
                        too short for a second thread to pay (d->opt.par_grain > 0 overrides both) */
+    ctc_gate_site gate; /* the gate that decides whether the pass splits; CTC_GATE_NONE: it
+                           splits whenever the plan does (the caller has decided) */
 } gdca_par_pass;
 
 /* Runs the pass on the threads d allows (data.h: ctc_data_set_threads), starting d's pool at the

@@ -40,6 +40,22 @@
 #define CTC_REFINE_CONVERGED 1e-8
 #define CTC_REFINE_STALL 10.0
 
+/* On an open chain of CTC_REFINE_CHECK_MIN_BODIES bodies or more, whose conditioning approaches
+ * 1 / rounding, the refinement never makes the residual larger: before each step past the
+ * first, the residual of the last step's result (which the step computes anyway) is compared
+ * with the one before it (max |r|), and if it did not shrink, or is not finite, the last step is
+ * undone - the accelerations and d->jnt_load restored bitwise - and the refinement stops
+ * (d->fwd_refine_undone = 1); the last step is checked too, by one more residual pass (a repeat
+ * of the composite inverse, which keeps its composite inertias: 14% of a CTC right-hand
+ * side), after which d->jnt_load_inv holds that pass's loads. Shorter chains were measured to
+ * shrink the residual at every step, and the guard's copies would cost them 1-3% of a right-hand
+ * side (bench/NOTEBOOK.md, "Long chains to 65536"). The residual is the backward error: a step
+ * can still fit the equations better and the exact accelerations worse, which no residual can
+ * see; the round trip of the longest chains is compared with the oracle's in test_hard. Loop
+ * models keep their own stopping rules (their residual includes the closure, and the correction
+ * moves the closing load with qacc). */
+#define CTC_REFINE_CHECK_MIN_BODIES 16384
+
 /* A model with a singular or a slender body (model.h "singular bodies", "slender bodies")
  * computes its forward handle equations with augmented inertias, and the refinement removes that
  * error: it gets up to

@@ -303,3 +303,55 @@ void ctc_pool_run(ctc_pool *p, const ctc_pool_job *job)
     run_stages(p, gen, 0);
     wait_until(p, &p->done, (unsigned long)nchunks, 0);
 }
+
+/* ---- the gate: alone or split, by measured cost ---- */
+
+static int cmp_seconds(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* the median of n <= CTC_POOL_GATE_SAMPLES timings (the mean of the middle two for even n) */
+static double median(const double *t, int n)
+{
+    double s[CTC_POOL_GATE_SAMPLES];
+    memcpy(s, t, (size_t)n * sizeof *s);
+    qsort(s, (size_t)n, sizeof *s, cmp_seconds);
+    return n % 2 ? s[n / 2] : 0.5 * (s[n / 2 - 1] + s[n / 2]);
+}
+
+int ctc_pool_gate_choose(const double *alone, int nalone, const double *split, int nsplit)
+{
+    if (nalone > CTC_POOL_GATE_SAMPLES) nalone = CTC_POOL_GATE_SAMPLES;
+    if (nsplit > CTC_POOL_GATE_SAMPLES) nsplit = CTC_POOL_GATE_SAMPLES;
+    if (nalone < 1 || nsplit < 1) return 0;
+    return median(split, nsplit) < (1 - CTC_POOL_GATE_MARGIN) * median(alone, nalone);
+}
+
+int ctc_pool_gate_way(const ctc_pool_gate *g)
+{
+    if (g->decided) return g->way;
+    return (int)(((g->runs + 1) >> 1) & 1); /* 0, 1, 1, 0, 0, 1, 1, ... */
+}
+
+void ctc_pool_gate_record(ctc_pool_gate *g, int way, double s)
+{
+    g->runs++;
+    if (g->decided) {
+        if (g->runs >= CTC_POOL_GATE_RECHECK) *g = (ctc_pool_gate){0};
+        return;
+    }
+    /* the first run of each way (runs 1 and 2) is a warm-up */
+    if (g->runs > 2 && g->nt[way] < CTC_POOL_GATE_SAMPLES) g->t[way][g->nt[way]++] = s;
+    if (g->nt[0] == CTC_POOL_GATE_SAMPLES && g->nt[1] == CTC_POOL_GATE_SAMPLES) {
+        g->way = ctc_pool_gate_choose(g->t[0], g->nt[0], g->t[1], g->nt[1]);
+        g->decided = 1;
+        g->runs = 0;
+    }
+}
+
+double ctc_pool_clock(void)
+{
+    return 1e-9 * (double)now_ns();
+}

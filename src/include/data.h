@@ -22,6 +22,22 @@
 #include "options.h"
 #include "pool.h"
 
+/* The kinds of pass that a gate decides on (data.h gate; gdca_par.h gdca_par_pass.gate): none
+ * (split whenever the plan splits), the forward pass's order on an open model (the sequential
+ * order alone or the balanced tree split), a loop model's forward pass and its correction,
+ * the composite inverse (a first pass at a state, and a repeat that keeps the composite
+ * inertias: gdca_inverse.c) and the mobility-form inverse. */
+typedef enum ctc_gate_site {
+    CTC_GATE_NONE = 0,
+    CTC_GATE_FWD_ORDER,
+    CTC_GATE_FWD_TREE,
+    CTC_GATE_FWD_CORRECT,
+    CTC_GATE_INVERSE,
+    CTC_GATE_INVERSE_REPEAT,
+    CTC_GATE_MOBILITY,
+    CTC_NGATES
+} ctc_gate_site;
+
 typedef struct ctc_data {
     int dim;   /* 3 or 6, as the model's */
     int hsize; /* doubles in one handle-equation record: 3 dim^2 + 2 dim */
@@ -70,17 +86,21 @@ typedef struct ctc_data {
     double *hbody; /* (n x hsize) */
 
     /* GDCA tree records and joint solutions */
-    double *hfwd;        /* (ntree x hsize; 2n x hsize for a branched tree) forward assemblies;
-                            in the sequential order slot i holds S_i or B_i and their joint's K
-                            (gdca_forward_seq.c, gdca_forward_tseq.c) */
-    double *hinv;        /* (ntree x hsize) inverse assemblies of the mobility form */
-    double *fwd_E;       /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
-    double *fwd_z;       /* (n x dim)   joint k: W Y + P f */
-    int fwd_refine_done; /* steps the last ctc_gdca_forward made */
-    double *fwd_res;     /* (2 nvx) the refinement's force residual and correction */
-    double *inv_E;       /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
-    double *inv_z;       /* (n x dim)   joint k: X Y' (mobility form) */
-    int csize;           /* doubles in one composite record: dim^2 + 2 dim + 3 */
+    double *hfwd;          /* (ntree x hsize; 2n x hsize for a branched tree) forward assemblies;
+                              in the sequential order slot i holds S_i or B_i and their joint's K
+                              (gdca_forward_seq.c, gdca_forward_tseq.c) */
+    double *hinv;          /* (ntree x hsize) inverse assemblies of the mobility form */
+    double *fwd_E;         /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
+    double *fwd_z;         /* (n x dim)   joint k: W Y + P f */
+    int fwd_refine_done;   /* steps the last ctc_gdca_forward made and kept */
+    int fwd_refine_undone; /* 1: the last ctc_gdca_forward undid a step whose residual grew
+                              (gdca_refine.h) */
+    double *fwd_res;       /* (3 nvx) the refinement's force residual, its correction, and the
+                              accelerations before the last step */
+    double *fwd_load_prev; /* (njoints x dim) jnt_load before the refinement's last step */
+    double *inv_E;         /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
+    double *inv_z;         /* (n x dim)   joint k: X Y' (mobility form) */
+    int csize;             /* doubles in one composite record: dim^2 + 2 dim + 3 */
     double *icomp;   /* ((2n - 1) x csize) inverse assemblies in composite form (gdca_inverse.c):
                         I (dim x dim), w (dim), c (dim), r12 (3) */
     double *icomp_e; /* (n x dim) joint k: A1(right) = T(r12 left) A1(left) + e */
@@ -109,6 +129,11 @@ typedef struct ctc_data {
     int pool_failed;             /* 1: the pool could not start; serial until threads change */
     struct ctc_data *pool_owner; /* NULL, or the data whose threads and pool d uses
                                     (ctc_data_share_pool) */
+    /* whether each kind of pass runs alone or split, by its measured cost (pool.h
+       ctc_pool_gate; gdca_par.h): d's own gates, reset when the thread count changes */
+    ctc_pool_gate gate[CTC_NGATES];
+    int fwd_split; /* the way the last ctc_gdca_forward took on an open model: 1 the balanced
+                      tree split over threads, 0 the sequential order (gdca_forward_seq.h) */
 
     /* state stamps: ctc_handles increments handles_stamp (a new state); the composite inverse
        sets icomp_stamp to it once icomp holds the parts of its records that depend on the
@@ -129,12 +154,15 @@ void ctc_data_free(ctc_data *d);
  * (pool.h). Heights too small to pay for the split still run on the calling thread (gdca_par.h).
  * The nthreads - 1 workers start at the first pass that uses them and belong to d: they stop when
  * d is freed or its count changes, so no two data share them unless ctc_data_share_pool says so.
- * The results are bitwise the same for every count, with one exception: an open chain's (or
- * tree's) forward pass takes the sequential order on one thread and, from a measured length on
- * (planar 4096, spatial 1024 bodies; chains' figures, used for trees too), the balanced tree (the
- * plan) on two threads or more (gdca_forward_seq.h, opt.fwd_order), so at those lengths one thread
- * and several agree to rounding, and any two counts of two or more bitwise. Returns CTC_OK, or
- * CTC_EINVAL with a message in err (errlen bytes; may be NULL) when nthreads is out of range. */
+ * Whether a pass splits is measured, pass by pass (gdca_par.h, pool.h ctc_pool_gate): where the
+ * split would be slower, the pass runs on the calling thread. The results are bitwise the same
+ * for every count, with one exception: an open chain's (or tree's) forward pass takes the
+ * sequential order on one thread and, from a least length on (planar 2048, spatial 512 bodies;
+ * chains' figures, used for trees too), on two threads or more whichever of it and the balanced
+ * tree split (the plan) its gate measures faster (gdca_forward_seq.h, opt.fwd_order), so at
+ * those lengths any two counts agree to rounding, evaluation by evaluation bitwise equal to one
+ * of the two orders. Returns CTC_OK, or CTC_EINVAL with a message in err (errlen bytes; may be
+ * NULL) when nthreads is out of range. */
 ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t errlen);
 
 /* Makes d's passes use owner's thread count and workers instead of its own, for two data used in

@@ -94,6 +94,13 @@ void ctc_integrator_free(ctc_integrator *it);
  * returns what the rhs returned (0 = ok). */
 int ctc_integrator_reset(ctc_integrator *it, double t0, const double *y0);
 
+/* Sets the tolerances of an adaptive integrator (dopri5, bdf) from its next step on: rtol in
+ * (0, 1), atol > 0 and finite, as ctc_integ_check requires. The state, the step size and the
+ * statistics are kept. Returns CTC_OK, or CTC_EINVAL with a message (rk4 has no tolerances: "rk4
+ * has no tolerances"; a value out of range as ctc_integ_check words it). */
+ctc_status ctc_integrator_set_tolerances(ctc_integrator *it, double rtol, double atol, char *err,
+                                         size_t errlen);
+
 /* bdf only: has CVODE call proj inside every step, after its Newton iteration and before its
  * error test (CVODE's projection, CVodeSetProjFn), and take the correction into the step. So a
  * projection keeps CVODE's order and step-size history, which putting the state back with

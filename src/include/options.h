@@ -15,8 +15,10 @@
 
 /* the forward pass's assembly orders of an open chain or tree (gdca_forward_seq.h) */
 enum {
-    CTC_ORDER_AUTO = 0, /* by rule: the balanced tree with two threads or more from a measured
-                           length on (gdca_forward_order_seq), else the sequential order */
+    CTC_ORDER_AUTO = 0, /* by rule and measure: on two threads or more from a least length on,
+                           the balanced tree split or the sequential order, whichever the
+                           pass's gate times faster (gdca_forward_order_seq); else the
+                           sequential order */
     CTC_ORDER_TREE = 1, /* the balanced assembly tree, a branched tree's plan (gdca_forward.c) */
     CTC_ORDER_SEQ = 2   /* the sequential order (gdca_forward_seq.c, a branched tree's
                            gdca_forward_tseq.c); loops take the tree */
@@ -32,13 +34,20 @@ typedef struct ctc_options {
     int par_grain;  /* the least items per chunk of a split stage of a pass (one tree height, or
                        the bodies; gdca_par.h), and no least chain length; 0 = the pass's
                        measured values */
+    int par_split;  /* 1: a pass whose plan splits runs split, without asking its gate whether
+                       that pays (tests and benchmarks time the split itself; on an open model
+                       with fwd_order AUTO the forward pass then takes the tree wherever it may);
+                       0 = by each pass's gate (gdca_par.h) */
 } ctc_options;
 
 /* The defaults: every choice by the library's rule. */
 static inline ctc_options ctc_options_default(void)
 {
-    return (ctc_options){
-        .fwd_order = CTC_ORDER_AUTO, .fwd_refine = -1, .inv_full = 0, .par_grain = 0};
+    return (ctc_options){.fwd_order = CTC_ORDER_AUTO,
+                         .fwd_refine = -1,
+                         .inv_full = 0,
+                         .par_grain = 0,
+                         .par_split = 0};
 }
 
 #endif

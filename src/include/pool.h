@@ -34,6 +34,13 @@
  * bench/NOTEBOOK.md, "Parallel assembly" ("Level barrier", "Oversubscription").
  *
  * A pool belongs to one thread at a time (the one calling ctc_pool_run); it is not reentrant.
+ *
+ * Whether a job should run on the pool at all is a matter of measured cost, not of a length
+ * rule: a split pays only where the work of a stage outweighs the hand-offs, which depends on
+ * the machine, its load and the thread count. A gate (ctc_pool_gate) times the first runs of one
+ * kind of job alone and split, alternately, then takes the faster way for the next
+ * CTC_POOL_GATE_RECHECK runs before it measures again; ctc_pool_gate_choose is its decision
+ * from the timings alone, so that it is tested without a clock.
  */
 #ifndef CTC_POOL_H
 #define CTC_POOL_H
@@ -87,5 +94,39 @@ void ctc_pool_set_wait(ctc_pool *p, long spin_ns, long block_ns);
 /* Runs the job's stages on p's threads, the caller's included, and returns when every chunk is
  * done (above). */
 void ctc_pool_run(ctc_pool *p, const ctc_pool_job *job);
+
+/* A gate's timings per way before it decides: the first run of each way (a pool's start, cold
+ * caches) is not counted. The split must be faster by CTC_POOL_GATE_MARGIN of the time alone
+ * (medians) to be taken; after CTC_POOL_GATE_RECHECK decided runs the gate measures again. */
+#define CTC_POOL_GATE_SAMPLES 6
+#define CTC_POOL_GATE_MARGIN 0.05
+#define CTC_POOL_GATE_RECHECK 4096
+
+/* One gate: how one kind of job runs. All zero (a zeroed struct) is a gate that measures. */
+typedef struct ctc_pool_gate {
+    int decided;                        /* 1: way holds the decision */
+    int way;                            /* when decided: 0 alone, 1 split */
+    long runs;                          /* runs since the gate last started measuring */
+    int nt[2];                          /* timings kept per way (0 alone, 1 split) */
+    double t[2][CTC_POOL_GATE_SAMPLES]; /* s, the kept timings */
+} ctc_pool_gate;
+
+/* The decision from timings: 1 (split) when the median of the nsplit split timings is below
+ * (1 - CTC_POOL_GATE_MARGIN) times the median of the nalone timings alone, else 0 (alone; also
+ * when either list is empty). Deterministic: the same timings give the same decision, whatever
+ * their order. The arrays are not changed; at most CTC_POOL_GATE_SAMPLES of each are read. */
+int ctc_pool_gate_choose(const double *alone, int nalone, const double *split, int nsplit);
+
+/* The way the next run of the gate's job takes: 1 split, 0 alone. While measuring, the runs
+ * alternate as alone, split, split, alone, alone, split, ... so that a job whose runs alternate
+ * between two costs (a full pass and a cheaper repeat) is timed equally often in both ways. */
+int ctc_pool_gate_way(const ctc_pool_gate *g);
+
+/* Records a run that took `way` and lasted s seconds; decides once both ways have
+ * CTC_POOL_GATE_SAMPLES timings, and measures again after CTC_POOL_GATE_RECHECK decided runs. */
+void ctc_pool_gate_record(ctc_pool_gate *g, int way, double s);
+
+/* Seconds on the monotonic clock, to time a gate's runs. */
+double ctc_pool_clock(void);
 
 #endif

@@ -150,9 +150,10 @@ typedef struct ctc_sim_spec {
     /* threads of the GDCA passes, the calling thread included (data.h ctc_data_set_threads):
        0 or 1 = serial; up to CTC_MAX_THREADS. The run owns its workers (one set for the plant and
        the controller's model, started at the first pass that splits a tree height), so runs in
-       different threads never share them; the results are bitwise the same for every count (but
-       for open chains of 4096 planar or 1024 spatial bodies or more, whose forward pass changes
-       its assembly order from one thread to two: there 1 and 2 threads agree to rounding, data.h
+       different threads never share them; each pass splits only where that is measured to pay
+       (gdca_par.h), and the results are bitwise the same for every count (but for open chains of
+       2048 planar or 512 spatial bodies or more, whose forward pass may take another assembly
+       order on two threads, as measured: there the counts agree to rounding, data.h
        ctc_data_set_threads), and metrics.cpu_s counts the calling thread only */
     int threads;
 } ctc_sim_spec;
@@ -218,16 +219,27 @@ typedef struct ctc_sim_metrics {
                             |E(t) - expm(Ac t) E(0)| for the error state (int e, e, de), the
                             deviation from the linear error dynamics; NaN otherwise */
     long steps, rejected;
-    long rhs_evals;       /* evaluations of the dynamics with the forward pass: the integrator's
-                             right-hand sides and, for a loop model, one per sample not at a
-                             step's end (an open chain's samples need no forward pass) */
-    double err_estimate;  /* the integrator's accumulated error estimate (integrator.h) */
-    double wall_s, cpu_s; /* time spent in the run */
-    double us_per_eval;   /* wall microseconds per right-hand-side evaluation */
-    double t_end;         /* time reached */
-    double step_used;     /* rk4: the step taken (s), the spec's shortened to divide the output
-                             interval (h = dt / ceil(dt / step)); NaN for the adaptive methods */
-    int diverged_joint;   /* joint index (0-based) when DIVERGED, else -1 */
+    long rhs_evals;      /* evaluations of the dynamics with the forward pass: the integrator's
+                            right-hand sides and, for a loop model, one per sample not at a
+                            step's end (an open chain's samples need no forward pass) */
+    double err_estimate; /* the integrator's accumulated error estimate (integrator.h) */
+    /* the tolerance floor of an adaptive run on an open model (sim_tol.c): the tolerances never
+       ask for more than the accelerations' rounding allows */
+    double accel_rounding;     /* rad/s^2, m/s^2: max |GDCA(iGDCA(a0)) - a0| for the accelerations
+                                  a0 at the initial state, their rounding; NaN when not estimated
+                                  (rk4, loop models) */
+    double tol_rtol, tol_atol; /* the tolerances the run used: the spec's, or raised to the
+                                  floor; NaN for rk4 */
+    int tol_floored;           /* bit 0: atol was raised, bit 1: rtol was raised */
+    char tol_reason[256];      /* why, when raised (e.g. "atol 1e-10 raised to 1.7e-07: ..."),
+                                  else empty */
+    double wall_s, cpu_s;      /* time spent in the run */
+    double us_per_eval;        /* wall microseconds per right-hand-side evaluation */
+    double t_end;              /* time reached */
+    double step_used;          /* rk4: the step taken (s), the spec's shortened to divide the
+                                  output interval (h = dt / ceil(dt / step)); NaN for the adaptive
+                                  methods */
+    int diverged_joint;        /* joint index (0-based) when DIVERGED, else -1 */
     /* loop models (NaN / 0 otherwise) */
     double loop_res_max;  /* max position residual over the samples and over the ends of the
                              accepted steps before any projection - the drift of one step

@@ -305,3 +305,8 @@ void ctc_bdf_dense(const ctc_integrator *it, double t, double *y)
     }
     memcpy(y, N_VGetArrayPointer(b->dky), (size_t)it->n * sizeof(double));
 }
+
+int ctc_bdf_set_tolerances(ctc_integrator *it)
+{
+    return CVodeSStolerances(it->bdf->cvode, it->spec.rtol, it->spec.atol) == CV_SUCCESS ? 0 : -1;
+}

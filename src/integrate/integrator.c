@@ -187,6 +187,23 @@ ctc_status ctc_integrator_set_projection(ctc_integrator *it, ctc_ode_project pro
     return CTC_OK;
 }
 
+ctc_status ctc_integrator_set_tolerances(ctc_integrator *it, double rtol, double atol, char *err,
+                                         size_t errlen)
+{
+    if (it->spec.method == CTC_INTEG_RK4)
+        return ctc_fail(CTC_EINVAL, err, errlen, "rk4 has no tolerances");
+    ctc_integ_spec s = it->spec;
+    s.rtol = rtol;
+    s.atol = atol;
+    ctc_status st = ctc_integ_check(&s, err, errlen);
+    if (st != CTC_OK) return st;
+    it->spec.rtol = rtol;
+    it->spec.atol = atol;
+    if (it->spec.method == CTC_INTEG_BDF && ctc_bdf_set_tolerances(it) != 0)
+        return ctc_fail(CTC_EINVAL, err, errlen, "bdf: CVODE refused the tolerances");
+    return CTC_OK;
+}
+
 int ctc_integrator_step(ctc_integrator *it, double tstop, char *err, size_t errlen)
 {
     if (!it->ready) {

@@ -126,6 +126,9 @@ int ctc_bdf_reset(ctc_integrator *it);
 /* Turns CVODE's in-step projection on (it->proj set) or off (NULL): 0, or -1 if CVODE refuses. */
 int ctc_bdf_set_projection(ctc_integrator *it);
 
+/* Passes it->spec's rtol and atol to CVODE; 0, or -1 when it refuses them. */
+int ctc_bdf_set_tolerances(ctc_integrator *it);
+
 /* One CVODE step (CV_ONE_STEP) with stop time tstop. */
 int ctc_bdf_step(ctc_integrator *it, double tstop, char *err, size_t errlen);
 

@@ -5,6 +5,7 @@
 #include "data.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 ctc_data *ctc_data_new(const ctc_model *m)
 {
@@ -34,7 +35,8 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->hinv = calloc(nt * (size_t)d->hsize, sizeof(double));
     d->fwd_E = calloc(n * dim * dim, sizeof(double));
     d->fwd_z = calloc(n * dim, sizeof(double));
-    d->fwd_res = calloc(2 * (size_t)m->nvx + 1, sizeof(double));
+    d->fwd_res = calloc(3 * (size_t)m->nvx + 1, sizeof(double));
+    d->fwd_load_prev = calloc(nj * dim, sizeof(double));
     d->inv_E = calloc(n * dim * dim, sizeof(double));
     d->inv_z = calloc(n * dim, sizeof(double));
     d->csize = (int)(dim * dim + 2 * dim + 3);
@@ -51,9 +53,9 @@ ctc_data *ctc_data_new(const ctc_model *m)
         d->xvel == NULL || d->jnt_P == NULL || d->jnt_D == NULL || d->jnt_beta == NULL ||
         d->hr == NULL || d->rake == NULL || d->hbody == NULL || d->hfwd == NULL ||
         d->hinv == NULL || d->fwd_E == NULL || d->fwd_z == NULL || d->fwd_res == NULL ||
-        d->inv_E == NULL || d->inv_z == NULL || d->icomp == NULL || d->icomp_e == NULL ||
-        d->tload == NULL || d->jnt_load == NULL || d->jnt_load_inv == NULL || d->xbuf == NULL ||
-        d->xangle == NULL) {
+        d->fwd_load_prev == NULL || d->inv_E == NULL || d->inv_z == NULL || d->icomp == NULL ||
+        d->icomp_e == NULL || d->tload == NULL || d->jnt_load == NULL || d->jnt_load_inv == NULL ||
+        d->xbuf == NULL || d->xangle == NULL) {
         ctc_data_free(d);
         return NULL;
     }
@@ -80,6 +82,7 @@ void ctc_data_free(ctc_data *d)
     free(d->fwd_E);
     free(d->fwd_z);
     free(d->fwd_res);
+    free(d->fwd_load_prev);
     free(d->inv_E);
     free(d->inv_z);
     free(d->icomp);
@@ -103,6 +106,7 @@ ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t err
         d->pool = NULL;
         d->pool_failed = 0;
         d->threads = nthreads;
+        memset(d->gate, 0, sizeof d->gate);
     }
     return CTC_OK;
 }
@@ -110,4 +114,5 @@ ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t err
 void ctc_data_share_pool(ctc_data *d, ctc_data *owner)
 {
     d->pool_owner = owner == d ? NULL : owner;
+    memset(d->gate, 0, sizeof d->gate);
 }

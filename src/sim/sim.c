@@ -570,6 +570,14 @@ ctc_status sim_run_once(const ctc_sim_spec *spec, const ctc_sim_hooks *hooks, ct
     ctc_run_status status = start(&c, &sp, &rec, y0);
     if (status == CTC_RUN_DONE && hooks->recorded) hooks->recorded(hooks->ctx, rec.r);
 
+    /* the tolerance floor, from the accelerations at the start */
+    if (status == CTC_RUN_DONE) {
+        st = sim_tolerance_floor(&c, y0, &sp.is, &rec.r->metrics, err, errlen);
+        if (st == CTC_OK && rec.r->metrics.tol_floored)
+            st = ctc_integrator_set_tolerances(sp.integ, sp.is.rtol, sp.is.atol, err, errlen);
+        if (st != CTC_OK) goto cleanup;
+    }
+
     /* the loop: one accepted step at a time */
     while (status == CTC_RUN_DONE && rec.next < rec.count) {
         status = advance(&c, &sp, &rec, rec.ysample + c.ny + 1, hooks, &t);

@@ -186,6 +186,19 @@ unsigned sim_sample_needs(const sim_ctx *c, const recorder *rec);
 /* Records sample j = r->nsamples at (t, y): its channels and its share of the metrics. */
 void sim_record_sample(sim_ctx *c, recorder *rec, double t, const double *y);
 
+/* ---- sim_tol.c ---- */
+
+/* The step below which an adaptive run would be bound by the accelerations' rounding: atol's
+ * floor is the velocity error that rounding puts into one such step (sim_tol.c). */
+#define SIM_TOL_FLOOR_STEP 1e-4
+
+/* The tolerance floor (sim_tol.c): after the integrator's start at y0 (c->acc holds the
+ * accelerations there), estimates their rounding on an open model and raises is's atol and rtol
+ * to what it allows; fills mt's accel_rounding, tol_* (NaN and 0 for rk4 and loop models).
+ * CTC_ENOMEM with a message, else CTC_OK. */
+ctc_status sim_tolerance_floor(const sim_ctx *c, const double *y0, ctc_integ_spec *is,
+                               ctc_sim_metrics *mt, char *err, size_t errlen);
+
 /* ---- sim_metrics.c ---- */
 
 /* the metrics' references and scratch, before the first sample (nv: nind + 1 entries); sets

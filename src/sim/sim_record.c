@@ -160,6 +160,7 @@ ctc_status sim_alloc_result(const sim_ctx *c, unsigned channels, long count, ctc
     mt->errdyn_dev = NAN;
     mt->err_estimate = NAN;
     mt->step_used = NAN;
+    mt->accel_rounding = mt->tol_rtol = mt->tol_atol = NAN; /* set at the start: sim_tol.c */
     mt->diverged_joint = -1;
     if (c->active) {
         mt->e_max = calloc((size_t)c->nind + 1, sizeof(double));

@@ -27,10 +27,10 @@ const ctrlJob = (controller) => ({ scene: SCENE2, controller, trajectory: HOLD, 
 const bodyJob = (body) => ({ scene: { bodies: [body] }, controller: PASSIVE, duration: 1 });
 const unitBody = (extra) => ({ mass: 1, com: [0, 0, 0], inertia: [1, 1, 1], joint: REV, ...extra });
 
-/* 4097 bodies, compact (about 400 KB) */
+/* 65537 bodies, compact (about 6.4 MB) */
 function tooManyBodies() {
     const b = JSON.stringify(BODY);
-    return `{"scene":{"bodies":[${Array(4097).fill(b).join(',')}]},"controller":{"type":"none"},"duration":1}`;
+    return `{"scene":{"bodies":[${Array(65537).fill(b).join(',')}]},"controller":{"type":"none"},"duration":1}`;
 }
 
 const PASSWD = /root:.*:0:0:/;
@@ -89,13 +89,13 @@ const CASES = [
     { name: 'unknown channel', json: passiveJob({ output: { channels: ['x'] } }), status: 400, code: 'INVALID_FIELD', field: 'output.channels[0]', message: 'must be one of "q", "qdot", "q_des", "qdot_des", "e", "tau", "w", "energy", "loop", "end_effector", "body_pose" (got "x")' },
     { name: 'two hours', json: { scene: SCENE2, controller: PASSIVE, duration: 7200 }, status: 400, code: 'LIMIT_EXCEEDED', field: 'duration', message: 'must be at most 3600 s (got 7200 s)' },
     { name: 'too many samples', json: { scene: SCENE2, controller: PASSIVE, duration: 3600 }, status: 400, code: 'LIMIT_EXCEEDED', field: 'output.interval', message: 'gives up to 360002 samples over 3600 s; the limit is 200000 (use a longer interval)' },
-    { name: 'too many bodies (4097)', server: 'B', headers: { 'content-type': J, authorization: `Bearer ${TOKEN}` }, body: tooManyBodies(), status: 400, code: 'LIMIT_EXCEEDED', field: 'scene.bodies', message: 'has 4097 bodies; the limit is 4096' },
+    { name: 'too many bodies (65537)', server: 'B', headers: { 'content-type': J, authorization: `Bearer ${TOKEN}` }, body: tooManyBodies(), status: 400, code: 'LIMIT_EXCEEDED', field: 'scene.bodies', message: 'has 65537 bodies; the limit is 65536' },
 
     /* presets in a body */
     { name: 'unknown preset', json: { preset: 'nope' }, status: 400, code: 'UNKNOWN_PRESET', field: 'preset', message: /^unknown preset "nope" \(the presets are: triple_pendulum_pd, .*n_link_pendulum, five_bar_pd, .*rssr_passive, y_pendulum_pd, y_four_bar_pd, spatial_hand_pd, two_arm_torso_pd, ur5_min_jerk, iiwa14_min_jerk, .*triple_pendulum_pid_limited, panda_min_jerk, two_link_min_jerk, two_link_lab_payload, puma560_min_jerk\)$/ },
     { name: 'loop between two branches', json: { preset: 'y_four_bar_pd', scene: { loop: { body: 3 } } }, status: 400, code: 'INVALID_FIELD', field: 'scene.loop', message: 'loop: body 3 is not on the path from the ground to the tip (body 5); a loop between two branches is not supported yet' },
     { name: 'preset not a string', json: { preset: 5 }, status: 400, code: 'INVALID_FIELD', field: 'preset', message: 'must be a string (got a number)' },
-    { name: 'preset parameter out of range', json: { preset: 'n_link_pendulum', n: 1 }, status: 400, code: 'INVALID_FIELD', field: 'n', message: 'must be an integer from 2 to 4096 (got 1)' },
+    { name: 'preset parameter out of range', json: { preset: 'n_link_pendulum', n: 1 }, status: 400, code: 'INVALID_FIELD', field: 'n', message: 'must be an integer from 2 to 65536 (got 1)' },
     { name: 'validate: negative mass', path: '/api/validate', json: bodyJob(unitBody({ mass: -1 })), status: 400, code: 'INVALID_FIELD', field: 'scene.bodies[0].mass', message: 'must not be negative (got -1 kg)' },
     { name: 'validate: array body', path: '/api/validate', body: '[]', status: 400, code: 'INVALID_FIELD', field: '', message: 'the job must be a JSON object (got an array)' },
 
@@ -160,7 +160,7 @@ const CASES = [
     { name: 'unknown preset path', method: 'GET', path: '/api/presets/nope', status: 404, code: 'UNKNOWN_PRESET' },
     { name: 'preset parameter n=1', method: 'GET', path: '/api/presets/n_link_pendulum?n=1', status: 400, code: 'INVALID_QUERY', field: 'n' },
     { name: 'preset parameter n=abc', method: 'GET', path: '/api/presets/n_link_pendulum?n=abc', status: 400, code: 'INVALID_QUERY', field: 'n' },
-    { name: 'preset parameter n=5000', method: 'GET', path: '/api/presets/n_link_pendulum?n=5000', status: 400, code: 'INVALID_QUERY', field: 'n' },
+    { name: 'preset parameter n=70000', method: 'GET', path: '/api/presets/n_link_pendulum?n=70000', status: 400, code: 'INVALID_QUERY', field: 'n' },
 
     /* traversal out of the web root */
     { name: 'traversal /../etc/passwd', method: 'GET', raw: true, path: '/../etc/passwd', status: 404, passwd: true },

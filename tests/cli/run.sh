@@ -85,6 +85,23 @@ echo '{"preset": "triple_pendulum_pid", "duration": 0.2, "controller": {"type": 
 expect_exit 0 "run a preset with another controller" "$CTCSIM" run "$tmp/lqr.json" -o "$tmp/lqr.csv"
 expect_grep "its summary names the controller" "$tmp/err" "Triple pendulum, LQR (scene of Kingsley et al. 2017, sec. 7.1): done, planar lqr,"
 
+# long chains: a default run of 4096 rods floors its tolerances on the accelerations' rounding
+# and says so (src/sim/sim_tol.c); 65536 rods, the job format's limit, run 3 ms of CTC with rk4
+# without diverging (every |e| stays at its start, pi/6, to 1e-2), and 65537 are refused
+echo '{"preset": "n_link_pendulum", "n": 4096, "duration": 0.1}' >"$tmp/n4096.json"
+expect_exit 0 "a default run of 4096 rods" "$CTCSIM" run "$tmp/n4096.json" -o "$tmp/n4096.csv"
+expect_grep "its tolerance floor is reported" "$tmp/err" "tolerance floor: atol 1e-10 raised to "
+echo '{"preset": "n_link_pendulum", "n": 65536, "duration": 0.003, "integrator": {"method": "rk4", "step": 0.001}, "output": {"interval": 0.001, "channels": ["e"]}}' >"$tmp/n65536.json"
+expect_exit 0 "3 ms of CTC on 65536 rods" "$CTCSIM" run "$tmp/n65536.json" -o "$tmp/n65536.csv"
+expect_grep "65536 rods done" "$tmp/err" "done, planar pd, 4 samples to t = 0.003 s"
+if awk -F, 'NR > 1 { for (i = 2; i <= NF; i++) if ($i > 0.534 || $i < -0.534) bad = 1 } END { exit bad || NR != 5 }' "$tmp/n65536.csv"; then
+    pass
+else
+    fail "65536 rods: an error left pi/6 by more than 1e-2 (or not 4 samples)"
+fi
+expect_exit 2 "65537 rods refused" "$CTCSIM" preset n_link_pendulum n=65537
+expect_grep "65537 rods named" "$tmp/err" "must be an integer from 2 to 65536 (got 65537)"
+
 expect_exit 1 "no command" "$CTCSIM"
 expect_exit 1 "unknown command" "$CTCSIM" fly
 expect_exit 1 "bad format" "$CTCSIM" run "$tmp/job.json" --format xml

@@ -550,6 +550,8 @@ Test(gdca_forward, new_data_takes_the_default_options_and_they_choose_the_order)
     cr_assert_eq(d->opt.fwd_refine, def.fwd_refine);
     cr_assert_eq(d->opt.inv_full, def.inv_full);
     cr_assert_eq(d->opt.par_grain, def.par_grain);
+    cr_assert_eq(def.par_split, 0);
+    cr_assert_eq(d->opt.par_split, def.par_split);
 
     cr_expect_eq(gdca_forward_order_seq(m, d), 1, "an open chain on one thread: sequential");
     d->opt.fwd_order = CTC_ORDER_TREE;

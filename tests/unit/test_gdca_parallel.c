@@ -12,10 +12,10 @@
  * serial), on 2, 3 and 8 threads with every height split (grain 1) and with the measured grains.
  * The serial results themselves are checked against the oracles elsewhere (test_gdca_forward.c,
  * test_gdca_inverse.c, test_loop.c). Also: the pool's barrier in each of its waiting modes, the
- * first singular joint named as the serial pass names it, the thread setting's limits, and whole
- * simulations: on two and three threads bitwise the same samples, and on one thread (whose
- * forward pass takes the sequential order at that length) the same to the forward pass's
- * accuracy.
+ * first singular joint named as the serial pass names it, the thread setting's limits, the gate
+ * that chooses between one thread and the split by measured cost (its decision from injected
+ * timings; gated passes on 1 to 4 threads bitwise the serial ones of the order they took), and
+ * whole simulations on one to three threads, the same to the forward pass's accuracy.
  */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -529,24 +529,29 @@ static ctc_model *order_model(int n, int spatial)
 }
 
 /* By default (CTC_ORDER_AUTO) an open chain's forward pass takes the sequential order on one
- * thread at any length, and the tree on two threads or more from 4096 planar or 1024 spatial
- * bodies (gdca_forward.c); a shared pool's owner's count decides; loop models take the tree
+ * thread at any length; on two threads or more it may take the tree from 2048 planar or 512
+ * spatial bodies (gdca_forward.c), where its gate chooses by measured cost; before any pass the
+ * order is the sequential one; a shared pool's owner's count decides; loop models take the tree
  * always; the setting overrides the rule for open chains. */
-Test(gdca_parallel, the_forward_pass_takes_the_tree_on_threads_only_from_the_measured_length)
+Test(gdca_parallel, the_forward_pass_may_take_the_tree_on_threads_only_from_the_least_length)
 {
     static const struct {
-        int n, spatial, threads, seq;
-    } cases[] = {{2, 0, 1, 1},    {4095, 0, 1, 1}, {8192, 0, 1, 1}, {4095, 0, 2, 1},
-                 {4096, 0, 2, 0}, {4096, 0, 8, 0}, {1023, 1, 2, 1}, {1023, 1, 64, 1},
-                 {1024, 1, 2, 0}, {1024, 1, 1, 1}};
+        int n, spatial, threads, candidate;
+    } cases[] = {{2, 0, 1, 0},    {4095, 0, 1, 0}, {8192, 0, 1, 0}, {2047, 0, 2, 0},
+                 {2048, 0, 2, 1}, {4096, 0, 8, 1}, {511, 1, 2, 0},  {511, 1, 64, 0},
+                 {512, 1, 2, 1},  {1024, 1, 1, 0}};
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         ctc_model *m = order_model(cases[i].n, cases[i].spatial);
         ctc_data *d = ctc_data_new(m), *owner = ctc_data_new(m);
         cr_assert(d && owner);
         cr_assert_eq(ctc_data_set_threads(d, cases[i].threads, NULL, 0), CTC_OK);
-        cr_expect_eq(gdca_forward_order_seq(m, d), cases[i].seq, "n = %d %s, %d threads",
+        cr_expect_eq(gdca_forward_tree_candidate(m, d), cases[i].candidate, "n = %d %s, %d threads",
                      cases[i].n, cases[i].spatial ? "spatial" : "planar", cases[i].threads);
+        cr_expect_eq(gdca_forward_order_seq(m, d), 1, "no pass yet: the sequential order");
+        d->fwd_split = 1; /* as the gate would set it */
+        cr_expect_eq(gdca_forward_order_seq(m, d), !cases[i].candidate);
         d->opt.fwd_order = CTC_ORDER_TREE;
+        cr_expect_eq(gdca_forward_tree_candidate(m, d), 0, "told the order: no gate");
         cr_expect_eq(gdca_forward_order_seq(m, d), 0);
         d->opt.fwd_order = CTC_ORDER_SEQ;
         cr_expect_eq(gdca_forward_order_seq(m, d), 1);
@@ -555,7 +560,7 @@ Test(gdca_parallel, the_forward_pass_takes_the_tree_on_threads_only_from_the_mea
         cr_assert_eq(ctc_data_set_threads(d, 1, NULL, 0), CTC_OK);
         cr_assert_eq(ctc_data_set_threads(owner, cases[i].threads, NULL, 0), CTC_OK);
         ctc_data_share_pool(d, owner);
-        cr_expect_eq(gdca_forward_order_seq(m, d), cases[i].seq);
+        cr_expect_eq(gdca_forward_tree_candidate(m, d), cases[i].candidate);
         ctc_data_free(d), ctc_data_free(owner);
         ctc_model_free(m);
     }
@@ -568,6 +573,112 @@ Test(gdca_parallel, the_forward_pass_takes_the_tree_on_threads_only_from_the_mea
     ctc_data_free(d);
     ctc_model_free(m);
     loop_chain_free(l);
+}
+
+/* ---- the gate: alone or split by measured cost ---- */
+
+/* The decision is the medians' comparison with the margin, from the timings alone: the same
+ * timings in any order give the same answer, one outlier does not move it, and without timings
+ * of both ways it stays alone. */
+Test(gdca_parallel, the_gate_decides_from_injected_timings_by_their_medians)
+{
+    const double alone[6] = {1.0, 1.1, 0.9, 1.0, 5.0, 1.0};
+    const double faster[6] = {0.90, 0.80, 0.94, 9.00, 0.85, 0.93}; /* median 0.915 */
+    const double level[6] = {0.97, 0.96, 0.98, 0.90, 1.20, 0.99};  /* median 0.975 > 0.95 */
+    const double reordered[6] = {0.93, 0.85, 9.00, 0.94, 0.80, 0.90};
+    cr_expect_eq(ctc_pool_gate_choose(alone, 6, faster, 6), 1);
+    cr_expect_eq(ctc_pool_gate_choose(alone, 6, reordered, 6), 1, "order does not matter");
+    cr_expect_eq(ctc_pool_gate_choose(alone, 6, level, 6), 0, "within the margin: alone");
+    cr_expect_eq(ctc_pool_gate_choose(faster, 6, alone, 6), 0, "split slower: alone");
+    cr_expect_eq(ctc_pool_gate_choose(alone, 0, faster, 6), 0, "no timings alone");
+    cr_expect_eq(ctc_pool_gate_choose(alone, 6, faster, 0), 0, "no timings split");
+    const double a2[2] = {1.0, 2.0}, s2[2] = {1.3, 1.5}; /* medians 1.5 and 1.4: 1.4 < 1.425 */
+    cr_expect_eq(ctc_pool_gate_choose(a2, 2, s2, 2), 1, "even counts: the middle two's mean");
+}
+
+/* Fed timings by way (the clock left out), a gate warms each way up once, alternates the ways
+ * as ABBA so that both get CTC_POOL_GATE_SAMPLES timings, takes the faster way, keeps it for
+ * CTC_POOL_GATE_RECHECK runs and then measures again. */
+Test(gdca_parallel, the_gate_alternates_then_keeps_the_faster_way_and_rechecks)
+{
+    for (int faster = 0; faster < 2; faster++) {
+        ctc_pool_gate g = {0};
+        int count[2] = {0, 0}, runs = 0;
+        while (!g.decided) {
+            int way = ctc_pool_gate_way(&g);
+            count[way]++;
+            ctc_pool_gate_record(&g, way, way == faster ? 1e-3 : 2e-3);
+            cr_assert(++runs < 100);
+        }
+        cr_expect_eq(runs, 2 + 2 * CTC_POOL_GATE_SAMPLES, "one warm-up per way, then samples");
+        cr_expect_eq(count[0], count[1]);
+        cr_expect_eq(g.way, faster);
+        for (int k = 1; k < CTC_POOL_GATE_RECHECK; k++) {
+            cr_assert_eq(ctc_pool_gate_way(&g), faster);
+            ctc_pool_gate_record(&g, faster, 1.0); /* decided: timings are not looked at */
+        }
+        cr_expect(g.decided);
+        ctc_pool_gate_record(&g, faster, 1.0);
+        cr_expect(!g.decided, "measures again after the recheck count");
+        cr_expect_eq(ctc_pool_gate_way(&g), 0);
+    }
+}
+
+/* With the gates on (no forced split), a pass on 1 to 4 threads gives, run after run while its
+ * gates measure and after they decide, bitwise the serial results: the composite inverse always,
+ * the forward pass those of one of its two orders (the sequential one of one thread, or the
+ * balanced tree) - the gate may pick either. */
+Test(gdca_parallel, gated_passes_give_bitwise_the_serial_results_on_1_to_4_threads, .timeout = 120)
+{
+    for (int spatial = 0; spatial < 2; spatial++) {
+        ctc_model *m = order_model(spatial ? 512 : 2048, spatial);
+        const size_t nv = (size_t)m->nv, bytes = nv * sizeof(double);
+        double *q = calloc(nv, sizeof(double)), *v = calloc(nv, sizeof(double));
+        double *u = calloc(nv, sizeof(double)), *f1 = calloc(nv, sizeof(double));
+        double *fk = calloc(nv, sizeof(double)), *aseq = calloc(nv, sizeof(double));
+        double *atree = calloc(nv, sizeof(double)), *ak = calloc(nv, sizeof(double));
+        ctc_data *ds = ctc_data_new(m), *dt = ctc_data_new(m), *dk[4] = {0};
+        cr_assert(q && v && u && f1 && fk && aseq && atree && ak && ds && dt);
+        dt->opt.fwd_order = CTC_ORDER_TREE;
+        for (int k = 1; k < 4; k++) {
+            dk[k] = ctc_data_new(m);
+            cr_assert_not_null(dk[k]);
+            cr_assert_eq(ctc_data_set_threads(dk[k], k + 1, NULL, 0), CTC_OK);
+        }
+        uint64_t rng = 77;
+        for (int run = 0; run < 40; run++) {
+            test_random_state(m, &rng, 1.0, q, v);
+            for (size_t i = 0; i < nv; i++) u[i] = test_uniform(&rng, -1, 1);
+            ctc_data *ref[2] = {ds, dt};
+            for (int r = 0; r < 2; r++) {
+                ctc_kinematics(m, ref[r], q, v);
+                ctc_handles(m, ref[r]);
+            }
+            ctc_gdca_inverse(m, ds, u, f1);
+            ctc_gdca_forward(m, ds, f1, aseq);
+            ctc_gdca_forward(m, dt, f1, atree);
+            for (int k = 1; k < 4; k++) {
+                ctc_kinematics(m, dk[k], q, v);
+                ctc_handles(m, dk[k]);
+                ctc_gdca_inverse(m, dk[k], u, fk);
+                cr_expect_eq(memcmp(fk, f1, bytes), 0, "%s run %d, %d threads: inverse",
+                             spatial ? "spatial" : "planar", run, k + 1);
+                ctc_gdca_forward(m, dk[k], f1, ak);
+                cr_expect(memcmp(ak, dk[k]->fwd_split ? atree : aseq, bytes) == 0,
+                          "%s run %d, %d threads: forward (%s order)",
+                          spatial ? "spatial" : "planar", run, k + 1,
+                          dk[k]->fwd_split ? "tree" : "sequential");
+            }
+        }
+        for (int k = 1; k < 4; k++) {
+            cr_expect(dk[k]->gate[CTC_GATE_FWD_ORDER].decided, "the order's gate has decided");
+            cr_expect(dk[k]->gate[CTC_GATE_INVERSE].decided, "the inverse's gate has decided");
+            ctc_data_free(dk[k]);
+        }
+        ctc_data_free(ds), ctc_data_free(dt);
+        free(q), free(v), free(u), free(f1), free(fk), free(aseq), free(atree), free(ak);
+        ctc_model_free(m);
+    }
 }
 
 /* ---- the setting ---- */
@@ -661,19 +772,6 @@ static ctc_sim_result *pendulum_run(int threads, double mass_scale)
     return r;
 }
 
-static void expect_same_run(const ctc_sim_result *a, const ctc_sim_result *b, const char *what)
-{
-    cr_assert_eq(a->nsamples, b->nsamples);
-    cr_assert_eq(a->channels, b->channels);
-    cr_expect_eq(memcmp(a->t, b->t, (size_t)a->nsamples * sizeof(double)), 0);
-    for (int ch = 0; ch < CTC_NCHANNELS; ch++) {
-        if (!a->ch[ch]) continue;
-        size_t count = (size_t)a->nsamples * (size_t)a->width[ch];
-        cr_expect_eq(memcmp(a->ch[ch], b->ch[ch], count * sizeof(double)), 0, "%s: channel %s",
-                     what, ctc_channel_name((ctc_channel)ch));
-    }
-}
-
 /* the largest difference of two runs' samples of channel ch, relative to the largest sample */
 static double run_difference(const ctc_sim_result *a, const ctc_sim_result *b, ctc_channel ch)
 {
@@ -686,24 +784,29 @@ static double run_difference(const ctc_sim_result *a, const ctc_sim_result *b, c
     return diff > 0 ? diff / big : 0.0;
 }
 
-/* Two and three threads record bitwise the same samples. One thread, whose forward pass takes
- * the sequential order at this length, records the same to the forward pass's accuracy on a
- * chain this long: each order's accelerations are off the exact ones by up to about 2e-5 at
- * n = 4096 (the round trip on uniform rods, bench/NOTEBOOK.md "Hard cases"), and the runs differ by
- * up to 3e-6 of the largest sample (qdot, tau, energy; q by 2e-7). */
+/* One, two and three threads record the same samples to the forward pass's accuracy on a chain
+ * this long: the forward pass takes the sequential order on one thread and, on more, whichever
+ * of it and the split tree its gate measures faster, evaluation by evaluation while the gate
+ * measures; each order's accelerations are off the exact ones by up to about 2e-5 at n = 4096
+ * (the round trip on uniform rods, bench/NOTEBOOK.md "Hard cases"), and the runs differ by up to
+ * 3e-6 of the largest sample (qdot, tau, energy; q by 2e-7). (Bitwise equality of the split
+ * passes: the tests above.) */
 Test(gdca_parallel, a_simulation_on_threads_records_the_same_samples, .timeout = 120)
 {
     for (int err = 0; err < 2; err++) { /* exact model, then a controller model of its own */
         double scale = err ? 1.1 : 1.0;
         ctc_sim_result *serial = pendulum_run(0, scale), *two = pendulum_run(2, scale);
         ctc_sim_result *three = pendulum_run(3, scale);
-        expect_same_run(two, three, err ? "model error" : "exact model");
         cr_assert_eq(serial->nsamples, two->nsamples);
+        cr_assert_eq(serial->nsamples, three->nsamples);
+        cr_expect_eq(memcmp(serial->t, two->t, (size_t)serial->nsamples * sizeof(double)), 0);
         for (int ch = 0; ch < CTC_NCHANNELS; ch++) {
             if (!serial->ch[ch]) continue;
-            double e = run_difference(serial, two, (ctc_channel)ch);
-            cr_expect(e < 1e-5, "%s: channel %s: 1 and 2 threads differ by %.3g",
-                      err ? "model error" : "exact model", ctc_channel_name((ctc_channel)ch), e);
+            double e2 = run_difference(serial, two, (ctc_channel)ch);
+            double e3 = run_difference(serial, three, (ctc_channel)ch);
+            cr_expect(
+                e2 < 1e-5 && e3 < 1e-5, "%s: channel %s: 1 and 2, 3 threads differ by %.3g, %.3g",
+                err ? "model error" : "exact model", ctc_channel_name((ctc_channel)ch), e2, e3);
         }
         ctc_sim_result_free(serial);
         ctc_sim_result_free(two);

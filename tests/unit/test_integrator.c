@@ -296,6 +296,44 @@ Test(integrator, dopri5_meets_the_tolerance_on_the_oscillator)
     }
 }
 
+/* Tolerances set after the reset act from the next step: on the oscillator, dopri5 and bdf set
+ * from 1e-10 to 1e-6 take the steps (within one) and reach the error of an integrator made at
+ * 1e-6; rk4 and out-of-range values are refused with messages. */
+Test(integrator, tolerances_set_after_the_reset_act_from_the_next_step)
+{
+    const double y0[2] = {1, 0};
+    for (int m = CTC_INTEG_DOPRI5; m <= CTC_INTEG_BDF; m++) {
+        problem p1 = problem_default(), p2 = problem_default();
+        ctc_integ_spec tight = adaptive_spec((ctc_integ_method)m, 1e-10, 1e-10);
+        ctc_integ_spec loose = adaptive_spec((ctc_integ_method)m, 1e-6, 1e-6);
+        ctc_integrator *a = make(&tight, 2, oscillator, &p1), *b = make(&loose, 2, oscillator, &p2);
+        cr_assert_eq(ctc_integrator_reset(a, 0, y0), 0);
+        cr_assert_eq(ctc_integrator_reset(b, 0, y0), 0);
+        char err[ERRLEN] = "";
+        cr_assert_eq(ctc_integrator_set_tolerances(a, 1e-6, 1e-6, err, sizeof err), CTC_OK, "%s",
+                     err);
+        run_to(a, 10.0);
+        run_to(b, 10.0);
+        long sa = ctc_integrator_stats(a)->steps, sb = ctc_integrator_stats(b)->steps;
+        cr_expect(labs(sa - sb) <= 1 + sb / 10, "%s: %ld steps against %ld",
+                  ctc_integ_method_name((ctc_integ_method)m), sa, sb);
+        cr_expect_leq(oscillator_error(a), 10 * fmax(oscillator_error(b), 1e-6));
+        cr_expect_eq(ctc_integrator_set_tolerances(a, 2, 1e-6, err, sizeof err), CTC_EINVAL);
+        cr_expect_str_eq(err, "rtol must be in (0, 1) (got 2)");
+        cr_expect_eq(ctc_integrator_set_tolerances(a, 1e-6, 0, err, sizeof err), CTC_EINVAL);
+        cr_expect_str_eq(err, "atol must be positive and finite (got 0)");
+        ctc_integrator_free(a);
+        ctc_integrator_free(b);
+    }
+    problem p = problem_default();
+    ctc_integ_spec spec = rk4_spec(0.01);
+    ctc_integrator *it = make(&spec, 2, oscillator, &p);
+    char err[ERRLEN] = "";
+    cr_expect_eq(ctc_integrator_set_tolerances(it, 1e-6, 1e-6, err, sizeof err), CTC_EINVAL);
+    cr_expect_str_eq(err, "rk4 has no tolerances");
+    ctc_integrator_free(it);
+}
+
 Test(integrator, dopri5_meets_the_tolerance_on_the_riccati_equation)
 {
     /* y' = y^2 on [0, 0.9]: y(0.9) = 10, with |y'''''| growing fast towards the pole */

@@ -882,3 +882,91 @@ Test(sim, a_controller_class_is_checked_with_exact_messages)
     cr_expect_null(r);
     scene_free(s);
 }
+
+/* ---- the tolerance floor (sim_tol.c) ---- */
+
+/* The PD run of the n-link rod pendulum from q0_k = +-pi/6 to rest, on the given integrator,
+ * for duration s. */
+static ctc_sim_result *long_pendulum(int n, ctc_integ_spec integ, double duration)
+{
+    test_chain *c = test_chain_rod_pendulum(n, 1, 1);
+    double *q0 = calloc((size_t)n, sizeof *q0);
+    ctc_gains *gains = calloc((size_t)n, sizeof *gains);
+    ctc_traj *traj = calloc((size_t)n, sizeof *traj);
+    cr_assert(c && q0 && gains && traj);
+    for (int k = 0; k < n; k++) {
+        q0[k] = ((k + 1) % 2 ? -1 : 1) * PI / 6;
+        gains[k] = (ctc_gains){.kp = 100, .kv = 20};
+        traj[k] = (ctc_traj){.type = CTC_TRAJ_CONSTANT, .value = 0};
+    }
+    ctc_sim_spec spec = {.chain = c->spec,
+                         .q0 = q0,
+                         .controller = CTC_CTRL_PD,
+                         .gains = gains,
+                         .model_mass_scale = 1,
+                         .model_inertia_scale = 1,
+                         .traj = traj,
+                         .integrator = integ,
+                         .duration = duration,
+                         .output_interval = duration / 10};
+    ctc_sim_result *r = NULL;
+    char err[256] = "";
+    cr_assert_eq(ctc_sim_run(&spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
+    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    test_chain_free(c);
+    free(q0), free(gains), free(traj);
+    return r;
+}
+
+/* The paper's scenes stay far below the floor: their tolerances are kept exactly (so their runs
+ * are those of before the floor), and the estimate is near rounding. */
+Test(sim, the_tolerance_floor_leaves_short_chains_alone)
+{
+    scene *s = triple_pendulum();
+    set_pd(s, 100, 20, 250);
+    s->spec.integrator = (ctc_integ_spec){.method = CTC_INTEG_DOPRI5, .rtol = 1e-8, .atol = 1e-10};
+    ctc_sim_result *r = run(s);
+    const ctc_sim_metrics *m = &r->metrics;
+    cr_expect_eq(m->tol_floored, 0);
+    cr_expect_eq(m->tol_rtol, 1e-8);
+    cr_expect_eq(m->tol_atol, 1e-10);
+    cr_expect_str_empty(m->tol_reason);
+    cr_expect(m->accel_rounding >= 0 && m->accel_rounding < 1e-12, "rounding %g",
+              m->accel_rounding);
+    ctc_sim_result_free(r);
+    scene_free(s);
+}
+
+/* On 1024 rods the default tolerances ask for more than the accelerations carry (their round
+ * trip at the start is about 2e-5 rad/s^2, 4e-7 of their size): both are raised, with the reason,
+ * the run takes tens of steps instead of thousands, and its error stays where the closed-form
+ * error dynamics put it (errdyn_dev, measured 1.7e-8 over 5 s; 1e-6 asserted over 0.5 s). A
+ * job's own tolerances above the floor are kept; rk4 has none to floor. */
+Test(sim, the_tolerance_floor_raises_what_a_long_chain_cannot_meet, .timeout = 60)
+{
+    ctc_integ_spec def = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-8, .atol = 1e-10};
+    ctc_sim_result *r = long_pendulum(1024, def, 0.5);
+    const ctc_sim_metrics *m = &r->metrics;
+    cr_expect_eq(m->tol_floored, 3, "both raised");
+    cr_expect(m->accel_rounding > 1e-7 && m->accel_rounding < 1e-3, "rounding %g",
+              m->accel_rounding);
+    cr_expect_eq(m->tol_atol, 1e-4 * m->accel_rounding, "atol %g", m->tol_atol);
+    cr_expect(m->tol_rtol > 1e-8 && m->tol_rtol < 1e-5, "rtol %g", m->tol_rtol);
+    cr_expect(strstr(m->tol_reason, "atol 1e-10 raised to ") == m->tol_reason, "%s", m->tol_reason);
+    cr_expect(strstr(m->tol_reason, ", rtol 1e-08 raised to ") != NULL, "%s", m->tol_reason);
+    cr_expect_lt(m->steps, 100, "%ld steps", m->steps);
+    cr_expect_lt(m->errdyn_dev, 1e-6, "errdyn_dev %g", m->errdyn_dev);
+    ctc_sim_result_free(r);
+
+    ctc_integ_spec loose = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-4, .atol = 1e-4};
+    r = long_pendulum(1024, loose, 0.1);
+    cr_expect_eq(r->metrics.tol_floored, 0);
+    cr_expect_eq(r->metrics.tol_rtol, 1e-4);
+    cr_expect_eq(r->metrics.tol_atol, 1e-4);
+    ctc_sim_result_free(r);
+
+    r = long_pendulum(1024, (ctc_integ_spec){.method = CTC_INTEG_RK4, .step = 1e-2}, 0.1);
+    cr_expect(isnan(r->metrics.accel_rounding) && isnan(r->metrics.tol_atol));
+    cr_expect_eq(r->metrics.tol_floored, 0);
+    ctc_sim_result_free(r);
+}
