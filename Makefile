@@ -26,13 +26,16 @@
 
 CC ?= cc
 # -O3 without gcc's vectoriser, which slows the library's 3- and 6-vector kernels (they use simd.h
-# where vectors pay): bench/NOTEBOOK.md, "Before that: the sequential order", change 5
-OPT_DEFAULT := -O3 -fno-tree-vectorize
+# where vectors pay): bench/NOTEBOOK.md, "Before that: the sequential order", change 5. The
+# default build stays portable (baseline x86-64), and its hot kernels carry AVX2 + FMA and
+# AVX-512 copies chosen at load time (src/core/clones.h); -ffp-contract=fast lets those copies
+# fuse a * b + c, which gcc leaves off in ISO C mode (-std=c11): bench/NOTEBOOK.md, "The portable
+# build (issue 26)"
+OPT_DEFAULT := -O3 -fno-tree-vectorize -ffp-contract=fast
 # make bench builds for this machine: its instruction set (with fused multiply-adds, where it has
-# them) and contraction of a * b + c into them, which gcc leaves off in ISO C mode (-std=c11); the
-# figures: bench/NOTEBOOK.md, "Latest", change 1. The unit tests pass in either build, and make
-# bench runs them in its own first; the default build stays portable (baseline x86-64 has no FMA).
-OPT_BENCH := $(OPT_DEFAULT) -march=native -ffp-contract=fast -DNDEBUG
+# them); the figures: bench/NOTEBOOK.md, "Latest", change 1. The unit tests pass in either build,
+# and make bench runs them in its own first.
+OPT_BENCH := $(OPT_DEFAULT) -march=native -DNDEBUG
 OPT ?= $(OPT_DEFAULT)
 BUILD ?= build
 SANITIZE ?=
