@@ -26,13 +26,16 @@
 
 CC ?= cc
 # -O3 without gcc's vectoriser, which slows the library's 3- and 6-vector kernels (they use simd.h
-# where vectors pay): bench/NOTEBOOK.md, "Before that: the sequential order", change 5
-OPT_DEFAULT := -O3 -fno-tree-vectorize
+# where vectors pay): bench/NOTEBOOK.md, "Before that: the sequential order", change 5. The
+# default build stays portable (baseline x86-64), and its hot kernels carry AVX2 + FMA and
+# AVX-512 copies chosen at load time (src/core/clones.h); -ffp-contract=fast lets those copies
+# fuse a * b + c, which gcc leaves off in ISO C mode (-std=c11): bench/NOTEBOOK.md, "The portable
+# build (issue 26)"
+OPT_DEFAULT := -O3 -fno-tree-vectorize -ffp-contract=fast
 # make bench builds for this machine: its instruction set (with fused multiply-adds, where it has
-# them) and contraction of a * b + c into them, which gcc leaves off in ISO C mode (-std=c11); the
-# figures: bench/NOTEBOOK.md, "Latest", change 1. The unit tests pass in either build, and make
-# bench runs them in its own first; the default build stays portable (baseline x86-64 has no FMA).
-OPT_BENCH := $(OPT_DEFAULT) -march=native -ffp-contract=fast -DNDEBUG
+# them); the figures: bench/NOTEBOOK.md, "Latest", change 1. The unit tests pass in either build,
+# and make bench runs them in its own first.
+OPT_BENCH := $(OPT_DEFAULT) -march=native -DNDEBUG
 OPT ?= $(OPT_DEFAULT)
 BUILD ?= build
 SANITIZE ?=
@@ -76,7 +79,7 @@ SYSTEM_CA := /etc/ssl/certs/ca-certificates.crt
 NPM_CA = $(if $(NODE_EXTRA_CA_CERTS),,\
 	$(if $(wildcard $(SYSTEM_CA)),NODE_EXTRA_CA_CERTS=$(SYSTEM_CA)))
 NPM_CI = $(NPM_CA) npm ci --no-audit --no-fund --loglevel=error
-BENCH_PACKAGES := wrk curl libmujoco-dev
+BENCH_PACKAGES := wrk curl libmujoco-dev libdart-dev
 
 LIB_SRC := $(wildcard src/*/*.c)
 LIB_OBJ := $(LIB_SRC:src/%.c=$(BUILD)/obj/%.o)
@@ -166,13 +169,29 @@ $(BUILD)/tests/%: tests/unit/%.c $(SUPPORT_OBJ) $(APP_LIB) $(LIB) $(FLAGS_STAMP)
 		$(LDFLAGS) -lcriterion $(SERVER_LDLIBS) $(LDLIBS)
 
 # benchmarks also link SUNDIALS ARKODE, to measure it against the in-house explicit steppers;
-# bench_mujoco alone links MuJoCo (libmujoco-dev), to measure ctcsim against it
+# bench_mujoco alone links MuJoCo (libmujoco-dev) and DART (libdart-dev, through the C++ shim
+# bench/dart_peer.cpp), to measure ctcsim against them. DART is compiled in where pkg-config
+# finds it; otherwise the shim says so and bench_mujoco skips DART (make bench-deps installs it).
 BENCH_LDLIBS := -lsundials_arkode
-$(BUILD)/bench/bench_mujoco: BENCH_LDLIBS += -lmujoco
+BENCH_OBJ :=
+DART_FOUND := $(shell pkg-config --exists dart 2>/dev/null && echo 1)
+DART_CXXFLAGS := $(if $(DART_FOUND),-DCTC_HAVE_DART \
+	$(filter-out -std=%,$(shell pkg-config --cflags dart 2>/dev/null)))
+DART_LIBS := $(if $(DART_FOUND),$(shell pkg-config --libs dart 2>/dev/null))
+# the shim is compiled for the target Debian's DART was (no -march): Eigen aligns its fixed-size
+# members by the instruction set, so DART's structures must have the layout its library has
+BENCH_CXXFLAGS := -std=c++17 -Wall -Wextra -Werror $(filter-out -march=%,$(OPT)) -g -Isrc/include \
+	$(DART_CXXFLAGS)
+$(BUILD)/obj/bench/%.o: bench/%.cpp $(FLAGS_STAMP)
+	@mkdir -p $(@D)
+	$(CXX) $(BENCH_CXXFLAGS) -MMD -MP -c $< -o $@
+$(BUILD)/bench/bench_mujoco: BENCH_OBJ := $(BUILD)/obj/bench/dart_peer.o
+$(BUILD)/bench/bench_mujoco: BENCH_LDLIBS += -lmujoco $(DART_LIBS) -lstdc++
+$(BUILD)/bench/bench_mujoco: $(BUILD)/obj/bench/dart_peer.o
 $(BUILD)/bench/%: bench/%.c $(SUPPORT_OBJ) $(APP_LIB) $(LIB) $(FLAGS_STAMP)
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -Itests/support -Iserver -MMD -MP $< $(SUPPORT_OBJ) $(APP_LIB) $(LIB) -o $@ \
-		$(LDFLAGS) $(BENCH_LDLIBS) $(SERVER_LDLIBS) $(LDLIBS)
+	$(CC) $(CFLAGS) -Itests/support -Iserver -MMD -MP $< $(BENCH_OBJ) $(SUPPORT_OBJ) $(APP_LIB) \
+		$(LIB) -o $@ $(LDFLAGS) $(BENCH_LDLIBS) $(SERVER_LDLIBS) $(LDLIBS)
 
 $(BUILD)/fuzzers/%_seeds: fuzz/%.c fuzz/seed_driver.c $(APP_LIB) $(LIB) $(FLAGS_STAMP)
 	@mkdir -p $(@D)
@@ -196,7 +215,7 @@ deps:
 deps-run:
 	@$(MAKE) --no-print-directory install-packages PACKAGES="$(RUN_PACKAGES)" CHECK_NODE=1
 
-# the benchmarks also need wrk and curl (bench/bench_server.sh) and MuJoCo (bench_mujoco)
+# the benchmarks also need wrk and curl (bench/bench_server.sh), MuJoCo and DART (bench_mujoco)
 bench-deps: deps
 	@$(MAKE) --no-print-directory install-packages PACKAGES="$(BENCH_PACKAGES)"
 
@@ -356,4 +375,4 @@ clean:
 	rm -rf $(BUILD)
 
 -include $(LIB_OBJ:.o=.d) $(APP_OBJ:.o=.d) $(MAINS:server/%.c=$(BUILD)/obj/server/%.d) \
-	$(SUPPORT_OBJ:.o=.d) $(TEST_BIN:=.d) $(BENCH_BIN:=.d)
+	$(SUPPORT_OBJ:.o=.d) $(TEST_BIN:=.d) $(BENCH_BIN:=.d) $(BUILD)/obj/bench/dart_peer.d

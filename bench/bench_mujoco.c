@@ -14,7 +14,8 @@
  * axis (the direction of its centre of mass), which a planar chain never turns about, so the
  * dynamics are unchanged (checked against ctcsim to 1e-8, below).
  *
- * 1. One CTC right-hand side, f = M(q) u + c(q, v), then qdd = M(q)^-1 (f - c(q, v)):
+ * 1. One CTC right-hand side, f = M(q) u + c(q, v), then qdd = M(q)^-1 (f - c(q, v)), against
+ *    MuJoCo and DART:
  *      ctcsim  kinematics + handles + iGDCA (composite form) + GDCA forward, as bench_dynamics's
  *              "ctc" column;
  *      MuJoCo  as a CTC loop would call it: mj_fwdPosition and mj_fwdVelocity once, shared by
@@ -23,11 +24,16 @@
  *              constraint forces, none here, and RNE with accelerations), then the forward
  *              acceleration stages mj_fwdActuation, mj_fwdAcceleration (solve with the LDL'
  *              factor) and mj_fwdConstraint (no constraints: qacc = qacc_smooth).
+ *      DART    6.12 (Debian's libdart-dev; dart_peer.h): computeInverseDynamics for tau, then
+ *              computeForwardDynamics, its O(n) articulated-body pass, at the same state (the
+ *              skeleton's cached kinematics shared), on every n; skipped, with a line saying
+ *              why, in a build without DART's headers.
  *    MuJoCo's stages are also timed alone, and within the position stage mj_crb and mj_factorM.
  *    Before timing, each case checks that ctcsim's iGDCA forces equal MuJoCo's qfrc_inverse for
  *    random u, and ctcsim's GDCA accelerations MuJoCo's qacc for random torques, both to 1e-8
- *    relative to the largest entry; a case that fails is reported and not timed, and the run ends
- *    with status 1. Timing as in bench_loop: batches of every timing interleaved, each batch
+ *    relative to the largest entry, and against DART's inverse and forward dynamics to
+ *    DART_CHECK_TOL (1e-10); a case that fails is reported and not timed, and the run ends with
+ *    status 1. Timing as in bench_loop: batches of every timing interleaved, each batch
  *    starting one timing further on, each timing run untimed for SETTLE_S before it is timed;
  *    medians over the batches. MuJoCo is skipped beyond MJ_MAX_N (its factorisation is O(n^3)
  *    on a serial chain) and calls slower than SLOW_S get fewer batches (SLOW_BATCHES).
@@ -99,12 +105,14 @@
 
 #include "chains.h"
 #include "ctc.h"
+#include "dart_peer.h"
 #include "sim.h"
 
 #define PI 3.14159265358979323846
 #define MJCF_SEGMENT 40      /* bodies per MJCF file: keeps every file under tinyxml2's depth 100 */
 #define MJ_MAX_N 1024        /* MuJoCo is timed up to this n */
 #define CHECK_TOL 1e-8       /* agreement of ctcsim and MuJoCo, relative to the largest entry */
+#define DART_CHECK_TOL 1e-10 /* the same for ctcsim and DART */
 #define TREE_CHECK_TOL 1e-10 /* the same on branched autoTrees (part 1t; bf 1: CHECK_TOL) */
 #define SETTLE_S 5e-3        /* s, untimed runs before each timing in a batch */
 #define BATCH_S 2e-3         /* s, length of one timed batch of fast calls */
@@ -426,13 +434,15 @@ static void mj_quiet(const char *msg)
  * 1. One CTC right-hand side
  */
 
-enum { T_CTC, T_MJ, T_MJ_POS, T_MJ_CRB, T_MJ_FACT, T_MJ_VEL, T_MJ_INV, T_MJ_ACC, NT };
+enum { T_CTC, T_DART, T_MJ, T_MJ_POS, T_MJ_CRB, T_MJ_FACT, T_MJ_VEL, T_MJ_INV, T_MJ_ACC, NT };
 
 typedef struct rhs_case {
     const ctc_model *cm;
     ctc_data *cd;
-    mjModel *m; /* NULL: ctcsim only */
+    mjModel *m; /* NULL: without MuJoCo */
     mjData *d;
+    dart_peer *dart;      /* NULL: without DART */
+    double *dtau, *dqdd;  /* DART's forces and accelerations */
     double *q, *v, *u;    /* the state and the commanded accelerations */
     double *mq, *mv, *mu; /* the same in MuJoCo's order (q, v, u themselves on a chain) */
     double *f, *a;        /* ctcsim's forces and accelerations */
@@ -451,6 +461,10 @@ static void run_once(rhs_case *c, int what)
         ctc_gdca_inverse(c->cm, c->cd, c->u, c->f);
         ctc_gdca_forward(c->cm, c->cd, c->f, c->a);
         sink += c->a[0];
+        return;
+    case T_DART:
+        dart_peer_rhs(c->dart, c->q, c->v, c->u, c->dtau, c->dqdd);
+        sink += c->dqdd[0];
         return;
     case T_MJ:
         /* shared: kinematics, composite inertias, M and its factor, bias forces */
@@ -495,11 +509,13 @@ static void run_once(rhs_case *c, int what)
     sink += d->qacc[0] + d->qfrc_inverse[0] + d->qLD[0];
 }
 
-/* median seconds per call of each of the first nt timings, from interleaved batches */
-static void measure(rhs_case *c, int nt, int batches, double med[NT])
+/* median seconds per call of the first nt timings, from interleaved batches; those with on[w] = 0
+   are left out (med[w] = 0) */
+static void measure(rhs_case *c, int nt, const int *on, int batches, double med[NT])
 {
-    int reps[NT], nb[NT];
+    int reps[NT] = {0}, nb[NT] = {0};
     for (int w = 0; w < nt; w++) {
+        if (!on[w]) continue;
         run_once(c, w);
         double s = now();
         run_once(c, w);
@@ -512,7 +528,7 @@ static void measure(rhs_case *c, int nt, int batches, double med[NT])
     for (int b = 0; b < batches; b++) {
         for (int i = 0; i < nt; i++) {
             int w = (b + i) % nt;
-            if (b >= nb[w]) continue;
+            if (!on[w] || b >= nb[w]) continue;
             double s = now();
             do {
                 run_once(c, w);
@@ -522,15 +538,17 @@ static void measure(rhs_case *c, int nt, int batches, double med[NT])
             samples[w * batches + b] = (now() - s) / reps[w];
         }
     }
-    for (int w = 0; w < nt; w++) med[w] = median_sort(samples + w * batches, nb[w]);
+    for (int w = 0; w < nt; w++) med[w] = on[w] ? median_sort(samples + w * batches, nb[w]) : 0;
     free(samples);
 }
 
 /* one row's results, kept for the slopes and the targets */
 typedef struct rhs_row {
     int n;
-    double ctc, mj; /* s per call; mj = 0 when not timed */
+    double ctc, mj, dart; /* s per call; mj, dart = 0 when not timed */
 } rhs_row;
+
+static char dart_skipped[256]; /* why DART is not run (empty: it is) */
 
 /* Checks ctcsim against MuJoCo at c's state: iGDCA f(u) against qfrc_inverse, and GDCA
  * accelerations against qacc for the torques tq (nv). Writes the two relative differences. */
@@ -550,7 +568,21 @@ static void check_case(rhs_case *c, const double *tq, double *f_err, double *a_e
     run_once(c, T_CTC);
 }
 
-/* times one chain; returns 0, or 1 when ctcsim and MuJoCo disagree */
+/* Checks ctcsim against DART at c's state, as check_case does against MuJoCo: DART's inverse
+ * dynamics tau(u) against iGDCA's f, and its forward dynamics for the torques tq against GDCA's.
+ * Writes the two relative differences. */
+static void check_dart(rhs_case *c, const double *tq, double *f_err, double *a_err)
+{
+    run_once(c, T_CTC);
+    run_once(c, T_DART);
+    *f_err = rel_diff(c->dtau, c->f, c->cm->nv);
+    ctc_gdca_forward(c->cm, c->cd, tq, c->a);
+    dart_peer_forward(c->dart, c->q, c->v, tq, c->dqdd);
+    *a_err = rel_diff(c->dqdd, c->a, c->cm->nv);
+    run_once(c, T_CTC);
+}
+
+/* times one chain; returns 0, or 1 when ctcsim disagrees with MuJoCo or DART */
 static int bench_rhs_chain(const char *label, test_chain *chain, int batches, const rhs_row *prev,
                            rhs_row *row)
 {
@@ -560,6 +592,12 @@ static int bench_rhs_chain(const char *label, test_chain *chain, int batches, co
         c.m = mj_load_chain(&chain->spec, 0, 1e-3);
         c.d = mj_makeData(c.m);
         adopt_mj_inertia(chain, c.m);
+    } else { /* the inertias MuJoCo would be given: DART also refuses a slender rod's */
+        for (int k = 0; k < chain->spec.nbodies; k++) {
+            double in[9];
+            mj_inertia(&chain->spec, k, in);
+            memcpy(chain->bodies[k].inertia, in, sizeof in);
+        }
     }
     ctc_model *cm = NULL;
     if (ctc_model_build(&chain->spec, &cm, err, sizeof err) != CTC_OK) {
@@ -575,7 +613,13 @@ static int bench_rhs_chain(const char *label, test_chain *chain, int batches, co
     c.f = xcalloc((size_t)nv, sizeof(double));
     c.a = xcalloc((size_t)nv, sizeof(double));
     c.tau = xcalloc((size_t)nv, sizeof(double));
+    c.dtau = xcalloc((size_t)nv, sizeof(double));
+    c.dqdd = xcalloc((size_t)nv, sizeof(double));
     c.mq = c.q, c.mv = c.v, c.mu = c.u;
+    if (!dart_skipped[0]) { /* with the inertias MuJoCo compiled, as ctcsim has them */
+        c.dart = dart_peer_new(&chain->spec, err, sizeof err);
+        if (!c.dart) snprintf(dart_skipped, sizeof dart_skipped, "%s", err);
+    }
     double *tq = xcalloc((size_t)nv, sizeof(double));
     uint64_t rng = 1;
     test_random_state(cm, &rng, 1.0, c.q, c.v);
@@ -584,13 +628,32 @@ static int bench_rhs_chain(const char *label, test_chain *chain, int batches, co
 
     int failed = 0;
     double f_err = NAN, a_err = NAN;
+    double df_err = NAN, da_err = NAN;
     if (c.m) {
         check_case(&c, tq, &f_err, &a_err);
         failed = !(f_err <= CHECK_TOL && a_err <= CHECK_TOL);
     }
+    if (c.dart) {
+        check_dart(&c, tq, &df_err, &da_err);
+        failed |= !(df_err <= DART_CHECK_TOL && da_err <= DART_CHECK_TOL);
+    }
     double med[NT] = {0};
-    if (!failed) measure(&c, c.m ? NT : 1, batches, med);
-    *row = (rhs_row){.n = n, .ctc = med[T_CTC], .mj = c.m && !failed ? med[T_MJ] : 0};
+    int on[NT] = {[T_CTC] = 1, [T_DART] = c.dart != NULL};
+    for (int w = T_MJ; w < NT; w++) on[w] = c.m != NULL;
+    if (!failed) measure(&c, NT, on, batches, med);
+    *row = (rhs_row){.n = n,
+                     .ctc = med[T_CTC],
+                     .mj = c.m && !failed ? med[T_MJ] : 0,
+                     .dart = c.dart && !failed ? med[T_DART] : 0};
+    char dart_us[16] = "-", dart_ratio[16] = "-", dart_f[16] = "-", dart_a[16] = "-";
+    if (row->dart > 0) {
+        snprintf(dart_us, sizeof dart_us, "%.2f", 1e6 * row->dart);
+        snprintf(dart_ratio, sizeof dart_ratio, "%.4f", row->ctc / row->dart);
+    }
+    if (c.dart) {
+        snprintf(dart_f, sizeof dart_f, "%.1e", df_err);
+        snprintf(dart_a, sizeof dart_a, "%.1e", da_err);
+    }
 
     char slope_c[16] = "-", slope_m[16] = "-";
     if (prev && prev->ctc > 0 && row->ctc > 0)
@@ -598,26 +661,29 @@ static int bench_rhs_chain(const char *label, test_chain *chain, int batches, co
     if (prev && prev->mj > 0 && row->mj > 0)
         snprintf(slope_m, sizeof slope_m, "%.2f", log(row->mj / prev->mj) / log(n / prev->n));
     if (failed) {
-        printf("| %-7s | %4d | FAILED: f vs MuJoCo %.1e, qacc vs MuJoCo %.1e (limit %.0e): not "
-               "timed |\n",
-               label, n, f_err, a_err, CHECK_TOL);
+        printf("| %-7s | %4d | FAILED: f vs MuJoCo %.1e, qacc vs MuJoCo %.1e (limit %.0e); f vs "
+               "DART %.1e, qacc vs DART %.1e (limit %.0e): not timed |\n",
+               label, n, f_err, a_err, CHECK_TOL, df_err, da_err, DART_CHECK_TOL);
     } else if (c.m) {
-        printf("| %-7s | %4d | %9.2f | %10.2f | %7.4f | %6.1f | %8.1f | %5s | %5s | %10.2f | "
-               "%8.2f | %10.2f | %7.2f | %7.2f | %7.2f | %.1e | %.1e |\n",
-               label, n, 1e6 * med[T_CTC], 1e6 * med[T_MJ], med[T_CTC] / med[T_MJ],
-               1e9 * med[T_CTC] / n, 1e9 * med[T_MJ] / n, slope_c, slope_m, 1e6 * med[T_MJ_POS],
-               1e6 * med[T_MJ_CRB], 1e6 * med[T_MJ_FACT], 1e6 * med[T_MJ_VEL], 1e6 * med[T_MJ_INV],
-               1e6 * med[T_MJ_ACC], f_err, a_err);
+        printf("| %-7s | %4d | %9.2f | %10.2f | %7.4f | %s | %s | %6.1f | %8.1f | %5s | %5s | "
+               "%10.2f | %8.2f | %10.2f | %7.2f | %7.2f | %7.2f | %.1e | %.1e | %s | %s |\n",
+               label, n, 1e6 * med[T_CTC], 1e6 * med[T_MJ], med[T_CTC] / med[T_MJ], dart_us,
+               dart_ratio, 1e9 * med[T_CTC] / n, 1e9 * med[T_MJ] / n, slope_c, slope_m,
+               1e6 * med[T_MJ_POS], 1e6 * med[T_MJ_CRB], 1e6 * med[T_MJ_FACT], 1e6 * med[T_MJ_VEL],
+               1e6 * med[T_MJ_INV], 1e6 * med[T_MJ_ACC], f_err, a_err, dart_f, dart_a);
     } else {
-        printf("| %-7s | %4d | %9.2f | - | - | %6.1f | - | %5s | - | - | - | - | - | - | - | - | "
-               "- |\n",
-               label, n, 1e6 * med[T_CTC], 1e9 * med[T_CTC] / n, slope_c);
+        printf("| %-7s | %4d | %9.2f | - | - | %s | %s | %6.1f | - | %5s | - | - | - | - | - | - | "
+               "- | - | - | %s | %s |\n",
+               label, n, 1e6 * med[T_CTC], dart_us, dart_ratio, 1e9 * med[T_CTC] / n, slope_c,
+               dart_f, dart_a);
     }
     fflush(stdout);
     if (c.m) {
         mj_deleteData(c.d);
         mj_deleteModel(c.m);
     }
+    dart_peer_free(c.dart);
+    free(c.dtau), free(c.dqdd);
     free(c.q), free(c.v), free(c.u), free(c.f), free(c.a), free(c.tau), free(tq);
     ctc_data_free(c.cd);
     ctc_model_free(cm);
@@ -652,21 +718,42 @@ static void print_target(const char *label, const rhs_row *rows, int nrows, int 
            worst <= limit ? "met" : "not met");
 }
 
+/* the range of ctcsim / DART over the rows where DART was timed */
+static void print_dart_range(const char *label, const rhs_row *rows, int nrows)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    int n_lo = 0, n_hi = 0;
+    for (int i = 0; i < nrows; i++) {
+        if (rows[i].dart <= 0 || rows[i].ctc <= 0) continue;
+        double r = rows[i].ctc / rows[i].dart;
+        if (r < lo) lo = r, n_lo = rows[i].n;
+        if (r > hi) hi = r, n_hi = rows[i].n;
+    }
+    if (hi < 0) return;
+    printf("| %s against DART | n = %d..%d | - | %.4f (n = %d) to %.4f (n = %d) | |\n", label,
+           rows[0].n, rows[nrows - 1].n, lo, n_lo, hi, n_hi);
+}
+
 static int bench_rhs(int max_n, int batches)
 {
-    printf("## 1. One CTC right-hand side: ctcsim against MuJoCo %s\n\n", mj_versionString());
+    printf("## 1. One CTC right-hand side: ctcsim against MuJoCo %s and DART %s\n\n",
+           mj_versionString(), dart_peer_version());
     printf("ctcsim = kinematics + handles + iGDCA (composite) + GDCA forward. MuJoCo = "
            "mj_fwdPosition + mj_fwdVelocity (shared) + mj_inverseSkip(mjSTAGE_VEL) + "
-           "mj_fwdActuation + mj_fwdAcceleration + mj_fwdConstraint. Medians of %d interleaved "
+           "mj_fwdActuation + mj_fwdAcceleration + mj_fwdConstraint. DART = "
+           "Skeleton::computeInverseDynamics then computeForwardDynamics (its O(n) "
+           "articulated-body pass) at the same state. Medians of %d interleaved "
            "batches (%d for a call over %.0f ms); thread CPU times in us, per body in ns. "
-           "Slope = d log(time) / d log(n) from the row above. MuJoCo only up to n = %d.\n\n",
+           "Slope = d log(time) / d log(n) from the row above. MuJoCo only up to n = %d. "
+           "Ratios are ctcsim / peer.\n\n",
            batches, batches < SLOW_BATCHES ? batches : SLOW_BATCHES, 1e3 * SLOW_S, MJ_MAX_N);
-    printf("| chain   |    n | ctcsim (us) | MuJoCo (us) | ratio | ctcsim/n ns | MuJoCo/n ns | "
-           "slope ctcsim | slope MuJoCo | MuJoCo position | of which crb | of which factorM | "
-           "velocity | inverse | forward acc | f vs MuJoCo | qacc vs MuJoCo |\n");
-    printf("| ------- | ---: | --------: | ---------: | ------: | -----: | -------: | ----: | "
-           "----: | ---------: | -------: | ---------: | ------: | ------: | ------: | ---: | "
-           "---: |\n");
+    printf("| chain   |    n | ctcsim (us) | MuJoCo (us) | ratio | DART (us) | ratio DART | "
+           "ctcsim/n ns | MuJoCo/n ns | slope ctcsim | slope MuJoCo | MuJoCo position | of which "
+           "crb | of which factorM | velocity | inverse | forward acc | f vs MuJoCo | qacc vs "
+           "MuJoCo | f vs DART | qacc vs DART |\n");
+    printf("| ------- | ---: | --------: | ---------: | ------: | ------: | ------: | -----: | "
+           "-------: | ----: | ----: | ---------: | -------: | ---------: | ------: | ------: | "
+           "------: | ---: | ---: | ---: | ---: |\n");
     enum { MAXROWS = 32 };
     rhs_row planar[MAXROWS], spatial[MAXROWS];
     int np = 0, ns = 0, failed = 0;
@@ -681,9 +768,10 @@ static int bench_rhs(int max_n, int batches)
             bench_rhs_chain("spatial", c, batches, ns ? &spatial[ns - 1] : NULL, &spatial[ns]);
         test_chain_free(c);
     }
-    printf("\nctcsim was given the inertias as MuJoCo compiled them (largest change %.1e relative "
-           "to the body's largest entry).\n",
+    printf("\nctcsim (and DART) were given the inertias as MuJoCo compiled them (largest change "
+           "%.1e relative to the body's largest entry).\n",
            inertia_adjust_max);
+    if (dart_skipped[0]) printf("\nDART skipped: %s.\n", dart_skipped);
     printf("\nTargets (ratio = ctcsim / MuJoCo; the worst n of each range):\n\n");
     printf("| chain | range | target | measured | |\n| --- | --- | ---: | ---: | --- |\n");
     print_target("planar", planar, np, 2, 64, 0.5);
@@ -691,6 +779,8 @@ static int bench_rhs(int max_n, int batches)
     print_target("planar", planar, np, 1024, 1024, 0.002);
     print_target("spatial", spatial, ns, 2, 16, 1.0);
     print_target("spatial", spatial, ns, 256, 256, 0.1);
+    print_dart_range("planar", planar, np);
+    print_dart_range("spatial", spatial, ns);
     printf("\n");
     return failed;
 }
@@ -793,7 +883,8 @@ static int bench_rhs_tree(const char *label, test_chain *tree, int batches, cons
         failed = !(f_err <= tol && a_err <= tol);
     }
     double med[NT] = {0};
-    if (!failed) measure(&c, c.m ? 2 : 1, batches, med);
+    const int on[NT] = {[T_CTC] = 1, [T_MJ] = c.m != NULL};
+    if (!failed) measure(&c, T_MJ + 1, on, batches, med);
     per[0] = failed ? 0 : med[T_CTC] / n;
     per[1] = c.m && !failed ? med[T_MJ] / n : 0;
 

@@ -12,10 +12,9 @@
 
 #include <math.h>
 
-#define CTC_DENSE_MAX 6
+#include "clones.h"
 
-/* inline every call inside the function, so kernels specialise on constant sizes */
-#define CTC_SPECIALISE __attribute__((flatten))
+#define CTC_DENSE_MAX 6
 
 /* y = A x, A (r x c) */
 static inline void ctc_dense_mulv(int r, int c, const double *a, const double *x, double *y)

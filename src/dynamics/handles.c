@@ -12,6 +12,7 @@
  */
 #include "handles.h"
 
+#include "clones.h"
 #include "spatial.h"
 
 static void planar_block(double *h, const double ri[2], const double rj[2], double ij, double im)
@@ -38,7 +39,7 @@ static inline const double *handle2(const ctc_model *m, const ctc_data *d, int k
                                                 : c;
 }
 
-static void handles_planar(const ctc_model *m, ctc_data *d)
+static CTC_MULTIVERSION void handles_planar(const ctc_model *m, ctc_data *d)
 {
     const double *g = m->plane_gravity;
     for (int k = 0; k < m->nbodies; k++) {
@@ -78,7 +79,7 @@ static inline void spatial_block(double *h, const double iw[9], const double gi[
     }
 }
 
-static void handles_spatial(const ctc_model *m, ctc_data *d)
+static CTC_MULTIVERSION void handles_spatial(const ctc_model *m, ctc_data *d)
 {
     for (int k = 0; k < m->nbodies; k++) {
         const ctc_body_spec *body = &m->bodies[k];

@@ -11,10 +11,12 @@
 #include <math.h>
 #include <string.h>
 
+#include "clones.h"
 #include "loop.h"
 #include "spatial.h"
 
-static void kinematics_planar(const ctc_model *m, ctc_data *d, const double *q, const double *v)
+static CTC_MULTIVERSION void kinematics_planar(const ctc_model *m, ctc_data *d, const double *q,
+                                               const double *v)
 {
     for (int k = 0; k < m->nbodies; k++) {
         /* the parent's angle, cos, sin, omega, origin and origin velocity (the ground's: zero) */
@@ -82,7 +84,8 @@ static void kinematics_planar(const ctc_model *m, ctc_data *d, const double *q, 
     }
 }
 
-static void kinematics_spatial(const ctc_model *m, ctc_data *d, const double *q, const double *v)
+static CTC_MULTIVERSION void kinematics_spatial(const ctc_model *m, ctc_data *d, const double *q,
+                                                const double *v)
 {
     static const double zero[3] = {0, 0, 0};
     static const double eye[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};

@@ -5,8 +5,10 @@
 # Every ```sh block of that section is run as written (its `make` line left out: the suite runs
 # on a build already made) with `sh -e`, in a temporary folder where build/ctcsim is $CTCSIM and
 # api/ the repository's, and must exit 0. The first block's output is held against the plain
-# block that follows it: each CSV line the README shows must be a line the run printed, exactly
-# (every digit), and the summary line (standard error) must be the run's up to its timing figure
+# block that follows it: each CSV line the README shows must be a line the run printed, the header
+# exactly and each row's numbers to 1e-12 absolute (with at least unit scale: their last digits
+# depend on whether the processor's copy of the dynamics kernels fuses multiply-adds,
+# src/core/clones.h), and the summary line (standard error) must be the run's up to its timing figure
 # ("0.0177 s", which is the machine's). The block that shows an invalid job ("$ build/ctcsim run
 # bad.json") is run on the worked example's job with the first mass made -1, and must print the
 # README's message and exit 2 (invalid job).
@@ -87,10 +89,23 @@ for block in "$tmp/blocks"/*; do
                     [ "$got" = "$want" ] && pass ||
                         fail "summary: the run prints \"$got\", the README shows \"$want\""
                     ;;
-                *)
+                t,*)
                     csv_lines=$((csv_lines + 1))
                     grep -qxF -- "$line" "$first_sh.out" && pass ||
-                        fail "CSV: the run prints no line \"$line\" (its t = ${line%%,*} is \"$(grep "^${line%%,*}," "$first_sh.out")\")"
+                        fail "CSV: the run prints no header \"$line\""
+                    ;;
+                *)
+                    csv_lines=$((csv_lines + 1))
+                    row=$(grep "^${line%%,*}," "$first_sh.out" | head -n 1)
+                    printf '%s\n%s\n' "$line" "$row" | awk -F, '
+                        NR == 1 { n = NF; for (i = 1; i <= NF; i++) w[i] = $i + 0 }
+                        NR == 2 { if (NF != n) exit 1
+                                  for (i = 1; i <= NF; i++) {
+                                      d = $i - w[i]; if (d < 0) d = -d
+                                      s = w[i] < 0 ? -w[i] : w[i]; if (s < 1) s = 1
+                                      if (d > 1e-12 * s) exit 1 } ; ok = 1 }
+                        END { exit !ok }' && pass ||
+                        fail "CSV: the run prints no line \"$line\" to 1e-12 (its t = ${line%%,*} is \"$row\")"
                     ;;
                 esac
             done <"$block"
