@@ -496,25 +496,16 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         forward_plan(m, d, f, qacc, 0);
     }
 
-    /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r,
-       until the correction converges or stalls */
+    /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += w M^-1 r,
+       until the step rule (gdca_refine_step) stops it */
     const int steps = gdca_refine_steps(m, d);
-    double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, last = INFINITY;
+    double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, *dq_last = d->fwd_res + 2 * m->nvx;
+    gdca_refine_rule rule = {.augmented = m->nsingular > 0 || m->nslender > 0};
     d->fwd_refine_done = 0;
     for (int s = 0; s < steps && d->singular_joint < 0; s++) {
         gdca_refine_residual(m, d, f, qacc, r);
         gdca_forward_correct(m, d, r, dq);
-        /* the largest |qacc| and |dq|: plain comparisons, not libm's fmax (a call each); a NaN
-           is skipped either way */
-        double amax = 0, dmax = 0;
-        for (int i = 0; i < m->nvx; i++) {
-            qacc[i] += dq[i];
-            double aa = fabs(qacc[i]), ad = fabs(dq[i]);
-            if (aa > amax) amax = aa;
-            if (ad > dmax) dmax = ad;
-        }
         d->fwd_refine_done++;
-        if (dmax <= CTC_REFINE_CONVERGED * amax || dmax * CTC_REFINE_STALL > last) break;
-        last = dmax;
+        if (gdca_refine_step(&rule, m->nvx, dq, dq_last, qacc)) break;
     }
 }

@@ -77,7 +77,8 @@ typedef struct ctc_data {
     double *fwd_E;       /* (n x dim^2) joint k: factor E of W = E E^T = D (D^T K D)^-1 D^T */
     double *fwd_z;       /* (n x dim)   joint k: W Y + P f */
     int fwd_refine_done; /* steps the last ctc_gdca_forward made */
-    double *fwd_res;     /* (2 nvx) the refinement's force residual and correction */
+    double *fwd_res;     /* (3 nvx) the refinement's force residual, correction and the
+                            last step's correction */
     double *inv_E;       /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
     double *inv_z;       /* (n x dim)   joint k: X Y' (mobility form) */
     int csize;           /* doubles in one composite record: dim^2 + 2 dim + 3 */
