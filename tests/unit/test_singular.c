@@ -392,9 +392,9 @@ Test(singular, a_singular_mass_matrix_is_refused_naming_the_body)
 }
 
 /* Worst errors of a loop model against the loop oracle (tests/support/loop_oracle.h) over random
- * states near q0 put onto the closure (ctc_loop_assemble): forward accelerations for random forces on
- * the independent coordinates, and CTC driving forces for random commands, each relative to the
- * oracle's largest entry. */
+ * states near q0 put onto the closure (ctc_loop_assemble): forward accelerations for random
+ * forces on the independent coordinates, and CTC driving forces for random commands, each
+ * relative to the oracle's largest entry. */
 static void check_loop_against_oracle(const ctc_chain_spec *spec, const double *q0, int states,
                                       double *fwd, double *inv)
 {
