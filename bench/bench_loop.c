@@ -16,6 +16,8 @@
  *            directions (spatial form), closed by a spherical joint at the tip's link end.
  *            Mobility n + 3 - 6 = n - 3: joints n/4, n/2, 3n/4 and the closing joint are
  *            dependent, every other joint independent.
+ *   arch spread  the arch with its dependent joints spread along it: n/3, 2n/3 and the closing
+ *            joint (the arch's are bunched at the tip, which makes its problem ill conditioned).
  *   arch on b, spatial on b   the arch closed on body n/4, the spatial chain on body n/8: the
  *            anchor is the same point in that body's frame, the dependent joints the same.
  * Each loop is closed at its q0 by construction (the anchor is where forward kinematics at q0
@@ -44,10 +46,14 @@
  * driving forces with and without its early stop, and every pass's are finite; the library's and
  * the paper's forces against the dense loop oracle (tests/support/loop_oracle.h; n <=
  * ORACLE_MAX_N); GDCA forward on the library's against the commanded accelerations of the
- * independent coordinates (the round trip, closed and open); the projection converges. A case that
+ * independent coordinates (the round trip, closed and open), and the round trip's floor: how far
+ * the forward pass's accelerations move when each driving force is perturbed by its own rounding
+ * (f_i (1 + eps r), r uniform in [-1, 1], FLOOR_DRAWS draws), relative to max |u| as the round
+ * trip is: no solver in double precision can be held to less; the projection converges. A case that
  * fails is reported on stderr and left out of the tables, and the run ends with status 1. Usage:
  * bench_loop [max_n] [batches]
  */
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -78,16 +84,7 @@ enum {
 #define DRIFT 1e-9
 #define ORACLE_MAX_N 1024 /* the dense oracle is O(n^3) */
 #define SETTLE_S 5e-3     /* s, untimed runs before each timing in a batch */
-
-/* a loop scene of any size: spec points into the arrays */
-typedef struct bench_scene {
-    ctc_chain_spec spec;
-    ctc_body_spec *bodies;  /* (n) */
-    ctc_joint_spec *joints; /* (n) */
-    ctc_loop_spec loop;
-    unsigned char *independent; /* (n + 1) */
-    double *q0;                 /* (nq) closed */
-} bench_scene;
+#define FLOOR_DRAWS 3
 
 typedef struct bench_case {
     const ctc_model *m;    /* the closed chain */
@@ -109,6 +106,8 @@ typedef struct bench_row {
     double f_oracle, f_paper;     /* max |f - f_oracle| / max |f_oracle| of the default and the
                                      paper's iGDCA; -1: not computed */
     double round_trip, open_trip; /* max |qacc - u| / max |u| over the independent coordinates */
+    double floor;                 /* the round trip's floor: max |qacc(f + df) - qacc(f)| / max |u|
+                                     over FLOOR_DRAWS draws of df_i = eps |f_i| uniform(-1, 1) */
 } bench_row;
 
 static double now(void)
@@ -230,105 +229,14 @@ static ctc_model *build(const ctc_chain_spec *spec, const char *label)
     return m;
 }
 
-/* s's loop anchor where its tip's closing point is at q0: world (body < 0) or body's frame */
-static void scene_anchor(bench_scene *s, int body, const char *label)
+/* the scene, or ends the run */
+static test_loop *scene(test_loop *l, const char *label, int n)
 {
-    char err[256];
-    if (test_loop_anchor(&s->spec, s->q0, body, s->loop.anchor, err, sizeof err) != CTC_OK) {
-        fprintf(stderr, "bench_loop: %s n = %d: %s\n", label, s->spec.nbodies, err);
+    if (l == NULL) {
+        fprintf(stderr, "bench_loop: %s n = %d: could not make the scene\n", label, n);
         exit(1);
     }
-}
-
-static bench_scene *scene_alloc(int n)
-{
-    bench_scene *s = calloc(1, sizeof *s);
-    if (!s) abort();
-    s->bodies = calloc((size_t)n, sizeof *s->bodies);
-    s->joints = calloc((size_t)n, sizeof *s->joints);
-    s->independent = calloc((size_t)n + 1, 1);
-    s->q0 = calloc((size_t)n, sizeof *s->q0); /* revolute joints only */
-    if (!s->bodies || !s->joints || !s->independent || !s->q0) abort();
-    s->spec.nbodies = n;
-    s->spec.bodies = s->bodies;
-    s->spec.joints = s->joints;
-    s->spec.loop = &s->loop;
-    s->spec.independent = s->independent;
-    s->spec.form = CTC_FORM_AUTO;
-    return s;
-}
-
-static void scene_free(bench_scene *s)
-{
-    if (!s) return;
-    free(s->bodies), free(s->joints), free(s->independent), free(s->q0);
-    free(s);
-}
-
-/* n uniform 1 kg, 1 m rods hanging along -y at q = 0 from revolute joints about +z, bent into
-   an arch by q0; the closing revolute joint at the tip's far end, anchored where q0 puts it */
-static bench_scene *scene_arch(int n)
-{
-    const double len = 1.0, end[3] = {0, -len, 0};
-    bench_scene *s = scene_alloc(n);
-    ctc_v3_set(s->spec.gravity, 0, -9.81, 0);
-    double prev = 0, x = 0, y = 0;
-    for (int k = 0; k < n; k++) {
-        s->joints[k] = (ctc_joint_spec){.type = CTC_JOINT_REVOLUTE, .axis = {0, 0, 1}};
-        if (k) s->joints[k].location[1] = -len;
-        ctc_shape_rod(1.0, end, &s->bodies[k], NULL, 0);
-        /* absolute angle from -y: 3 pi / 4 (up and right) to pi / 4 (down and right) */
-        double th = 0.75 * CTC_PI - 0.5 * CTC_PI * k / (n - 1);
-        s->q0[k] = th - prev;
-        prev = th;
-        x += len * sin(th), y -= len * cos(th);
-        s->independent[k] = 1;
-    }
-    s->loop.joint =
-        (ctc_joint_spec){.type = CTC_JOINT_REVOLUTE, .axis = {0, 0, 1}, .location = {0, -len, 0}};
-    ctc_v3_set(s->loop.anchor, x, y, 0);
-    s->independent[n / 2] = s->independent[n - 1] = s->independent[n] = 0;
-    return s;
-}
-
-/* n 1 kg boxes on revolute joints with random axes and 0.3 m links in random directions, q0
-   random; a spherical closing joint at the tip's link end, anchored where q0 puts it */
-static bench_scene *scene_spatial(int n, uint64_t seed)
-{
-    const double size[3] = {0.12, 0.08, 0.05};
-    uint64_t rng = seed;
-    bench_scene *s = scene_alloc(n);
-    ctc_v3_set(s->spec.gravity, 0, 0, -9.81);
-    double link[3] = {0, 0, 0};
-    for (int k = 0; k < n; k++) {
-        ctc_joint_spec *j = &s->joints[k];
-        j->type = CTC_JOINT_REVOLUTE;
-        test_random_unit(&rng, j->axis);
-        ctc_v3_copy(j->location, link);
-        test_random_unit(&rng, link);
-        ctc_v3_scale(link, link, 0.3);
-        double centre[3];
-        ctc_v3_scale(centre, link, 0.5);
-        ctc_shape_box(1.0, size, centre, &s->bodies[k], NULL, 0);
-        s->q0[k] = test_uniform(&rng, -CTC_PI, CTC_PI);
-        s->independent[k] = 1;
-    }
-    s->loop.joint = (ctc_joint_spec){.type = CTC_JOINT_SPHERICAL};
-    ctc_v3_copy(s->loop.joint.location, link);
-    s->independent[n / 4] = s->independent[n / 2] = s->independent[3 * n / 4] = 0;
-    s->independent[n] = 0;
-
-    /* the anchor: the tip's closing point at q0 */
-    scene_anchor(s, -1, "spatial");
-    return s;
-}
-
-/* the same loop closed on body b: the anchor (the tip's closing point at q0) in b's frame */
-static void scene_close_on(bench_scene *s, int b)
-{
-    scene_anchor(s, b, "on a body");
-    s->loop.on_body = 1;
-    s->loop.body = b;
+    return l;
 }
 
 static double max_abs(const double *x, int n)
@@ -423,6 +331,22 @@ static int bench_loop_case(const char *label, const ctc_chain_spec *spec, const 
         row->f_oracle /= max_abs(f_full, m->nvx);
         row->f_paper /= max_abs(f_full, m->nvx);
     }
+
+    /* the floor: what rounding the driving forces alone does to the accelerations (f_paper
+       and f_full are free from here) */
+    for (int t = 0; t < FLOOR_DRAWS; t++) {
+        for (size_t i = 0; i < nvx; i++) {
+            f_paper[i] = c.f[i] * (1 + DBL_EPSILON * test_uniform(&rng, -1, 1));
+        }
+        ctc_kinematics(m, c.d, c.q, c.v);
+        ctc_handles(m, c.d);
+        ctc_gdca_forward(m, c.d, f_paper, f_full);
+        double e = 0;
+        for (int i = 0; i < m->nind; i++) {
+            e = fmax(e, fabs(f_full[m->ind_coord[i]] - c.a[m->ind_coord[i]]));
+        }
+        row->floor = fmax(row->floor, e / max_abs(c.u, m->nvx));
+    }
     ctc_eval(open, c.d_open, c.q, c.v, c.u, c.fo, c.ao, 0);
     if (!test_all_finite(c.fo, m->nv) || !test_all_finite(c.ao, m->nv)) {
         snprintf(err, sizeof err, "open chain: non-finite driving forces or accelerations");
@@ -490,9 +414,9 @@ static void print_rows(const bench_row *rows, int nrows)
            PROJ_TOL, DRIFT);
     printf("| chain    |    n | mobility | cond (dependent) | projection (us) | Newton its | "
            "residual after (m) | 6 ctc (us) | projection / 6 ctc | f vs oracle | paper's f vs "
-           "oracle | round trip | open round trip |\n");
+           "oracle | round trip | its floor | open round trip |\n");
     printf("| -------- | ---: | ---: | ---: | ---------: | ---: | ---: | ---------: | ----: | ---: "
-           "| ---: | ---: | ---: |\n");
+           "| ---: | ---: | ---: | ---: |\n");
     for (int i = 0; i < nrows; i++) {
         const bench_row *r = &rows[i];
         const double *t = r->med;
@@ -500,10 +424,10 @@ static void print_rows(const bench_row *rows, int nrows)
         if (r->f_oracle >= 0) snprintf(oracle, sizeof oracle, "%7.1e", r->f_oracle);
         if (r->f_paper >= 0) snprintf(paper, sizeof paper, "%7.1e", r->f_paper);
         printf("| %-8s | %4d | %4d | %6.1e | %10.2f | %d | %7.1e | %10.2f | %5.1f%% | %7s | %7s | "
-               "%7.1e | %7.1e |\n",
+               "%7.1e | %7.1e | %7.1e |\n",
                r->label, r->n, r->mobility, r->cond, 1e6 * t[T_PROJ], r->iterations, r->res_after,
                6e6 * t[T_CTC], 100.0 * t[T_PROJ] / (6 * t[T_CTC]), oracle, paper, r->round_trip,
-               r->open_trip);
+               r->floor, r->open_trip);
     }
 }
 
@@ -523,7 +447,7 @@ int main(int argc, char **argv)
            batches);
     static const int arch_n[] = {5, 16, 64, 256, 1024, 4096};
     static const int spatial_n[] = {5, 64, 256, 1024};
-    bench_row rows[20];
+    bench_row rows[32];
     int nrows = 0;
 
     /* a case that fails is reported and left out; the run then ends with status 1 */
@@ -535,33 +459,45 @@ int main(int argc, char **argv)
         failed = 1;
     free(five);
     for (size_t i = 0; i < sizeof arch_n / sizeof *arch_n && arch_n[i] <= max_n; i++) {
-        bench_scene *s = scene_arch(arch_n[i]);
+        test_loop *s = scene(test_loop_arch(arch_n[i]), "arch", arch_n[i]);
         if (bench_loop_case("arch", &s->spec, s->q0, batches, &rows[nrows]) == 0)
             nrows++;
         else
             failed = 1;
-        scene_free(s);
+        test_loop_free(s);
+    }
+    for (size_t i = 1; i < sizeof arch_n / sizeof *arch_n && arch_n[i] <= max_n; i++) {
+        test_loop *s = scene(test_loop_arch_spread(arch_n[i]), "arch spread", arch_n[i]);
+        if (bench_loop_case("arch spread", &s->spec, s->q0, batches, &rows[nrows]) == 0)
+            nrows++;
+        else
+            failed = 1;
+        test_loop_free(s);
     }
     for (size_t i = 0; i < sizeof spatial_n / sizeof *spatial_n && spatial_n[i] <= max_n; i++) {
-        bench_scene *s = scene_spatial(spatial_n[i], 11);
+        test_loop *s = scene(test_loop_spatial(spatial_n[i], 11), "spatial", spatial_n[i]);
         if (bench_loop_case("spatial", &s->spec, s->q0, batches, &rows[nrows]) == 0)
             nrows++;
         else
             failed = 1;
-        scene_free(s);
+        test_loop_free(s);
     }
     /* loops closed on a body: the same passes below an extra level of the tree */
     for (int i = 0; i < 3; i++) {
         const int spatial = i == 2, n = spatial ? 256 : i ? 1024 : 64;
         if (n > max_n) continue;
-        bench_scene *s = spatial ? scene_spatial(n, 11) : scene_arch(n);
-        scene_close_on(s, spatial ? n / 8 : n / 4);
-        if (bench_loop_case(spatial ? "spatial on b" : "arch on b", &s->spec, s->q0, batches,
-                            &rows[nrows]) == 0)
+        const char *label = spatial ? "spatial on b" : "arch on b";
+        test_loop *s = scene(spatial ? test_loop_spatial(n, 11) : test_loop_arch(n), label, n);
+        char err[256];
+        if (test_loop_close_on(s, spatial ? n / 8 : n / 4, err, sizeof err) != CTC_OK) {
+            fprintf(stderr, "bench_loop: %s n = %d: %s\n", label, n, err);
+            return 1;
+        }
+        if (bench_loop_case(label, &s->spec, s->q0, batches, &rows[nrows]) == 0)
             nrows++;
         else
             failed = 1;
-        scene_free(s);
+        test_loop_free(s);
     }
     print_rows(rows, nrows);
     if (failed) return 1;

@@ -494,7 +494,7 @@ void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, doub
 /* the accelerations and the joint loads before a refinement step, to undo it */
 static void keep_before_step(const ctc_model *m, ctc_data *d, const double *qacc)
 {
-    memcpy(d->fwd_res + 2 * m->nvx, qacc, (size_t)m->nvx * sizeof *qacc);
+    memcpy(d->fwd_res + 3 * m->nvx, qacc, (size_t)m->nvx * sizeof *qacc);
     memcpy(d->fwd_load_prev, d->jnt_load, (size_t)m->njoints * (size_t)m->dim * sizeof(double));
 }
 
@@ -516,7 +516,7 @@ static int refine_undo_if_grown(const ctc_model *m, ctc_data *d, double *qacc, c
         return 0;
     }
     if (d->fwd_refine_done > 0) {
-        memcpy(qacc, d->fwd_res + 2 * m->nvx, (size_t)m->nvx * sizeof *qacc);
+        memcpy(qacc, d->fwd_res + 3 * m->nvx, (size_t)m->nvx * sizeof *qacc);
         memcpy(d->jnt_load, d->fwd_load_prev, (size_t)m->njoints * (size_t)m->dim * sizeof(double));
         d->fwd_refine_done--;
         d->fwd_refine_undone = 1;
@@ -544,12 +544,14 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
     }
     if (g != NULL) ctc_pool_gate_record(g, d->fwd_split, ctc_pool_clock() - t0);
 
-    /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += M^-1 r,
-       until the correction converges or stalls; on a long open chain a step whose residual grew
-       is undone, and the last step is checked by one more residual */
+    /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += w M^-1 r,
+       until the step rule (gdca_refine_step) stops it; on a long open chain a step whose residual
+       grew is undone, and the last step is checked by one more residual */
     const int steps = gdca_refine_steps(m, d);
     const int guard = !m->has_loop && m->nbodies >= CTC_REFINE_CHECK_MIN_BODIES;
-    double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, last = INFINITY, rlast = INFINITY;
+    double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, *dq_last = d->fwd_res + 2 * m->nvx;
+    double rlast = INFINITY;
+    gdca_refine_rule rule = {.augmented = m->nsingular > 0 || m->nslender > 0};
     d->fwd_refine_done = 0;
     d->fwd_refine_undone = 0;
     for (int s = 0; s < steps && d->singular_joint < 0; s++) {
@@ -557,18 +559,8 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         if (guard && refine_undo_if_grown(m, d, qacc, r, &rlast)) return;
         if (guard) keep_before_step(m, d, qacc);
         gdca_forward_correct(m, d, r, dq);
-        /* the largest |qacc| and |dq|: plain comparisons, not libm's fmax (a call each); a NaN
-           is skipped either way */
-        double amax = 0, dmax = 0;
-        for (int i = 0; i < m->nvx; i++) {
-            qacc[i] += dq[i];
-            double aa = fabs(qacc[i]), ad = fabs(dq[i]);
-            if (aa > amax) amax = aa;
-            if (ad > dmax) dmax = ad;
-        }
         d->fwd_refine_done++;
-        if (dmax <= CTC_REFINE_CONVERGED * amax || dmax * CTC_REFINE_STALL > last) break;
-        last = dmax;
+        if (gdca_refine_step(&rule, m->nvx, dq, dq_last, qacc)) break;
     }
     if (guard && d->fwd_refine_done > 0 && d->singular_joint < 0) {
         gdca_refine_residual(m, d, f, qacc, r);

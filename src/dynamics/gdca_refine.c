@@ -8,6 +8,9 @@
  */
 #include "gdca_refine.h"
 
+#include <math.h>
+#include <string.h>
+
 #include "gdca.h"
 #include "gdca_inverse_loop.h"
 #include "gdca_loop.h"
@@ -22,6 +25,50 @@ int gdca_refine_steps(const ctc_model *m, const ctc_data *d)
     if (d->opt.fwd_refine >= 0) return d->opt.fwd_refine;
     if (m->mass_ratio >= CTC_REFINE_MASS_RATIO) return CTC_REFINE_MAX_STEPS;
     return m->nbodies >= CTC_REFINE_MIN_BODIES ? 1 : 0;
+}
+
+int gdca_refine_step(gdca_refine_rule *rule, int nvx, const double *dq, double *dq_last,
+                     double *qacc)
+{
+    /* an augmented model's ratio of this correction to the last, and whether to extrapolate */
+    double lambda = 0, w = 1;
+    if (rule->augmented && rule->steps > 0) {
+        double dd = 0, ll = 0;
+        for (int i = 0; i < nvx; i++) dd += dq[i] * dq_last[i], ll += dq_last[i] * dq_last[i];
+        lambda = ll > 0 ? dd / ll : 0;
+    }
+    const double mag = fabs(lambda);
+    const int extrapolate = rule->steps > 1 && !rule->extrapolate && mag >= CTC_REFINE_EXTRAP_MIN &&
+                            mag <= CTC_REFINE_EXTRAP_MAX &&
+                            fabs(lambda - rule->lambda) <= CTC_REFINE_RATE_AGREE * mag;
+    if (extrapolate) w = 1 / (1 - lambda);
+
+    /* the largest |qacc| and |w dq|: plain comparisons, not libm's fmax (a call each); a NaN is
+       skipped either way */
+    double amax = 0, dmax = 0;
+    for (int i = 0; i < nvx; i++) {
+        const double step = w * dq[i];
+        qacc[i] += step;
+        double aa = fabs(qacc[i]), ad = fabs(step);
+        if (aa > amax) amax = aa;
+        if (ad > dmax) dmax = ad;
+    }
+    const int first = rule->steps == 0;
+    const double last = rule->last;
+    rule->steps++;
+    rule->lambda = lambda;
+    rule->extrapolate = extrapolate;
+    rule->last = dmax;
+    if (first || !rule->augmented) {
+        if (dmax <= CTC_REFINE_CONVERGED * amax) return 1;
+        if (!first && dmax * CTC_REFINE_STALL > last) return 1;
+    } else if (!extrapolate) {
+        if (mag * CTC_REFINE_SLOW_STALL >= 1) return 1;
+        if (dmax <= CTC_REFINE_TOL * amax && dmax * mag <= CTC_REFINE_TAIL * amax * (1 - mag))
+            return 1;
+    }
+    if (rule->augmented) memcpy(dq_last, dq, (size_t)nvx * sizeof *dq);
+    return 0;
 }
 
 void gdca_refine_residual(const ctc_model *m, ctc_data *d, const double *f, double *qacc, double *r)

@@ -29,16 +29,42 @@
  * bodies, or its body masses or inertias span a ratio of CTC_REFINE_MASS_RATIO or more (model.h
  * mass_ratio). A stiffly proportioned chain gets up to CTC_REFINE_MAX_STEPS steps (each recovers
  * digits the literal pass lost: test_hard, test_loop), a long evenly proportioned one gets one
- * (its round trip is then at the articulated-body oracle's own), a short even one none. Steps
- * stop once a correction is below CTC_REFINE_CONVERGED of the accelerations (the next would be
- * smaller by the bias-free pass's own relative error, far below rounding of the result), or
- * shrinks by less than a factor CTC_REFINE_STALL (the residual has reached its rounding level).
- * The thresholds and step counts: bench/NOTEBOOK.md, "Hard cases" and "Closed chains". */
+ * (its round trip is then at the articulated-body oracle's own), a short even one none. Within
+ * that cap, gdca_refine_step decides after each step (delta = max |w dq| / max |qdd|, the step's
+ * change relative to the result). The correction pass of a model without augmented bodies is
+ * M^-1 itself up to rounding, so its steps stop once a correction is below CTC_REFINE_CONVERGED of
+ * the accelerations (the next would be smaller by the bias-free pass's own relative error, far
+ * below rounding of the result), or shrinks by less than a factor CTC_REFINE_STALL (the residual
+ * has reached its rounding level). A model with singular or slender bodies corrects with the
+ * augmented inertias' M_aug^-1, whose steps converge at the rate of the augmentation's share of
+ * M, slowly where M(q) is ill conditioned; its steps follow that rate:
+ *   - the first step ends the refinement when delta <= CTC_REFINE_CONVERGED, as above;
+ *   - from the second step, the ratio lambda = dq . dq_last / |dq_last|^2 of the correction to the
+ *     last one estimates the rate (the iteration is linear: its slowest mode soon dominates). The
+ *     refinement ends once delta <= CTC_REFINE_TOL and the corrections still to come, a
+ *     geometric series at that rate, delta |lambda| / (1 - |lambda|), are at most CTC_REFINE_TAIL
+ *     (delta bounds a slower mode that the second step's ratio, still the first mode's, cannot
+ *     show), or once |lambda| >= 1 / CTC_REFINE_SLOW_STALL (a step gains too little: rounding);
+ *   - when two successive ratios agree to CTC_REFINE_RATE_AGREE and CTC_REFINE_EXTRAP_MIN <=
+ *     |lambda| <= CTC_REFINE_EXTRAP_MAX, one mode dominates the error and the step is
+ *     extrapolated: qdd += dq / (1 - lambda) removes that mode at once (the sum of its geometric
+ *     series), and the next step checks what is left.
+ * On ill-conditioned M(q) (256 slender rods of alternating 1 kg and 1 g, cond(M) ~ 3e9) the
+ * slowest mode has lambda of -0.3 to -0.7, where the first rule alone stopped with 4e-8 of qdd
+ * left. The exact pass's steps past its rounding level are noise, which the same rate rule would
+ * follow to the cap (random planar rods, n >= 256: a third step that changes nothing). Measured:
+ * bench/NOTEBOOK.md, "Hard cases", "Closed chains" and "Refinement that converges". */
 #define CTC_REFINE_MIN_BODIES 64
 #define CTC_REFINE_MASS_RATIO 100.0
 #define CTC_REFINE_MAX_STEPS 3
 #define CTC_REFINE_CONVERGED 1e-8
 #define CTC_REFINE_STALL 10.0
+#define CTC_REFINE_TOL 1e-9
+#define CTC_REFINE_TAIL 1e-11
+#define CTC_REFINE_SLOW_STALL 1.1
+#define CTC_REFINE_RATE_AGREE 0.25
+#define CTC_REFINE_EXTRAP_MIN 0.2
+#define CTC_REFINE_EXTRAP_MAX 0.8
 
 /* On an open chain of CTC_REFINE_CHECK_MIN_BODIES bodies or more, whose conditioning approaches
  * 1 / rounding, the refinement never makes the residual larger: before each step past the
@@ -61,12 +87,27 @@
  * error: it gets up to
  * CTC_REFINE_SINGULAR_STEPS steps, or d->opt.fwd_refine if that is more (each shrinks the error
  * by about the augmentation's share, 1e-6 to 1e-5 for a singular body and about 1e-4 for a
- * slender one; the stopping rules above end it after two). */
+ * slender one; the stopping rules above end it after two where M(q) is well conditioned). */
 #define CTC_REFINE_SINGULAR_STEPS 6
 
 /* The most refinement steps ctc_gdca_forward makes on model m with settings d: d->opt.fwd_refine
  * when >= 0, else by the rule above CTC_REFINE_MAX_STEPS (mass ratio), 1 (length) or 0. */
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d);
+
+/* What the step rule keeps between the steps of one ctc_gdca_forward; zero it before the first. */
+typedef struct gdca_refine_rule {
+    int augmented;   /* the model has singular or slender bodies: the rate rule (set it first) */
+    int steps;       /* steps seen */
+    double last;     /* the last step's max |w dq| */
+    double lambda;   /* the last step's ratio (0 before the second step) */
+    int extrapolate; /* the last step was extrapolated */
+} gdca_refine_rule;
+
+/* One step of the rule above: adds w dq to qacc (nvx; w = 1, or 1 / (1 - lambda) when an
+ * augmented model's step is extrapolated), keeps dq in dq_last (nvx; augmented models only) for
+ * the next step, and returns 1 when the refinement should stop, else 0. */
+int gdca_refine_step(gdca_refine_rule *rule, int nvx, const double *dq, double *dq_last,
+                     double *qacc);
 
 /* The residual of the forward pass's accelerations qacc (nv; nvx for a loop model) under the
  * driving forces f (the same length, a loop's dependent entries zero), from the composite inverse

@@ -95,8 +95,8 @@ typedef struct ctc_data {
     int fwd_refine_done;   /* steps the last ctc_gdca_forward made and kept */
     int fwd_refine_undone; /* 1: the last ctc_gdca_forward undid a step whose residual grew
                               (gdca_refine.h) */
-    double *fwd_res;       /* (3 nvx) the refinement's force residual, its correction, and the
-                              accelerations before the last step */
+    double *fwd_res;       /* (4 nvx) the refinement's force residual, its correction, the last
+                              step's correction, and the accelerations before the last step */
     double *fwd_load_prev; /* (njoints x dim) jnt_load before the refinement's last step */
     double *inv_E;         /* (n x dim^2) joint k: factor E of X = E E^T = K^-1 (mobility form) */
     double *inv_z;         /* (n x dim)   joint k: X Y' (mobility form) */

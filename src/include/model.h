@@ -178,8 +178,11 @@ typedef struct ctc_body_spec {
  * generic configuration (each coordinate q_i = sin(i + 1), each quaternion normalised from (1, 0.1
  * sin(i + 1), 0.2, 0.3)) and refuses a pivot <= CTC_MASS_MATRIX_PIVOT_REL times the largest
  * diagonal entry, naming the joint's body: a massless tip on a moving joint, a point mass on a
- * revolute axis through it. Loop models refuse singular bodies (their passes invert each body's
- * mobility). Models without a singular body skip all of this and are unchanged. */
+ * revolute axis through it. A loop model is held to the same test on its open chain (the chain
+ * without the closing joint): its forward pass is augmented and refined alike (the refinement's
+ * residual carries the closure, gdca_refine.h), and its CTC inverse inverts no body
+ * (gdca_inverse_loop.h). That refuses a massless tip, which the closing joint would hold in
+ * place. Models without a singular body skip all of this and are unchanged. */
 #define CTC_MASS_ZERO_REL 1e-12
 #define CTC_INERTIA_ZERO_REL 1e-12
 #define CTC_SINGULAR_AUGMENT_REL 1e-6
@@ -202,8 +205,9 @@ typedef struct ctc_body_spec {
  * 1e-12, in two steps. Ratios
  * from CTC_SLENDER_RATIO up lose at most about 1e-12 of qdd unrefined, and 7e-11 in the round
  * trip GDCA(RNEA(u)) of CTC-like forces (16 rods; 2e-3 lost 3e-10 there). The thresholds are
- * measured (bench/NOTEBOOK.md). A loop model's slender bodies are not augmented (its passes invert
- * each body's mobility, gdca_inverse_loop.h); nslender is 0 there. */
+ * measured (bench/NOTEBOOK.md). A loop model's slender bodies are not augmented (nslender is 0
+ * there): its threshold and fraction were measured on open chains only (a loop model's singular
+ * bodies are augmented as above). */
 #define CTC_SLENDER_RATIO 1e-2
 #define CTC_SLENDER_AUGMENT_REL 1e-5
 

@@ -35,7 +35,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->hinv = calloc(nt * (size_t)d->hsize, sizeof(double));
     d->fwd_E = calloc(n * dim * dim, sizeof(double));
     d->fwd_z = calloc(n * dim, sizeof(double));
-    d->fwd_res = calloc(3 * (size_t)m->nvx + 1, sizeof(double));
+    d->fwd_res = calloc(4 * (size_t)m->nvx + 1, sizeof(double));
     d->fwd_load_prev = calloc(nj * dim, sizeof(double));
     d->inv_E = calloc(n * dim * dim, sizeof(double));
     d->inv_z = calloc(n * dim, sizeof(double));

@@ -922,15 +922,6 @@ static ctc_status setup_singular(ctc_model *m, const double *moments, const doub
     m->nslender = 0;
     for (int k = 0; k < nb; k++) m->nslender += is_slender(m, moments, n, k);
     if (m->nsingular == 0 && m->nslender == 0) return CTC_OK;
-    if (m->nsingular > 0 && m->has_loop) {
-        int k = 0;
-        while (!m->body_singular[k]) k++;
-        return ctc_fail(CTC_EINVAL, err, errlen,
-                        "body %d: a massless or point-mass body (mass %g kg, smallest principal "
-                        "moment %g kg m^2) is not supported in a loop model: give it mass and "
-                        "inertia about every axis",
-                        k, m->bodies[k].mass, moments[3 * k]);
-    }
 
     /* J_ref and m_ref of each subtree, children before parents (body_parent[k] < k) */
     double *ref = malloc((size_t)nb * 2 * sizeof(double));

@@ -329,3 +329,107 @@ ctc_status test_loop_anchor(const ctc_chain_spec *spec, const double *q0, int bo
     ctc_model_free(m);
     return st;
 }
+
+static test_loop *test_loop_alloc(int n)
+{
+    test_loop *l = calloc(1, sizeof *l);
+    if (!l) return NULL;
+    l->bodies = calloc((size_t)n, sizeof *l->bodies);
+    l->joints = calloc((size_t)n, sizeof *l->joints);
+    l->independent = calloc((size_t)n + 1, 1);
+    l->q0 = calloc((size_t)n, sizeof *l->q0); /* revolute joints only */
+    if (!l->bodies || !l->joints || !l->independent || !l->q0) {
+        test_loop_free(l);
+        return NULL;
+    }
+    l->spec.nbodies = n;
+    l->spec.bodies = l->bodies;
+    l->spec.joints = l->joints;
+    l->spec.loop = &l->loop;
+    l->spec.independent = l->independent;
+    l->spec.form = CTC_FORM_AUTO;
+    for (int k = 0; k <= n; k++) l->independent[k] = 1;
+    return l;
+}
+
+void test_loop_free(test_loop *l)
+{
+    if (!l) return;
+    free(l->bodies), free(l->joints), free(l->independent), free(l->q0);
+    free(l);
+}
+
+test_loop *test_loop_arch(int n)
+{
+    const double len = 1.0, end[3] = {0, -len, 0};
+    test_loop *l = test_loop_alloc(n);
+    if (!l) return NULL;
+    ctc_v3_set(l->spec.gravity, 0, -9.81, 0);
+    double prev = 0, x = 0, y = 0;
+    for (int k = 0; k < n; k++) {
+        l->joints[k] = (ctc_joint_spec){.type = CTC_JOINT_REVOLUTE, .axis = {0, 0, 1}};
+        if (k) l->joints[k].location[1] = -len;
+        ctc_shape_rod(1.0, end, &l->bodies[k], NULL, 0);
+        /* absolute angle from -y: 3 pi / 4 (up and right) to pi / 4 (down and right) */
+        double th = 0.75 * CTC_PI - 0.5 * CTC_PI * k / (n - 1);
+        l->q0[k] = th - prev;
+        prev = th;
+        x += len * sin(th), y -= len * cos(th);
+    }
+    l->loop.joint =
+        (ctc_joint_spec){.type = CTC_JOINT_REVOLUTE, .axis = {0, 0, 1}, .location = {0, -len, 0}};
+    ctc_v3_set(l->loop.anchor, x, y, 0);
+    l->independent[n / 2] = l->independent[n - 1] = l->independent[n] = 0;
+    return l;
+}
+
+test_loop *test_loop_arch_spread(int n)
+{
+    test_loop *l = test_loop_arch(n);
+    if (!l) return NULL;
+    l->independent[n / 2] = l->independent[n - 1] = 1;
+    l->independent[n / 3] = l->independent[2 * n / 3] = 0;
+    return l;
+}
+
+test_loop *test_loop_spatial(int n, uint64_t seed)
+{
+    const double size[3] = {0.12, 0.08, 0.05};
+    uint64_t rng = seed;
+    test_loop *l = test_loop_alloc(n);
+    if (!l) return NULL;
+    ctc_v3_set(l->spec.gravity, 0, 0, -9.81);
+    double link[3] = {0, 0, 0};
+    for (int k = 0; k < n; k++) {
+        ctc_joint_spec *j = &l->joints[k];
+        j->type = CTC_JOINT_REVOLUTE;
+        test_random_unit(&rng, j->axis);
+        ctc_v3_copy(j->location, link);
+        test_random_unit(&rng, link);
+        ctc_v3_scale(link, link, 0.3);
+        double centre[3];
+        ctc_v3_scale(centre, link, 0.5);
+        ctc_shape_box(1.0, size, centre, &l->bodies[k], NULL, 0);
+        l->q0[k] = test_uniform(&rng, -CTC_PI, CTC_PI);
+    }
+    l->loop.joint = (ctc_joint_spec){.type = CTC_JOINT_SPHERICAL};
+    ctc_v3_copy(l->loop.joint.location, link);
+    l->independent[n / 4] = l->independent[n / 2] = l->independent[3 * n / 4] = 0;
+    l->independent[n] = 0;
+    char err[256];
+    if (test_loop_anchor(&l->spec, l->q0, -1, l->loop.anchor, err, sizeof err) != CTC_OK) {
+        fprintf(stderr, "test_loop_spatial n = %d: %s\n", n, err);
+        test_loop_free(l);
+        return NULL;
+    }
+    return l;
+}
+
+ctc_status test_loop_close_on(test_loop *l, int b, char *err, size_t errlen)
+{
+    ctc_status st = test_loop_anchor(&l->spec, l->q0, b, l->loop.anchor, err, errlen);
+    if (st != CTC_OK) return st;
+    l->loop.on_body = 1;
+    l->loop.body = b;
+    return CTC_OK;
+}

@@ -103,4 +103,42 @@ void test_chain_scale_bodies(test_chain *c, const double *factor);
  * test_chain_free. */
 test_chain *test_chain_spatial_double_pendulum(ctc_joint_type type);
 
+/* A long loop of tests and benchmarks (bench_loop, test_loop): owns its arrays, spec points into
+ * them (free with test_loop_free, NULL allowed). q0 (nq) is a closed configuration by
+ * construction (the anchor is where the kinematics put the tip's closing point at q0). */
+typedef struct test_loop {
+    ctc_chain_spec spec;
+    ctc_body_spec *bodies;  /* (n) */
+    ctc_joint_spec *joints; /* (n) */
+    ctc_loop_spec loop;
+    unsigned char *independent; /* (n + 1) */
+    double *q0;                 /* (nq) */
+} test_loop;
+
+/* The arch: n >= 5 uniform 1 kg, 1 m rods hanging along -y at q = 0 from revolute joints about
+ * +z (planar form), bent by q0 so that the absolute link angles (from -y) spread evenly from
+ * 3 pi / 4 to pi / 4, an arch from the origin to its anchor; a revolute closing joint at the
+ * tip's far end, on the ground. Mobility n - 2: joints n/2, n-1 and the closing joint are
+ * dependent, every other joint independent. Two of the three dependent joints are 1 m apart at
+ * the tip, so for unit commands on the others they accelerate at up to 1.7e5 rad/s^2 at n = 256
+ * and 3.4e7 at n = 1024: an ill-conditioned problem (bench/NOTEBOOK.md, "Long loops"). NULL if
+ * memory runs out. */
+test_loop *test_loop_arch(int n);
+
+/* The same arch with the dependent joints spread along it: n/3, 2n/3 and the closing joint
+ * (dependent accelerations up to 29 rad/s^2 at n = 256, 280 at n = 1024). */
+test_loop *test_loop_arch_spread(int n);
+
+/* n >= 5 1 kg boxes (0.12 x 0.08 x 0.05 m) on revolute joints with random unit axes and 0.3 m
+ * links in random directions (spatial form), q0 random in [-pi, pi], closed on the ground by a
+ * spherical joint at the tip's link end. Mobility n - 3: joints n/4, n/2, 3n/4 and the closing
+ * joint are dependent, every other joint independent. NULL if memory runs out. */
+test_loop *test_loop_spatial(int n, uint64_t seed);
+
+/* Closes l's loop on body b (0 <= b <= n - 2) instead: the anchor is the tip's closing point at
+ * q0 in b's frame. Returns CTC_OK or the model's error. */
+ctc_status test_loop_close_on(test_loop *l, int b, char *err, size_t errlen);
+
+void test_loop_free(test_loop *l);
+
 #endif

@@ -18,6 +18,8 @@
  * disassembly changing nothing, loop assembly, the error messages of bad loops, and simulations:
  * a passive four-bar's energy and loop residual, honest residuals without stabilisation,
  * Baumgarte stabilisation, and the exact-model PD error of the five-bar against its closed form.
+ * Long loops of 16 to 4096 bodies: forces against the oracle, and the round trip against its
+ * floor, what rounding the driving forces alone does to the accelerations (issue 18, part 3).
  * Last, a loop on a branched tree (loop_scene_branch hangs branches off a loop's spine): the same
  * checks against the oracle on planar and spatial trees closing on the ground or on an ancestor of
  * the tip, bitwise equal results at 1, 2 and 8 threads, and the exact PD error on a hand.
@@ -31,6 +33,7 @@
  * <= 4.6e-13 relative to the oracle; the early stop changes nothing (bit-identical).
  */
 #include <criterion/criterion.h>
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -723,6 +726,101 @@ Test(loop, the_forward_refinement_of_a_loop_reaches_the_oracle)
     cr_expect_leq(literal, 1e-13, "literal %g", literal);
     cr_expect_leq(forced, 1e-13, "a forced step %g", forced);
     fx_free(&f);
+}
+
+/* ---- long loops (issue 18, part 3) ---- */
+
+/* What one long loop gives at its q0 with rates projected onto the closure (seeded uniform in
+ * [-1, 1] before) and commands u uniform in [-1, 1]: the library's forces against the oracle's
+ * (max |f - f_oracle| / max |f_oracle|; -1 without the oracle), the round trip max |qacc_i - u_i|
+ * / max |u| over the independent coordinates, and its floor: the same measure of how far the
+ * forward pass's accelerations move when each force is perturbed by its own rounding,
+ * f_i (1 + eps r), r uniform in [-1, 1], the worst of three draws. No solver in double precision
+ * can be held to a round trip under its floor. */
+typedef struct long_loop_errors {
+    double force, trip, floor;
+} long_loop_errors;
+
+static long_loop_errors check_long_loop(test_loop *l, int oracle, const char *what)
+{
+    cr_assert(l != NULL, "%s: the scene", what);
+    ctc_model *m = build(&l->spec);
+    ctc_data *d = ctc_data_new(m);
+    cr_assert(d != NULL);
+    const int nvx = m->nvx;
+    double *buf = calloc((size_t)m->nq + (size_t)m->nv + 5 * (size_t)nvx, sizeof(double));
+    cr_assert(buf != NULL);
+    double *q = buf, *v = q + m->nq, *u = v + m->nv, *f = u + nvx, *a = f + nvx, *fp = a + nvx,
+           *ap = fp + nvx;
+    char err[256] = "";
+    uint64_t rng = 3;
+    memcpy(q, l->q0, (size_t)m->nq * sizeof *q);
+    for (int i = 0; i < m->nv; i++) v[i] = test_uniform(&rng, -1, 1);
+    for (int i = 0; i < nvx; i++) u[i] = test_uniform(&rng, -1, 1);
+    cr_assert_eq(ctc_loop_assemble(m, d, q, v, 1e-12, 20, NULL, err, sizeof err), CTC_OK, "%s: %s",
+                 what, err);
+    ctc_kinematics(m, d, q, v);
+    ctc_handles(m, d);
+    ctc_gdca_inverse(m, d, u, f);
+    ctc_gdca_forward(m, d, f, a);
+    cr_assert(test_all_finite(f, nvx) && test_all_finite(a, nvx), "%s: finite", what);
+    long_loop_errors e = {.force = -1};
+    const double umax = max_abs(u, nvx);
+    for (int i = 0; i < m->nind; i++) {
+        const int c = m->ind_coord[i];
+        e.trip = fmax(e.trip, fabs(a[c] - u[c]) / umax);
+    }
+    for (int t = 0; t < 3; t++) {
+        for (int i = 0; i < nvx; i++) fp[i] = f[i] * (1 + DBL_EPSILON * test_uniform(&rng, -1, 1));
+        ctc_gdca_forward(m, d, fp, ap);
+        for (int i = 0; i < m->nind; i++) {
+            const int c = m->ind_coord[i];
+            e.floor = fmax(e.floor, fabs(ap[c] - a[c]) / umax);
+        }
+    }
+    if (oracle) {
+        loop_oracle *o = loop_oracle_new(&l->spec);
+        cr_assert(o != NULL);
+        cr_assert_eq(loop_oracle_inverse(o, q, v, u, fp, NULL), 0, "%s: oracle: singular", what);
+        e.force = test_rel_err(f, fp, nvx);
+        loop_oracle_free(o);
+    }
+    free(buf);
+    ctc_data_free(d);
+    ctc_model_free(m);
+    return e;
+}
+
+/* Loops of 16 to 4096 bodies (tests/support: the arch, the arch with its dependent joints spread,
+ * the random spatial loop; the oracle is O(n^3), so up to 1024 bodies): forces within 1e-9 of the
+ * oracle's, and the round trip within 4 times its floor (plus 1e-13), within 1e-8 where the floor
+ * allows (n <= 64). Measured (gcc -O3): forces <= 5.5e-13; round trip / floor 0.5 to 1.8; the
+ * floors: 6.7e-11 to 3e-10 at n <= 64, 1.9e-7 (arch spread) to 8.9e-4 (spatial) at 256, 5e-6
+ * (spatial) to 0.12 (arch) at 1024; bench/NOTEBOOK.md, "Long loops". Unrefined, the spatial loop
+ * of 256 is 24 times over its floor. */
+Test(loop, long_loops_match_the_oracle_and_reach_their_round_trip_floor)
+{
+    static const int sizes[] = {16, 64, 256, 1024, 4096};
+    for (size_t i = 0; i < sizeof sizes / sizeof *sizes; i++) {
+        const int n = sizes[i], oracle = n <= 1024;
+        for (int kind = 0; kind < 3; kind++) {
+            static const char *const names[] = {"arch", "arch spread", "spatial"};
+            test_loop *l = kind == 0   ? test_loop_arch(n)
+                           : kind == 1 ? test_loop_arch_spread(n)
+                                       : test_loop_spatial(n, 11);
+            long_loop_errors e = check_long_loop(l, oracle, names[kind]);
+            test_loop_free(l);
+            cr_log_info("%s n = %d: forces %.1e, round trip %.1e, floor %.1e\n", names[kind], n,
+                        e.force, e.trip, e.floor);
+            if (oracle)
+                cr_expect_leq(e.force, 1e-9, "%s n = %d: forces off the oracle by %g", names[kind],
+                              n, e.force);
+            cr_expect_leq(e.trip, 4 * e.floor + 1e-13, "%s n = %d: round trip %g, its floor %g",
+                          names[kind], n, e.trip, e.floor);
+            if (n <= 64)
+                cr_expect_leq(e.trip, 1e-8, "%s n = %d: round trip %g", names[kind], n, e.trip);
+        }
+    }
 }
 
 Test(loop, gdca_matches_the_parallelogram_closed_form)

@@ -6,7 +6,8 @@
  * z and y, whose joint-space mass matrix is well conditioned however thin the rods are. Oracles:
  * a dense solve of M(q) qdd = f - N(q, v) with the composite-rigid-body M and the Newton-Euler N
  * of oracle.h (neither inverts a body's inertia) by Cholesky (tests/support/linalg.h), and, for
- * a whole run, the conservation of energy of a passive chain. Errors are max |difference| /
+ * a whole run, the conservation of energy of a passive chain. Last, the refinement's step rule
+ * on a chain whose M(q) is ill conditioned (gdca_refine.h). Errors are max |difference| /
  * max |reference| over the coordinates, the largest over the states. Bounds are the issue's
  * target, the values measured here (gcc -O3) beside them.
  */
@@ -87,6 +88,60 @@ Test(slender, forward_matches_the_dense_solve_at_every_moment_ratio_on_16_rods)
 {
     check_sweep(16); /* measured (200 states): <= 1.0e-12 at 1e-2, <= 1.2e-13 slender, 8.8e-14
                        at ratio 1; unaugmented, 1e-2 at ratio 1e-10 */
+}
+
+/* Where M(q) itself is ill conditioned the refinement converges slowly: 256 rods of moment ratio
+ * 1e-10 with masses (and inertias) alternating 1 kg and 1 g, v in [-5, 5] rad/s, cond(M) up to
+ * about 3e9, where ABA and the dense solve agree to 9e-12. The step rule (gdca_refine.h) goes on
+ * while the corrections shrink and extrapolates a dominant slow mode: every one of 100 states
+ * within 1e-9 of the dense solve (measured: worst 1.9e-10, 2 to 6 steps, 2.9 on average). The
+ * rule before it stopped once one step shrank the correction by less than 10 times, leaving 8 of
+ * these states over 1e-9, the worst at 4.2e-8. */
+Test(slender, refinement_converges_on_an_ill_conditioned_chain)
+{
+    const int n = 256, states = 100;
+    test_chain *c = test_chain_slender_rods(n, 1e-10);
+    double factor[256];
+    for (int k = 0; k < n; k++) factor[k] = k % 2 ? 1e-3 : 1.0;
+    test_chain_scale_bodies(c, factor);
+    ctc_model *m = build(&c->spec);
+    ctc_data *d = ctc_data_new(m);
+    ctc_oracle *o = ctc_oracle_new(m);
+    cr_assert(d != NULL && o != NULL);
+    const int nv = m->nv;
+    double *buf = calloc((size_t)m->nq + 6 * (size_t)nv + (size_t)nv * nv, sizeof(double));
+    cr_assert(buf != NULL);
+    double *q = buf, *v = q + m->nq, *f = v + nv, *a = f + nv, *ref = a + nv, *b = ref + nv,
+           *zero = b + nv, *mm = zero + nv;
+    uint64_t rng = 1800 + (uint64_t)n;
+    double worst = 0;
+    int over = 0, steps = 0, most = 0;
+    for (int s = 0; s < states; s++) {
+        test_random_state(m, &rng, 5.0, q, v);
+        for (int i = 0; i < nv; i++) f[i] = test_uniform(&rng, -5, 5);
+        ctc_oracle_mass_matrix(m, o, q, mm);
+        ctc_oracle_rnea(m, o, q, v, zero, b);
+        for (int i = 0; i < nv; i++) b[i] = f[i] - b[i];
+        cr_assert_eq(test_solve_spd(mm, nv, b, ref), 0, "M(q) is positive definite");
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        ctc_gdca_forward(m, d, f, a);
+        cr_assert(test_all_finite(a, nv), "state %d: qdd is finite", s);
+        const double err = test_rel_err(a, ref, nv);
+        worst = fmax(worst, err);
+        over += err > 1e-9;
+        steps += d->fwd_refine_done;
+        most = d->fwd_refine_done > most ? d->fwd_refine_done : most;
+    }
+    cr_expect_eq(over, 0, "%d of %d states over 1e-9 of the dense solve, the worst %g", over,
+                 states, worst);
+    cr_log_info("worst %g, %.2f steps on average, at most %d\n", worst, (double)steps / states,
+                most);
+    free(buf);
+    ctc_oracle_free(o);
+    ctc_data_free(d);
+    ctc_model_free(m);
+    test_chain_free(c);
 }
 
 /* A slender body's forward inertia gets CTC_SLENDER_AUGMENT_REL times its largest moment on
