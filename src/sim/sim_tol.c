@@ -15,9 +15,14 @@
  * The estimate, on an open model at the initial state y0 = (q0, v0), after the integrator's
  * start has evaluated the accelerations a0 there: the round trip of a0 through the plant's own
  * passes, on a data block of its own (the run's data and results are not touched),
- *     delta = max_i |GDCA(iGDCA(a0))_i - a0_i|  (rad/s^2, m/s^2),   rho = delta / max |a0|,
+ *     delta = max_i |GDCA(iGDCA(a0))_i - a0_i|  (rad/s^2, m/s^2),
+ *     rho = delta / max(max |a0|, max |GDCA(0)|),
  * the rounding of accelerations of the run's own size, where the driving forces balance the bias
- * terms as in every CTC step. The floor:
+ * terms as in every CTC step. rho is relative to the larger of the accelerations and the free
+ * ones (no driving force: what gravity and the velocity terms alone would do), because the
+ * rounding comes from the terms that cancel, not from their balance: a chain held at rest in
+ * equilibrium has a0 = 0 up to rounding, and delta / max |a0| would be of order one there. The
+ * floor:
  *     atol >= SIM_TOL_FLOOR_STEP delta,      rtol >= rho,
  * the velocity error that the rounding alone puts into a step of SIM_TOL_FLOOR_STEP, and the
  * relative accuracy the accelerations carry. A tolerance below it, the default's or a job's
@@ -65,19 +70,22 @@ ctc_status sim_tolerance_floor(const sim_ctx *c, const double *y0, ctc_integ_spe
     /* the round trip of the initial accelerations */
     const int nv = m->nv;
     ctc_data *d = ctc_data_new(m);
-    double *buf = malloc(3 * ((size_t)nv + 1) * sizeof *buf);
+    double *buf = malloc(4 * ((size_t)nv + 1) * sizeof *buf);
     if (d == NULL || buf == NULL) {
         ctc_data_free(d);
         free(buf);
         return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
     }
-    double *a0 = buf, *f = a0 + nv + 1, *a = f + nv + 1;
+    double *a0 = buf, *f = a0 + nv + 1, *a = f + nv + 1, *afree = a + nv + 1;
     memcpy(a0, c->acc, (size_t)nv * sizeof *a0);
     ctc_kinematics(m, d, y0, y0 + c->nq);
     ctc_handles(m, d);
     ctc_gdca_inverse(m, d, a0, f);
     ctc_gdca_forward(m, d, f, a);
-    const double delta = max_diff(a, a0, nv), scale = max_diff(a0, NULL, nv);
+    memset(f, 0, (size_t)nv * sizeof *f);
+    ctc_gdca_forward(m, d, f, afree);
+    const double delta = max_diff(a, a0, nv),
+                 scale = fmax(max_diff(a0, NULL, nv), max_diff(afree, NULL, nv));
     ctc_data_free(d);
     free(buf);
     mt->accel_rounding = delta;
