@@ -793,8 +793,10 @@ static long_loop_errors check_long_loop(test_loop *l, int oracle, const char *wh
 
 /* Loops of 16 to 4096 bodies (tests/support: the arch, the arch with its dependent joints spread,
  * the random spatial loop; the oracle is O(n^3), so up to 1024 bodies): forces within 1e-9 of the
- * oracle's, and the round trip within 4 times its floor (plus 1e-13), within 1e-8 where the floor
- * allows (n <= 64). Measured (gcc -O3): forces <= 5.5e-13; round trip / floor 0.5 to 1.8; the
+ * oracle's, and the round trip within 8 times its floor (plus 1e-13), within 1e-8 where the floor
+ * allows (n <= 64). The floor is a one-draw estimate of the rounding: the portable build's FMA
+ * kernels move it by 1.5x and the round trip by 2.4x at n = 16 (arch spread: 3.3e-12 against
+ * 5.2e-13, 6.3 times). Measured (gcc -O3): forces <= 5.5e-13; round trip / floor 0.5 to 6.3; the
  * floors: 6.7e-11 to 3e-10 at n <= 64, 1.9e-7 (arch spread) to 8.9e-4 (spatial) at 256, 5e-6
  * (spatial) to 0.12 (arch) at 1024; bench/NOTEBOOK.md, "Long loops". Unrefined, the spatial loop
  * of 256 is 24 times over its floor. */
@@ -815,7 +817,7 @@ Test(loop, long_loops_match_the_oracle_and_reach_their_round_trip_floor)
             if (oracle)
                 cr_expect_leq(e.force, 1e-9, "%s n = %d: forces off the oracle by %g", names[kind],
                               n, e.force);
-            cr_expect_leq(e.trip, 4 * e.floor + 1e-13, "%s n = %d: round trip %g, its floor %g",
+            cr_expect_leq(e.trip, 8 * e.floor + 1e-13, "%s n = %d: round trip %g, its floor %g",
                           names[kind], n, e.trip, e.floor);
             if (n <= 64)
                 cr_expect_leq(e.trip, 1e-8, "%s n = %d: round trip %g", names[kind], n, e.trip);
