@@ -14,6 +14,7 @@ import { after, before, test } from 'node:test';
 import {
     attr,
     launchBrowser,
+    near,
     newPage,
     overflowing,
     poll,
@@ -228,6 +229,35 @@ test('Monte-Carlo: each replica a point, their mean and spread a line per mass e
         assert.equal((doc.match(/<circle /g) || []).length, 6, 'a dot per replica in the SVG');
         await page.setViewportSize(DESKTOP);
         await screenshot(page, 'family-mc-1400.png');
+    });
+});
+
+test('chartData: the mean and sample sd per x and group, categories for a string axis', async () => {
+    await withView(browser, srv, '#/families', 'family-chartdata', async (page) => {
+        const d = await page.evaluate(async () => {
+            const { chartData } = await import('/families.js');
+            /* rows as GET /api/families/{id} gives them: values [method, rtol]; y = e_rms */
+            const rows = [
+                ['bdf', 1e-6, 2], ['bdf', 1e-6, 4], ['bdf', 1e-6, 9], ['bdf', 1e-8, 1],
+                ['dopri5', 1e-6, 5], ['dopri5', 1e-8, null], ['dopri5', 1e-8, 3],
+            ].map(([m, r, y], i) => ({ member: i, values: [m, r], e_rms: y }));
+            return { byMethod: chartData(rows, 1, 'e_rms', 0), overMethod: chartData(rows, 0, 'e_rms', -1) };
+        });
+        const m = d.byMethod;
+        assert.deepEqual(m.xs, [1e-8, 1e-6]);
+        assert.equal(m.cats, null);
+        assert.deepEqual(m.groups.map((g) => g.value), ['bdf', 'dopri5']);
+        /* bdf at 1e-6: 2, 4, 9: mean 5, sample variance ((-3)^2 + (-1)^2 + 4^2) / 2 = 13 */
+        assert.deepEqual(m.groups[0].mean, [1, 5]);
+        near(m.groups[0].sd[1], Math.sqrt(13), 1e-12, 'sd of 2, 4, 9');
+        assert.equal(m.groups[0].sd[0], 0, 'one value: no spread');
+        /* dopri5 at 1e-8: the null e_rms is left out */
+        assert.deepEqual(m.groups[1].mean, [3, 5]);
+        assert.equal(m.groups[1].points.length, 2);
+        const c = d.overMethod;
+        assert.deepEqual(c.cats, ['bdf', 'dopri5'], 'a string axis as categories, in the order met');
+        assert.deepEqual(c.xs, [0, 1]);
+        assert.deepEqual(c.groups[0].mean, [4, 4], 'bdf (2+4+9+1)/4, dopri5 (5+3)/2');
     });
 });
 
