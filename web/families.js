@@ -75,8 +75,8 @@ export async function familiesView(root, ctx) {
   const body = el("tbody");
   const table = el("table", {id: "families-table"},
     el("caption", {class: "visually-hidden", text: "The families of jobs, newest first"}),
-    el("thead", {}, el("tr", {}, ...["id", "name", "axes", "members", "status", "progress", "created"]
-      .map((h) => el("th", {scope: "col", text: h})))), body);
+    el("thead", {}, el("tr", {}, ...["id", "name", "status", "progress", "members", "axes", "created"]
+      .map((h) => el("th", {scope: "col", "data-col": h, text: h})))), body);
   const note = el("div", {role: "status"});
   root.append(el("h1", {text: "Studies"}),
     el("p", {class: "muted", text: "Families of jobs swept along axes (POST /api/families, README \"Studies\"). Open one for its table and chart."}),
@@ -92,13 +92,13 @@ export async function familiesView(root, ctx) {
       return;
     }
     body.replaceChildren(...list.map((f) => el("tr", {"data-family-id": f.id},
-      el("td", {class: "num", text: f.id}),
-      el("td", {}, el("a", {href: `#/families/${f.id}`, text: f.name || `family ${f.id}`})),
-      el("td", {text: (f.axes || []).join(" × ")}),
-      el("td", {class: "num", "data-col": "members", text: f.members}),
+      el("td", {class: "num", "data-col": "id", text: f.id}),
+      el("td", {"data-col": "family"}, el("a", {href: `#/families/${f.id}`, text: f.name || `family ${f.id}`})),
       el("td", {"data-col": "status"}, countsNode(f)),
       el("td", {"data-col": "progress"}, progressNode(f)),
-      el("td", {text: fmtTime(f.created)}))));
+      el("td", {class: "num", "data-col": "members", text: f.members}),
+      el("td", {"data-col": "axes", text: (f.axes || []).join(" × ")}),
+      el("td", {"data-col": "created", text: fmtTime(f.created)}))));
     note.replaceChildren(list.length ? "" : el("p", {class: "empty", text: "No families yet."}));
     ctx.ready();
     await sleep(list.some((f) => familyProgress(f).unfinished) ? POLL_MS : 3 * POLL_MS, ctx.signal);
