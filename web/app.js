@@ -2,7 +2,8 @@
  * app.js - the page's entry point: a hash router that mounts one view at a time in #view.
  *
  * Routes (web/README.md): "#/jobs" (also "#/" and empty) browse, "#/jobs/{id}" one job,
- * "#/compare?ids=3,5,8" compare, "#/submit?preset=NAME" (or "?job=ID") the job form. Each
+ * "#/compare?ids=3,5,8" compare, "#/submit?preset=NAME" (or "?job=ID") the job form,
+ * "#/families" the studies and "#/families/{id}" one family. Each
  * mount gets a context: its route parameters, an AbortSignal that fires when the user leaves
  * (so late replies never write into another view), onCleanup() for timers and listeners, and
  * ready()/busy() which set and remove data-ready="1" on #view, the browser tests' signal that
@@ -12,6 +13,7 @@ import {browseView} from "./browse.js";
 import {jobView} from "./job.js";
 import {compareView} from "./compare.js";
 import {submitView} from "./submit.js";
+import {familiesView, familyView} from "./families.js";
 import {el, errorBox} from "./dom.js";
 
 const ROUTES = [
@@ -19,6 +21,8 @@ const ROUTES = [
   {pattern: /^\/jobs\/(\d+)$/, view: jobView, nav: "#/jobs"},
   {pattern: /^\/compare\/?$/, view: compareView, nav: "#/compare"},
   {pattern: /^\/submit\/?$/, view: submitView, nav: "#/submit"},
+  {pattern: /^\/families\/?$/, view: familiesView, nav: "#/families"},
+  {pattern: /^\/families\/(\d+)$/, view: familyView, nav: "#/families"},
 ];
 
 const root = document.getElementById("view");
@@ -57,7 +61,8 @@ function route() {
   const mounted = {controller, cleanups: []};
   current = mounted;
   const ctx = {
-    params: {path, id: (path.match(/^\/jobs\/(\d+)$/) || [])[1], query: new URLSearchParams(query)},
+    params: {path, id: (path.match(/^\/jobs\/(\d+)$/) || [])[1],
+      familyId: (path.match(/^\/families\/(\d+)$/) || [])[1], query: new URLSearchParams(query)},
     signal: controller.signal,
     alive: () => !controller.signal.aborted,
     onCleanup: (fn) => mounted.cleanups.push(fn),

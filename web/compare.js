@@ -25,6 +25,7 @@ import {createAnimation, createPlayer} from "./animate.js";
 import {loadPlotSeries} from "./series.js";
 import {differenceLabels, jobFigures} from "./summary.js";
 import {csvText, download} from "./export.js";
+import {readState, writeState} from "./viewstate.js";
 
 const go = (ids) => { location.hash = ids.length ? `#/compare?ids=${ids.join(",")}` : "#/compare"; };
 const PER_JOINT_MAX = 6; /* per-coordinate columns up to this many coordinates, else the max */
@@ -50,25 +51,6 @@ async function picker(root, ctx) {
     go([...root.querySelectorAll("input.compare-pick:checked")].map((b) => b.dataset.jobId));
   });
   ctx.ready();
-}
-
-/* the view's state from the address: {t, x, y, hide, log, layout, sort} */
-function readState(q) {
-  const nums = (s) => (s || "").split(",").filter((x) => x !== "").map(Number).filter(Number.isFinite);
-  const x = nums(q.get("x"));
-  const y = {};
-  for (const part of (q.get("y") || "").split("~")) {
-    const [id, lo, hi] = part.split(":");
-    if (id && Number.isFinite(Number(lo)) && Number.isFinite(Number(hi)) && Number(hi) > Number(lo)) y[id] = [Number(lo), Number(hi)];
-  }
-  const [key, dir] = (q.get("sort") || "").split(":");
-  return {
-    t: Number.isFinite(Number(q.get("t"))) ? Number(q.get("t")) : 0,
-    x: x.length === 2 && x[1] > x[0] ? x : null, y,
-    hide: nums(q.get("hide")).filter((j) => Number.isInteger(j) && j >= 0),
-    log: q.get("log") === "1", layout: q.get("layout") === "paper" ? "paper" : "channels",
-    sort: key ? {key, dir: dir === "desc" ? "desc" : "asc"} : null,
-  };
 }
 
 /* the comparison table's columns: [{key, head, title, value(entry) -> number | string | null}] */
@@ -257,13 +239,8 @@ export async function compareView(root, ctx) {
     clearTimeout(saving);
     saving = setTimeout(() => {
       if (!ctx.alive()) return;
-      const p = new URLSearchParams({ids: ids.join(",")});
-      if (timeline.t > 0) p.set("t", String(Math.round(timeline.t * 1e6) / 1e6));
-      const x = plots && plots.xRange();
-      if (x) p.set("x", x.map((v) => Number(v.toPrecision(8))).join(","));
-      const y = Object.entries(state.y).map(([id, [lo, hi]]) => `${id}:${Number(lo.toPrecision(6))}:${Number(hi.toPrecision(6))}`);
-      if (y.length) p.set("y", y.join("~"));
-      if (state.hide.length) p.set("hide", state.hide.join(","));
+      const p = writeState(new URLSearchParams({ids: ids.join(",")}),
+        {t: timeline.t, x: plots && plots.xRange(), y: state.y, hide: state.hide});
       if (state.log) p.set("log", "1");
       if (state.layout === "paper") p.set("layout", "paper");
       if (state.sort) p.set("sort", `${state.sort.key}:${state.sort.dir}`);

@@ -38,14 +38,17 @@ function shownLines(u, lines) {
   return lines.map((l, k) => ({...l, i: k + 1})).filter((l) => u.series[l.i].show !== false);
 }
 
-/* The plot u as an SVG document (text). meta: {title, yLabel, lines}. */
-export function plotSvg(u, {title, yLabel, lines}) {
+/* The plot u as an SVG document (text). meta: {title, yLabel, xLabel (default "t [s]"), lines};
+ * a line with points: true is also drawn as dots at its values, only: true as dots alone, and
+ * nokey: true is left out of the key. */
+export function plotSvg(u, {title, yLabel, xLabel = "t [s]", lines}) {
   const W = u.width, plotH = u.height;
   const dpr = window.devicePixelRatio || 1;
   const left = u.bbox.left / dpr, top = u.bbox.top / dpr;
   const w = u.bbox.width / dpr, h = u.bbox.height / dpr;
   const shown = shownLines(u, lines);
-  const keyRows = Math.ceil(shown.length / 3);
+  const keyed = shown.filter((l) => !l.nokey);
+  const keyRows = Math.ceil(keyed.length / 3);
   const head = 28;
   const H = head + plotH + 18 * keyRows + 10;
   const out = [`<svg xmlns="http://www.w3.org/2000/svg" width="${W}" height="${H}" viewBox="0 0 ${W} ${H}" font-family="${FONT}">`,
@@ -69,7 +72,7 @@ export function plotSvg(u, {title, yLabel, lines}) {
       `<text x="${left - 6}" y="${(y + 4).toFixed(1)}" font-size="12" text-anchor="end" fill="#1f2328">${escapeXml(label ?? "")}</text>`);
   }
   out.push(`<rect x="${left}" y="${top}" width="${w}" height="${h}" fill="none" stroke="#b8bec6"/>`,
-    `<text x="${left + w / 2}" y="${top + h + 34}" font-size="13" font-weight="bold" text-anchor="middle" fill="#1f2328">t [s]</text>`,
+    `<text x="${left + w / 2}" y="${top + h + 34}" font-size="13" font-weight="bold" text-anchor="middle" fill="#1f2328">${escapeXml(xLabel)}</text>`,
     `<text transform="translate(14 ${top + h / 2}) rotate(-90)" font-size="13" font-weight="bold" text-anchor="middle" fill="#1f2328">${escapeXml(yLabel)}</text>`,
     `<clipPath id="area"><rect x="${left}" y="${top}" width="${w}" height="${h}"/></clipPath>`,
     `<g clip-path="url(#area)" fill="none" stroke-linejoin="round">`);
@@ -77,21 +80,24 @@ export function plotSvg(u, {title, yLabel, lines}) {
   for (const l of shown) {
     const vals = u.data[l.i];
     let d = "", pen = false;
+    const dots = [];
     for (let k = 0; k < t.length; k++) {
       const v = vals[k];
       if (v === null || v === undefined || !Number.isFinite(v)) continue; /* gaps are spanned, as on screen */
       const x = left + u.valToPos(t[k], "x"), y = top + u.valToPos(v, "y");
       if (!Number.isFinite(x) || !Number.isFinite(y)) continue;
       d += `${pen ? "L" : "M"}${x.toFixed(2)} ${y.toFixed(2)}`;
+      if (l.points) dots.push(`<circle cx="${x.toFixed(2)}" cy="${y.toFixed(2)}" r="2.5" fill="${l.stroke}" stroke="none"/>`);
       pen = true;
     }
     if (!d) continue;
     const dash = l.dash && l.dash.length ? ` stroke-dasharray="${l.dash.join(" ")}"` : "";
-    out.push(`<path d="${d}" stroke="${l.stroke}" stroke-width="${l.width}"${dash}><title>${escapeXml(l.label)}</title></path>`);
+    if (!l.only) out.push(`<path d="${d}" stroke="${l.stroke}" stroke-width="${l.width}"${dash}><title>${escapeXml(l.label)}</title></path>`);
+    if (dots.length) out.push(`<g class="points"><title>${escapeXml(l.label)}</title>${dots.join("")}</g>`);
   }
   out.push("</g></g>");
-  /* the key */
-  shown.forEach((l, k) => {
+  /* the key (lines with nokey, a series' further slots, are left out of it) */
+  keyed.forEach((l, k) => {
     const x = 10 + (k % 3) * (W / 3), y = head + plotH + 14 + 18 * Math.floor(k / 3);
     const dash = l.dash && l.dash.length ? ` stroke-dasharray="${l.dash.join(" ")}"` : "";
     out.push(`<line x1="${x}" y1="${y - 4}" x2="${x + 24}" y2="${y - 4}" stroke="${l.stroke}" stroke-width="${l.width}"${dash}/>`,
@@ -105,7 +111,7 @@ export function plotSvg(u, {title, yLabel, lines}) {
 export function plotPng(u, {title, lines}) {
   const src = u.root.querySelector("canvas");
   const dpr = src.width / (u.width || 1);
-  const shown = shownLines(u, lines);
+  const shown = shownLines(u, lines).filter((l) => !l.nokey);
   const keyRows = Math.ceil(shown.length / 3);
   const head = 28, W = u.width, H = head + u.height + 18 * keyRows + 10;
   const c = document.createElement("canvas");

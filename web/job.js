@@ -21,6 +21,10 @@
  * error), chosen with the joint picker (form#joint-picker, "0-3, 17"), the summary table or a
  * click on the heat-map; the metrics list keeps the scalars and the table the per-coordinate
  * values.
+ *
+ * The address keeps the time cursor, the time and value zooms and the hidden coordinates
+ * (#/jobs/7?t=1.2&x=0.5,1.5&y=e:-0.01:0.01&hide=0,2, viewstate.js), rewritten in place as they
+ * change once the final plots are drawn; opening such an address restores them.
  */
 import {getJob, getJobBrief, deleteJob, cancelJob, postJob, seriesUrl} from "./api.js";
 import {el, errorBox, fmtNum, fmtTime, isFinished, prettyJson, sleep} from "./dom.js";
@@ -32,6 +36,7 @@ import {loadPlotSeries, loadAnimSeries, loadHeatSeries, loadPartialSeries, appen
 import {jointSummary} from "./jointsummary.js";
 import {createHeatmap} from "./heatmap.js";
 import {confirmDialog} from "./confirm.js";
+import {readState, writeState} from "./viewstate.js";
 
 /* coordinates from which the heat-map is drawn: fewer read well enough in the plots */
 const HEAT_MIN = 8;
@@ -160,6 +165,7 @@ export function runningText(job, duration, now = Date.now()) {
 
 export async function jobView(root, ctx) {
   const id = Number(ctx.params.id);
+  const state = readState(ctx.params.query);
   document.title = `Job ${id} - ctcsim`;
   let job;
   try {
@@ -369,20 +375,36 @@ export async function jobView(root, ctx) {
   const timeline = createTimeline(duration);
   const ncoord = Math.max(m.nv ?? 0, m.nq ?? 0);
   let plots = null;
-  const zoomProxy = {zoomIn: () => plots && plots.zoomIn(), resetZoom: () => plots && plots.resetZoom()};
+  const zoomProxy = {zoomIn: () => plots && plots.zoomIn(), zoomInY: () => plots && plots.zoomInY(),
+    resetZoom: () => plots && plots.resetZoom()};
+  /* the address, rewritten (debounced) as the cursor, the zooms and the hidden rows change */
+  let saving = 0;
+  function save() {
+    clearTimeout(saving);
+    saving = setTimeout(() => {
+      if (!ctx.alive()) return;
+      const p = writeState(new URLSearchParams(), {t: timeline.t, x: plots && plots.xRange(), y: state.y, hide: state.hide});
+      const query = decodeURIComponent(p.toString());
+      history.replaceState(null, "", `#/jobs/${id}${query ? `?${query}` : ""}`);
+    }, 250);
+  }
+  ctx.onCleanup(() => clearTimeout(saving));
   ctx.onCleanup(() => plots && plots.destroy());
   const plotArea = el("div", {class: "plot-area"});
   const large = ncoord > MAX_PLOTTED;
 
   function draw(d) {
+    const x = plots ? plots.xRange() : state.x;
     if (plots) plots.destroy();
     plots = createPlots(plotArea, [{label: `#${id}`, color: PALETTE[0], series: d.series,
-      joints: d.joints, coords: d.coords, loop: d.loop, spec: job.spec}], timeline);
+      joints: d.joints, coords: d.coords, loop: d.loop, spec: job.spec}], timeline, {yZoom: state.y, onZoom: save});
     const coords = (d.joints || Array.from({length: ncoord}, (_, i) => i));
     /* a closing joint's controlled coordinate has a row beyond q's */
     for (const c of d.loop ? d.coords : []) if (c.row >= ncoord && !d.joints) coords.push(c.row);
     plotArea.prepend(jointToggles(plots, coords, (j) => PALETTE[j % PALETTE.length],
-      (j) => (j >= ncoord ? "closing joint" : `joint ${j}`)));
+      (j) => (j >= ncoord ? "closing joint" : `joint ${j}`),
+      {hidden: state.hide, onChange: (hidden) => { state.hide = hidden; save(); }}));
+    if (x) plots.setX(x[0], x[1]);
     if (d.joints) {
       plotArea.prepend(el("p", {class: "muted", id: "plotted-note",
         text: `The plots show ${d.joints.length} of ${m.nv} coordinates: ${listText(d.joints)}.`}));
@@ -451,7 +473,8 @@ export async function jobView(root, ctx) {
   } else {
     animBox.append(el("p", {class: "muted", text: "No animation: the run did not record q."}));
   }
-  timeline.set(0, null);
+  timeline.set(Math.min(state.t, duration), null);
+  timeline.subscribe(() => save());
   ctx.ready();
 }
 

@@ -146,6 +146,8 @@ export function viewHook(hash) {
     if (/^jobs\/[0-9]+/.test(h)) return '#job-status';
     if (h.startsWith('compare')) return '#compare-legend';
     if (h.startsWith('submit')) return 'select#preset';
+    if (/^families\/?(\?.*)?$/.test(h)) return 'table#families-table';
+    if (/^families\/[0-9]+/.test(h)) return 'table#family-table';
     throw new Error(`no view for ${hash}`);
 }
 
@@ -367,4 +369,29 @@ export async function tabThrough(page, targets, max = 150) {
 /* Asserts |a - b| <= tol with a message. */
 export function near(a, b, tol, what) {
     assert.ok(Number.isFinite(a) && Math.abs(a - b) <= tol, `${what}: ${a}, want ${b} within ${tol}`);
+}
+
+/* the elements whose right edge passes the viewport's (outside any box that scrolls or clips
+ * sideways, which keeps what it holds on screen), as "tag#id.class: right" */
+export function overflowing(page) {
+    return page.evaluate(() => {
+        const width = document.documentElement.clientWidth;
+        const clips = (e) => {
+            for (let p = e.parentElement; p; p = p.parentElement) {
+                const o = getComputedStyle(p).overflowX;
+                if (o === 'auto' || o === 'scroll' || o === 'hidden' || o === 'clip') return true;
+            }
+            return false;
+        };
+        const out = [];
+        for (const e of document.querySelectorAll('body *')) {
+            const r = e.getBoundingClientRect();
+            if (r.width === 0 && r.height === 0) continue;
+            if (r.right > width + 0.5 && !clips(e)) {
+                out.push(`${e.tagName.toLowerCase()}${e.id ? '#' + e.id : ''}${e.className && typeof e.className === 'string' ? '.' + e.className.split(' ').join('.') : ''}: ${Math.round(r.right)}`);
+            }
+        }
+        if (document.documentElement.scrollWidth > width) out.push(`document scrollWidth ${document.documentElement.scrollWidth}`);
+        return out;
+    });
 }

@@ -21,6 +21,7 @@ import {
     attr,
     launchBrowser,
     newPage,
+    overflowing,
     plots,
     poll,
     pollValue,
@@ -74,30 +75,6 @@ async function openAt(viewport, hash, opts = {}) {
     return page;
 }
 
-/* the elements whose right edge passes the viewport's (outside any box that scrolls or clips
- * sideways, which keeps what it holds on screen), as "tag#id.class: right" */
-function overflowing(page) {
-    return page.evaluate(() => {
-        const width = document.documentElement.clientWidth;
-        const clips = (e) => {
-            for (let p = e.parentElement; p; p = p.parentElement) {
-                const o = getComputedStyle(p).overflowX;
-                if (o === 'auto' || o === 'scroll' || o === 'hidden' || o === 'clip') return true;
-            }
-            return false;
-        };
-        const out = [];
-        for (const e of document.querySelectorAll('body *')) {
-            const r = e.getBoundingClientRect();
-            if (r.width === 0 && r.height === 0) continue;
-            if (r.right > width + 0.5 && !clips(e)) {
-                out.push(`${e.tagName.toLowerCase()}${e.id ? '#' + e.id : ''}${e.className && typeof e.className === 'string' ? '.' + e.className.split(' ').join('.') : ''}: ${Math.round(r.right)}`);
-            }
-        }
-        if (document.documentElement.scrollWidth > width) out.push(`document scrollWidth ${document.documentElement.scrollWidth}`);
-        return out;
-    });
-}
 
 test('a 64-link chain: summary of the worst 10, the whole table in a scrolling box, a short page, f32 series', async () => {
     const page = await openAt(DESKTOP, `#/jobs/${chain.id}`);
