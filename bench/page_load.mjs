@@ -8,9 +8,11 @@
  * the n_link_pendulum preset for PAGE_DURATION s (default 5) sampled every 0.01 s, then opens
  * #/jobs/ID in headless Chromium (playwright-core from tests/web) PAGE_REPEATS times (default
  * 3), each in a fresh context (no cache), at 1400 x 900, and records:
- *   - ready: ms from the navigation's start (performance.now() in the page) to the view's
- *     data-ready (plots, heat-map, summary and animation drawn), and wall: the same seen from
- *     this script, from page.goto to the selector found (adds the browser's own overhead);
+ *   - usable: ms from the navigation's start (performance.now() in the page) to the plots, the
+ *     time cursor and the summary drawn (div.plots[data-drawn]), and wall usable: the same seen
+ *     from this script, from page.goto to the selector found (adds the browser's own overhead:
+ *     the target's clock);
+ *   - ready: the same two to the view's data-ready (heat-map and animation drawn too);
  *   - data: ms from the navigation's start to the end of the last API response;
  *   - bytes: the encoded bytes of every response (CDP Network.loadingFinished), and of those the
  *     series requests and GET /api/jobs/ID;
@@ -49,15 +51,19 @@ async function measure(browser, srv, id) {
     });
     await page.addInitScript(() => {
         new MutationObserver(() => {
+            if (!window.__usableAt && document.querySelector('#view .plots[data-drawn="1"]')) window.__usableAt = performance.now();
             const v = document.getElementById('view');
             if (v && v.getAttribute('data-ready') === '1' && v.querySelector('a#download-csv') && !window.__readyAt) window.__readyAt = performance.now();
         }).observe(document, { subtree: true, attributes: true, childList: true });
     });
     const t0 = Date.now();
     await page.goto(`${srv.base}/#/jobs/${id}`);
+    await page.waitForSelector('#view .plots[data-drawn="1"]', { timeout: 120000 });
+    const wallUsable = Date.now() - t0;
     await page.waitForSelector('#view[data-ready="1"] a#download-csv', { timeout: 120000 });
     const wall = Date.now() - t0;
     const ready = Math.round(await page.evaluate(() => window.__readyAt));
+    const usable = Math.round(await page.evaluate(() => window.__usableAt));
     const data = Math.round(await page.evaluate(() => Math.max(...performance.getEntriesByType('resource').filter((r) => r.name.includes('/api/')).map((r) => r.responseEnd))));
     const slider = [];
     for (let k = 1; k <= 20; k++) {
@@ -77,7 +83,7 @@ async function measure(browser, srv, id) {
     }
     const height = await page.evaluate(() => document.documentElement.scrollHeight);
     await context.close();
-    return { ready, wall, data, total, series, job, slider: median(slider), height };
+    return { usable, wallUsable, ready, wall, data, total, series, job, slider: median(slider), height };
 }
 
 /* the bytes the page fetched before the f32 form, for the same job and width */
@@ -107,15 +113,15 @@ try {
         const runs = [];
         for (let r = 0; r < REPEATS; r++) runs.push(await measure(browser, srv, job.id));
         const pick = (k) => median(runs.map((x) => x[k]));
-        rows.push({ n, samples: job.metrics.samples, ready: pick('ready'), wall: pick('wall'), data: pick('data'), total: pick('total'), series: pick('series'),
+        rows.push({ n, samples: job.metrics.samples, usable: pick('usable'), wallUsable: pick('wallUsable'), ready: pick('ready'), wall: pick('wall'), data: pick('data'), total: pick('total'), series: pick('series'),
             job: pick('job'), slider: pick('slider'), height: pick('height'), before: await before(srv, job) });
     }
 } finally {
     await browser.close();
     await srv.stop();
 }
-console.log(`| n | samples | ready (ms) | data in (ms) | wall (ms) | transferred (MB) | of which series | GET job | series before f32 (MB) | slider (ms/frame) | page height (px) |`);
-console.log(`| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |`);
+console.log(`| n | samples | usable (ms) | wall usable (ms) | ready (ms) | data in (ms) | wall ready (ms) | transferred (MB) | of which series | GET job | series before f32 (MB) | slider (ms/frame) | page height (px) |`);
+console.log(`| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |`);
 for (const r of rows) {
-    console.log(`| ${r.n} | ${r.samples} | ${r.ready} | ${r.data} | ${r.wall} | ${mb(r.total)} | ${mb(r.series)} | ${mb(r.job)} | ${mb(r.before)} | ${r.slider.toFixed(1)} | ${r.height} |`);
+    console.log(`| ${r.n} | ${r.samples} | ${r.usable} | ${r.wallUsable} | ${r.ready} | ${r.data} | ${r.wall} | ${mb(r.total)} | ${mb(r.series)} | ${mb(r.job)} | ${mb(r.before)} | ${r.slider.toFixed(1)} | ${r.height} |`);
 }

@@ -565,6 +565,13 @@ static worker_outcome run_job(jobq_worker *w, int64_t id)
         goto cleanup;
     }
 
+    /* a run that stopped early keeps how far it got (the throttled progress writes may not have
+       said it): the job list shows it; a failed write leaves the last one, a hint as ever */
+    if (r->status != CTC_RUN_DONE && j->spec.duration > 0 && isfinite(r->metrics.t_end)) {
+        double reached = fmin(1, fmax(0, r->metrics.t_end / j->spec.duration));
+        (void)store_progress(w->db, id, reached, err, sizeof err);
+    }
+
     cJSON *m = result_metrics_json(r, j);
     metrics = m ? cJSON_PrintUnformatted(m) : NULL;
     cJSON_Delete(m);

@@ -3,7 +3,8 @@
  * search (input#job-search: a text in the name, preset, controller or a tag, the server's
  * GET /api/jobs?q=) and by a tag (a tag button in a row, or ?tag=), refreshed while the view is
  * open (every 2 s while a job on the page is queued or running, every 6 s otherwise) so status
- * and progress are live.
+ * and progress are live. A run that stopped early (failed, diverged, cancelled) shows how far it
+ * ran ("ran 7 %", the fraction of its duration), not its last progress write.
  *
  * Columns: the compare box, id, name, tags, scene, controller, status, progress, created, the
  * final |e| (largest over the coordinates at the end), the RMS e (over the run and the
@@ -140,6 +141,12 @@ export async function browseView(root, ctx) {
     load(false);
   }
 
+  /* A finished job's progress cell: "100 %" for a done one; for a run that stopped early, how
+     far it ran ("ran 7 %": the worker records the fraction of the duration it reached) */
+  function stoppedText(job) {
+    return job.status === "done" ? `${Math.round(100 * job.progress)} %` : `ran ${Math.floor(100 * job.progress)} %`;
+  }
+
   function fillRow(tr, job) {
     const cells = tr._cells;
     tr._job = job;
@@ -159,7 +166,8 @@ export async function browseView(root, ctx) {
     cells.status.textContent = job.status;
     cells.status.className = `status status-${job.status}`;
     if (isFinished(job.status)) {
-      cells.progress.textContent = `${Math.round(100 * job.progress)} %`;
+      cells.progress.textContent = stoppedText(job);
+      cells.progress.title = job.status === "done" ? "" : `${job.status}: it ran ${Math.floor(100 * job.progress)} % of its duration`;
     } else {
       let bar = cells.progress.querySelector("progress");
       if (!bar) {

@@ -17,6 +17,13 @@
  * separate buttons, each confirmed in a dialog naming the job and its status; a cancel goes to
  * POST /api/jobs/{id}/cancel, which never deletes a job that finished in the meantime.
  *
+ * A finished job is drawn in stages, so that the page is usable before all of it is there: the
+ * plots' series is fetched first (the heat-map's at the same time), the plots, the time cursor
+ * and the summary are drawn (div.plots gets data-drawn="1"), then after the first paint the
+ * heat-map, then the animation: its own series (fetched only when the plots' does not serve it)
+ * is asked for when its panel is in view, at once on a desktop, else when it scrolls into view
+ * or on play. data-ready comes when the animation is drawn or waits out of view.
+ *
  * Large chains: the plots show a few coordinates (series.js defaultJoints: the worst by RMS
  * error), chosen with the joint picker (form#joint-picker, "0-3, 17"), the summary table or a
  * click on the heat-map; the metrics list keeps the scalars and the table the per-coordinate
@@ -75,11 +82,20 @@ export function metricsList(m) {
     add("initial correction", `${init.iterations ?? "–"} Newton iterations, |dq| ≤ ${fmtNum(init.dq_max)}, ` +
       `|dv| ≤ ${fmtNum(init.dv_max)}, residual ${fmtNum(init.residual_before)} → ${fmtNum(init.residual_after)}`);
   }
+  const causes = errorCausesText(m.error_by_cause);
+  if (causes) add("tracking error by cause", causes);
   if (m.errdyn_dev !== null) add("deviation from the exact error dynamics", fmtNum(m.errdyn_dev));
   if (m.energy_drift !== null) add("relative energy drift", fmtNum(m.energy_drift));
   add("integrator error estimate", fmtNum(m.err_estimate));
-  add("steps", `${m.steps} (${m.rejected} rejected), ${m.rhs_evals} evaluations`);
-  add("wall time", `${fmtNum(m.wall_s)} s (CPU ${fmtNum(m.cpu_s)} s, ${fmtNum(m.us_per_eval)} µs per evaluation)`);
+  const floor = m.tolerance_floor;
+  if (floor) {
+    add("tolerances", floor.raised ? `raised: ${floor.reason}` :
+      `rtol ${fmtNum(floor.rtol)}, atol ${fmtNum(floor.atol)}, as asked (the accelerations round to ` +
+      `${fmtNum(floor.accel_rounding)}: no need to raise them)`);
+  }
+  add("cost", `${fmtNum(m.us_per_eval)} µs per evaluation; ${m.steps} steps (${m.rejected} rejected), ` +
+    `${m.rhs_evals} evaluations`);
+  add("wall time", `${fmtNum(m.wall_s)} s (CPU ${fmtNum(m.cpu_s)} s)`);
   if (m.diverged_joint !== null) add("diverged at joint", String(m.diverged_joint));
   if (m.gains) {
     const text = m.gains.map((g) => Object.entries(g).map(([k, v]) => `${k} ${fmtNum(v)}`).join(", "));
@@ -89,6 +105,22 @@ export function metricsList(m) {
       (text.length > shown ? `; … (${text.length} coordinates: the spec has them all)` : ""));
   }
   return dl;
+}
+
+/* metrics.error_by_cause in one line: each cause's RMS over time and the coordinates and its share
+ * of the three causes' sum ("sampling 0.012 (80 %), noise 0.003 (20 %), model 0 (0 %); the job's
+ * total 0.013 ..."), or null when the job has none of the causes (all zeros), or the metrics none
+ * (a passive run, or a job stored before them). */
+export function errorCausesText(causes) {
+  if (!causes || !Array.isArray(causes.total)) return null;
+  const rms = (xs) => (Array.isArray(xs) && xs.length ?
+    Math.sqrt(xs.reduce((s, x) => s + (x ?? 0) * (x ?? 0), 0) / xs.length) : 0);
+  const names = ["sampling", "noise", "model"];
+  const each = names.map((k) => rms(causes[k]));
+  const sum = each.reduce((a, b) => a + b, 0);
+  if (!(sum > 0)) return null;
+  const parts = names.map((k, i) => `${k} ${fmtNum(each[i])} (${Math.round((100 * each[i]) / sum)} %)`);
+  return `${parts.join(", ")}; the job's total ${fmtNum(rms(causes.total))} (RMS over time and coordinates)`;
 }
 
 /* How far a run got, for a finished job: "ran 0.33 s of 5 s", or null when it ran to the end. */
@@ -355,15 +387,13 @@ export async function jobView(root, ctx) {
   const m = job.metrics || {};
   const width = plotsHost.clientWidth;
   const nind = m.nind ?? 0;
-  let data, anim, heat;
+  /* the plots' series first; the heat-map's comes meanwhile and is drawn after the first paint,
+     the animation's (when the plots' does not serve it) once its panel is in view */
+  const heatLoad = nind >= HEAT_MIN ? loadHeatSeries(job, Math.round(width), ctx.signal) : Promise.resolve(null);
+  heatLoad.catch(() => {}); /* awaited below; a rejection is reported there */
+  let data;
   try {
-    /* the three requests at once; the animation's only when the plots' does not serve it */
-    [data, anim, heat] = await Promise.all([
-      loadPlotSeries(job, width, ctx.signal),
-      plotsCoverAnimation(job, width) ? null : loadAnimSeries(job, animBox.clientWidth || width, ctx.signal),
-      nind >= HEAT_MIN ? loadHeatSeries(job, Math.round(width), ctx.signal) : null,
-    ]);
-    anim = anim || data.anim;
+    data = await loadPlotSeries(job, width, ctx.signal);
   } catch (e) {
     if (e.name === "AbortError") return;
     plotsHost.replaceChildren(e.status === 404 ? el("p", {class: "empty", text: "This job has no series (it stopped before it ran)."})
@@ -460,22 +490,89 @@ export async function jobView(root, ctx) {
 
   const summary = jointSummary(m, data.coords, pickJoint && !data.loop ? pickJoint : null);
   if (summary) summaryHost.append(summary);
+  timeline.set(Math.min(state.t, duration), null);
+  timeline.subscribe(() => save());
+  plotsHost.setAttribute("data-drawn", "1"); /* plots, cursor and summary: the page is usable */
+
+  /* the heat-map after the first paint */
+  await afterPaint(ctx.signal);
+  let heat = null;
+  try {
+    heat = await heatLoad;
+  } catch (e) {
+    if (e.name === "AbortError") return;
+    heatBox.hidden = false;
+    heatBox.append(errorBox("The heat-map's series could not be loaded", e));
+  }
+  if (!ctx.alive()) return;
   if (heat && heat.e && heat.t.length) {
     heatBox.hidden = false;
     const labels = data.coords;
     const hm = createHeatmap(heatBox, heat, {labelOf: (i) => (labels[i] ? labels[i].label : `coordinate ${i}`),
       onPick: pickJoint && !data.loop ? pickJoint : null});
     ctx.onCleanup(() => hm.destroy());
+    await afterPaint(ctx.signal);
   }
-  if (anim && anim.q && anim.t.length) {
-    const a = createAnimation(animBox, {spec, form: m.form, series: anim, timeline});
-    ctx.onCleanup(() => a.destroy());
-  } else {
+
+  /* the animation: at once when its panel is in view, else when it scrolls into view or on play */
+  const recordsQ = ((spec.output && spec.output.channels) || ["q"]).includes("q");
+  if (!recordsQ) {
     animBox.append(el("p", {class: "muted", text: "No animation: the run did not record q."}));
+    ctx.ready();
+    return;
   }
-  timeline.set(Math.min(state.t, duration), null);
-  timeline.subscribe(() => save());
+  let animStarted = false;
+  const animNote = el("p", {class: "muted", id: "anim-waiting", role: "status",
+    text: "The animation loads when this panel is in view, or on play."});
+  async function showAnimation() {
+    if (animStarted) return;
+    animStarted = true;
+    seen.disconnect();
+    ctx.busy();
+    animNote.textContent = "Loading the animation…";
+    let anim = data.anim;
+    try {
+      anim = anim || await loadAnimSeries(job, animBox.clientWidth || width, ctx.signal);
+    } catch (e) {
+      if (e.name === "AbortError") return;
+      animNote.replaceWith(errorBox("The animation's series could not be loaded", e));
+      ctx.ready();
+      return;
+    }
+    animNote.remove();
+    if (anim && anim.q && anim.t.length) {
+      const a = createAnimation(animBox, {spec, form: m.form, series: anim, timeline});
+      ctx.onCleanup(() => a.destroy());
+      timeline.set(timeline.t, null);
+    } else {
+      animBox.append(el("p", {class: "muted", text: "No animation: the run did not record q."}));
+    }
+    ctx.ready();
+  }
+  const seen = new IntersectionObserver((entries) => {
+    if (entries.some((e) => e.isIntersecting)) showAnimation();
+  });
+  ctx.onCleanup(() => seen.disconnect());
+  if (data.anim) { await showAnimation(); return; }
+  animBox.append(animNote);
+  player.node.querySelector("button#play").addEventListener("click", showAnimation);
+  /* the observer's first report says whether the panel is in view now */
+  const inView = await new Promise((resolve) => {
+    const first = new IntersectionObserver((entries) => { first.disconnect(); resolve(entries.some((e) => e.isIntersecting)); });
+    first.observe(animBox);
+  });
+  if (!ctx.alive()) return;
+  if (inView) { await showAnimation(); return; }
+  seen.observe(animBox);
   ctx.ready();
+}
+
+/* Resolves after the next frame has been painted (a frame callback, then a task). */
+function afterPaint(signal) {
+  return new Promise((resolve, reject) => {
+    requestAnimationFrame(() => setTimeout(() => (signal && signal.aborted ?
+      reject(new DOMException("left the view", "AbortError")) : resolve()), 0));
+  });
 }
 
 /* "0-3, 17" for [0, 1, 2, 3, 17]. */
