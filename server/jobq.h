@@ -40,10 +40,16 @@
  * on a connection of its own: jobq_wait and the `left` hook follow the jobs submitted through
  * this process (jobq_submit) without a query per waiting request; every JOBQ_RECONCILE s, and
  * after the listening connection was lost, it reads the status of those jobs in one query, so a
- * notification missed while disconnected delays nothing for long. jobq_space, jobq_cancel and the
- * counters of jobq_get_stats then read the database (one small query each, on a connection the
- * process shares under a lock): queued and busy are the whole database's queued and running
- * jobs, workers this process's.
+ * notification missed while disconnected delays nothing for long. jobq_space, jobq_cancel,
+ * jobq_position and the counters of jobq_get_stats then read the database (one small query each,
+ * on a connection the process shares under a lock): jobq_space bounds the queued single jobs,
+ * jobq_position counts places in the claims' turns (store_pg_queue_position), queued and busy
+ * are the whole database's queued and running jobs, workers this process's. Families need no
+ * lanes here: the claim itself serves the single jobs and each family in turn, across every
+ * worker process (store_pg_claim); jobq_submit_family only checks that the queue is not
+ * stopping (its members are not followed: jobq_wait returns at once for them), and
+ * jobq_cancel_family flags the family's active members in the database (store_pg_request_cancel_
+ * family), handing back no ids.
  *
  * All functions are thread-safe unless they say otherwise.
  */
