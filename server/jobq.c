@@ -1161,6 +1161,11 @@ int jobq_live_info(jobq *q, int64_t id, store_series_info *out)
     return rc;
 }
 
+int jobq_shared(const jobq *q)
+{
+    return q->shared;
+}
+
 int jobq_live_read(jobq *q, int64_t id, int channel, uint64_t offset, void *buf, size_t len)
 {
     int rc = 1;

@@ -49,7 +49,8 @@
  * worker process (store_pg_claim); jobq_submit_family only checks that the queue is not
  * stopping (its members are not followed: jobq_wait returns at once for them), and
  * jobq_cancel_family flags the family's active members in the database (store_pg_request_cancel_
- * family), handing back no ids.
+ * family), handing back no ids. jobq_live_info and jobq_live_read know only the jobs this
+ * process's workers run: an API process without workers has no live samples to give.
  *
  * All functions are thread-safe unless they say otherwise.
  */
@@ -128,6 +129,10 @@ int jobq_cancel(jobq *q, int64_t id);
  * filled as store_get_series_info fills it (out->nsamples samples, all final), or 1 when no
  * worker here runs it or it has recorded no sample yet. */
 int jobq_live_info(jobq *q, int64_t id, store_series_info *out);
+
+/* 1 when the queue is a PostgreSQL database shared by worker processes (jobs may run in
+ * another process, whose live samples this one cannot read), else 0. */
+int jobq_shared(const jobq *q);
 
 /* Copies len bytes at offset (store.h's layout: per channel, samples x width float64; -1 = t)
  * of the samples job id's run has recorded so far. Returns 0; 1 when no worker here runs it

@@ -14,8 +14,8 @@ import { BACKEND, startServer, submit, waitFor, waitJob } from './lib.mjs';
 
 /* on PostgreSQL each server is an API process without workers beside two worker processes
    (lib.mjs): a running job's samples so far are in a worker's memory, which the API process
-   cannot read */
-const PG_CLUSTER = BACKEND === 'postgres' && 'the API process of the PostgreSQL cluster runs no job, so it has no live samples';
+   cannot read; it says so instead (the next test) */
+const PG_CLUSTER = BACKEND === 'postgres' && 'the API process of the PostgreSQL cluster runs no job, so it has no live samples (checked below)';
 
 /* runs for many minutes: only ever cancelled */
 const LONG = { preset: 'n_link_pendulum', n: 64, duration: 600, integrator: { method: 'rk4', step: 0.0001 }, output: { interval: 0.1 } };
@@ -193,6 +193,21 @@ test('a running job\'s series with ?partial=1: the samples so far, growing; ?fro
     assert.equal(done.status, 200);
     assert.ok(Math.abs(done.json.t[0] - 5 * small.spec.output.interval) < 1e-12, 'from works on a finished job');
     assert.equal(done.json.t.length, small.metrics.samples - 5);
+});
+
+test('a cluster\'s API process answers ?partial=1 of a job running in a worker process with 409 saying so', { skip: BACKEND !== 'postgres' && 'PostgreSQL only' }, async () => {
+    const id = (await submit(srv, LONG)).id;
+    try {
+        await waitJob(srv, id, { until: running, timeoutMs: 10000 });
+        const res = await srv.get(`/api/jobs/${id}/series?partial=1`);
+        assert.equal(res.status, 409, res.text);
+        assert.equal(res.json.error.code, 'NOT_FINISHED');
+        assert.equal(res.json.error.message,
+            `job ${id} is running in another worker process of the cluster, which alone holds the samples recorded so far; its series is here once it has finished`);
+    } finally {
+        await srv.post(`/api/jobs/${id}/cancel`);
+        await waitJob(srv, id, { timeoutMs: 10000 });
+    }
 });
 
 test('an RK4 step longer than the output interval is reported as metrics.step_cut', async () => {
