@@ -1244,7 +1244,9 @@ int store_pg_claim(store *s, double lease_s, int64_t *id, int *cancel, char *err
     /* the candidates: every job whose lease expired (first), then the oldest few claimable
        jobs of each lane (found by a skip scan of jobs_queued_lanes: one index probe per lane),
        the lane served least recently first; the first candidate no other claim holds is taken
-       and its lane marked served now */
+       and its lane marked served now. started is this worker's clock, read before the claim, so
+       a job inserted meanwhile (or by a process whose clock is ahead) would seem to start before
+       it was created: it starts no earlier than its creation */
     PGresult *r = run(
         p,
         "WITH RECURSIVE lane(id) AS (SELECT min(coalesce(family_id, 0)) FROM jobs WHERE " CLAIMABLE
@@ -1260,7 +1262,8 @@ int store_pg_claim(store *s, double lease_s, int64_t *id, int *cancel, char *err
         "'queued' AND NOT j.cancel_requested) OR (j.status = 'running' AND j.lease_until < " DB_NOW
         ") ORDER BY cand.served, j.id LIMIT 1 FOR UPDATE OF j SKIP LOCKED), "
         "claimed AS (UPDATE jobs SET status = 'running', worker = $1, lease_until = " DB_NOW
-        " + $2::float8, started = $3::float8, progress = 0 WHERE id = (SELECT id FROM pick) "
+        " + $2::float8, started = greatest($3::float8, created), progress = 0 WHERE id = (SELECT "
+        "id FROM pick) "
         "RETURNING id, cancel_requested, coalesce(family_id, 0) AS lane), "
         "served AS (INSERT INTO lanes (lane, served) SELECT lane, " DB_NOW " FROM claimed ON "
         "CONFLICT (lane) DO UPDATE SET served = EXCLUDED.served) "
