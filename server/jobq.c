@@ -1036,7 +1036,11 @@ int jobq_submit_family(jobq *q, int64_t family, const int64_t *ids, long n)
 {
     int rc = 0;
     pthread_mutex_lock(&q->lock);
-    if (atomic_load(&q->stopping))
+    if (q->shared) {
+        /* the members are in the database, which the workers claim from in fair turns; they are
+           not followed here (jobq_wait does not wait for them) */
+        rc = atomic_load(&q->stopping) ? 2 : 0;
+    } else if (atomic_load(&q->stopping))
         rc = 2;
     else if (n > 0 && lane_push(q, family, ids, n) != 0)
         rc = -1;
@@ -1051,6 +1055,16 @@ int jobq_cancel_family(jobq *q, int64_t family, int64_t **removed, long *n)
     int running = 0;
     *removed = NULL;
     *n = 0;
+    if (q->shared) {
+        /* flagged in the database: the queued members are no longer claimed (the caller records
+           them cancelled), the running ones stop at their worker's next heartbeat */
+        char err[256];
+        pthread_mutex_lock(&q->ctl_lock);
+        running = store_pg_request_cancel_family(q->ctl, family, err, sizeof err);
+        pthread_mutex_unlock(&q->ctl_lock);
+        if (running < 0) fprintf(stderr, "jobq: family %lld: %s\n", (long long)family, err);
+        return running < 0 ? 0 : running;
+    }
     pthread_mutex_lock(&q->lock);
     jobq_lane *l = lane_of(q, family);
     if (l) {
@@ -1079,11 +1093,16 @@ int jobq_cancel_family(jobq *q, int64_t family, int64_t **removed, long *n)
 int jobq_space(jobq *q)
 {
     if (q->shared) {
-        /* the database's queued jobs against the bound; a failed read lets the insert say why */
-        long counts[STORE_NSTATUS];
+        /* the database's queued single jobs against the bound (a family's members are not
+           bounded by it, as on SQLite); a failed read lets the insert say why */
+        long queued = 0;
+        char err[256];
         if (atomic_load(&q->stopping)) return 0;
-        if (shared_counts(q, counts) != 0) return 1;
-        long space = q->config.max_queue - counts[STORE_QUEUED];
+        pthread_mutex_lock(&q->ctl_lock);
+        int rc = store_pg_queued_singles(q->ctl, &queued, err, sizeof err);
+        pthread_mutex_unlock(&q->ctl_lock);
+        if (rc != 0) return 1;
+        long space = q->config.max_queue - queued;
         return space > 0 ? (int)(space < INT_MAX ? space : INT_MAX) : 0;
     }
     pthread_mutex_lock(&q->lock);
@@ -1149,6 +1168,11 @@ int jobq_live_info(jobq *q, int64_t id, store_series_info *out)
     return rc;
 }
 
+int jobq_shared(const jobq *q)
+{
+    return q->shared;
+}
+
 int jobq_live_read(jobq *q, int64_t id, int channel, uint64_t offset, void *buf, size_t len)
 {
     int rc = 1;
@@ -1184,6 +1208,15 @@ static long ahead_in_turns(const jobq *q, long k, const jobq_lane *self)
 
 int jobq_position(jobq *q, int64_t id)
 {
+    if (q->shared) {
+        /* the database's queue, in the claims' turns */
+        char err[256];
+        pthread_mutex_lock(&q->ctl_lock);
+        int pos = store_pg_queue_position(q->ctl, id, err, sizeof err);
+        pthread_mutex_unlock(&q->ctl_lock);
+        if (pos < 0) fprintf(stderr, "jobq: job %lld: %s\n", (long long)id, err);
+        return pos < 0 ? 0 : pos;
+    }
     pthread_mutex_lock(&q->lock);
     long ahead = -1;
     int pos = ring_find(q, id);

@@ -40,10 +40,17 @@
  * on a connection of its own: jobq_wait and the `left` hook follow the jobs submitted through
  * this process (jobq_submit) without a query per waiting request; every JOBQ_RECONCILE s, and
  * after the listening connection was lost, it reads the status of those jobs in one query, so a
- * notification missed while disconnected delays nothing for long. jobq_space, jobq_cancel and the
- * counters of jobq_get_stats then read the database (one small query each, on a connection the
- * process shares under a lock): queued and busy are the whole database's queued and running
- * jobs, workers this process's.
+ * notification missed while disconnected delays nothing for long. jobq_space, jobq_cancel,
+ * jobq_position and the counters of jobq_get_stats then read the database (one small query each,
+ * on a connection the process shares under a lock): jobq_space bounds the queued single jobs,
+ * jobq_position counts places in the claims' turns (store_pg_queue_position), queued and busy
+ * are the whole database's queued and running jobs, workers this process's. Families need no
+ * lanes here: the claim itself serves the single jobs and each family in turn, across every
+ * worker process (store_pg_claim); jobq_submit_family only checks that the queue is not
+ * stopping (its members are not followed: jobq_wait returns at once for them), and
+ * jobq_cancel_family flags the family's active members in the database (store_pg_request_cancel_
+ * family), handing back no ids. jobq_live_info and jobq_live_read know only the jobs this
+ * process's workers run: an API process without workers has no live samples to give.
  *
  * All functions are thread-safe unless they say otherwise.
  */
@@ -122,6 +129,10 @@ int jobq_cancel(jobq *q, int64_t id);
  * filled as store_get_series_info fills it (out->nsamples samples, all final), or 1 when no
  * worker here runs it or it has recorded no sample yet. */
 int jobq_live_info(jobq *q, int64_t id, store_series_info *out);
+
+/* 1 when the queue is a PostgreSQL database shared by worker processes (jobs may run in
+ * another process, whose live samples this one cannot read), else 0. */
+int jobq_shared(const jobq *q);
 
 /* Copies len bytes at offset (store.h's layout: per channel, samples x width float64; -1 = t)
  * of the samples job id's run has recorded so far. Returns 0; 1 when no worker here runs it

@@ -926,6 +926,15 @@ static void get_series(const http_request *req, http_reply *rep, void *arg)
     int live = 0;
     if (!job_finished(row.status)) {
         live = partial && row.status == STORE_RUNNING && jobq_live_info(ctx->queue, id, &info) == 0;
+        if (!live && partial && row.status == STORE_RUNNING && jobq_shared(ctx->queue)) {
+            /* the samples so far live in the worker process that runs the job */
+            http_reply_error(rep, 409, "NOT_FINISHED", "id",
+                             "job %" PRId64 " is running in another worker process of the "
+                             "cluster, which alone holds the samples recorded so far; its series "
+                             "is here once it has finished",
+                             id);
+            goto done;
+        }
         if (!live && partial) {
             http_reply_error(rep, 409, "NOT_FINISHED", "id",
                              "job %" PRId64 " is %s and has recorded no samples yet", id,

@@ -617,9 +617,16 @@ static double real_or_nan(sqlite3_stmt *q, int i)
  * non-finite entries, written as null, are left out) */
 static void summarise_errors(sqlite3_stmt *q, store_job *j)
 {
-    j->e_final = j->e_rms = NAN;
+    store_summarise_errors((const char *)sqlite3_column_text(q, 15),
+                           (const char *)sqlite3_column_text(q, 16), &j->e_final, &j->e_rms);
+}
+
+void store_summarise_errors(const char *e_final, const char *e_rms, double *final_out,
+                            double *rms_out)
+{
+    *final_out = *rms_out = NAN;
     for (int c = 15; c <= 16; c++) {
-        const char *text = (const char *)sqlite3_column_text(q, c);
+        const char *text = c == 15 ? e_final : e_rms;
         cJSON *a = text ? cJSON_Parse(text) : NULL;
         double acc = 0;
         int n = 0;
@@ -630,8 +637,8 @@ static void summarise_errors(sqlite3_stmt *q, store_job *j)
             n++;
         }
         cJSON_Delete(a);
-        if (n > 0 && c == 15) j->e_final = acc;
-        if (n > 0 && c == 16) j->e_rms = sqrt(acc / n);
+        if (n > 0 && c == 15) *final_out = acc;
+        if (n > 0 && c == 16) *rms_out = sqrt(acc / n);
     }
 }
 
@@ -1417,13 +1424,6 @@ done:
     return rc;
 }
 
-/* An operation the PostgreSQL backend does not have yet (store_pg.h): -1 with a message. */
-static int pg_missing(char *err, size_t errlen, const char *what)
-{
-    set_err(err, errlen, "%s: not available with a PostgreSQL database yet", what);
-    return -1;
-}
-
 /* the checks store_list and store_search share; 0 or -1 */
 static int list_args(int64_t before, int status, int limit, char *err, size_t errlen)
 {
@@ -1465,7 +1465,7 @@ done:
 int store_search(store *s, int64_t before, const store_filter *f, int limit, store_job **rows,
                  int *n, char *err, size_t errlen)
 {
-    if (s->pg) return pg_missing(err, errlen, "searching jobs");
+    if (s->pg) return store_pg_search(s->pg, before, f, limit, rows, n, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_SEARCH];
     int rc = -1;
@@ -1942,7 +1942,9 @@ int store_family_insert(store *s, const char *name, const char *spec, const char
                         const store_new_member *members, long n, int64_t *family_id, int64_t *ids,
                         char *err, size_t errlen)
 {
-    if (s->pg) return pg_missing(err, errlen, "families");
+    if (s->pg)
+        return store_pg_family_insert(s->pg, name, spec, axes, members, n, family_id, ids, err,
+                                      errlen);
     call_begin(s);
     return write_end(s, insert_family(s, name, spec, axes, members, n, family_id, ids, err, errlen),
                      1);
@@ -1996,7 +1998,7 @@ void store_family_clear(store_family *f)
 
 int store_family_get(store *s, int64_t id, store_family *out, char *err, size_t errlen)
 {
-    if (s->pg) return pg_missing(err, errlen, "families");
+    if (s->pg) return store_pg_family_get(s->pg, id, out, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_FAMILY_GET];
     int rc = -1, in_tx = 0;
@@ -2033,7 +2035,7 @@ done:
 int store_family_list(store *s, int64_t before, int limit, store_family **rows, int *n, char *err,
                       size_t errlen)
 {
-    if (s->pg) return pg_missing(err, errlen, "families");
+    if (s->pg) return store_pg_family_list(s->pg, before, limit, rows, n, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_FAMILY_LIST];
     int rc = -1, count = 0, step, in_tx = 0;
@@ -2087,7 +2089,7 @@ void store_families_free(store_family *rows, int n)
 int store_family_members(store *s, int64_t id, store_member **rows, long *n, char *err,
                          size_t errlen)
 {
-    if (s->pg) return pg_missing(err, errlen, "families");
+    if (s->pg) return store_pg_family_members(s->pg, id, rows, n, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_FAMILY_MEMBERS];
     int rc = -1, step;
@@ -2147,7 +2149,7 @@ void store_members_free(store_member *rows, long n)
 
 int store_family_active(store *s, int64_t id, int64_t **ids, long *n, char *err, size_t errlen)
 {
-    if (s->pg) return pg_missing(err, errlen, "families");
+    if (s->pg) return store_pg_family_active(s->pg, id, ids, n, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_FAMILY_ACTIVE];
     int rc = -1, step;
@@ -2235,7 +2237,7 @@ done:
 
 int store_family_delete(store *s, int64_t id, char *err, size_t errlen)
 {
-    if (s->pg) return pg_missing(err, errlen, "families");
+    if (s->pg) return store_pg_family_delete(s->pg, id, err, errlen);
     call_begin(s);
     return write_end(s, delete_family(s, id, err, errlen), 1);
 }
@@ -2243,7 +2245,7 @@ int store_family_delete(store *s, int64_t id, char *err, size_t errlen)
 int store_job_families(store *s, const int64_t *ids, int n, int64_t *families, char *err,
                        size_t errlen)
 {
-    if (s->pg) return pg_missing(err, errlen, "families");
+    if (s->pg) return store_pg_job_families(s->pg, ids, n, families, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_FAMILY_OF];
     int rc = -1;
@@ -2293,7 +2295,7 @@ done:
 int store_family_cancel(store *s, int64_t id, const char *message, long *n, char *err,
                         size_t errlen)
 {
-    if (s->pg) return pg_missing(err, errlen, "families");
+    if (s->pg) return store_pg_family_cancel(s->pg, id, message, n, err, errlen);
     call_begin(s);
     return write_end(s, cancel_family(s, id, message, n, err, errlen), 0);
 }

@@ -20,6 +20,13 @@
  * store_series_read reads one range of a row with substring() (the column's storage is
  * EXTERNAL, uncompressed, so PostgreSQL reads only the chunks of the range).
  *
+ * Families (schema version 3) are SQLite's tables and contracts; a family's members go in with
+ * one INSERT .. SELECT from json_to_recordset, so 10,000 members cost one round trip, and read
+ * back in the order of their ids, each checked to be the member of its place. The claim serves
+ * lanes in turn (store_pg.h, "Claims"): a skip scan of the partial index jobs_queued_lanes finds
+ * each lane's oldest claimable jobs with one index probe per lane, and the lanes table says which
+ * lane was served least recently, so a claim costs O(lanes log n), not a scan of the queue.
+ *
  * Faults and health are store.c's (store_health_report_*), with the classification of
  * store_pg.h; a call on a connection libpq reports bad first tries PQreset once.
  *
@@ -42,6 +49,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
 #include <libpq-fe.h>
 
 #define PG_MAX_LIST 1000
@@ -103,11 +111,39 @@ static const char *const migrations[STORE_PG_SCHEMA_VERSION] = {
     "CREATE TRIGGER job_change AFTER INSERT OR DELETE OR UPDATE OF status ON jobs"
     "  FOR EACH ROW EXECUTE FUNCTION ctcsim_job_change();"
     "UPDATE schema_version SET version = 2;",
+    /* 2 -> 3: families of jobs (family.h), as SQLite's version 3; a member is an ordinary job
+     * that names its family, its number in it, its replica and its axis values (jobs stored
+     * before have none). lanes holds when each lane (0: the single jobs, else a family) last had
+     * a job claimed, and jobs_queued_lanes finds each lane's oldest claimable job (the claim's
+     * fair turns, store_pg.h) */
+    "CREATE TABLE families ("
+    "  id BIGINT GENERATED ALWAYS AS IDENTITY PRIMARY KEY,"
+    "  name TEXT NOT NULL,"
+    "  spec TEXT NOT NULL,"
+    "  axes TEXT NOT NULL,"
+    "  members BIGINT NOT NULL CHECK (members >= 0),"
+    "  created DOUBLE PRECISION NOT NULL);"
+    "ALTER TABLE jobs ADD COLUMN family_id BIGINT REFERENCES families (id);"
+    "ALTER TABLE jobs ADD COLUMN family_member BIGINT;"
+    "ALTER TABLE jobs ADD COLUMN family_replica INTEGER;"
+    "ALTER TABLE jobs ADD COLUMN family_values TEXT;"
+    "CREATE INDEX jobs_by_family ON jobs (family_id, family_member) WHERE family_id IS NOT NULL;"
+    "CREATE INDEX jobs_queued_lanes ON jobs ((coalesce(family_id, 0)), id)"
+    "  WHERE status = 'queued' AND NOT cancel_requested;"
+    "CREATE TABLE lanes ("
+    "  lane BIGINT PRIMARY KEY,"
+    "  served DOUBLE PRECISION NOT NULL);"
+    "UPDATE schema_version SET version = 3;",
 };
 
 #define JOB_COLUMNS                                                                                \
     "id, name, preset, status, progress, created, started, finished, nbodies, nv, controller, "    \
-    "message, e_max, wall_s"
+    "message, e_max, wall_s, family_id, " SUMMARY_COLUMNS
+/* the summaries a list shows, as SQLite's (store.c): metrics.e_final and metrics.e_rms as JSON
+   text, reduced in C (store_summarise_errors), and the normalised job's tags */
+#define SUMMARY_COLUMNS                                                                            \
+    "(jobs.metrics::json -> 'e_final')::text, (jobs.metrics::json -> 'e_rms')::text, "             \
+    "nullif((jobs.spec::json -> 'tags')::text, 'null')"
 #define ACTIVE "status IN ('queued', 'running')"
 #define DB_NOW "extract(epoch from clock_timestamp())::float8"
 
@@ -357,9 +393,14 @@ static int read_job(const PGresult *r, int row, int with_spec, store_job *j, cha
     j->nv = atoi(PQgetvalue(r, row, 9));
     j->e_max = real_col(r, row, 12);
     j->wall_s = real_col(r, row, 13);
+    j->family = PQgetisnull(r, row, 14) ? 0 : strtoll(PQgetvalue(r, row, 14), NULL, 10);
+    store_summarise_errors(PQgetisnull(r, row, 15) ? NULL : PQgetvalue(r, row, 15),
+                           PQgetisnull(r, row, 16) ? NULL : PQgetvalue(r, row, 16), &j->e_final,
+                           &j->e_rms);
     if (dup_col(r, row, 1, &j->name) || dup_col(r, row, 2, &j->preset) ||
         dup_col(r, row, 10, &j->controller) || dup_col(r, row, 11, &j->message) ||
-        (with_spec && (dup_col(r, row, 14, &j->spec) || dup_col(r, row, 15, &j->metrics)))) {
+        dup_col(r, row, 17, &j->tags) ||
+        (with_spec && (dup_col(r, row, 18, &j->spec) || dup_col(r, row, 19, &j->metrics)))) {
         set_err(err, errlen, "job %lld: out of memory", (long long)j->id);
         store_job_clear(j);
         return -1;
@@ -886,6 +927,76 @@ done:
     return rc;
 }
 
+/* translate(x, AZ) folds x's ASCII letters to lowercase, as SQLite's lower() does, which
+ * store_search's contract follows (PostgreSQL's lower() folds by the database's locale) */
+#define AZ "'ABCDEFGHIJKLMNOPQRSTUVWXYZ', 'abcdefghijklmnopqrstuvwxyz'"
+/* the elements of the normalised job's tags, as text (none when it has no array of them) */
+#define TAGS                                                                                       \
+    "json_array_elements_text(CASE WHEN json_typeof(jobs.spec::json -> 'tags') = 'array' THEN "    \
+    "jobs.spec::json -> 'tags' END) AS tag"
+/* a search: $4 a lowercase text in the name, preset, controller or a tag; $5 a tag */
+#define SEARCH_WHERE                                                                               \
+    "($4::text IS NULL OR strpos(translate(name, " AZ "), $4) > 0 OR "                             \
+    "strpos(translate(coalesce(preset, ''), " AZ "), $4) > 0 OR "                                  \
+    "strpos(translate(controller, " AZ "), $4) > 0 OR "                                            \
+    "EXISTS (SELECT 1 FROM " TAGS " WHERE strpos(translate(tag, " AZ "), $4) > 0)) AND "           \
+    "($5::text IS NULL OR EXISTS (SELECT 1 FROM " TAGS " WHERE tag = $5))"
+
+int store_pg_search(store_pg *p, int64_t before, const store_filter *f, int limit, store_job **rows,
+                    int *n, char *err, size_t errlen)
+{
+    call_begin(p);
+    *rows = NULL;
+    *n = 0;
+    if (limit < 1 || limit > PG_MAX_LIST) {
+        set_err(err, errlen, "limit must be between 1 and %d (got %d)", PG_MAX_LIST, limit);
+        return -1;
+    }
+    if (before < 0) {
+        set_err(err, errlen, "before must be 0 or a job id (got %lld)", (long long)before);
+        return -1;
+    }
+    if (f->status < -1 || f->status >= STORE_NSTATUS) {
+        set_err(err, errlen, "unknown job status %d", f->status);
+        return -1;
+    }
+    char bs[24], ls[16], *text = NULL;
+    if (f->text) {
+        if (!(text = strdup(f->text))) {
+            set_err(err, errlen, "listing jobs: out of memory");
+            return -1;
+        }
+        for (char *c = text; *c; c++)
+            if (*c >= 'A' && *c <= 'Z') *c = (char)(*c - 'A' + 'a');
+    }
+    fmt_i64(bs, sizeof bs, before > 0 ? before : INT64_MAX);
+    snprintf(ls, sizeof ls, "%d", limit);
+    const char *v[] = {bs, ls, f->status >= 0 ? store_status_name((store_status)f->status) : NULL,
+                       text, f->tag};
+    PGresult *r = run(p,
+                      "SELECT " JOB_COLUMNS " FROM jobs WHERE id < $1 AND ($3::text IS NULL OR "
+                      "status = $3) AND " SEARCH_WHERE " ORDER BY id DESC LIMIT $2",
+                      5, v, 0, err, errlen, "listing jobs");
+    free(text);
+    if (!r) return -1;
+    int count = PQntuples(r), rc = -1, got = 0;
+    store_job *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
+    if (!list) {
+        set_err(err, errlen, "listing jobs: out of memory");
+        goto done;
+    }
+    for (; got < count; got++)
+        if (read_job(r, got, 0, &list[got], err, errlen)) goto done;
+    *rows = list;
+    *n = count;
+    list = NULL;
+    rc = 0;
+done:
+    PQclear(r);
+    store_jobs_free(list, got);
+    return rc;
+}
+
 #define SERIES_SHAPE                                                                               \
     "SELECT s.channel, s.width::int4, s.nsamples::int4, length(s.data)::int4, j.nv::int4"
 #define SERIES_FROM " FROM series AS s JOIN jobs AS j ON j.id = s.job_id WHERE s.job_id = $1"
@@ -1108,6 +1219,14 @@ int store_pg_count(store_pg *p, long counts[STORE_NSTATUS], char *err, size_t er
 
 /* ---- claims, heartbeats, notifications ---- */
 
+/* a queued job no cancel stops; jobs_queued_lanes's condition, which the claim's index scans
+ * must repeat to use it */
+#define CLAIMABLE "status = 'queued' AND NOT cancel_requested"
+/* the oldest jobs of each lane the claim considers: more than one, so that claims at the same
+ * moment, which skip each other's locked rows, still find one in the lane served least
+ * recently */
+#define CLAIM_PER_LANE "4"
+
 int store_pg_claim(store *s, double lease_s, int64_t *id, int *cancel, char *err, size_t errlen)
 {
     store_pg *p = store_pg_of(s);
@@ -1122,14 +1241,34 @@ int store_pg_claim(store *s, double lease_s, int64_t *id, int *cancel, char *err
     char started[40];
     fmt_real(started, sizeof started, now_s());
     const char *v[] = {p->owner, lease, started};
-    PGresult *r = run(p,
-                      "UPDATE jobs SET status = 'running', worker = $1, lease_until = " DB_NOW
-                      " + $2::float8, started = $3::float8, progress = 0 WHERE id = (SELECT id "
-                      "FROM jobs WHERE (status = 'queued' AND NOT cancel_requested) OR (status = "
-                      "'running' AND lease_until < " DB_NOW ") ORDER BY id LIMIT 1 "
-                      "FOR UPDATE SKIP LOCKED) "
-                      "RETURNING id, cancel_requested",
-                      3, v, 0, err, errlen, "claiming a job");
+    /* the candidates: every job whose lease expired (first), then the oldest few claimable
+       jobs of each lane (found by a skip scan of jobs_queued_lanes: one index probe per lane),
+       the lane served least recently first; the first candidate no other claim holds is taken
+       and its lane marked served now. started is this worker's clock, read before the claim, so
+       a job inserted meanwhile (or by a process whose clock is ahead) would seem to start before
+       it was created: it starts no earlier than its creation */
+    PGresult *r = run(
+        p,
+        "WITH RECURSIVE lane(id) AS (SELECT min(coalesce(family_id, 0)) FROM jobs WHERE " CLAIMABLE
+        " UNION ALL SELECT (SELECT min(coalesce(family_id, 0)) FROM jobs WHERE " CLAIMABLE
+        " AND coalesce(family_id, 0) > lane.id) FROM lane WHERE lane.id IS NOT NULL), "
+        "cand AS (SELECT id, -1::float8 AS served FROM jobs WHERE status = 'running' AND "
+        "lease_until < " DB_NOW " UNION ALL SELECT c.id, coalesce(l.served, 0) FROM lane LEFT "
+        "JOIN lanes AS l ON l.lane = lane.id CROSS JOIN LATERAL (SELECT id FROM jobs "
+        "WHERE " CLAIMABLE " AND coalesce(family_id, 0) = lane.id ORDER BY id LIMIT " CLAIM_PER_LANE
+        ") AS c WHERE "
+        "lane.id IS NOT NULL), "
+        "pick AS (SELECT j.id FROM jobs AS j JOIN cand ON cand.id = j.id WHERE (j.status = "
+        "'queued' AND NOT j.cancel_requested) OR (j.status = 'running' AND j.lease_until < " DB_NOW
+        ") ORDER BY cand.served, j.id LIMIT 1 FOR UPDATE OF j SKIP LOCKED), "
+        "claimed AS (UPDATE jobs SET status = 'running', worker = $1, lease_until = " DB_NOW
+        " + $2::float8, started = greatest($3::float8, created), progress = 0 WHERE id = (SELECT "
+        "id FROM pick) "
+        "RETURNING id, cancel_requested, coalesce(family_id, 0) AS lane), "
+        "served AS (INSERT INTO lanes (lane, served) SELECT lane, " DB_NOW " FROM claimed ON "
+        "CONFLICT (lane) DO UPDATE SET served = EXCLUDED.served) "
+        "SELECT id, cancel_requested FROM claimed",
+        3, v, 0, err, errlen, "claiming a job");
     int rc = -1;
     if (r && PQntuples(r) == 1) {
         *id = strtoll(PQgetvalue(r, 0, 0), NULL, 10);
@@ -1275,4 +1414,431 @@ int store_pg_statuses(store *s, const int64_t *ids, int n, int *out, char *err, 
     }
     PQclear(r);
     return 0;
+}
+
+/* ---- families ---- */
+
+/* the members as one JSON array of records, for json_to_recordset: one statement stores them
+ * all (a statement per member would cost a round trip each); NULL when out of memory or a
+ * member lacks a field (*bad receives its index, else -1) */
+static char *members_json(const store_new_member *members, long n, long *bad)
+{
+    *bad = -1;
+    cJSON *a = cJSON_CreateArray();
+    for (long i = 0; a && i < n; i++) {
+        const store_new_member *m = &members[i];
+        if (!m->name || !m->controller || !m->spec || !m->values || m->nbodies < 1 || m->nv < 0) {
+            *bad = i;
+            cJSON_Delete(a);
+            return NULL;
+        }
+        cJSON *o = cJSON_CreateObject();
+        if (!o || !cJSON_AddStringToObject(o, "name", m->name) ||
+            !(m->preset ? cJSON_AddStringToObject(o, "preset", m->preset)
+                        : cJSON_AddNullToObject(o, "preset")) ||
+            !cJSON_AddNumberToObject(o, "nbodies", m->nbodies) ||
+            !cJSON_AddNumberToObject(o, "nv", m->nv) ||
+            !cJSON_AddStringToObject(o, "controller", m->controller) ||
+            !cJSON_AddStringToObject(o, "spec", m->spec) ||
+            !cJSON_AddNumberToObject(o, "member", (double)m->index) ||
+            !cJSON_AddNumberToObject(o, "replica", m->replica) ||
+            !cJSON_AddStringToObject(o, "vals", m->values) ||
+            !cJSON_AddNumberToObject(o, "ord", (double)i)) {
+            cJSON_Delete(o);
+            cJSON_Delete(a);
+            return NULL;
+        }
+        cJSON_AddItemToArray(a, o);
+    }
+    char *text = a ? cJSON_PrintUnformatted(a) : NULL;
+    cJSON_Delete(a);
+    return text;
+}
+
+int store_pg_family_insert(store_pg *p, const char *name, const char *spec, const char *axes,
+                           const store_new_member *members, long n, int64_t *family_id,
+                           int64_t *ids, char *err, size_t errlen)
+{
+    call_begin(p);
+    if (!name || !spec || !axes || n < 0) {
+        set_err(err, errlen, "cannot store a family without a name, a spec and its axes");
+        return -1;
+    }
+    int rc = -1;
+    long bad;
+    PGresult *r = NULL;
+    char *list = members_json(members, n, &bad);
+    char what[300], created[40], ns[24], fid[24];
+    snprintf(what, sizeof what, "cannot store family '%.200s'", name);
+    if (!list) {
+        if (bad >= 0)
+            set_err(err, errlen, "cannot store member %ld of family '%.200s': a field is missing",
+                    bad, name);
+        else
+            set_err(err, errlen, "%s: out of memory", what);
+        return -1;
+    }
+    fmt_real(created, sizeof created, now_s());
+    snprintf(ns, sizeof ns, "%ld", n);
+    if (run_simple(p, "BEGIN", err, errlen, what) != 0) goto done;
+    const char *fv[] = {name, spec, axes, ns, created};
+    r = run(p,
+            "INSERT INTO families (name, spec, axes, members, created) VALUES ($1, $2, $3, $4, "
+            "$5) RETURNING id",
+            5, fv, 0, err, errlen, what);
+    if (!r) goto done;
+    *family_id = strtoll(PQgetvalue(r, 0, 0), NULL, 10);
+    PQclear(r);
+    fmt_i64(fid, sizeof fid, *family_id);
+    /* the ids are drawn in the order of the SELECT (ord, the members' order); read back in the
+       order of the ids, each row must be the member of its place */
+    const char *mv[] = {list, fid, created};
+    r = run(p,
+            "WITH ins AS (INSERT INTO jobs (name, preset, status, progress, created, nbodies, nv, "
+            "controller, spec, family_id, family_member, family_replica, family_values) SELECT "
+            "m.name, m.preset, 'queued', 0, $3::float8, m.nbodies, m.nv, m.controller, m.spec, "
+            "$2::bigint, m.member, m.replica, m.vals FROM json_to_recordset($1::json) AS "
+            "m(name text, preset text, nbodies int, nv int, controller text, spec "
+            "text, member bigint, replica int, vals text, ord bigint) ORDER BY m.ord RETURNING "
+            "id, family_member, family_replica) SELECT id, family_member, family_replica FROM ins "
+            "ORDER BY id",
+            3, mv, 0, err, errlen, what);
+    if (!r) goto done;
+    if (PQntuples(r) != n) {
+        set_err(err, errlen, "%s: %d members stored, not %ld", what, PQntuples(r), n);
+        goto done;
+    }
+    for (long i = 0; i < n; i++) {
+        int k = (int)i;
+        if (strtol(PQgetvalue(r, k, 1), NULL, 10) != members[i].index ||
+            atoi(PQgetvalue(r, k, 2)) != members[i].replica) {
+            set_err(err, errlen, "%s: the members' ids do not follow their order (member %ld)",
+                    what, i);
+            goto done;
+        }
+        ids[i] = strtoll(PQgetvalue(r, k, 0), NULL, 10);
+    }
+    PQclear(r);
+    r = NULL;
+    if (run_simple(p, "COMMIT", err, errlen, what) != 0) goto done;
+    rc = 0;
+done:
+    PQclear(r);
+    free(list);
+    if (rc) rollback(p);
+    return write_end(p, rc, 1);
+}
+
+/* a family's columns, then its counts as "status n,status n" (one statement: one snapshot) */
+#define FAMILY_COLUMNS                                                                             \
+    "f.id, f.name, f.spec, f.axes, f.members, f.created, (SELECT string_agg(c.status || ' ' || "   \
+    "c.n, ',') FROM (SELECT status, count(*) AS n FROM jobs WHERE family_id = f.id GROUP BY "      \
+    "status) AS c)"
+
+static int read_family(const PGresult *r, int row, int with_spec, store_family *f, char *err,
+                       size_t errlen)
+{
+    memset(f, 0, sizeof *f);
+    f->id = strtoll(PQgetvalue(r, row, 0), NULL, 10);
+    f->members = strtol(PQgetvalue(r, row, 4), NULL, 10);
+    f->created = real_col(r, row, 5);
+    const char *c = PQgetisnull(r, row, 6) ? "" : PQgetvalue(r, row, 6);
+    while (*c) {
+        char status[16];
+        long count;
+        int used = 0;
+        if (sscanf(c, "%15s %ld%n", status, &count, &used) != 2) break;
+        int st = store_status_parse(status);
+        if (st >= 0) f->counts[st] = count;
+        c += used;
+        if (*c == ',') c++;
+    }
+    if (dup_col(r, row, 1, &f->name) || dup_col(r, row, 3, &f->axes) ||
+        (with_spec && dup_col(r, row, 2, &f->spec))) {
+        set_err(err, errlen, "family %lld: out of memory", (long long)f->id);
+        store_family_clear(f);
+        return -1;
+    }
+    return 0;
+}
+
+int store_pg_family_get(store_pg *p, int64_t id, store_family *out, char *err, size_t errlen)
+{
+    call_begin(p);
+    memset(out, 0, sizeof *out);
+    char ids[24], what[48];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(what, sizeof what, "cannot read family %lld", (long long)id);
+    const char *v[] = {ids};
+    PGresult *r = run(p, "SELECT " FAMILY_COLUMNS " FROM families AS f WHERE f.id = $1", 1, v, 0,
+                      err, errlen, what);
+    if (!r) return -1;
+    int rc = PQntuples(r) == 0 ? 1 : read_family(r, 0, 1, out, err, errlen);
+    PQclear(r);
+    return rc;
+}
+
+int store_pg_family_list(store_pg *p, int64_t before, int limit, store_family **rows, int *n,
+                         char *err, size_t errlen)
+{
+    call_begin(p);
+    *rows = NULL;
+    *n = 0;
+    if (limit < 1 || limit > PG_MAX_LIST) {
+        set_err(err, errlen, "limit must be between 1 and %d (got %d)", PG_MAX_LIST, limit);
+        return -1;
+    }
+    char bs[24], ls[16];
+    fmt_i64(bs, sizeof bs, before > 0 ? before : INT64_MAX);
+    snprintf(ls, sizeof ls, "%d", limit);
+    const char *v[] = {bs, ls};
+    PGresult *r = run(p,
+                      "SELECT " FAMILY_COLUMNS " FROM families AS f WHERE f.id < $1 ORDER BY f.id "
+                      "DESC LIMIT $2",
+                      2, v, 0, err, errlen, "listing families");
+    if (!r) return -1;
+    int count = PQntuples(r), rc = -1, got = 0;
+    store_family *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
+    if (!list) {
+        set_err(err, errlen, "listing families: out of memory");
+        goto done;
+    }
+    for (; got < count; got++)
+        if (read_family(r, got, 0, &list[got], err, errlen)) goto done;
+    *rows = list;
+    *n = count;
+    list = NULL;
+    rc = 0;
+done:
+    PQclear(r);
+    store_families_free(list, got);
+    return rc;
+}
+
+int store_pg_family_members(store_pg *p, int64_t id, store_member **rows, long *n, char *err,
+                            size_t errlen)
+{
+    call_begin(p);
+    *rows = NULL;
+    *n = 0;
+    char ids[24], what[64];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(what, sizeof what, "reading the members of family %lld", (long long)id);
+    const char *v[] = {ids};
+    PGresult *r = run(p,
+                      "SELECT id, family_member, family_replica, status, family_values, metrics, "
+                      "message FROM jobs WHERE family_id = $1 ORDER BY family_member",
+                      1, v, 0, err, errlen, what);
+    if (!r) return -1;
+    long count = PQntuples(r), got = 0;
+    int rc = -1;
+    store_member *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
+    if (!list) {
+        set_err(err, errlen, "family %lld: out of memory", (long long)id);
+        goto done;
+    }
+    for (; got < count; got++) {
+        store_member *m = &list[got];
+        int k = (int)got;
+        m->job = strtoll(PQgetvalue(r, k, 0), NULL, 10);
+        m->index = strtol(PQgetvalue(r, k, 1), NULL, 10);
+        m->replica = atoi(PQgetvalue(r, k, 2));
+        int st = store_status_parse(PQgetvalue(r, k, 3));
+        m->status = st < 0 ? STORE_FAILED : (store_status)st;
+        if (dup_col(r, k, 4, &m->values) || dup_col(r, k, 5, &m->metrics) ||
+            dup_col(r, k, 6, &m->message)) {
+            set_err(err, errlen, "family %lld: out of memory", (long long)id);
+            got++;
+            goto done;
+        }
+    }
+    *rows = list;
+    *n = count;
+    list = NULL;
+    rc = 0;
+done:
+    PQclear(r);
+    store_members_free(list, got);
+    return rc;
+}
+
+int store_pg_family_active(store_pg *p, int64_t id, int64_t **ids, long *n, char *err,
+                           size_t errlen)
+{
+    call_begin(p);
+    *ids = NULL;
+    *n = 0;
+    char fid[24], what[64];
+    fmt_i64(fid, sizeof fid, id);
+    snprintf(what, sizeof what, "reading the members of family %lld", (long long)id);
+    const char *v[] = {fid};
+    PGresult *r = run(p, "SELECT id FROM jobs WHERE family_id = $1 AND " ACTIVE " ORDER BY id", 1,
+                      v, 0, err, errlen, what);
+    if (!r) return -1;
+    long count = PQntuples(r);
+    int64_t *list = malloc((size_t)(count > 0 ? count : 1) * sizeof *list);
+    if (!list) {
+        set_err(err, errlen, "family %lld: out of memory", (long long)id);
+        PQclear(r);
+        return -1;
+    }
+    for (long k = 0; k < count; k++) list[k] = strtoll(PQgetvalue(r, (int)k, 0), NULL, 10);
+    PQclear(r);
+    *ids = list;
+    *n = count;
+    return 0;
+}
+
+int store_pg_family_cancel(store_pg *p, int64_t id, const char *message, long *n, char *err,
+                           size_t errlen)
+{
+    call_begin(p);
+    *n = 0;
+    char fid[24], fin[40], what[48];
+    fmt_i64(fid, sizeof fid, id);
+    fmt_real(fin, sizeof fin, now_s());
+    snprintf(what, sizeof what, "cannot cancel family %lld", (long long)id);
+    const char *v[] = {fid, message, fin};
+    PGresult *r = run(p,
+                      "UPDATE jobs SET status = 'cancelled', message = $2, finished = $3 WHERE "
+                      "family_id = $1 AND status = 'queued'",
+                      3, v, 0, err, errlen, what);
+    if (r) *n = changes(r);
+    PQclear(r);
+    return write_end(p, r ? 0 : -1, 0);
+}
+
+int store_pg_family_delete(store_pg *p, int64_t id, char *err, size_t errlen)
+{
+    call_begin(p);
+    int rc = -1;
+    PGresult *r = NULL;
+    char fid[24], what[48];
+    fmt_i64(fid, sizeof fid, id);
+    snprintf(what, sizeof what, "cannot delete family %lld", (long long)id);
+    const char *v[] = {fid};
+    if (run_simple(p, "BEGIN", err, errlen, what) != 0) goto done;
+    /* the family's row locked, then whether a member is active: a finished member never
+       becomes active again, so the answer holds until the commit */
+    r = run(p,
+            "SELECT (SELECT id FROM families WHERE id = $1 FOR UPDATE) IS NOT NULL, EXISTS "
+            "(SELECT 1 FROM jobs WHERE family_id = $1 AND " ACTIVE ")",
+            1, v, 0, err, errlen, what);
+    if (!r) goto done;
+    if (PQgetvalue(r, 0, 0)[0] != 't' || PQgetvalue(r, 0, 1)[0] == 't') {
+        rc = PQgetvalue(r, 0, 0)[0] != 't' ? 1 : 2;
+        goto done;
+    }
+    PQclear(r);
+    /* the members first (their series follow by ON DELETE CASCADE), then the family */
+    r = run(p, "DELETE FROM jobs WHERE family_id = $1", 1, v, 0, err, errlen, what);
+    if (!r) goto done;
+    PQclear(r);
+    r = run(p, "DELETE FROM lanes WHERE lane = $1", 1, v, 0, err, errlen, what);
+    if (!r) goto done;
+    PQclear(r);
+    r = run(p, "DELETE FROM families WHERE id = $1", 1, v, 0, err, errlen, what);
+    if (!r) goto done;
+    PQclear(r);
+    r = NULL;
+    if (run_simple(p, "COMMIT", err, errlen, what) != 0) goto done;
+    rc = 0;
+done:
+    PQclear(r);
+    if (rc != 0) rollback(p);
+    return write_end(p, rc, 1);
+}
+
+int store_pg_job_families(store_pg *p, const int64_t *ids, int n, int64_t *families, char *err,
+                          size_t errlen)
+{
+    call_begin(p);
+    for (int i = 0; i < n; i++) families[i] = 0;
+    if (n <= 0) return 0;
+    size_t cap = (size_t)n * 21 + 3, used = 0;
+    char *list = malloc(cap);
+    if (!list) {
+        set_err(err, errlen, "reading the jobs' families: out of memory");
+        return -1;
+    }
+    list[used++] = '{';
+    for (int i = 0; i < n; i++)
+        used +=
+            (size_t)snprintf(list + used, cap - used, "%s%lld", i ? "," : "", (long long)ids[i]);
+    snprintf(list + used, cap - used, "}");
+    const char *v[] = {list};
+    PGresult *r = run(p,
+                      "SELECT id, family_id FROM jobs WHERE id = ANY($1::bigint[]) AND family_id "
+                      "IS NOT NULL",
+                      1, v, 0, err, errlen, "reading the jobs' families");
+    free(list);
+    if (!r) return -1;
+    for (int k = 0; k < PQntuples(r); k++) {
+        long long id = strtoll(PQgetvalue(r, k, 0), NULL, 10);
+        int64_t fam = strtoll(PQgetvalue(r, k, 1), NULL, 10);
+        for (int i = 0; i < n; i++)
+            if (ids[i] == id) families[i] = fam;
+    }
+    PQclear(r);
+    return 0;
+}
+
+int store_pg_request_cancel_family(store *s, int64_t id, char *err, size_t errlen)
+{
+    store_pg *p = store_pg_of(s);
+    call_begin(p);
+    char fid[24], what[48];
+    fmt_i64(fid, sizeof fid, id);
+    snprintf(what, sizeof what, "cannot cancel family %lld", (long long)id);
+    const char *v[] = {fid};
+    PGresult *r = run(p,
+                      "WITH flagged AS (UPDATE jobs SET cancel_requested = true WHERE family_id = "
+                      "$1 AND " ACTIVE " RETURNING status) SELECT count(*) FROM flagged WHERE "
+                      "status = 'running'",
+                      1, v, 0, err, errlen, what);
+    int rc = r ? atoi(PQgetvalue(r, 0, 0)) : -1;
+    PQclear(r);
+    return write_end(p, rc, 0);
+}
+
+int store_pg_queue_position(store *s, int64_t id, char *err, size_t errlen)
+{
+    store_pg *p = store_pg_of(s);
+    call_begin(p);
+    char ids[24], what[64];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(what, sizeof what, "job %lld: reading its place in the queue", (long long)id);
+    const char *v[] = {ids};
+    /* k of its own lane ahead of it, and min(k, count) of each other lane's (store_pg.h) */
+    PGresult *r = run(p,
+                      "WITH me AS (SELECT id, coalesce(family_id, 0) AS lane FROM jobs WHERE id = "
+                      "$1 AND status = 'queued' AND NOT cancel_requested), "
+                      "k AS (SELECT count(*) AS k FROM jobs AS j, me WHERE j.status = 'queued' "
+                      "AND NOT j.cancel_requested AND coalesce(j.family_id, 0) = me.lane AND j.id "
+                      "< me.id), "
+                      "others AS (SELECT coalesce(j.family_id, 0) AS lane, count(*) AS c FROM "
+                      "jobs AS j, me WHERE j.status = 'queued' AND NOT j.cancel_requested AND "
+                      "coalesce(j.family_id, 0) <> me.lane GROUP BY 1) "
+                      "SELECT 1 + k.k + coalesce((SELECT sum(least(o.c, k.k)) FROM others AS o), "
+                      "0) FROM me, k",
+                      1, v, 0, err, errlen, what);
+    if (!r) return -1;
+    long long pos = PQntuples(r) == 1 ? strtoll(PQgetvalue(r, 0, 0), NULL, 10) : 0;
+    PQclear(r);
+    return pos > INT_MAX ? INT_MAX : (int)pos;
+}
+
+int store_pg_queued_singles(store *s, long *n, char *err, size_t errlen)
+{
+    store_pg *p = store_pg_of(s);
+    call_begin(p);
+    *n = 0;
+    /* jobs_queued_lanes's lane 0: as many rows as single jobs wait, which max_queue bounds */
+    PGresult *r = run(p,
+                      "SELECT count(*) FROM jobs WHERE " CLAIMABLE " AND coalesce(family_id, 0) "
+                      "= 0",
+                      0, NULL, 0, err, errlen, "counting the queued jobs");
+    if (r) *n = atol(PQgetvalue(r, 0, 0));
+    PQclear(r);
+    return r ? 0 : -1;
 }

@@ -30,7 +30,12 @@
  * three columns of jobs for claims: worker (the claim's owner), lease_until (s since the epoch on
  * the database's clock) and cancel_requested. Version 2 adds job_counts, kept by a trigger that
  * also sends NOTIFY ctcsim_jobs with "ID STATUS" on every insert and status change (delivered at
- * commit, so a listener never hears of a status it cannot read).
+ * commit, so a listener never hears of a status it cannot read). Version 3 adds SQLite's
+ * families (the families table, jobs' family_id, family_member, family_replica and
+ * family_values; the jobs stored before keep their rows, with no family), and the claims' lanes
+ * table (lane: 0 for the single jobs, else a family id; served: when a job of it was last
+ * claimed, on the database's clock). A family is stored with one INSERT of all its members
+ * (json_to_recordset), so 10,000 members cost one round trip.
  *
  * Claims. A worker claims the oldest job that is queued, or running under a lease that has
  * expired, with SELECT ... FOR UPDATE SKIP LOCKED (concurrent claims never wait for each other
@@ -51,7 +56,7 @@
 
 #include "store.h"
 
-#define STORE_PG_SCHEMA_VERSION 2
+#define STORE_PG_SCHEMA_VERSION 3
 #define STORE_PG_LOCK_MS 5000          /* lock_timeout of every connection */
 #define STORE_PG_CHANNEL "ctcsim_jobs" /* the NOTIFY channel of job status changes */
 
@@ -66,9 +71,12 @@ void store_pg_redact(const char *url, char *out, size_t outlen);
 /* The PostgreSQL connection of a store, or NULL for an SQLite one. */
 store_pg *store_pg_of(store *s);
 
-/* Claims the oldest claimable job for lease_s seconds (> 0): *id receives it and *cancel
- * whether a cancel was requested before it started. Returns 0 with a job, 1 when there is none,
- * -1 on error (store_last_fault says whether to retry). */
+/* Claims a job for lease_s seconds (> 0): a running job whose lease expired if there is one,
+ * else the oldest queued job of the lane served least recently (lanes: the single jobs, and each
+ * family; the lanes table records when each last had a job claimed), so that a family's members
+ * and the single jobs take turns across every worker process, as jobq's lanes do on SQLite.
+ * *id receives it and *cancel whether a cancel was requested before it started. Returns 0 with a
+ * job, 1 when there is none, -1 on error (store_last_fault says whether to retry). */
 int store_pg_claim(store *s, double lease_s, int64_t *id, int *cancel, char *err, size_t errlen);
 
 /* Renews the lease of the claimed job id for lease_s and records its progress (0..1). Returns 0
@@ -81,6 +89,22 @@ int store_pg_heartbeat(store *s, int64_t id, double progress, double lease_s, in
  * cancelled at its next heartbeat), 1 when it is queued (flagged; the caller records it
  * cancelled), 0 when it is neither, -1 on error. */
 int store_pg_request_cancel(store *s, int64_t id, char *err, size_t errlen);
+
+/* Asks the workers holding family id's running members to stop, and keeps its queued members
+ * from being claimed (the caller records them cancelled, store_family_cancel): the number of
+ * running members flagged, or -1 on error. */
+int store_pg_request_cancel_family(store *s, int64_t id, char *err, size_t errlen);
+
+/* Job id's place in the database's queue, as the claims' fair turns serve it: k jobs of its own
+ * lane (the single jobs, or its family) are ahead of it, and min(k, count) of each other lane's,
+ * so the place is 1 + k + that sum (where the turn stands is not counted: at most one job per
+ * lane off). 0 when the job is not claimable (running, finished, or its cancel asked), -1 on
+ * error. */
+int store_pg_queue_position(store *s, int64_t id, char *err, size_t errlen);
+
+/* The single jobs (no family's members) queued and claimable, into *n: what a server's
+ * max_queue bounds (a family's members are bounded by --max-family instead, as on SQLite). */
+int store_pg_queued_singles(store *s, long *n, char *err, size_t errlen);
 
 /* Starts listening on STORE_PG_CHANNEL (again after every reconnect). */
 int store_pg_listen(store *s, char *err, size_t errlen);
@@ -126,6 +150,23 @@ int store_pg_series_read(store_pg *p, int64_t id, int channel, uint64_t offset, 
 void store_pg_series_end(store_pg *p);
 int store_pg_delete(store_pg *p, int64_t id, char *err, size_t errlen);
 int store_pg_count(store_pg *p, long counts[STORE_NSTATUS], char *err, size_t errlen);
+int store_pg_search(store_pg *p, int64_t before, const store_filter *f, int limit, store_job **rows,
+                    int *n, char *err, size_t errlen);
+int store_pg_family_insert(store_pg *p, const char *name, const char *spec, const char *axes,
+                           const store_new_member *members, long n, int64_t *family_id,
+                           int64_t *ids, char *err, size_t errlen);
+int store_pg_family_get(store_pg *p, int64_t id, store_family *out, char *err, size_t errlen);
+int store_pg_family_list(store_pg *p, int64_t before, int limit, store_family **rows, int *n,
+                         char *err, size_t errlen);
+int store_pg_family_members(store_pg *p, int64_t id, store_member **rows, long *n, char *err,
+                            size_t errlen);
+int store_pg_family_active(store_pg *p, int64_t id, int64_t **ids, long *n, char *err,
+                           size_t errlen);
+int store_pg_family_cancel(store_pg *p, int64_t id, const char *message, long *n, char *err,
+                           size_t errlen);
+int store_pg_family_delete(store_pg *p, int64_t id, char *err, size_t errlen);
+int store_pg_job_families(store_pg *p, const int64_t *ids, int n, int64_t *families, char *err,
+                          size_t errlen);
 
 /* store.c's health reports, for the PostgreSQL calls (store.h, "Health") */
 void store_health_report_fault(store_health *h, store_fault f, const char *message);
@@ -135,5 +176,11 @@ void store_health_report_ok(store_health *h, int room);
 int store_series_check_row(int64_t id, int *nv, int *nind, int *nsamples, const char *name,
                            int width, int64_t row_nsamples, int64_t bytes, int *c, char *err,
                            size_t errlen);
+
+/* store.c's list summaries: *final_out = max |x| over the JSON array e_final, *rms_out = the
+ * root of the mean of x^2 over the JSON array e_rms (either NULL or not an array: NaN; entries
+ * that are not finite numbers are left out), so both backends list the same e_final and e_rms */
+void store_summarise_errors(const char *e_final, const char *e_rms, double *final_out,
+                            double *rms_out);
 
 #endif

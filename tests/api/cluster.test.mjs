@@ -13,7 +13,7 @@ import assert from 'node:assert/strict';
 import { spawnSync } from 'node:child_process';
 import test from 'node:test';
 
-import { BACKEND, cliCsv, sleep, startServer, submit, waitFor, waitJob } from './lib.mjs';
+import { BACKEND, cliCsv, pgDatabase, sleep, startServer, submit, tempDir, waitFor, waitJob } from './lib.mjs';
 
 const SKIP = BACKEND !== 'postgres' && 'needs PostgreSQL (tests/api/run.sh runs it with CTCSIM_TEST_PG)';
 
@@ -131,6 +131,70 @@ test('a worker whose connection the database ends reconnects and claims again', 
         assert.equal(srv.workers.length, 1);
         assert.equal(srv.workers[0].exited, null);
         assert.equal(workerPid(srv, again.json.id), srv.workers[0].proc.pid);
+    } finally {
+        await srv.stop();
+    }
+});
+
+/* the schema of version 2 as that version of store_pg.c created it (migrations 0 -> 1 -> 2),
+   without its trigger's notifications, which no process listens to here */
+const V2_SCHEMA = `
+CREATE TABLE schema_version (version INTEGER NOT NULL);
+INSERT INTO schema_version VALUES (2);
+CREATE TABLE jobs (
+  id BIGINT GENERATED ALWAYS AS IDENTITY PRIMARY KEY, name TEXT NOT NULL, preset TEXT,
+  status TEXT NOT NULL DEFAULT 'queued' CHECK (status IN ('queued', 'running', 'done', 'failed', 'diverged', 'cancelled')),
+  progress DOUBLE PRECISION NOT NULL DEFAULT 0, created DOUBLE PRECISION NOT NULL,
+  started DOUBLE PRECISION NOT NULL DEFAULT 0, finished DOUBLE PRECISION NOT NULL DEFAULT 0,
+  nbodies INTEGER NOT NULL, nv INTEGER NOT NULL, controller TEXT NOT NULL, spec TEXT NOT NULL,
+  metrics TEXT, message TEXT, e_max DOUBLE PRECISION, wall_s DOUBLE PRECISION, worker TEXT,
+  lease_until DOUBLE PRECISION, cancel_requested BOOLEAN NOT NULL DEFAULT false);
+CREATE INDEX jobs_by_status ON jobs (status);
+CREATE INDEX jobs_active ON jobs (id) WHERE status IN ('queued', 'running');
+CREATE TABLE series (
+  job_id BIGINT NOT NULL REFERENCES jobs (id) ON DELETE CASCADE, channel TEXT NOT NULL,
+  width INTEGER NOT NULL CHECK (width > 0), nsamples INTEGER NOT NULL CHECK (nsamples >= 0),
+  data BYTEA NOT NULL, PRIMARY KEY (job_id, channel));
+CREATE TABLE job_counts (status TEXT PRIMARY KEY, n BIGINT NOT NULL CHECK (n >= 0));
+INSERT INTO job_counts (status, n) VALUES ('queued', 0), ('running', 0), ('done', 0), ('failed', 0), ('diverged', 0), ('cancelled', 0);
+CREATE FUNCTION ctcsim_job_change() RETURNS trigger LANGUAGE plpgsql AS $$ BEGIN
+  IF TG_OP = 'INSERT' THEN UPDATE job_counts SET n = n + 1 WHERE status = NEW.status;
+  ELSIF TG_OP = 'DELETE' THEN UPDATE job_counts SET n = n - 1 WHERE status = OLD.status;
+  ELSIF OLD.status <> NEW.status THEN
+    UPDATE job_counts SET n = n + CASE WHEN status = NEW.status THEN 1 ELSE -1 END WHERE status IN (OLD.status, NEW.status);
+  END IF; RETURN NULL; END $$;
+CREATE TRIGGER job_change AFTER INSERT OR DELETE OR UPDATE OF status ON jobs FOR EACH ROW EXECUTE FUNCTION ctcsim_job_change();
+INSERT INTO jobs (name, preset, status, created, finished, nbodies, nv, controller, spec, metrics, e_max, wall_s)
+  VALUES ('finished before', 'triple_pendulum_pid', 'done', 1700000000, 1700000001, 3, 3, 'pid',
+          '{"name":"finished before","tags":["old"]}', '{"e_final":[0.5,-2,1],"e_rms":[3,4,0]}', 2, 0.5);
+INSERT INTO jobs (name, preset, status, created, nbodies, nv, controller, spec)
+  VALUES ('queued before', 'triple_pendulum_pid', 'queued', 1700000002, 3, 3, 'pid',
+          '{"preset":"triple_pendulum_pid","name":"queued before","duration":0.2}');
+`;
+
+test('a version 2 database is migrated to families and keeps every job; its queued job runs', { skip: SKIP }, async () => {
+    const dir = tempDir();
+    const db = pgDatabase(dir);
+    const r = spawnSync('psql', [db, '-qv', 'ON_ERROR_STOP=1'], { input: V2_SCHEMA, encoding: 'utf8' });
+    assert.equal(r.status, 0, r.stderr);
+    const srv = await startServer({ dir, workers: 1 });
+    try {
+        assert.equal(sql(srv, 'SELECT version FROM schema_version'), '3');
+        const old = (await srv.get('/api/jobs/1')).json;
+        assert.equal(old.status, 'done');
+        assert.equal(old.name, 'finished before');
+        assert.equal(old.family ?? null, null, 'a job stored before families has none');
+        const listed = (await srv.get('/api/jobs?q=OLD')).json.jobs;
+        assert.deepEqual(listed.map((j) => j.id), [1], 'the old job is found by its tag');
+        /* the summaries from its metrics: max |e_final| = 2, sqrt((9 + 16 + 0) / 3) */
+        assert.equal(listed[0].e_final, 2);
+        assert.ok(Math.abs(listed[0].e_rms - Math.sqrt(25 / 3)) < 1e-12, String(listed[0].e_rms));
+        const queued = await waitJob(srv, 2, { timeoutMs: 30000 });
+        assert.equal(queued.status, 'done', JSON.stringify(queued));
+        const fam = await srv.post('/api/families', { base: { preset: 'triple_pendulum_pd', duration: 0.01 }, axes: [{ path: 'controller.kp', values: [50, 60] }] });
+        assert.equal(fam.status, 202, fam.text);
+        assert.equal(fam.json.first_job, 3, 'the members follow the jobs kept');
+        assert.equal(sql(srv, 'SELECT count(*) FROM jobs'), '4');
     } finally {
         await srv.stop();
     }

@@ -13,10 +13,8 @@ import { readFileSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
 import test from 'node:test';
 
-import { BACKEND, FINAL, parseCsv, runCli, startServer, tempDir, waitFor, waitJob } from './lib.mjs';
+import { FINAL, parseCsv, runCli, startServer, tempDir, waitFor, waitJob } from './lib.mjs';
 
-/* what the PostgreSQL backend does not have yet: skipped there, with the reason */
-const PG_PENDING = BACKEND === 'postgres' && 'families are not stored on PostgreSQL yet (store_pg.c)';
 
 const TINY = { preset: 'triple_pendulum_pd', duration: 0.01 };
 /* a quarter of a second or so of work (100000 RK4 steps of the triple pendulum) */
@@ -66,7 +64,7 @@ test('the server starts', async () => {
     srv = await startServer({ workers: 2 });
 });
 
-test('POST /api/families: 202 with the id and the member count; the members run', { skip: PG_PENDING }, async () => {
+test('POST /api/families: 202 with the id and the member count; the members run', async () => {
     const res = await srv.post('/api/families', SWEEP);
     assert.equal(res.status, 202, res.text);
     assert.equal(res.json.members, 6);
@@ -80,7 +78,7 @@ test('POST /api/families: 202 with the id and the member count; the members run'
     assert.deepEqual(f.spec, SWEEP);
 });
 
-test('the table: one row per member with its axis values and metrics; members are jobs', { skip: PG_PENDING }, async () => {
+test('the table: one row per member with its axis values and metrics; members are jobs', async () => {
     const f = await family(srv, sweepId);
     assert.deepEqual(f.table.columns, ['member', 'replica', 'controller.kp', 'integrator.rtol', 'status',
         'e_final', 'e_rms', 'e_max', 'tau_peak', 'energy_drift', 'us_per_eval', 'steps', 'wall_s']);
@@ -110,7 +108,7 @@ test('the table: one row per member with its axis values and metrics; members ar
     assert.equal((await srv.get(`/api/jobs/${single.json.id}`)).json.family, null);
 });
 
-test('the table as CSV (?format=csv and Accept: text/csv) equals `ctcsim sweep --csv` but for timings', { skip: PG_PENDING }, async () => {
+test('the table as CSV (?format=csv and Accept: text/csv) equals `ctcsim sweep --csv` but for timings', async () => {
     const csv = await srv.get(`/api/families/${sweepId}?format=csv`);
     assert.equal(csv.status, 200);
     assert.match(csv.headers['content-type'], /^text\/csv/);
@@ -133,7 +131,7 @@ test('the table as CSV (?format=csv and Accept: text/csv) equals `ctcsim sweep -
     assert.deepEqual(bad.json.error, { code: 'INVALID_QUERY', field: 'format', message: 'format must be json or csv (got "xml")' });
 });
 
-test('GET /api/families lists families newest first with their counts', { skip: PG_PENDING }, async () => {
+test('GET /api/families lists families newest first with their counts', async () => {
     const other = await srv.post('/api/families', { base: TINY, axes: [{ path: 'controller.kv', values: [10, 20] }] });
     assert.equal(other.status, 202, other.text);
     await waitFamily(srv, other.json.id);
@@ -150,7 +148,7 @@ test('GET /api/families lists families newest first with their counts', { skip: 
     assert.equal((await srv.get('/api/families/x')).json.error.code, 'INVALID_ID');
 });
 
-test('bad axes: 400 naming the axis, the value and the member\'s error', { skip: PG_PENDING }, async () => {
+test('bad axes: 400 naming the axis, the value and the member\'s error', async () => {
     const cases = [
         [{ base: TINY, axes: [{ path: 'integrator.rtol', values: [1e-6, -1] }] },
             { code: 'INVALID_FIELD', field: 'axes[0]', message: 'axis integrator.rtol = -1 (member 1): integrator: rtol must be in (0, 1) (got -1)' }],
@@ -171,7 +169,7 @@ test('bad axes: 400 naming the axis, the value and the member\'s error', { skip:
     assert.equal(listed, 2, 'nothing refused was stored');
 });
 
-test('DELETE cancels the queued and running members (202), a second DELETE deletes them (204)', { skip: PG_PENDING }, async () => {
+test('DELETE cancels the queued and running members (202), a second DELETE deletes them (204)', async () => {
     const res = await srv.post('/api/families', { base: LONG, axes: [{ path: 'controller.kp', linspace: [50, 100, 5] }] });
     assert.equal(res.status, 202, res.text);
     const id = res.json.id;
@@ -192,7 +190,7 @@ test('DELETE cancels the queued and running members (202), a second DELETE delet
     assert.equal((await srv.del(`/api/families/${id}`)).status, 404);
 });
 
-test('a restart in the middle of a family: its members finish after it', { skip: PG_PENDING }, async () => {
+test('a restart in the middle of a family: its members finish after it', async () => {
     const res = await srv.post('/api/families', { base: MEDIUM, axes: [{ path: 'controller.kp', linspace: [50, 150, 8] }] });
     assert.equal(res.status, 202, res.text);
     const id = res.json.id;
@@ -227,7 +225,7 @@ async function startMeasured() {
     }
 }
 
-test('10,000 tiny members: accepted in seconds, sane memory; single jobs wait for about one job', { skip: PG_PENDING }, async (t) => {
+test('10,000 tiny members: accepted in seconds, sane memory; single jobs wait for about one job', async (t) => {
     const lean = await startMeasured();
     t.after(() => lean.stop());
     const before = rssOf(lean);
@@ -263,7 +261,7 @@ test('10,000 tiny members: accepted in seconds, sane memory; single jobs wait fo
     assert.equal((await lean.del(`/api/families/${id}`)).status, 204);
 });
 
-test('--max-family: a larger family is refused with 413 before anything is stored', { skip: PG_PENDING }, async () => {
+test('--max-family: a larger family is refused with 413 before anything is stored', async () => {
     const small = await startServer({ workers: 1, args: ['--max-family', '5'] });
     const res = await small.post('/api/families', { base: TINY, replicas: 2, axes: [{ path: 'controller.kp', values: [1, 2, 3] }] });
     assert.equal(res.status, 413, res.text);

@@ -7,10 +7,8 @@
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
 
-import { BACKEND, listAll, startServer } from './lib.mjs';
+import { listAll, startServer } from './lib.mjs';
 
-/* what the PostgreSQL backend does not have yet: skipped there, with the reason */
-const PG_PENDING = BACKEND === 'postgres' && 'tags, search and the error summaries are not on PostgreSQL yet (store_pg.c)';
 
 let srv;
 const jobs = {};
@@ -50,7 +48,7 @@ test('the same edit posted as the whole document is named alike', async () => {
     assert.equal(res.json.spec.name, 'triple_pendulum_pid, kp = 400, duration = 0.5');
 });
 
-test('tags are kept in the normalised job and listed with the row', { skip: PG_PENDING }, async () => {
+test('tags are kept in the normalised job and listed with the row', async () => {
     assert.deepEqual(jobs.kp.spec.tags, ['sweep', 'kp 400']);
     assert.deepEqual(jobs.kp.tags, ['sweep', 'kp 400']);
     assert.deepEqual(jobs.plain.tags, [], 'no tags: an empty list');
@@ -75,7 +73,7 @@ test('bad tags are refused with the entry and the reason', async () => {
     }
 });
 
-test('?q= and ?tag= find what a filter of the whole list finds', { skip: PG_PENDING }, async () => {
+test('?q= and ?tag= find what a filter of the whole list finds', async () => {
     const all = await listAll(srv);
     const has = (s, q) => typeof s === 'string' && s.toLowerCase().includes(q.toLowerCase());
     const oracle = (q, tag) =>
@@ -102,7 +100,7 @@ test('a bad q or tag is a 400 naming it', async () => {
     assert.deepEqual(res.json.error, { code: 'INVALID_QUERY', field: 'tag', message: 'tag must be 1 to 40 bytes long (got 0)' });
 });
 
-test('the list shows the final and RMS errors of each job, from its metrics', { skip: PG_PENDING }, async () => {
+test('the list shows the final and RMS errors of each job, from its metrics', async () => {
     const rows = await listAll(srv);
     for (const j of Object.values(jobs)) {
         const row = rows.find((r) => r.id === j.id);
