@@ -41,7 +41,8 @@ fi
 # the README's line to run first on a stock image: the first line of its "Two commands" section
 # that starts with apt-get
 install_first=$(git show HEAD:README.md |
-    awk '/^## /{sec=$0} sec=="## Two commands" && /^apt-get /{print; exit}' | sed 's/ *#.*$//')
+    awk '/^## /{sec=$0} sec=="## Two commands" && /^apt-get / && !found {print; found=1}' |
+    sed 's/ *#.*$//') # awk reads to the end: an early exit would stop git show with SIGPIPE
 if [ -z "$install_first" ]; then
     echo "README.md at HEAD has no apt-get line in its \"Two commands\" section" >&2
     exit 1
