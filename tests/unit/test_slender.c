@@ -21,6 +21,7 @@
 #include "model_fixture.h"
 #include "oracle.h"
 #include "sim.h"
+#include "run_fixture.h"
 
 /* the largest error of ctc_gdca_forward's qdd against the dense solve over `states` random states
    (q uniform, v in [-1, 1] rad/s, f in [-5, 5] N m) of n rods of moment ratio `ratio` */
@@ -202,10 +203,7 @@ static long passive_run(double ratio, double *drift)
         .duration = 3.0,
         .output_interval = 0.01,
     };
-    ctc_sim_result *res = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&spec, NULL, &res, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(res->status, CTC_RUN_DONE, "%s", res->message);
+    ctc_sim_result *res = fixture_run_done(&spec);
     *drift = res->metrics.energy_drift;
     long steps = res->metrics.steps;
     ctc_sim_result_free(res);
