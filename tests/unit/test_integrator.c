@@ -161,6 +161,16 @@ static double oscillator_error(const ctc_integrator *it)
 
 /* ---- rk4 ---- */
 
+/* Halving the step from 2h to h took the error from prev to e: asserts the ratio prev / e lies
+ * in (lo, hi), the order's 2^p with a margin (what names the error in the message). */
+static void expect_halving_ratio(double prev, double e, double lo, double hi, double h,
+                                 const char *what)
+{
+    double ratio = prev / e;
+    cr_assert(ratio > lo && ratio < hi, "h = %g: %s %.3e, ratio %.3f not in (%g, %g)", h, what, e,
+              ratio, lo, hi);
+}
+
 Test(integrator, rk4_converges_at_fourth_order_on_the_oscillator)
 {
     /* global error at t = 5 for h = 0.1, 0.05, 0.025, 0.0125: ratio 2^4 = 16 */
@@ -180,11 +190,7 @@ Test(integrator, rk4_converges_at_fourth_order_on_the_oscillator)
         cr_assert_eq(st->rejected, 0);
         cr_assert(isnan(st->err_estimate), "rk4 has no error estimate (got %g)", st->err_estimate);
         cr_assert_leq(fabs(st->h_last - h), 1e-9 * h, "h_last %.17g, want %.17g", st->h_last, h);
-        if (k > 0) {
-            double ratio = prev / e;
-            cr_assert(ratio > 14 && ratio < 18, "h = %g: error %.3e, ratio %.3f not in (14, 18)", h,
-                      e, ratio);
-        }
+        if (k > 0) expect_halving_ratio(prev, e, 14, 18, h, "error");
         prev = e;
         ctc_integrator_free(it);
     }
@@ -222,14 +228,30 @@ Test(integrator, rk4_dense_output_is_fourth_order_between_steps)
         ctc_integrator *it = make(&spec, 2, oscillator, &p);
         cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
         double e = dense_error_inside_steps(it, 4.0, NULL);
-        if (k > 0) {
-            double ratio = prev / e;
-            cr_assert(ratio > 14 && ratio < 18, "h = %g: dense error %.3e, ratio %.3f", h, e,
-                      ratio);
-        }
+        if (k > 0) expect_halving_ratio(prev, e, 14, 18, h, "dense error");
         prev = e;
         ctc_integrator_free(it);
     }
+}
+
+/* One step of size h from the exact value y(0) = 1 of y' = y^2 (the riccati problem) by spec's
+ * method, whose first step must be h (checked: one step to reach h): the largest error of the
+ * dense output at the 9 points s = 0.1 j h inside the step against the solution 1 / (1 - s). */
+static double riccati_dense_error_in_one_step(const ctc_integ_spec *spec, double h)
+{
+    double y0 = 1, y[1], e = 0;
+    problem p = problem_default();
+    ctc_integrator *it = make(spec, 1, riccati, &p);
+    cr_assert_eq(ctc_integrator_reset(it, 0, &y0), 0);
+    run_to(it, h);
+    cr_assert_eq(ctc_integrator_stats(it)->steps, 1);
+    for (int j = 1; j <= 9; j++) {
+        double s = 0.1 * j * h;
+        ctc_integrator_dense(it, s, y);
+        e = fmax(e, fabs(y[0] - 1 / (1 - s)));
+    }
+    ctc_integrator_free(it);
+    return e;
 }
 
 Test(integrator, rk4_dense_output_has_third_order_local_accuracy_in_one_step)
@@ -240,26 +262,11 @@ Test(integrator, rk4_dense_output_has_third_order_local_accuracy_in_one_step)
      * asymptotic range.) */
     double prev = NAN;
     for (int k = 0; k < 4; k++) {
-        double h = 0.025 / (1 << k), y0 = 1, y[1];
-        problem p = problem_default();
+        double h = 0.025 / (1 << k);
         ctc_integ_spec spec = rk4_spec(h);
-        ctc_integrator *it = make(&spec, 1, riccati, &p);
-        cr_assert_eq(ctc_integrator_reset(it, 0, &y0), 0);
-        run_to(it, h);
-        cr_assert_eq(ctc_integrator_stats(it)->steps, 1);
-        double e = 0;
-        for (int j = 1; j <= 9; j++) {
-            double s = 0.1 * j * h;
-            ctc_integrator_dense(it, s, y);
-            e = fmax(e, fabs(y[0] - 1 / (1 - s)));
-        }
-        if (k > 0) {
-            double ratio = prev / e;
-            cr_assert(ratio > 14 && ratio < 18, "h = %g: local dense error %.3e, ratio %.3f", h, e,
-                      ratio);
-        }
+        double e = riccati_dense_error_in_one_step(&spec, h);
+        if (k > 0) expect_halving_ratio(prev, e, 14, 18, h, "local dense error");
         prev = e;
-        ctc_integrator_free(it);
     }
 }
 
@@ -386,28 +393,13 @@ Test(integrator, dopri5_dense_output_is_fourth_order)
      * h = 0.006 the error nears round-off. */
     double prev = NAN;
     for (int k = 0; k < 3; k++) {
-        double h = 0.025 / (1 << k), y0 = 1, y[1];
-        problem p = problem_default();
+        double h = 0.025 / (1 << k);
         ctc_integ_spec spec = adaptive_spec(CTC_INTEG_DOPRI5, 0.5, 1e3);
         spec.initial_step = h;
         spec.max_step = h;
-        ctc_integrator *it = make(&spec, 1, riccati, &p);
-        cr_assert_eq(ctc_integrator_reset(it, 0, &y0), 0);
-        run_to(it, h);
-        cr_assert_eq(ctc_integrator_stats(it)->steps, 1);
-        double e = 0;
-        for (int j = 1; j <= 9; j++) {
-            double s = 0.1 * j * h;
-            ctc_integrator_dense(it, s, y);
-            e = fmax(e, fabs(y[0] - 1 / (1 - s)));
-        }
-        if (k > 0) {
-            double ratio = prev / e;
-            cr_assert(ratio > 28 && ratio < 36, "h = %g: dense error %.3e, ratio %.3f", h, e,
-                      ratio);
-        }
+        double e = riccati_dense_error_in_one_step(&spec, h);
+        if (k > 0) expect_halving_ratio(prev, e, 28, 36, h, "dense error");
         prev = e;
-        ctc_integrator_free(it);
     }
 }
 
