@@ -753,6 +753,15 @@ static inline ctc_oracle *fx_make_random(fx_rng *r, int n, ctc_form form, ctc_mo
     return fx_make(&c, form, m);
 }
 
+/* builds the model of the rod chain fx_rod_chain(n, mass, len) in form AUTO (planar: revolute z
+ * joints) into *m and an oracle workspace for it; free both with fx_release */
+static inline ctc_oracle *fx_make_rods(int n, const double *mass, const double *len, ctc_model **m)
+{
+    fx_chain c;
+    fx_rod_chain(n, mass, len, &c);
+    return fx_make(&c, CTC_FORM_AUTO, m);
+}
+
 /* Builds the spatial models and oracle workspaces of fx_fixed_and_merged(r, n, w): a random chain
  * with joint w fixed (*mf, *of) and the same chain with body w merged into its parent (*mm, *om).
  * Both have the same nq and nv (asserted), so one state serves both. Free each pair with

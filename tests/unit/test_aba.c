@@ -15,10 +15,8 @@ Test(aba, matches_closed_form_rod_pendulum)
 {
     /* qdd = (tau - m g L/2 sin q) / (m L^2 / 3) */
     const double mass = 2.0, len = 1.5;
-    fx_chain c;
-    fx_rod_chain(1, &mass, &len, &c);
     ctc_model *m;
-    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+    ctc_oracle *o = fx_make_rods(1, &mass, &len, &m);
     double worst = 0.0;
 
     for (int i = 0; i <= 24; i++) {
@@ -58,10 +56,8 @@ Test(aba, matches_lagrangian_double_pendulum)
 {
     /* qdd = M^{-1} (tau - h(q, v)) with M and h written out in the fixture */
     const double mass[2] = {1.3, 0.7}, len[2] = {1.1, 0.8};
-    fx_chain c;
-    fx_rod_chain(2, mass, len, &c);
     ctc_model *m;
-    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+    ctc_oracle *o = fx_make_rods(2, mass, len, &m);
     fx_rng rng = {12};
     double worst = 0.0;
 
@@ -151,10 +147,8 @@ Test(aba, inverts_rnea_on_planar_rod_chains)
             mass[k] = fx_uniform(&rng, 0.1, 10.0);
             len[k] = fx_uniform(&rng, 0.2, 1.5);
         }
-        fx_chain c;
-        fx_rod_chain(n, mass, len, &c);
         ctc_model *m;
-        ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+        ctc_oracle *o = fx_make_rods(n, mass, len, &m);
         double q[FX_MAX_NQ], v[FX_MAX_NV], a[FX_MAX_NV], tau[FX_MAX_NV], back[FX_MAX_NV];
 
         cr_assert_eq(m->form, CTC_FORM_PLANAR);

@@ -16,10 +16,8 @@ static double mm_a[FX_MAX_NV * FX_MAX_NV], mm_b[FX_MAX_NV * FX_MAX_NV];
 Test(crba, matches_lagrangian_double_pendulum)
 {
     const double mass[2] = {1.3, 0.7}, len[2] = {1.1, 0.8};
-    fx_chain c;
-    fx_rod_chain(2, mass, len, &c);
     ctc_model *m;
-    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+    ctc_oracle *o = fx_make_rods(2, mass, len, &m);
     fx_rng rng = {13};
 
     for (int s = 0; s < 100; s++) {

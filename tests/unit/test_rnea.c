@@ -15,10 +15,8 @@ Test(rnea, matches_closed_form_rod_pendulum)
 {
     /* tau = m L^2/3 qdd + m g L/2 sin q for a rod hung from a revolute z joint */
     const double mass = 2.0, len = 1.5;
-    fx_chain c;
-    fx_rod_chain(1, &mass, &len, &c);
     ctc_model *m;
-    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+    ctc_oracle *o = fx_make_rods(1, &mass, &len, &m);
     double worst = 0.0;
 
     for (int i = 0; i <= 24; i++) {
@@ -62,10 +60,8 @@ Test(rnea, matches_closed_form_prismatic_slider)
 Test(rnea, matches_lagrangian_double_pendulum)
 {
     const double mass[2] = {1.3, 0.7}, len[2] = {1.1, 0.8};
-    fx_chain c;
-    fx_rod_chain(2, mass, len, &c);
     ctc_model *m;
-    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+    ctc_oracle *o = fx_make_rods(2, mass, len, &m);
     fx_rng rng = {11};
     double worst = 0.0;
 
