@@ -52,6 +52,17 @@ static inline job *fixture_parse_ok(const char *text)
     return j;
 }
 
+/* The run to its end of the job of text (single quotes), the job into *j; fails the test, naming
+ * what, when the format refuses the job, and as fixture_run_done does when the run fails. The
+ * caller frees both (ctc_sim_result_free, job_free). */
+static inline ctc_sim_result *fixture_run_text(const char *text, const char *what, job **j)
+{
+    job_error err;
+    *j = fixture_parse(text, &err);
+    cr_assert_not_null(*j, "%s: %s: %s", what, err.field, err.message);
+    return fixture_run_done(&(*j)->spec);
+}
+
 /* A job the format must refuse: its text (single quotes) and the field and message it must
  * name. */
 typedef struct fixture_bad_job {

@@ -28,6 +28,21 @@ static inline ctc_sim_result *fixture_run_done(const ctc_sim_spec *spec)
     return r;
 }
 
+/* A passive run's spec for chain (no controller, the exact model): from q0 (nq; NULL = the
+ * chain's zero pose) and v0 (nv; NULL = at rest), by integ for duration s, sampled
+ * output_interval s apart. The arrays stay the caller's; set any other field on the result. */
+static inline ctc_sim_spec fixture_passive_spec(const ctc_chain_spec *chain, const double *q0,
+                                                const double *v0, ctc_integ_spec integ,
+                                                double duration, double output_interval)
+{
+    ctc_sim_spec spec = {.chain = *chain, .q0 = q0, .v0 = v0, .controller = CTC_CTRL_NONE};
+    spec.model_mass_scale = spec.model_inertia_scale = 1;
+    spec.integrator = integ;
+    spec.duration = duration;
+    spec.output_interval = output_interval;
+    return spec;
+}
+
 /* A PD run's spec for chain (the plant, kept by the caller): from q0 (nq; NULL = the chain's zero
  * pose) at rest, gains and traj per coordinate, with the exact model (mass and inertia scales 1),
  * by integ for duration s, sampled output_interval s apart. The arrays stay the caller's and must

@@ -132,15 +132,10 @@ Test(armature, rod_on_a_spring_oscillates_at_the_closed_form_frequency)
     const double ip = 1.0 / 3, a = 0.25, k = 4, x0 = 0.3;
     double q0[1] = {x0}, v0[1] = {0};
     ctc_plant_coord plant[1] = {{.spring = k, .armature = a}};
-    ctc_sim_spec spec = {.chain = chain->spec,
-                         .q0 = q0,
-                         .v0 = v0,
-                         .model_mass_scale = 1,
-                         .model_inertia_scale = 1,
-                         .plant = plant,
-                         .integrator = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-11, .atol = 1e-13},
-                         .duration = 3,
-                         .output_interval = 0.01};
+    ctc_sim_spec spec = fixture_passive_spec(
+        &chain->spec, q0, v0,
+        (ctc_integ_spec){.method = CTC_INTEG_DOPRI5, .rtol = 1e-11, .atol = 1e-13}, 3, 0.01);
+    spec.plant = plant;
     ctc_sim_result *r = fixture_run_done(&spec);
     const double w = sqrt(k / (ip + a));
     double dev = 0;
@@ -172,15 +167,10 @@ Test(armature, negative_or_nan_armature_is_refused)
     test_chain *chain = test_chain_rod_pendulum(1, 1, 1);
     double q0[1] = {0}, v0[1] = {0};
     ctc_plant_coord plant[1] = {{.armature = -1}};
-    ctc_sim_spec spec = {.chain = chain->spec,
-                         .q0 = q0,
-                         .v0 = v0,
-                         .model_mass_scale = 1,
-                         .model_inertia_scale = 1,
-                         .plant = plant,
-                         .integrator = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-8, .atol = 1e-10},
-                         .duration = 1,
-                         .output_interval = 0.01};
+    ctc_sim_spec spec = fixture_passive_spec(
+        &chain->spec, q0, v0,
+        (ctc_integ_spec){.method = CTC_INTEG_DOPRI5, .rtol = 1e-8, .atol = 1e-10}, 1, 0.01);
+    spec.plant = plant;
     char err[256];
     cr_assert_eq(ctc_sim_check(&spec, err, sizeof err), CTC_EINVAL);
     cr_expect_str_eq(err, "coordinate 0: armature must be non-negative and finite (got -1)");

@@ -40,10 +40,8 @@ static void forward(const chain2 *c, const double q[2], double x[3])
    given form */
 static void check_run(const char *text, const chain2 *c, ctc_form form, const char *what)
 {
-    job_error err;
-    job *j = fixture_parse(text, &err);
-    cr_assert_not_null(j, "%s: %s: %s", what, err.field, err.message);
-    ctc_sim_result *r = fixture_run_done(&j->spec);
+    job *j;
+    ctc_sim_result *r = fixture_run_text(text, what, &j);
     cr_assert_eq(r->metrics.form, form, "%s: computed in the expected form", what);
     cr_assert_not_null(r->ch[CTC_CH_EE], "%s: the channel is recorded by default", what);
     cr_assert_eq(r->width[CTC_CH_EE], 6);

@@ -326,17 +326,9 @@ static void check_spin_energy(ctc_joint_type type, double bound)
     ctc_model_q_zero(m, q0);
     ctc_model_free(m);
     for (int i = 0; i < nv; i++) v0[i] = i % 2 ? -100 : 100;
-    ctc_sim_spec spec = {
-        .chain = c->spec,
-        .q0 = q0,
-        .v0 = v0,
-        .controller = CTC_CTRL_NONE,
-        .model_mass_scale = 1,
-        .model_inertia_scale = 1,
-        .integrator = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-10, .atol = 1e-12},
-        .duration = 0.1,
-        .output_interval = 0.001,
-    };
+    ctc_sim_spec spec = fixture_passive_spec(
+        &c->spec, q0, v0,
+        (ctc_integ_spec){.method = CTC_INTEG_DOPRI5, .rtol = 1e-10, .atol = 1e-12}, 0.1, 0.001);
     ctc_sim_result *res = fixture_run_done(&spec);
     double ke = 0;
     for (int j = 0; j < res->nsamples; j++) ke = fmax(ke, res->ch[CTC_CH_ENERGY][2 * j]);

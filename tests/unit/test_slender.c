@@ -192,17 +192,9 @@ static long passive_run(double ratio, double *drift)
     test_chain *c = test_chain_slender_rods(16, ratio);
     double q0[16], v0[16];
     for (int i = 0; i < 16; i++) q0[i] = 0.3 * sin(i + 1.0), v0[i] = cos(i + 1.0);
-    ctc_sim_spec spec = {
-        .chain = c->spec,
-        .q0 = q0,
-        .v0 = v0,
-        .controller = CTC_CTRL_NONE,
-        .model_mass_scale = 1,
-        .model_inertia_scale = 1,
-        .integrator = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-12, .atol = 1e-12},
-        .duration = 3.0,
-        .output_interval = 0.01,
-    };
+    ctc_sim_spec spec = fixture_passive_spec(
+        &c->spec, q0, v0,
+        (ctc_integ_spec){.method = CTC_INTEG_DOPRI5, .rtol = 1e-12, .atol = 1e-12}, 3.0, 0.01);
     ctc_sim_result *res = fixture_run_done(&spec);
     *drift = res->metrics.energy_drift;
     long steps = res->metrics.steps;
