@@ -26,6 +26,17 @@ static inline char *fixture_json(const char *text)
     return s;
 }
 
+/* the cJSON value of text (single quotes); fails the test when it is not JSON. The caller frees
+ * it (cJSON_Delete). */
+static inline cJSON *fixture_cjson(const char *text)
+{
+    char *s = fixture_json(text);
+    cJSON *v = cJSON_Parse(s);
+    cr_assert_not_null(v, "bad test JSON: %s", text);
+    free(s);
+    return v;
+}
+
 /* The job of text (single quotes, see above), or NULL with *err filled when the format refuses
  * it. The caller frees the job (job_free). */
 static inline job *fixture_parse(const char *text, job_error *err)
