@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "chains.h"
+#include "frames.h"
 #include "oracle.h"
 #include "shapes.h"
 
@@ -82,35 +83,6 @@ static double v3_dot(const double a[3], const double b[3])
 static double v3_norm(const double a[3])
 {
     return sqrt(v3_dot(a, a));
-}
-
-static void m3_mulv(double r[3], const double m[9], const double a[3])
-{
-    double x = m[0] * a[0] + m[1] * a[1] + m[2] * a[2];
-    double y = m[3] * a[0] + m[4] * a[1] + m[5] * a[2];
-    double z = m[6] * a[0] + m[7] * a[1] + m[8] * a[2];
-    r[0] = x, r[1] = y, r[2] = z;
-}
-
-static void m3_mul(double r[9], const double a[9], const double b[9])
-{
-    double t[9];
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            t[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
-    memcpy(r, t, sizeof t);
-}
-
-/* Rodrigues: rotation by theta about the unit axis a */
-static void m3_rot(double r[9], const double a[3], double theta)
-{
-    double c = cos(theta), s = sin(theta), t = 1 - c;
-    r[0] = c + t * a[0] * a[0], r[1] = t * a[0] * a[1] - s * a[2],
-    r[2] = t * a[0] * a[2] + s * a[1];
-    r[3] = t * a[0] * a[1] + s * a[2], r[4] = c + t * a[1] * a[1],
-    r[5] = t * a[1] * a[2] - s * a[0];
-    r[6] = t * a[0] * a[2] - s * a[1], r[7] = t * a[1] * a[2] + s * a[0],
-    r[8] = c + t * a[2] * a[2];
 }
 
 /* rotation of the quaternion (w, x, y, z), normalised first */
@@ -443,10 +415,10 @@ static void kinematics(loop_oracle *o, const double *q, const double *v)
         double rj[9], loc[3], wrel[3] = {0, 0, 0}, slide = 0, sdot = 0;
         memcpy(rj, ident, sizeof rj);
         memcpy(loc, j->location, sizeof loc);
-        m3_mulv(uk, rp, j->axis);
+        test_m3_mulv(uk, rp, j->axis);
         switch (j->type) {
         case CTC_JOINT_REVOLUTE:
-            m3_rot(rj, j->axis, qk[0]);
+            test_m3_rot(rj, j->axis, qk[0]);
             if (vk)
                 for (int i = 0; i < 3; i++) wrel[i] = uk[i] * vk[0];
             break;
@@ -454,7 +426,7 @@ static void kinematics(loop_oracle *o, const double *q, const double *v)
             slide = qk[0], sdot = vk ? vk[0] : 0;
             break;
         case CTC_JOINT_CYLINDRICAL:
-            m3_rot(rj, j->axis, qk[0]);
+            test_m3_rot(rj, j->axis, qk[0]);
             slide = qk[1], sdot = vk ? vk[1] : 0;
             if (vk)
                 for (int i = 0; i < 3; i++) wrel[i] = uk[i] * vk[0];
@@ -466,10 +438,10 @@ static void kinematics(loop_oracle *o, const double *q, const double *v)
             break;
         }
         for (int i = 0; i < 3; i++) loc[i] += j->axis[i] * slide;
-        m3_mul(rk, rp, rj);
-        m3_mulv(pk, rp, loc);
+        test_m3_mul(rk, rp, rj);
+        test_m3_mulv(pk, rp, loc);
         for (int i = 0; i < 3; i++) pk[i] += pp[i];
-        if (j->type == CTC_JOINT_SPHERICAL && vk) m3_mulv(wrel, rk, vk);
+        if (j->type == CTC_JOINT_SPHERICAL && vk) test_m3_mulv(wrel, rk, vk);
 
         /* velocities: omega_k = omega_p + w_rel; pdot_k = pdot_p + omega_p x r + u sdot */
         double r[3] = {pk[0] - pp[0], pk[1] - pp[1], pk[2] - pp[2]}, t[3], t2[3];
@@ -494,7 +466,7 @@ static void kinematics(loop_oracle *o, const double *q, const double *v)
     const double *rt = o->rot + 9 * (n - 1), *ot = o->pos + 3 * (n - 1);
     const double *wt = o->omega + 3 * (n - 1), *at = o->alpha0 + 3 * (n - 1);
     double r[3], t[3], t2[3];
-    m3_mulv(r, rt, o->joints[n].location);
+    test_m3_mulv(r, rt, o->joints[n].location);
     for (int i = 0; i < 3; i++) o->pt[i] = ot[i] + r[i];
     v3_cross(t, wt, r);
     for (int i = 0; i < 3; i++) o->vt[i] = o->vel[3 * (n - 1) + i] + t[i];
@@ -517,7 +489,7 @@ static void kinematics(loop_oracle *o, const double *q, const double *v)
     memcpy(o->ra, o->rot + 9 * b, sizeof o->ra);
     memcpy(o->wa, o->omega + 3 * b, sizeof o->wa);
     memcpy(o->alpha0a, o->alpha0 + 3 * b, sizeof o->alpha0a);
-    m3_mulv(r, o->ra, o->anchor);
+    test_m3_mulv(r, o->ra, o->anchor);
     for (int i = 0; i < 3; i++) o->pa[i] = o->pos[3 * b + i] + r[i];
     v3_cross(t, o->wa, r);
     for (int i = 0; i < 3; i++) o->va[i] = o->vel[3 * b + i] + t[i];
@@ -546,9 +518,9 @@ void loop_oracle_residual(loop_oracle *o, const double *q, double *phi)
     for (int i = 0; i < o->dims.nc; i++) {
         const lo_row *r = &o->rows[i];
         double w[3], c[3];
-        m3_mulv(c, o->ra, r->c);
+        test_m3_mulv(c, o->ra, r->c);
         if (r->rotational) {
-            m3_mulv(w, rt, r->b);
+            test_m3_mulv(w, rt, r->b);
             phi[i] = v3_dot(c, w);
         } else {
             double d[3] = {o->pt[0] - o->pa[0], o->pt[1] - o->pa[1], o->pt[2] - o->pa[2]};
@@ -586,11 +558,11 @@ static void jacobian_from_kinematics(loop_oracle *o, double *g, double *gamma)
         const lo_row *r = &o->rows[i];
         double *gi = g + (size_t)i * nv, c[3], wc[3], t[3], t2[3];
         memset(gi, 0, (size_t)nv * sizeof *gi);
-        m3_mulv(c, o->ra, r->c);
+        test_m3_mulv(c, o->ra, r->c);
         v3_cross(wc, wa, c); /* dc/dt */
         if (r->rotational) {
             double w[3], a[3];
-            m3_mulv(w, rt, r->b);
+            test_m3_mulv(w, rt, r->b);
             v3_cross(a, w, c);
             add_rows(o, o->jac, 0, a, 1, gi);
             add_rows(o, o->jacb, 0, a, -1, gi);
@@ -645,7 +617,7 @@ static void closing_from_kinematics(loop_oracle *o, double *cmap, double *cb, do
     const double *at = o->alpha0 + 3 * (n - 1), *wa = o->wa;
     double w[3], wrel[3] = {wa[0] - wt[0], wa[1] - wt[1], wa[2] - wt[2]}, t[3];
     double arel[3] = {o->alpha0a[0] - at[0], o->alpha0a[1] - at[1], o->alpha0a[2] - at[2]};
-    m3_mulv(w, rt, jn->axis);
+    test_m3_mulv(w, rt, jn->axis);
     if (qn) memset(qn, 0, (size_t)o->dims.nqn * sizeof(double));
     memset(cmap, 0, (size_t)nv * nvn * sizeof(double));
     switch (jn->type) {
@@ -659,7 +631,7 @@ static void closing_from_kinematics(loop_oracle *o, double *cmap, double *cb, do
              */
             double p1[3], p2[3], rp[3], x[3];
             v3_normals(jn->axis, p1, p2);
-            m3_mulv(x, rt, p1);
+            test_m3_mulv(x, rt, p1);
             for (int i = 0; i < 3; i++) /* R_a^T x */
                 rp[i] = o->ra[i] * x[0] + o->ra[3 + i] * x[1] + o->ra[6 + i] * x[2];
             v3_cross(x, p1, rp);
@@ -736,7 +708,7 @@ void loop_oracle_energy(loop_oracle *o, const double *q, const double *v, double
     double pe = 0;
     for (int k = 0; k < n; k++) {
         double c[3];
-        m3_mulv(c, o->rot + 9 * k, o->bodies[k].com);
+        test_m3_mulv(c, o->rot + 9 * k, o->bodies[k].com);
         for (int i = 0; i < 3; i++) c[i] += o->pos[3 * k + i];
         pe -= o->bodies[k].mass * v3_dot(o->gravity, c);
     }

@@ -17,6 +17,9 @@
  * then w = Jr(x) xdot with the right Jacobian Jr(x) = 1 - (1 - cos p)/p^2 [x]x
  * + (p - sin p)/p^3 [x]x^2, p = |x|. At x = 0, Jr = 1 and d(Jr)/dt xdot = -1/2 xdot x xdot = 0, so
  * the Lagrangian forces and accelerations in x equal the model's torques and wdot there.
+ * The builders that pair a model with its oracle workspace (fx_make_random,
+ * fx_make_fixed_merged, freed by fx_release) and the fixed-versus-merged check that test_rnea.c and
+ * test_aba.c share (fx_check_fixed_equals_merged) close the file.
  * All helpers are static inline so that each test file uses what it needs.
  */
 #ifndef CTC_ORACLE_FIXTURE_H
@@ -739,6 +742,48 @@ static inline void fx_lagrange_inverse(const ctc_model *m, const double *q0, con
     }
 }
 
+/* ---- models with their oracle workspaces ---- */
+
+/* builds the model of a random chain of n bodies (fx_random_chain, drawing from r) in the given
+ * form (into *m) and an oracle workspace for it; free both with fx_release */
+static inline ctc_oracle *fx_make_random(fx_rng *r, int n, ctc_form form, ctc_model **m)
+{
+    fx_chain c;
+    fx_random_chain(r, n, &c);
+    return fx_make(&c, form, m);
+}
+
+/* builds the model of the rod chain fx_rod_chain(n, mass, len) in form AUTO (planar: revolute z
+ * joints) into *m and an oracle workspace for it; free both with fx_release */
+static inline ctc_oracle *fx_make_rods(int n, const double *mass, const double *len, ctc_model **m)
+{
+    fx_chain c;
+    fx_rod_chain(n, mass, len, &c);
+    return fx_make(&c, CTC_FORM_AUTO, m);
+}
+
+/* Builds the spatial models and oracle workspaces of fx_fixed_and_merged(r, n, w): a random chain
+ * with joint w fixed (*mf, *of) and the same chain with body w merged into its parent (*mm, *om).
+ * Both have the same nq and nv (asserted), so one state serves both. Free each pair with
+ * fx_release. */
+static inline void fx_make_fixed_merged(fx_rng *r, int n, int w, ctc_model **mf, ctc_oracle **of,
+                                        ctc_model **mm, ctc_oracle **om)
+{
+    fx_chain cf, cm;
+    fx_fixed_and_merged(r, n, w, &cf, &cm);
+    *of = fx_make(&cf, CTC_FORM_SPATIAL, mf);
+    *om = fx_make(&cm, CTC_FORM_SPATIAL, mm);
+    cr_assert_eq((*mf)->nq, (*mm)->nq, "fixed joint %d: nq", w);
+    cr_assert_eq((*mf)->nv, (*mm)->nv, "fixed joint %d: nv", w);
+}
+
+/* frees what fx_make or fx_make_random gave: the oracle workspace o and the model m */
+static inline void fx_release(ctc_model *m, ctc_oracle *o)
+{
+    ctc_oracle_free(o);
+    ctc_model_free(m);
+}
+
 /* ---- dense helpers ---- */
 
 static inline double fx_max_abs(int n, const double *x)
@@ -757,6 +802,12 @@ static inline double fx_max_abs_diff(int n, const double *x, const double *y)
         s = fmax(s, fabs(x[i] - y[i]));
     }
     return s;
+}
+
+/* max |x_i - y_i| relative to the reference y: over max |y_i|, or over 1 when that is smaller */
+static inline double fx_rel_diff(int n, const double *x, const double *y)
+{
+    return fx_max_abs_diff(n, x, y) / fmax(1.0, fx_max_abs(n, y));
 }
 
 /* in-place Cholesky of an n x n row-major symmetric A into its lower factor; returns 0 when a
@@ -853,6 +904,39 @@ static inline double fx_condition_number(int n, const double *a)
     free(x);
     free(y);
     return cond;
+}
+
+/* ---- checks shared by the oracle's tests ---- */
+
+/* an oracle pass from (q, v, x) to y: ctc_oracle_rnea (x = vdot, y = tau) or ctc_oracle_aba
+ * (x = tau, y = vdot) */
+typedef void (*fx_pass)(const ctc_model *m, ctc_oracle *o, const double *q, const double *v,
+                        const double *x, double *y);
+
+/* For w = 0..4, the fixed joint at the base, inside and at the tip of a random 5-body chain
+ * (fx_make_fixed_merged, drawing from r): pass on the chain with joint w fixed and on the chain
+ * with body w merged, at one random state q, v, x (fx_random_state, drawing from r), must agree:
+ * fx_rel_diff (relative to the merged chain's y) at most tol, asserted with w in the message.
+ * Returns the worst relative difference. */
+static inline double fx_check_fixed_equals_merged(fx_rng *r, fx_pass pass, double tol)
+{
+    double worst = 0.0;
+    for (int w = 0; w < 5; w++) {
+        ctc_model *mf, *mm;
+        ctc_oracle *of, *om;
+        fx_make_fixed_merged(r, 5, w, &mf, &of, &mm, &om);
+        double q[FX_MAX_NQ], v[FX_MAX_NV], x[FX_MAX_NV], yf[FX_MAX_NV], ym[FX_MAX_NV];
+
+        fx_random_state(r, mf, q, v, x);
+        pass(mf, of, q, v, x, yf);
+        pass(mm, om, q, v, x, ym);
+        double err = fx_rel_diff(mf->nv, yf, ym);
+        worst = fmax(worst, err);
+        cr_assert_leq(err, tol, "fixed joint %d: relative difference %.3e", w, err);
+        fx_release(mf, of);
+        fx_release(mm, om);
+    }
+    return worst;
 }
 
 #endif

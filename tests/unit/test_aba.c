@@ -15,10 +15,8 @@ Test(aba, matches_closed_form_rod_pendulum)
 {
     /* qdd = (tau - m g L/2 sin q) / (m L^2 / 3) */
     const double mass = 2.0, len = 1.5;
-    fx_chain c;
-    fx_rod_chain(1, &mass, &len, &c);
     ctc_model *m;
-    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+    ctc_oracle *o = fx_make_rods(1, &mass, &len, &m);
     double worst = 0.0;
 
     for (int i = 0; i <= 24; i++) {
@@ -30,8 +28,7 @@ Test(aba, matches_closed_form_rod_pendulum)
         cr_assert_leq(err, 1e-13, "q = %g: qdd = %.17g, closed form %.17g", q, a, want);
     }
     cr_log_info("aba rod pendulum: worst relative error %.2e (tolerance 1e-13)", worst);
-    ctc_oracle_free(o);
-    ctc_model_free(m);
+    fx_release(m, o);
 }
 
 Test(aba, matches_closed_form_prismatic_slider)
@@ -52,18 +49,15 @@ Test(aba, matches_closed_form_prismatic_slider)
         cr_assert_leq(fabs(a - want), 1e-13 * fmax(1.0, fabs(want)),
                       "qdd = %.17g, closed form %.17g", a, want);
     }
-    ctc_oracle_free(o);
-    ctc_model_free(m);
+    fx_release(m, o);
 }
 
 Test(aba, matches_lagrangian_double_pendulum)
 {
     /* qdd = M^{-1} (tau - h(q, v)) with M and h written out in the fixture */
     const double mass[2] = {1.3, 0.7}, len[2] = {1.1, 0.8};
-    fx_chain c;
-    fx_rod_chain(2, mass, len, &c);
     ctc_model *m;
-    ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+    ctc_oracle *o = fx_make_rods(2, mass, len, &m);
     fx_rng rng = {12};
     double worst = 0.0;
 
@@ -79,14 +73,13 @@ Test(aba, matches_lagrangian_double_pendulum)
         want[0] = (mm[3] * r0 - mm[1] * r1) / det;
         want[1] = (mm[0] * r1 - mm[2] * r0) / det;
         ctc_oracle_aba(m, o, q, v, tau, a);
-        double err = fx_max_abs_diff(2, a, want) / fmax(1.0, fx_max_abs(2, want));
+        double err = fx_rel_diff(2, a, want);
         worst = fmax(worst, err);
         cr_assert_leq(err, 1e-12, "sample %d: qdd = (%.17g, %.17g), Lagrangian (%.17g, %.17g)", s,
                       a[0], a[1], want[0], want[1]);
     }
     cr_log_info("aba double pendulum: worst relative error %.2e (tolerance 1e-12)", worst);
-    ctc_oracle_free(o);
-    ctc_model_free(m);
+    fx_release(m, o);
 }
 
 /* The forward error of any solve grows with the condition number of M, which reaches 1e7 on
@@ -110,10 +103,8 @@ Test(aba, inverts_rnea_on_random_spatial_chains)
 
     for (size_t si = 0; si < sizeof(sizes) / sizeof(sizes[0]); si++) {
         for (int seed = 0; seed < 20; seed++) {
-            fx_chain c;
-            fx_random_chain(&rng, sizes[si], &c);
             ctc_model *m;
-            ctc_oracle *o = fx_make(&c, CTC_FORM_SPATIAL, &m);
+            ctc_oracle *o = fx_make_random(&rng, sizes[si], CTC_FORM_SPATIAL, &m);
             int nv = m->nv;
             double q[FX_MAX_NQ], v[FX_MAX_NV], a[FX_MAX_NV], tau[FX_MAX_NV];
             double back[FX_MAX_NV];
@@ -122,7 +113,7 @@ Test(aba, inverts_rnea_on_random_spatial_chains)
             double tol = accel_tolerance(m, o, q);
             ctc_oracle_rnea(m, o, q, v, a, tau);
             ctc_oracle_aba(m, o, q, v, tau, back);
-            double err = fx_max_abs_diff(nv, back, a) / fmax(1.0, fx_max_abs(nv, a));
+            double err = fx_rel_diff(nv, back, a);
             worst_a = fmax(worst_a, err);
             worst_ratio = fmax(worst_ratio, err / tol);
             cr_assert_leq(err, tol, "n = %d, seed %d: ABA(RNEA(a)) - a = %.3e relative > %.1e",
@@ -132,12 +123,11 @@ Test(aba, inverts_rnea_on_random_spatial_chains)
             fx_random_state(&rng, m, q, v, tau);
             ctc_oracle_aba(m, o, q, v, tau, a);
             ctc_oracle_rnea(m, o, q, v, a, back);
-            err = fx_max_abs_diff(nv, back, tau) / fmax(1.0, fx_max_abs(nv, tau));
+            err = fx_rel_diff(nv, back, tau);
             worst_tau = fmax(worst_tau, err);
             cr_assert_leq(err, 1e-10, "n = %d, seed %d: RNEA(ABA(tau)) - tau = %.3e relative",
                           sizes[si], seed, err);
-            ctc_oracle_free(o);
-            ctc_model_free(m);
+            fx_release(m, o);
         }
     }
     cr_log_info("aba(rnea(a)): worst relative error %.2e, worst error/tolerance %.2e; "
@@ -157,21 +147,18 @@ Test(aba, inverts_rnea_on_planar_rod_chains)
             mass[k] = fx_uniform(&rng, 0.1, 10.0);
             len[k] = fx_uniform(&rng, 0.2, 1.5);
         }
-        fx_chain c;
-        fx_rod_chain(n, mass, len, &c);
         ctc_model *m;
-        ctc_oracle *o = fx_make(&c, CTC_FORM_AUTO, &m);
+        ctc_oracle *o = fx_make_rods(n, mass, len, &m);
         double q[FX_MAX_NQ], v[FX_MAX_NV], a[FX_MAX_NV], tau[FX_MAX_NV], back[FX_MAX_NV];
 
         cr_assert_eq(m->form, CTC_FORM_PLANAR);
         fx_random_state(&rng, m, q, v, a);
         ctc_oracle_rnea(m, o, q, v, a, tau);
         ctc_oracle_aba(m, o, q, v, tau, back);
-        double err = fx_max_abs_diff(n, back, a) / fmax(1.0, fx_max_abs(n, a));
+        double err = fx_rel_diff(n, back, a);
         worst = fmax(worst, err);
         cr_assert_leq(err, 1e-10, "n = %d: relative error %.3e", n, err);
-        ctc_oracle_free(o);
-        ctc_model_free(m);
+        fx_release(m, o);
     }
     cr_log_info("aba/rnea on rod chains: worst relative error %.2e (tolerance 1e-10)", worst);
 }
@@ -187,10 +174,8 @@ Test(aba, matches_mass_matrix_solve_on_random_spatial_chains)
 
     for (size_t si = 0; si < sizeof(sizes) / sizeof(sizes[0]); si++) {
         for (int seed = 0; seed < 10; seed++) {
-            fx_chain c;
-            fx_random_chain(&rng, sizes[si], &c);
             ctc_model *m;
-            ctc_oracle *o = fx_make(&c, CTC_FORM_SPATIAL, &m);
+            ctc_oracle *o = fx_make_random(&rng, sizes[si], CTC_FORM_SPATIAL, &m);
             int nv = m->nv;
             double q[FX_MAX_NQ], v[FX_MAX_NV], tau[FX_MAX_NV], a[FX_MAX_NV];
             double zero[FX_MAX_NV] = {0}, bias[FX_MAX_NV], want[FX_MAX_NV];
@@ -205,13 +190,12 @@ Test(aba, matches_mass_matrix_solve_on_random_spatial_chains)
                 want[i] = tau[i] - bias[i];
             }
             fx_cholesky_solve(nv, mm, want, want);
-            double err = fx_max_abs_diff(nv, a, want) / fmax(1.0, fx_max_abs(nv, want));
+            double err = fx_rel_diff(nv, a, want);
             worst = fmax(worst, err);
             worst_ratio = fmax(worst_ratio, err / tol);
             cr_assert_leq(err, tol, "n = %d, seed %d: relative error %.3e > %.1e", sizes[si], seed,
                           err, tol);
-            ctc_oracle_free(o);
-            ctc_model_free(m);
+            fx_release(m, o);
         }
     }
     cr_log_info("aba vs CRBA solve: worst relative error %.2e, worst error/tolerance %.2e", worst,
@@ -221,27 +205,7 @@ Test(aba, matches_mass_matrix_solve_on_random_spatial_chains)
 Test(aba, fixed_joint_equals_merged_body)
 {
     fx_rng rng = {78};
-    double worst = 0.0;
-
-    for (int w = 0; w < 5; w++) {
-        fx_chain cf, cm;
-        fx_fixed_and_merged(&rng, 5, w, &cf, &cm);
-        ctc_model *mf, *mm;
-        ctc_oracle *of = fx_make(&cf, CTC_FORM_SPATIAL, &mf);
-        ctc_oracle *om = fx_make(&cm, CTC_FORM_SPATIAL, &mm);
-        double q[FX_MAX_NQ], v[FX_MAX_NV], tau[FX_MAX_NV], af[FX_MAX_NV], am[FX_MAX_NV];
-
-        fx_random_state(&rng, mf, q, v, tau);
-        ctc_oracle_aba(mf, of, q, v, tau, af);
-        ctc_oracle_aba(mm, om, q, v, tau, am);
-        double err = fx_max_abs_diff(mf->nv, af, am) / fmax(1.0, fx_max_abs(mf->nv, am));
-        worst = fmax(worst, err);
-        cr_assert_leq(err, 1e-11, "fixed joint %d: relative difference %.3e", w, err);
-        ctc_oracle_free(of);
-        ctc_oracle_free(om);
-        ctc_model_free(mf);
-        ctc_model_free(mm);
-    }
+    double worst = fx_check_fixed_equals_merged(&rng, ctc_oracle_aba, 1e-11);
     cr_log_info("aba fixed vs merged: worst relative difference %.2e (tolerance 1e-11)", worst);
 }
 
@@ -264,13 +228,12 @@ Test(aba, walks_the_parents_on_a_branched_tree)
         cr_assert(fx_cholesky(3, mm), "sample %d: M is not positive definite", s);
         fx_cholesky_solve(3, mm, r, want);
         ctc_oracle_aba(m, o, q, v, tau, a);
-        double err = fx_max_abs_diff(3, a, want) / fmax(1.0, fx_max_abs(3, want));
+        double err = fx_rel_diff(3, a, want);
         worst = fmax(worst, err);
         cr_assert_leq(err, 1e-12,
                       "sample %d: qdd = (%.17g, %.17g, %.17g), closed form (%.17g, %.17g, %.17g)",
                       s, a[0], a[1], a[2], want[0], want[1], want[2]);
     }
     cr_log_info("aba Y tree: worst relative error %.2e (tolerance 1e-12)", worst);
-    ctc_oracle_free(o);
-    ctc_model_free(m);
+    fx_release(m, o);
 }

@@ -25,6 +25,7 @@
 #include "sim.h"
 #include "model_fixture.h"
 #include "oracle_fixture.h"
+#include "run_fixture.h"
 
 #define MAXV 128
 
@@ -123,16 +124,6 @@ Test(armature, forward_matches_crba_plus_diag_and_rnea_on_chains_and_trees)
     cr_log_info("armature: worst relative residual %.3e", worst);
 }
 
-/* the run of a two-rod pendulum with the armature a on both joints; a rod 1 m, 1 kg */
-static ctc_sim_result *run(const ctc_sim_spec *spec)
-{
-    ctc_sim_result *r = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
-    return r;
-}
-
 /* no gravity, a spring k: (I_p + a) q'' + k q = 0, so q = x0 cos(omega t), omega^2 = k/(I_p + a) */
 Test(armature, rod_on_a_spring_oscillates_at_the_closed_form_frequency)
 {
@@ -141,16 +132,11 @@ Test(armature, rod_on_a_spring_oscillates_at_the_closed_form_frequency)
     const double ip = 1.0 / 3, a = 0.25, k = 4, x0 = 0.3;
     double q0[1] = {x0}, v0[1] = {0};
     ctc_plant_coord plant[1] = {{.spring = k, .armature = a}};
-    ctc_sim_spec spec = {.chain = chain->spec,
-                         .q0 = q0,
-                         .v0 = v0,
-                         .model_mass_scale = 1,
-                         .model_inertia_scale = 1,
-                         .plant = plant,
-                         .integrator = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-11, .atol = 1e-13},
-                         .duration = 3,
-                         .output_interval = 0.01};
-    ctc_sim_result *r = run(&spec);
+    ctc_sim_spec spec = fixture_passive_spec(
+        &chain->spec, q0, v0,
+        (ctc_integ_spec){.method = CTC_INTEG_DOPRI5, .rtol = 1e-11, .atol = 1e-13}, 3, 0.01);
+    spec.plant = plant;
+    ctc_sim_result *r = fixture_run_done(&spec);
     const double w = sqrt(k / (ip + a));
     double dev = 0;
     for (int j = 0; j < r->nsamples; j++)
@@ -165,40 +151,15 @@ Test(armature, rod_on_a_spring_oscillates_at_the_closed_form_frequency)
    the integrator's tolerance), an unknown one leaves an error */
 Test(armature, known_armature_keeps_the_error_law_exact)
 {
-    test_chain *chain = test_chain_rod_pendulum(2, 1, 1);
-    ctc_gains gains[2];
-    ctc_traj traj[2];
     ctc_plant_coord plant[2];
-    double q0[2] = {0.3, -0.2}, v0[2] = {0, 0};
-    for (int i = 0; i < 2; i++) {
-        gains[i] = (ctc_gains){.kp = 100, .kv = 20};
-        traj[i] = (ctc_traj){.type = CTC_TRAJ_SINE, .amplitude = 0.6, .period = 1.5};
-        plant[i] = (ctc_plant_coord){.armature = 0.4 - 0.15 * i, .known = 1};
-    }
-    ctc_sim_spec spec = {.chain = chain->spec,
-                         .q0 = q0,
-                         .v0 = v0,
-                         .controller = CTC_CTRL_PD,
-                         .gains = gains,
-                         .model_mass_scale = 1,
-                         .model_inertia_scale = 1,
-                         .traj = traj,
-                         .plant = plant,
-                         .integrator = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-10, .atol = 1e-12},
-                         .duration = 3,
-                         .output_interval = 0.01};
-    ctc_sim_result *known = run(&spec);
-    cr_expect_leq(known->metrics.errdyn_dev, 1e-7, "known: errdyn_dev %g",
-                  known->metrics.errdyn_dev);
-    for (int i = 0; i < 2; i++) plant[i].known = 0;
-    ctc_sim_result *unknown = run(&spec);
-    cr_expect(isnan(unknown->metrics.errdyn_dev), "unknown armature: no linear reference");
+    for (int i = 0; i < 2; i++) plant[i] = (ctc_plant_coord){.armature = 0.4 - 0.15 * i};
+    ctc_sim_result *known, *unknown;
+    fixture_run_known_and_unknown(plant, "armature", &known, &unknown);
     cr_expect_gt(fabs(unknown->metrics.e_rms[0]) - fabs(known->metrics.e_rms[0]), 1e-4,
                  "the unknown armature adds error: rms %g against %g", unknown->metrics.e_rms[0],
                  known->metrics.e_rms[0]);
     ctc_sim_result_free(known);
     ctc_sim_result_free(unknown);
-    test_chain_free(chain);
 }
 
 Test(armature, negative_or_nan_armature_is_refused)
@@ -206,15 +167,10 @@ Test(armature, negative_or_nan_armature_is_refused)
     test_chain *chain = test_chain_rod_pendulum(1, 1, 1);
     double q0[1] = {0}, v0[1] = {0};
     ctc_plant_coord plant[1] = {{.armature = -1}};
-    ctc_sim_spec spec = {.chain = chain->spec,
-                         .q0 = q0,
-                         .v0 = v0,
-                         .model_mass_scale = 1,
-                         .model_inertia_scale = 1,
-                         .plant = plant,
-                         .integrator = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-8, .atol = 1e-10},
-                         .duration = 1,
-                         .output_interval = 0.01};
+    ctc_sim_spec spec = fixture_passive_spec(
+        &chain->spec, q0, v0,
+        (ctc_integ_spec){.method = CTC_INTEG_DOPRI5, .rtol = 1e-8, .atol = 1e-10}, 1, 0.01);
+    spec.plant = plant;
     char err[256];
     cr_assert_eq(ctc_sim_check(&spec, err, sizeof err), CTC_EINVAL);
     cr_expect_str_eq(err, "coordinate 0: armature must be non-negative and finite (got -1)");

@@ -13,6 +13,7 @@
 
 #include "chains.h"
 #include "sim.h"
+#include "run_fixture.h"
 
 #define G 9.81
 #define MAXN 4
@@ -50,10 +51,7 @@ static bscene *bscene_new(int n, ctc_ctrl_type type, double kp, double kv)
 static ctc_sim_result *brun(bscene *s)
 {
     s->spec.chain = s->chain->spec;
-    ctc_sim_result *r = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&s->spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    ctc_sim_result *r = fixture_run_done(&s->spec);
     return r;
 }
 

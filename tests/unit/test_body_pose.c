@@ -4,7 +4,7 @@
  * world position of a body's frame origin and its orientation as a unit quaternion, through the
  * job format and a run.
  *
- * Oracle written here: forward kinematics of a two-joint chain from its joint axes and
+ * Oracle (tests/support/frames.c): forward kinematics of a two-joint chain from its joint axes and
  * locations (Rodrigues' rotations composed from the ground: R_0 = R(a0, q0), R_1 = R_0 R(a1, q1),
  * p_1 = loc0 + R_0 loc1), evaluated at each recorded q, and the quaternion's rotation matrix
  * (w^2 + x^2 - y^2 - z^2, ...) compared with those rotations, so the quaternion is checked
@@ -17,87 +17,18 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "frames.h"
 #include "job_json.h"
 #include "kinematics.h"
 #include "sim.h"
+#include "job_fixture.h"
 
 #define PI 3.14159265358979323846
 
-/* single quotes to double quotes, into a malloc'd string */
-static char *json(const char *text)
+static void check_run(const char *text, const test_chain2 *c, ctc_form form, const char *what)
 {
-    char *s = strdup(text);
-    cr_assert_not_null(s);
-    for (char *c = s; *c; c++)
-        if (*c == '\'') *c = '"';
-    return s;
-}
-
-static job *parse(const char *text, job_error *err)
-{
-    char *doc = json(text);
-    job *j = NULL;
-    int rc = job_parse(doc, strlen(doc), &j, err);
-    free(doc);
-    return rc == 0 ? j : NULL;
-}
-
-/* R = rotation by angle about the unit axis a (Rodrigues), row-major */
-static void rotation(const double a[3], double angle, double r[9])
-{
-    double c = cos(angle), s = sin(angle), t = 1 - c;
-    r[0] = c + t * a[0] * a[0], r[1] = t * a[0] * a[1] - s * a[2],
-    r[2] = t * a[0] * a[2] + s * a[1];
-    r[3] = t * a[1] * a[0] + s * a[2], r[4] = c + t * a[1] * a[1],
-    r[5] = t * a[1] * a[2] - s * a[0];
-    r[6] = t * a[2] * a[0] - s * a[1], r[7] = t * a[2] * a[1] + s * a[0],
-    r[8] = c + t * a[2] * a[2];
-}
-
-static void mul(const double a[9], const double b[9], double c[9])
-{
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            c[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
-}
-
-/* the rotation of the unit quaternion (w, x, y, z) */
-static void quat_matrix(const double q[4], double r[9])
-{
-    double w = q[0], x = q[1], y = q[2], z = q[3];
-    r[0] = w * w + x * x - y * y - z * z, r[1] = 2 * (x * y - w * z), r[2] = 2 * (x * z + w * y);
-    r[3] = 2 * (x * y + w * z), r[4] = w * w - x * x + y * y - z * z, r[5] = 2 * (y * z - w * x);
-    r[6] = 2 * (x * z - w * y), r[7] = 2 * (y * z + w * x), r[8] = w * w - x * x - y * y + z * z;
-}
-
-typedef struct chain2 {
-    double axis[2][3], loc[2][3];
-} chain2;
-
-/* body k's origin p_k and rotation R_k at q */
-static void forward(const chain2 *c, const double q[2], int k, double p[3], double rot[9])
-{
-    double r0[9], r1[9];
-    rotation(c->axis[0], q[0], r0);
-    for (int i = 0; i < 3; i++) p[i] = c->loc[0][i];
-    memcpy(rot, r0, sizeof r0);
-    if (k == 0) return;
-    rotation(c->axis[1], q[1], r1);
-    mul(r0, r1, rot);
-    for (int i = 0; i < 3; i++)
-        p[i] +=
-            r0[3 * i] * c->loc[1][0] + r0[3 * i + 1] * c->loc[1][1] + r0[3 * i + 2] * c->loc[1][2];
-}
-
-static void check_run(const char *text, const chain2 *c, ctc_form form, const char *what)
-{
-    job_error err;
-    job *j = parse(text, &err);
-    cr_assert_not_null(j, "%s: %s: %s", what, err.field, err.message);
-    ctc_sim_result *r = NULL;
-    char msg[256] = "";
-    cr_assert_eq(ctc_sim_run(&j->spec, NULL, &r, msg, sizeof msg), CTC_OK, "%s", msg);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    job *j;
+    ctc_sim_result *r = fixture_run_text(text, what, &j);
     cr_assert_eq(r->metrics.form, form, "%s: computed in the expected form", what);
     cr_assert_not_null(r->ch[CTC_CH_POSE], "%s: the channel is recorded by default", what);
     cr_assert_eq(r->width[CTC_CH_POSE], 14, "two bodies, 7 values each");
@@ -108,8 +39,8 @@ static void check_run(const char *text, const chain2 *c, ctc_form form, const ch
         for (int b = 0; b < 2; b++) {
             const double *pose = r->ch[CTC_CH_POSE] + 14 * s + 7 * b;
             double p[3], rot[9], rq[9];
-            forward(c, q, order[b], p, rot);
-            quat_matrix(pose + 3, rq);
+            test_chain2_pose(c, q, order[b], p, rot);
+            test_m3_quat_raw(rq, pose + 3);
             for (int i = 0; i < 3; i++) dx = fmax(dx, fabs(pose[i] - p[i]));
             for (int i = 0; i < 9; i++) dr = fmax(dr, fabs(rq[i] - rot[i]));
             double n2 = 0;
@@ -129,7 +60,7 @@ static void check_run(const char *text, const chain2 *c, ctc_form form, const ch
 
 Test(body_pose, planar_chain_matches_forward_kinematics)
 {
-    const chain2 c = {.axis = {{0, 0, 1}, {0, 0, -1}}, .loc = {{0.1, 0, 0.1}, {0, -1, 0.2}}};
+    const test_chain2 c = {.axis = {{0, 0, 1}, {0, 0, -1}}, .loc = {{0.1, 0, 0.1}, {0, -1, 0.2}}};
     check_run("{'scene':{'gravity':[0,-9.81,0],'q0':[2.9,-0.4],'v0':[3,-2],'bodies':["
               "{'mass':1,'com':[0,-0.5,0],'inertia':[0.1,0.1,0.1],"
               "'joint':{'type':'revolute','axis':[0,0,1],'location':[0.1,0,0.1]}},"
@@ -142,7 +73,7 @@ Test(body_pose, planar_chain_matches_forward_kinematics)
 
 Test(body_pose, spatial_chain_matches_forward_kinematics)
 {
-    const chain2 c = {.axis = {{0, 0, 1}, {0, 1, 0}}, .loc = {{0, 0, 0}, {1, 0, 0}}};
+    const test_chain2 c = {.axis = {{0, 0, 1}, {0, 1, 0}}, .loc = {{0, 0, 0}, {1, 0, 0}}};
     check_run("{'scene':{'gravity':[0,0,-9.81],'q0':[3,0],'v0':[1,4],'bodies':["
               "{'mass':1,'com':[0.5,0,0],'inertia':[0.00166667,0.0841667,0.0841667],"
               "'joint':{'type':'revolute','axis':[0,0,1]}},"
@@ -161,9 +92,9 @@ Test(body_pose, quaternion_of_every_branch_of_shepperds_method)
     const double angles[4] = {PI - 0.1, PI - 0.1, PI - 0.1, 0.3};
     for (int k = 0; k < 4; k++) {
         double rot[9], q[4], rq[9], d = 0;
-        rotation(axes[k], angles[k], rot);
+        test_m3_rot(rot, axes[k], angles[k]);
         ctc_rotation_quaternion(rot, q);
-        quat_matrix(q, rq);
+        test_m3_quat_raw(rq, q);
         for (int i = 0; i < 9; i++) d = fmax(d, fabs(rq[i] - rot[i]));
         cr_expect_leq(d, 1e-15, "axis %d: %.3e", k, d);
         cr_expect_geq(q[0], 0, "axis %d: w >= 0", k);
@@ -178,9 +109,7 @@ Test(body_pose, quaternion_of_every_branch_of_shepperds_method)
 
 Test(body_pose, bad_lists_and_a_channel_without_one_are_refused_naming_the_field)
 {
-    static const struct {
-        const char *text, *field, *message;
-    } bad[] = {
+    static const fixture_bad_job bad[] = {
         {POSE_JOB("{'body_pose':[1]}"), "output.body_pose[0]",
          "must be a body index, a whole number from 0 to 0 (got 1)"},
         {POSE_JOB("{'body_pose':[0,0]}"), "output.body_pose",
@@ -190,17 +119,9 @@ Test(body_pose, bad_lists_and_a_channel_without_one_are_refused_naming_the_field
         {POSE_JOB("{'channels':['q','body_pose']}"), "output.channels[1]",
          "channel \"body_pose\" needs its bodies (\"output.body_pose\")"},
     };
-    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-        job_error err;
-        job *j = parse(bad[i].text, &err);
-        cr_expect_null(j, "case %zu accepted", i);
-        job_free(j);
-        if (j) continue;
-        cr_expect_str_eq(err.field, bad[i].field, "case %zu", i);
-        cr_expect_str_eq(err.message, bad[i].message, "case %zu", i);
-    }
+    fixture_expect_refused(bad, sizeof bad / sizeof bad[0]);
     job_error err;
-    job *j = parse(POSE_JOB("{'body_pose':[0]}"), &err);
+    job *j = fixture_parse(POSE_JOB("{'body_pose':[0]}"), &err);
     cr_assert_not_null(j, "%s: %s", err.field, err.message);
     char msg[256];
     const int bodies[1] = {2};

@@ -163,6 +163,21 @@ static void expect_spectral_factor(const double q[9], double lambda, const ctc_g
                   c4);
 }
 
+/* The LQR gains of (q, lambda); fails the test unless ctc_ctrl_lqr succeeds with a residual of
+ * at most 1e-10 and the gains are the spectral factor to 1e-12 (expect_spectral_factor). what and
+ * t name the case in the messages. */
+static ctc_gains lqr_checked(const double q[9], double lambda, const char *what, int t)
+{
+    char err[ERRLEN] = "";
+    ctc_gains g;
+    double residual;
+    cr_assert_eq(ctc_ctrl_lqr(q, lambda, &g, &residual, err, sizeof err), CTC_OK,
+                 "%s %d (lambda %g): %s", what, t, lambda, err);
+    cr_assert_leq(residual, 1e-10, "%s %d (lambda %g): residual %g", what, t, lambda, residual);
+    expect_spectral_factor(q, lambda, &g, 1e-12, what);
+    return g;
+}
+
 /* a random positive semidefinite Q = G G^T of the given rank with Q[0][0] > 0, its rows and
  * columns scaled by random powers of ten up to 10^spread */
 static void random_psd(int rank, double spread, double q[9])
@@ -678,17 +693,11 @@ Test(ctrl, lqr_gains_are_their_own_policy_improvement_on_random_psd_q)
 {
     /* for random Q of rank 1..3 and lambda in [1e-3, 1e3]: B^T P_K / lambda = K, P_K solves the
      * Riccati equation, and the return-difference identities hold */
-    char err[ERRLEN] = "";
     for (int t = 0; t < 300; t++) {
         double q[9];
         random_psd(1 + t % 3, 1.0, q);
         double lambda = pow(10, uniform_in(-3, 3));
-        ctc_gains g;
-        double residual;
-        cr_assert_eq(ctc_ctrl_lqr(q, lambda, &g, &residual, err, sizeof err), CTC_OK, "case %d: %s",
-                     t, err);
-        cr_assert_leq(residual, 1e-10, "case %d: residual %g", t, residual);
-        expect_spectral_factor(q, lambda, &g, 1e-12, "random Q");
+        ctc_gains g = lqr_checked(q, lambda, "random Q", t);
 
         double p[9], r_norm, terms_norm;
         lyapunov_cost(q, lambda, &g, p);
@@ -744,22 +753,16 @@ Test(ctrl, lqr_handles_lambda_from_1e_minus_8_to_1e8)
 {
     /* Q = I and a fixed full Q over sixteen decades of lambda: ki = sqrt(Q00 / lambda) to
      * rounding, the return-difference identities to 1e-12, residual <= 1e-10, stable poles */
-    char err[ERRLEN] = "";
     const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
     const double full[9] = {2, 0.5, -0.3, 0.5, 1, 0.2, -0.3, 0.2, 0.5};
     const double *qs[2] = {identity, full};
     for (int c = 0; c < 2; c++) {
         for (int e = -8; e <= 8; e++) {
             double lambda = pow(10, e);
-            ctc_gains g;
-            double residual;
-            cr_assert_eq(ctc_ctrl_lqr(qs[c], lambda, &g, &residual, err, sizeof err), CTC_OK,
-                         "lambda 1e%d: %s", e, err);
-            cr_assert_leq(residual, 1e-10, "lambda 1e%d: residual %g", e, residual);
+            ctc_gains g = lqr_checked(qs[c], lambda, "lambda sweep, Q", c);
             double want_ki = sqrt(qs[c][0] / lambda);
             cr_assert_leq(fabs(g.ki - want_ki), 4e-16 * want_ki, "lambda 1e%d: ki = %.17g", e,
                           g.ki);
-            expect_spectral_factor(qs[c], lambda, &g, 1e-12, "lambda sweep");
             double re[3], im[3];
             ctc_ctrl_closed_loop_poles(&g, re, im);
             cr_assert_lt(re[2], 0, "lambda 1e%d: pole %g%+gi", e, re[2], im[2]);
@@ -771,17 +774,11 @@ Test(ctrl, lqr_accepts_random_psd_q_over_wide_scales)
 {
     /* Q of rank 1..3 with rows scaled over 10^+-3, lambda over 10^+-8: every solve succeeds,
      * with a small residual and gains that are the Hurwitz spectral factor */
-    char err[ERRLEN] = "";
     for (int t = 0; t < 1000; t++) {
         double q[9];
         random_psd(1 + t % 3, 3.0, q);
         double lambda = pow(10, uniform_in(-8, 8));
-        ctc_gains g;
-        double residual;
-        cr_assert_eq(ctc_ctrl_lqr(q, lambda, &g, &residual, err, sizeof err), CTC_OK,
-                     "case %d (lambda %g): %s", t, lambda, err);
-        cr_assert_leq(residual, 1e-10, "case %d: residual %g", t, residual);
-        expect_spectral_factor(q, lambda, &g, 1e-12, "wide random Q");
+        lqr_checked(q, lambda, "wide random Q", t);
     }
 }
 

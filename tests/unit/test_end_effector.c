@@ -3,7 +3,7 @@
  * ctc_kinematics_point, job format output.end_effector): the world position and velocity of a
  * point on a body, through the job format and a run.
  *
- * Oracles written here: forward kinematics of a two-joint chain from its joint axes and
+ * Oracles: forward kinematics of a two-joint chain (tests/support/frames.c) from its joint axes and
  * locations (Rodrigues' rotations composed from the ground, x = p_k + R_k point), evaluated at
  * each recorded q; and the velocity as the central difference of that forward kinematics along
  * the recorded qdot, (x(q + h qdot) - x(q - h qdot)) / 2h with h = 1e-6 s. Both a planar chain
@@ -16,81 +16,32 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "frames.h"
 #include "job_json.h"
 #include "sim.h"
+#include "job_fixture.h"
 
-/* single quotes to double quotes, into a malloc'd string */
-static char *json(const char *text)
-{
-    char *s = strdup(text);
-    cr_assert_not_null(s);
-    for (char *c = s; *c; c++)
-        if (*c == '\'') *c = '"';
-    return s;
-}
-
-static job *parse(const char *text, job_error *err)
-{
-    char *doc = json(text);
-    job *j = NULL;
-    int rc = job_parse(doc, strlen(doc), &j, err);
-    free(doc);
-    return rc == 0 ? j : NULL;
-}
-
-/* R = rotation by angle about the unit axis a (Rodrigues), row-major */
-static void rotation(const double a[3], double angle, double r[9])
-{
-    double c = cos(angle), s = sin(angle), t = 1 - c;
-    r[0] = c + t * a[0] * a[0], r[1] = t * a[0] * a[1] - s * a[2],
-    r[2] = t * a[0] * a[2] + s * a[1];
-    r[3] = t * a[1] * a[0] + s * a[2], r[4] = c + t * a[1] * a[1],
-    r[5] = t * a[1] * a[2] - s * a[0];
-    r[6] = t * a[2] * a[0] - s * a[1], r[7] = t * a[2] * a[1] + s * a[0],
-    r[8] = c + t * a[2] * a[2];
-}
-
-static void mul(const double a[9], const double b[9], double c[9])
-{
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            c[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
-}
-
-static void mulv(const double a[9], const double v[3], double out[3])
-{
-    for (int i = 0; i < 3; i++)
-        out[i] = a[3 * i] * v[0] + a[3 * i + 1] * v[1] + a[3 * i + 2] * v[2];
-}
-
-/* a chain of two revolute joints: body 1 on body 0 */
+/* a chain of two revolute joints (body 1 on body 0) and a point in body 1's frame (m) */
 typedef struct chain2 {
-    double axis[2][3], loc[2][3], point[3];
+    test_chain2 joints;
+    double point[3];
 } chain2;
 
-/* x = p_1 + R_1 point, R_1 = R(a0, q0) R(a1, q1), p_1 = loc0 + R(a0, q0) loc1 */
+/* x = p_1 + R_1 point */
 static void forward(const chain2 *c, const double q[2], double x[3])
 {
-    double r0[9], r1[9], r[9], t[3], u[3];
-    rotation(c->axis[0], q[0], r0);
-    rotation(c->axis[1], q[1], r1);
-    mul(r0, r1, r);
-    mulv(r0, c->loc[1], t);
-    mulv(r, c->point, u);
-    for (int i = 0; i < 3; i++) x[i] = c->loc[0][i] + t[i] + u[i];
+    double p[3], rot[9], u[3];
+    test_chain2_pose(&c->joints, q, 1, p, rot);
+    test_m3_mulv(u, rot, c->point);
+    for (int i = 0; i < 3; i++) x[i] = p[i] + u[i];
 }
 
 /* the channel against the oracles over every sample of the run of job text, whose model has the
    given form */
 static void check_run(const char *text, const chain2 *c, ctc_form form, const char *what)
 {
-    job_error err;
-    job *j = parse(text, &err);
-    cr_assert_not_null(j, "%s: %s: %s", what, err.field, err.message);
-    ctc_sim_result *r = NULL;
-    char msg[256] = "";
-    cr_assert_eq(ctc_sim_run(&j->spec, NULL, &r, msg, sizeof msg), CTC_OK, "%s", msg);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    job *j;
+    ctc_sim_result *r = fixture_run_text(text, what, &j);
     cr_assert_eq(r->metrics.form, form, "%s: computed in the expected form", what);
     cr_assert_not_null(r->ch[CTC_CH_EE], "%s: the channel is recorded by default", what);
     cr_assert_eq(r->width[CTC_CH_EE], 6);
@@ -119,9 +70,9 @@ static void check_run(const char *text, const chain2 *c, ctc_form form, const ch
 
 Test(end_effector, planar_chain_matches_forward_kinematics_and_finite_differences)
 {
-    const chain2 c = {.axis = {{0, 0, 1}, {0, 0, -1}},
-                      .loc = {{0.1, 0, 0.1}, {0, -1, 0.2}},
-                      .point = {0.1, -1, 0.3}};
+    const chain2 c = {
+        .joints = {.axis = {{0, 0, 1}, {0, 0, -1}}, .loc = {{0.1, 0, 0.1}, {0, -1, 0.2}}},
+        .point = {0.1, -1, 0.3}};
     check_run("{'scene':{'gravity':[0,-9.81,0],'q0':[0.7,-0.4],'v0':[1,-2],'bodies':["
               "{'mass':1,'com':[0,-0.5,0],'inertia':[0.1,0.1,0.1],"
               "'joint':{'type':'revolute','axis':[0,0,1],'location':[0.1,0,0.1]}},"
@@ -134,8 +85,8 @@ Test(end_effector, planar_chain_matches_forward_kinematics_and_finite_difference
 
 Test(end_effector, spatial_chain_matches_forward_kinematics_and_finite_differences)
 {
-    const chain2 c = {
-        .axis = {{0, 0, 1}, {0, 1, 0}}, .loc = {{0, 0, 0}, {1, 0, 0}}, .point = {1, 0.1, 0.05}};
+    const chain2 c = {.joints = {.axis = {{0, 0, 1}, {0, 1, 0}}, .loc = {{0, 0, 0}, {1, 0, 0}}},
+                      .point = {1, 0.1, 0.05}};
     check_run("{'scene':{'gravity':[0,0,-9.81],'q0':[1.5707963267948966,0],'v0':[1,1],'bodies':["
               "{'mass':1,'com':[0.5,0,0],'inertia':[0.00166667,0.0841667,0.0841667],"
               "'joint':{'type':'revolute','axis':[0,0,1]}},"
@@ -154,9 +105,7 @@ Test(end_effector, spatial_chain_matches_forward_kinematics_and_finite_differenc
 
 Test(end_effector, bad_points_and_a_channel_without_one_are_refused_naming_the_field)
 {
-    static const struct {
-        const char *text, *field, *message;
-    } bad[] = {
+    static const fixture_bad_job bad[] = {
         {EE_JOB("{'end_effector':{'body':1}}"), "output.end_effector.body",
          "must be a body index, a whole number from 0 to 0 (got 1)"},
         {EE_JOB("{'end_effector':{'body':0,'point':[0,1]}}"), "output.end_effector.point",
@@ -165,18 +114,10 @@ Test(end_effector, bad_points_and_a_channel_without_one_are_refused_naming_the_f
         {EE_JOB("{'channels':['q','end_effector']}"), "output.channels[1]",
          "channel \"end_effector\" needs its point (\"output.end_effector\")"},
     };
-    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-        job_error err;
-        job *j = parse(bad[i].text, &err);
-        cr_expect_null(j, "case %zu accepted", i);
-        job_free(j);
-        if (j) continue;
-        cr_expect_str_eq(err.field, bad[i].field, "case %zu", i);
-        cr_expect_str_eq(err.message, bad[i].message, "case %zu", i);
-    }
+    fixture_expect_refused(bad, sizeof bad / sizeof bad[0]);
     /* the library refuses what the format would not give it */
     job_error err;
-    job *j = parse(EE_JOB("{'end_effector':{'body':0}}"), &err);
+    job *j = fixture_parse(EE_JOB("{'end_effector':{'body':0}}"), &err);
     cr_assert_not_null(j, "%s: %s", err.field, err.message);
     char msg[256];
     ctc_end_effector ee = {.body = 3};

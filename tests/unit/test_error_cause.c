@@ -19,62 +19,25 @@
 
 #include "job_json.h"
 #include "sim.h"
-
-/* single quotes to double quotes, into a malloc'd string */
-static char *json(const char *text)
-{
-    char *s = strdup(text);
-    cr_assert_not_null(s);
-    for (char *c = s; *c; c++)
-        if (*c == '\'') *c = '"';
-    return s;
-}
-
-static job *parse_ok(const char *text)
-{
-    char *doc = json(text);
-    job *j = NULL;
-    job_error err;
-    int rc = job_parse(doc, strlen(doc), &j, &err);
-    cr_assert_eq(rc, 0, "job rejected at \"%s\": %s", err.field, err.message);
-    free(doc);
-    return j;
-}
-
-static ctc_sim_result *run(const job *j)
-{
-    ctc_sim_result *r = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&j->spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
-    return r;
-}
+#include "job_fixture.h"
 
 static const double *row(const ctc_sim_result *r, int cause)
 {
     return r->metrics.err_cause + (size_t)cause * (size_t)r->nind;
 }
 
-#define ROD                                                                                        \
-    "{'mass':1,'com':[0,-0.5,0],'inertia':[0.0833333333333333,0.0833333333333333,"                 \
-    "0.0833333333333333],'joint':{'type':'revolute','axis':[0,0,1]}}"
-#define ROD2                                                                                       \
-    "{'mass':1,'com':[0,-0.5,0],'inertia':[0.0833333333333333,0.0833333333333333,"                 \
-    "0.0833333333333333],'joint':{'type':'revolute','axis':[0,0,1],'location':[0,-1,0]}}"
-#define INTEG "'integrator':{'method':'dopri5','rtol':1e-11,'atol':1e-13}"
-
 Test(error_cause, a_run_without_a_cause_reports_zeros)
 {
-    job *j = parse_ok("{'preset':'triple_pendulum_pid','duration':1,"
-                      "'plant':{'torque_limit':50,'viscous':0.1}}");
-    ctc_sim_result *r = run(j);
+    job *j = fixture_parse_ok("{'preset':'triple_pendulum_pid','duration':1,"
+                              "'plant':{'torque_limit':50,'viscous':0.1}}");
+    ctc_sim_result *r = fixture_run_done(&j->spec);
     cr_assert_not_null(r->metrics.err_cause);
     for (int c = 0; c < CTC_NCAUSES; c++)
         for (int i = 0; i < r->nind; i++) cr_expect_eq(row(r, c)[i], 0, "cause %d, joint %d", c, i);
     ctc_sim_result_free(r);
     job_free(j);
-    j = parse_ok("{'preset':'triple_pendulum_passive','duration':0.1}");
-    r = run(j);
+    j = fixture_parse_ok("{'preset':'triple_pendulum_passive','duration':0.1}");
+    r = fixture_run_done(&j->spec);
     cr_expect_null(r->metrics.err_cause, "a passive run tracks nothing");
     ctc_sim_result_free(r);
     job_free(j);
@@ -102,15 +65,15 @@ static double e_sampled(double e0, double period, double t)
 Test(error_cause, sampling_share_matches_the_closed_form_zero_order_hold)
 {
     const double period = 0.02, e0 = -0.3;
-    job *j = parse_ok(
+    job *j = fixture_parse_ok(
         "{'scene':{'gravity':[0,0,0],'q0':[0.3],'bodies':[{'mass':2,'com':[0.1,0,0],"
         "'inertia':[0.05,0.05,0.05],'joint':{'type':'revolute','axis':[0,0,1]}}]},"
         "'controller':{'type':'pd','kp':100,'kv':20,'sample_period':0.02},"
         "'trajectory':{'type':'constant','value':0},'duration':1.5,'output':{'interval':0.005},"
-        "'plant':{'noise_q':0.001,'noise_v':0.01,'resolution':0.0005}," INTEG "}");
+        "'plant':{'noise_q':0.001,'noise_v':0.01,'resolution':0.0005}," FIXTURE_INTEG "}");
     /* sampling alone first: the same run with exact sensors */
     j->plant[0].noise_q = j->plant[0].noise_v = j->plant[0].resolution = 0;
-    ctc_sim_result *r = run(j);
+    ctc_sim_result *r = fixture_run_done(&j->spec);
     double sum = 0, dev = 0;
     for (int s = 0; s < r->nsamples; s++) {
         const double d = e_sampled(e0, period, r->t[s]) - e_continuous(e0, r->t[s]);
@@ -135,13 +98,14 @@ Test(error_cause, sampling_share_matches_the_closed_form_zero_order_hold)
 
 Test(error_cause, every_cause_has_its_share_and_the_same_seed_the_same_shares)
 {
-    const char *text = "{'scene':{'gravity':[0,-9.81,0],'bodies':[" ROD "," ROD2 "]},"
-                       "'controller':{'type':'pd','kp':100,'kv':20,'sample_period':0.005,'seed':7,"
-                       "'model':{'payload':{'body':1,'mass':0.5,'point':[0,-1,0]}}},"
-                       "'trajectory':{'type':'sine','amplitude':0.6,'period':1.5},'duration':2,"
-                       "'plant':{'noise_q':0.002}," INTEG "}";
-    job *j = parse_ok(text);
-    ctc_sim_result *r = run(j), *again = run(j);
+    const char *text =
+        "{'scene':{'gravity':[0,-9.81,0],'bodies':[" FIXTURE_ROD "," FIXTURE_ROD2 "]},"
+        "'controller':{'type':'pd','kp':100,'kv':20,'sample_period':0.005,'seed':7,"
+        "'model':{'payload':{'body':1,'mass':0.5,'point':[0,-1,0]}}},"
+        "'trajectory':{'type':'sine','amplitude':0.6,'period':1.5},'duration':2,"
+        "'plant':{'noise_q':0.002}," FIXTURE_INTEG "}";
+    job *j = fixture_parse_ok(text);
+    ctc_sim_result *r = fixture_run_done(&j->spec), *again = fixture_run_done(&j->spec);
     for (int c = 0; c < CTC_NCAUSES; c++)
         for (int i = 0; i < 2; i++) {
             cr_expect_gt(row(r, c)[i], 1e-5, "cause %d, joint %d: %g", c, i, row(r, c)[i]);
@@ -154,7 +118,7 @@ Test(error_cause, every_cause_has_its_share_and_the_same_seed_the_same_shares)
     ctc_sim_result_free(again);
     j->spec.sample_period = 0;
     j->plant[0].noise_q = j->plant[1].noise_q = 0; /* read by a sampled controller only */
-    again = run(j);
+    again = fixture_run_done(&j->spec);
     for (int i = 0; i < 2; i++) {
         cr_expect_eq(row(again, CTC_CAUSE_MODEL)[i], row(r, CTC_CAUSE_MODEL)[i]);
         cr_expect_eq(row(again, CTC_CAUSE_TOTAL)[i], row(again, CTC_CAUSE_MODEL)[i]);
@@ -168,7 +132,7 @@ Test(error_cause, every_cause_has_its_share_and_the_same_seed_the_same_shares)
 
 Test(error_cause, a_run_stopped_early_has_no_shares)
 {
-    job *j = parse_ok("{'preset':'triple_pendulum_pid_50hz','duration':1}");
+    job *j = fixture_parse_ok("{'preset':'triple_pendulum_pid_50hz','duration':1}");
     j->spec.max_speed = 0.1; /* the start's speeds pass it within the first steps */
     ctc_sim_result *r = NULL;
     char err[256] = "";

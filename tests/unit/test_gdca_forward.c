@@ -21,6 +21,7 @@
 #include "oracle.h"
 #include "spatial.h"
 #include "model_fixture.h"
+#include "gdca_fixture.h"
 
 static double tolerance(double cond)
 {
@@ -138,27 +139,8 @@ Test(gdca_forward, planar_and_spatial_forms_agree)
 {
     for (int i = 0; i < 5; i++) {
         test_chain *c = test_chain_random_planar(sizes[i], 500 + (uint64_t)i, 1, 0);
-        ctc_model *mp = build(&c->spec);
-        c->spec.form = CTC_FORM_SPATIAL;
-        ctc_model *ms = build(&c->spec);
-        cr_assert_eq(mp->form, CTC_FORM_PLANAR);
-        cr_assert_eq(ms->form, CTC_FORM_SPATIAL);
-        ctc_data *dp = ctc_data_new(mp), *ds = ctc_data_new(ms);
-        int nv = mp->nv;
-        double q[16], v[16], f[16], ap[16], as[16];
-        uint64_t rng = 12 + (uint64_t)i;
-        test_random_state(mp, &rng, 2.0, q, v);
-        for (int k = 0; k < nv; k++) f[k] = test_uniform(&rng, -5, 5);
-        ctc_kinematics(mp, dp, q, v);
-        ctc_handles(mp, dp);
-        ctc_gdca_forward(mp, dp, f, ap);
-        ctc_kinematics(ms, ds, q, v);
-        ctc_handles(ms, ds);
-        ctc_gdca_forward(ms, ds, f, as);
-        double err = test_rel_err(ap, as, nv);
+        double err = fixture_planar_vs_spatial(c, ctc_gdca_forward, 12 + (uint64_t)i);
         cr_assert(err < 1e-11, "n=%d: planar vs spatial %.3g", sizes[i], err);
-        ctc_data_free(dp), ctc_data_free(ds);
-        ctc_model_free(mp), ctc_model_free(ms);
         test_chain_free(c);
     }
 }

@@ -20,6 +20,7 @@
 #include "oracle.h"
 #include "spatial.h"
 #include "model_fixture.h"
+#include "gdca_fixture.h"
 
 typedef void (*inverse_fn)(const ctc_model *, ctc_data *, const double *, double *);
 
@@ -150,25 +151,8 @@ Test(gdca_inverse, planar_and_spatial_forms_agree)
 {
     for (int i = 0; i < 5; i++) {
         test_chain *c = test_chain_random_planar(sizes[i], 1000 + (uint64_t)i, 1, 0);
-        ctc_model *mp = build(&c->spec);
-        c->spec.form = CTC_FORM_SPATIAL;
-        ctc_model *ms = build(&c->spec);
-        ctc_data *dp = ctc_data_new(mp), *ds = ctc_data_new(ms);
-        int nv = mp->nv;
-        double q[16], v[16], u[16], fp[16], fs[16];
-        uint64_t rng = 26 + (uint64_t)i;
-        test_random_state(mp, &rng, 2.0, q, v);
-        for (int k = 0; k < nv; k++) u[k] = test_uniform(&rng, -5, 5);
-        ctc_kinematics(mp, dp, q, v);
-        ctc_handles(mp, dp);
-        ctc_gdca_inverse(mp, dp, u, fp);
-        ctc_kinematics(ms, ds, q, v);
-        ctc_handles(ms, ds);
-        ctc_gdca_inverse(ms, ds, u, fs);
-        double err = test_rel_err(fp, fs, nv);
+        double err = fixture_planar_vs_spatial(c, ctc_gdca_inverse, 26 + (uint64_t)i);
         cr_assert(err < 1e-12, "n=%d: planar vs spatial %.3g", sizes[i], err);
-        ctc_data_free(dp), ctc_data_free(ds);
-        ctc_model_free(mp), ctc_model_free(ms);
         test_chain_free(c);
     }
 }

@@ -31,6 +31,7 @@
 #include "pool.h"
 #include "sim.h"
 #include "model_fixture.h"
+#include "run_fixture.h"
 
 /* ---- the pool ---- */
 
@@ -745,29 +746,9 @@ Test(gdca_parallel, a_shared_pool_serves_two_data_in_turn)
 static ctc_sim_result *pendulum_run(int threads, double mass_scale)
 {
     test_chain *c = test_chain_rod_pendulum(SIM_N, 0.1, 0.1);
-    static double q0[SIM_N];
-    static ctc_gains gains[SIM_N];
-    static ctc_traj traj[SIM_N];
-    for (int k = 0; k < SIM_N; k++) {
-        q0[k] = (k % 2 ? 1 : -1) * 0.5235987755982988;
-        gains[k] = (ctc_gains){.kp = 100, .kv = 20};
-        traj[k] = (ctc_traj){.type = CTC_TRAJ_CONSTANT, .value = 0};
-    }
-    ctc_sim_spec spec = {.chain = c->spec,
-                         .q0 = q0,
-                         .controller = CTC_CTRL_PD,
-                         .gains = gains,
-                         .model_mass_scale = mass_scale,
-                         .model_inertia_scale = 1,
-                         .traj = traj,
-                         .integrator = {.method = CTC_INTEG_RK4, .step = 1e-3},
-                         .duration = 0.05,
-                         .output_interval = 0.01,
-                         .threads = threads};
-    ctc_sim_result *r = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    ctc_sim_result *r = fixture_pd_to_rest(c, 0.5235987755982988, mass_scale,
+                                           (ctc_integ_spec){.method = CTC_INTEG_RK4, .step = 1e-3},
+                                           0.05, 0.01, threads);
     test_chain_free(c);
     return r;
 }
@@ -775,12 +756,8 @@ static ctc_sim_result *pendulum_run(int threads, double mass_scale)
 /* the largest difference of two runs' samples of channel ch, relative to the largest sample */
 static double run_difference(const ctc_sim_result *a, const ctc_sim_result *b, ctc_channel ch)
 {
-    size_t count = (size_t)a->nsamples * (size_t)a->width[ch];
-    double big = 0, diff = 0;
-    for (size_t i = 0; i < count; i++) {
-        big = fmax(big, fabs(a->ch[ch][i]));
-        diff = fmax(diff, fabs(a->ch[ch][i] - b->ch[ch][i]));
-    }
+    double diff, big;
+    fixture_channel_diff(a, b, ch, &diff, &big);
     return diff > 0 ? diff / big : 0.0;
 }
 

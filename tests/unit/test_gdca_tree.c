@@ -31,6 +31,7 @@
 #include "sim.h"
 #include "model_fixture.h"
 #include "oracle_fixture.h"
+#include "run_fixture.h"
 
 #define MAX_COND_N 512
 
@@ -455,31 +456,9 @@ Test(gdca_tree, correction_pass_solves_the_mass_matrix)
    the forward pass to take the plan on threads) from q0 = +-0.1 rad to rest, RK4, 20 steps */
 static ctc_sim_result *tree_run(int threads)
 {
-    enum { N = 1024 };
-    test_chain *c = test_auto_tree(N, 2, 0.5, 1.0);
-    static double q0[N];
-    static ctc_gains gains[N];
-    static ctc_traj traj[N];
-    for (int k = 0; k < N; k++) {
-        q0[k] = (k % 2 ? 1 : -1) * 0.1;
-        gains[k] = (ctc_gains){.kp = 100, .kv = 20};
-        traj[k] = (ctc_traj){.type = CTC_TRAJ_CONSTANT, .value = 0};
-    }
-    ctc_sim_spec spec = {.chain = c->spec,
-                         .q0 = q0,
-                         .controller = CTC_CTRL_PD,
-                         .gains = gains,
-                         .model_mass_scale = 1.1,
-                         .model_inertia_scale = 1,
-                         .traj = traj,
-                         .integrator = {.method = CTC_INTEG_RK4, .step = 1e-3},
-                         .duration = 0.02,
-                         .output_interval = 0.01,
-                         .threads = threads};
-    ctc_sim_result *r = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    test_chain *c = test_auto_tree(1024, 2, 0.5, 1.0);
+    ctc_sim_result *r = fixture_pd_to_rest(
+        c, 0.1, 1.1, (ctc_integ_spec){.method = CTC_INTEG_RK4, .step = 1e-3}, 0.02, 0.01, threads);
     test_chain_free(c);
     return r;
 }
@@ -496,11 +475,8 @@ Test(gdca_tree, a_simulation_on_threads_records_the_same_samples)
         size_t count = (size_t)two->nsamples * (size_t)two->width[ch];
         cr_expect_eq(memcmp(two->ch[ch], three->ch[ch], count * sizeof(double)), 0, "channel %s",
                      ctc_channel_name((ctc_channel)ch));
-        double big = 0, diff = 0;
-        for (size_t i = 0; i < count; i++) {
-            big = fmax(big, fabs(one->ch[ch][i]));
-            diff = fmax(diff, fabs(one->ch[ch][i] - two->ch[ch][i]));
-        }
+        double big, diff;
+        fixture_channel_diff(one, two, (ctc_channel)ch, &diff, &big);
         cr_expect(diff <= 1e-8 * big, "channel %s: 1 and 2 threads differ by %.3g of %.3g",
                   ctc_channel_name((ctc_channel)ch), diff, big);
     }

@@ -30,6 +30,7 @@
 #include "sim.h"
 #include "spatial.h"
 #include "model_fixture.h"
+#include "run_fixture.h"
 
 #define MAXV 96 /* velocity coordinates of the largest chain here (32 spatial joints) */
 
@@ -325,21 +326,10 @@ static void check_spin_energy(ctc_joint_type type, double bound)
     ctc_model_q_zero(m, q0);
     ctc_model_free(m);
     for (int i = 0; i < nv; i++) v0[i] = i % 2 ? -100 : 100;
-    ctc_sim_spec spec = {
-        .chain = c->spec,
-        .q0 = q0,
-        .v0 = v0,
-        .controller = CTC_CTRL_NONE,
-        .model_mass_scale = 1,
-        .model_inertia_scale = 1,
-        .integrator = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-10, .atol = 1e-12},
-        .duration = 0.1,
-        .output_interval = 0.001,
-    };
-    ctc_sim_result *res = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&spec, NULL, &res, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(res->status, CTC_RUN_DONE, "%s", res->message);
+    ctc_sim_spec spec = fixture_passive_spec(
+        &c->spec, q0, v0,
+        (ctc_integ_spec){.method = CTC_INTEG_DOPRI5, .rtol = 1e-10, .atol = 1e-12}, 0.1, 0.001);
+    ctc_sim_result *res = fixture_run_done(&spec);
     double ke = 0;
     for (int j = 0; j < res->nsamples; j++) ke = fmax(ke, res->ch[CTC_CH_ENERGY][2 * j]);
     cr_expect_gt(ke, 1e4, "it spins: kinetic energy %g J", ke);

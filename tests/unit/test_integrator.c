@@ -139,6 +139,16 @@ static ctc_integrator *make(const ctc_integ_spec *spec, int n, ctc_ode_rhs rhs, 
     return it;
 }
 
+/* an integrator of spec on the oscillator (context p), reset at t = 0 to y = (1, 0), on the
+ * solution (cos t, -sin t); the caller frees it */
+static ctc_integrator *start_oscillator(const ctc_integ_spec *spec, problem *p)
+{
+    static const double y0[2] = {1, 0};
+    ctc_integrator *it = make(spec, 2, oscillator, p);
+    cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
+    return it;
+}
+
 /* steps to t_end (tstop = t_end); asserts success and that no step passes t_end */
 static void run_to(ctc_integrator *it, double t_end)
 {
@@ -161,17 +171,25 @@ static double oscillator_error(const ctc_integrator *it)
 
 /* ---- rk4 ---- */
 
+/* Halving the step from 2h to h took the error from prev to e: asserts the ratio prev / e lies
+ * in (lo, hi), the order's 2^p with a margin (what names the error in the message). */
+static void expect_halving_ratio(double prev, double e, double lo, double hi, double h,
+                                 const char *what)
+{
+    double ratio = prev / e;
+    cr_assert(ratio > lo && ratio < hi, "h = %g: %s %.3e, ratio %.3f not in (%g, %g)", h, what, e,
+              ratio, lo, hi);
+}
+
 Test(integrator, rk4_converges_at_fourth_order_on_the_oscillator)
 {
     /* global error at t = 5 for h = 0.1, 0.05, 0.025, 0.0125: ratio 2^4 = 16 */
-    const double y0[2] = {1, 0};
     double prev = NAN;
     for (int k = 0; k < 4; k++) {
         double h = 0.1 / (1 << k);
         problem p = problem_default();
         ctc_integ_spec spec = rk4_spec(h);
-        ctc_integrator *it = make(&spec, 2, oscillator, &p);
-        cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
+        ctc_integrator *it = start_oscillator(&spec, &p);
         run_to(it, 5.0);
         double e = oscillator_error(it);
         const ctc_integ_stats *st = ctc_integrator_stats(it);
@@ -180,11 +198,7 @@ Test(integrator, rk4_converges_at_fourth_order_on_the_oscillator)
         cr_assert_eq(st->rejected, 0);
         cr_assert(isnan(st->err_estimate), "rk4 has no error estimate (got %g)", st->err_estimate);
         cr_assert_leq(fabs(st->h_last - h), 1e-9 * h, "h_last %.17g, want %.17g", st->h_last, h);
-        if (k > 0) {
-            double ratio = prev / e;
-            cr_assert(ratio > 14 && ratio < 18, "h = %g: error %.3e, ratio %.3f not in (14, 18)", h,
-                      e, ratio);
-        }
+        if (k > 0) expect_halving_ratio(prev, e, 14, 18, h, "error");
         prev = e;
         ctc_integrator_free(it);
     }
@@ -213,23 +227,37 @@ static double dense_error_inside_steps(ctc_integrator *it, double t_end, double 
 Test(integrator, rk4_dense_output_is_fourth_order_between_steps)
 {
     /* the cubic Hermite interpolant's error is O(h^4), like the nodes': ratio 16 */
-    const double y0[2] = {1, 0};
     double prev = NAN;
     for (int k = 0; k < 4; k++) {
         double h = 0.2 / (1 << k);
         problem p = problem_default();
         ctc_integ_spec spec = rk4_spec(h);
-        ctc_integrator *it = make(&spec, 2, oscillator, &p);
-        cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
+        ctc_integrator *it = start_oscillator(&spec, &p);
         double e = dense_error_inside_steps(it, 4.0, NULL);
-        if (k > 0) {
-            double ratio = prev / e;
-            cr_assert(ratio > 14 && ratio < 18, "h = %g: dense error %.3e, ratio %.3f", h, e,
-                      ratio);
-        }
+        if (k > 0) expect_halving_ratio(prev, e, 14, 18, h, "dense error");
         prev = e;
         ctc_integrator_free(it);
     }
+}
+
+/* One step of size h from the exact value y(0) = 1 of y' = y^2 (the riccati problem) by spec's
+ * method, whose first step must be h (checked: one step to reach h): the largest error of the
+ * dense output at the 9 points s = 0.1 j h inside the step against the solution 1 / (1 - s). */
+static double riccati_dense_error_in_one_step(const ctc_integ_spec *spec, double h)
+{
+    double y0 = 1, y[1], e = 0;
+    problem p = problem_default();
+    ctc_integrator *it = make(spec, 1, riccati, &p);
+    cr_assert_eq(ctc_integrator_reset(it, 0, &y0), 0);
+    run_to(it, h);
+    cr_assert_eq(ctc_integrator_stats(it)->steps, 1);
+    for (int j = 1; j <= 9; j++) {
+        double s = 0.1 * j * h;
+        ctc_integrator_dense(it, s, y);
+        e = fmax(e, fabs(y[0] - 1 / (1 - s)));
+    }
+    ctc_integrator_free(it);
+    return e;
 }
 
 Test(integrator, rk4_dense_output_has_third_order_local_accuracy_in_one_step)
@@ -240,26 +268,11 @@ Test(integrator, rk4_dense_output_has_third_order_local_accuracy_in_one_step)
      * asymptotic range.) */
     double prev = NAN;
     for (int k = 0; k < 4; k++) {
-        double h = 0.025 / (1 << k), y0 = 1, y[1];
-        problem p = problem_default();
+        double h = 0.025 / (1 << k);
         ctc_integ_spec spec = rk4_spec(h);
-        ctc_integrator *it = make(&spec, 1, riccati, &p);
-        cr_assert_eq(ctc_integrator_reset(it, 0, &y0), 0);
-        run_to(it, h);
-        cr_assert_eq(ctc_integrator_stats(it)->steps, 1);
-        double e = 0;
-        for (int j = 1; j <= 9; j++) {
-            double s = 0.1 * j * h;
-            ctc_integrator_dense(it, s, y);
-            e = fmax(e, fabs(y[0] - 1 / (1 - s)));
-        }
-        if (k > 0) {
-            double ratio = prev / e;
-            cr_assert(ratio > 14 && ratio < 18, "h = %g: local dense error %.3e, ratio %.3f", h, e,
-                      ratio);
-        }
+        double e = riccati_dense_error_in_one_step(&spec, h);
+        if (k > 0) expect_halving_ratio(prev, e, 14, 18, h, "local dense error");
         prev = e;
-        ctc_integrator_free(it);
     }
 }
 
@@ -268,14 +281,12 @@ Test(integrator, rk4_dense_output_has_third_order_local_accuracy_in_one_step)
 Test(integrator, dopri5_meets_the_tolerance_on_the_oscillator)
 {
     /* error at t = 10 within 10 rtol, and fewer steps as the tolerance loosens */
-    const double y0[2] = {1, 0};
     long prev_steps = 0;
     for (int k = 10; k >= 6; k--) {
         double rtol = pow(10, -k);
         problem p = problem_default();
         ctc_integ_spec spec = adaptive_spec(CTC_INTEG_DOPRI5, rtol, rtol);
-        ctc_integrator *it = make(&spec, 2, oscillator, &p);
-        cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
+        ctc_integrator *it = start_oscillator(&spec, &p);
         run_to(it, 10.0);
         double e = oscillator_error(it);
         const ctc_integ_stats *st = ctc_integrator_stats(it);
@@ -386,40 +397,23 @@ Test(integrator, dopri5_dense_output_is_fourth_order)
      * h = 0.006 the error nears round-off. */
     double prev = NAN;
     for (int k = 0; k < 3; k++) {
-        double h = 0.025 / (1 << k), y0 = 1, y[1];
-        problem p = problem_default();
+        double h = 0.025 / (1 << k);
         ctc_integ_spec spec = adaptive_spec(CTC_INTEG_DOPRI5, 0.5, 1e3);
         spec.initial_step = h;
         spec.max_step = h;
-        ctc_integrator *it = make(&spec, 1, riccati, &p);
-        cr_assert_eq(ctc_integrator_reset(it, 0, &y0), 0);
-        run_to(it, h);
-        cr_assert_eq(ctc_integrator_stats(it)->steps, 1);
-        double e = 0;
-        for (int j = 1; j <= 9; j++) {
-            double s = 0.1 * j * h;
-            ctc_integrator_dense(it, s, y);
-            e = fmax(e, fabs(y[0] - 1 / (1 - s)));
-        }
-        if (k > 0) {
-            double ratio = prev / e;
-            cr_assert(ratio > 28 && ratio < 36, "h = %g: dense error %.3e, ratio %.3f", h, e,
-                      ratio);
-        }
+        double e = riccati_dense_error_in_one_step(&spec, h);
+        if (k > 0) expect_halving_ratio(prev, e, 28, 36, h, "dense error");
         prev = e;
-        ctc_integrator_free(it);
     }
 }
 
 Test(integrator, dopri5_dense_output_matches_the_solution_inside_steps)
 {
-    const double y0[2] = {1, 0};
     for (int k = 9; k >= 6; k--) {
         double rtol = pow(10, -k), node_error;
         problem p = problem_default();
         ctc_integ_spec spec = adaptive_spec(CTC_INTEG_DOPRI5, rtol, rtol);
-        ctc_integrator *it = make(&spec, 2, oscillator, &p);
-        cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
+        ctc_integrator *it = start_oscillator(&spec, &p);
         double e = dense_error_inside_steps(it, 10.0, &node_error);
         cr_assert_leq(e, 10 * rtol, "rtol %g: dense error %.3e (at the steps' ends %.3e)", rtol, e,
                       node_error);
@@ -431,12 +425,10 @@ Test(integrator, dopri5_reset_keeps_the_step_size)
 {
     /* the automatic starting step costs one evaluation, at the first step only; a reset later
      * keeps the step size, so the step after it costs 6 per attempt and nothing more */
-    const double y0[2] = {1, 0};
     problem p = problem_default();
     ctc_integ_spec spec = adaptive_spec(CTC_INTEG_DOPRI5, 1e-8, 1e-8);
-    ctc_integrator *it = make(&spec, 2, oscillator, &p);
+    ctc_integrator *it = start_oscillator(&spec, &p);
     char err[ERRLEN] = "";
-    cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
     for (int i = 0; i < 5; i++) cr_assert_eq(ctc_integrator_step(it, 10, err, sizeof err), 0);
     const ctc_integ_stats *st = ctc_integrator_stats(it);
     cr_assert_eq(st->rhs_evals, 2 + 6 * (st->steps + st->rejected));
@@ -455,13 +447,11 @@ Test(integrator, dopri5_reset_keeps_the_step_size)
 
 Test(integrator, dopri5_bounds_the_step_by_max_step)
 {
-    const double y0[2] = {1, 0};
     problem p = problem_default();
     ctc_integ_spec spec = adaptive_spec(CTC_INTEG_DOPRI5, 1e-3, 1e-3);
     spec.max_step = 0.01;
-    ctc_integrator *it = make(&spec, 2, oscillator, &p);
+    ctc_integrator *it = start_oscillator(&spec, &p);
     char err[ERRLEN] = "";
-    cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
     while (ctc_integrator_time(it) < 1) {
         cr_assert_eq(ctc_integrator_step(it, 1, err, sizeof err), 0, "%s", err);
         cr_assert_leq(ctc_integrator_stats(it)->h_last, 0.01);
@@ -721,13 +711,11 @@ Test(integrator, every_method_lands_exactly_on_tstop)
 {
     /* output times k / 10 (not multiples of rk4's 0.03, and 0.1 + 0.2 != 0.3 in binary): every
      * step ends at or before its tstop, and the last one on it, bit for bit */
-    const double y0[2] = {1, 0};
     for (int m = 0; m < 3; m++) {
         problem p = problem_default();
         ctc_integ_spec spec = method_spec(m);
-        ctc_integrator *it = make(&spec, 2, oscillator, &p);
+        ctc_integrator *it = start_oscillator(&spec, &p);
         char err[ERRLEN] = "";
-        cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
         for (int k = 1; k <= 30; k++) {
             double tstop = k == 3 ? 0.1 + 0.2 : k / 10.0;
             while (ctc_integrator_time(it) < tstop) {
@@ -778,14 +766,12 @@ Test(integrator, a_step_ends_on_tstop_where_t_plus_the_remainder_rounds_elsewher
 
 Test(integrator, dense_output_at_the_end_of_the_step_is_the_state)
 {
-    const double y0[2] = {1, 0};
     for (int m = 0; m < 3; m++) {
         problem p = problem_default();
         ctc_integ_spec spec = method_spec(m);
-        ctc_integrator *it = make(&spec, 2, oscillator, &p);
+        ctc_integrator *it = start_oscillator(&spec, &p);
         char err[ERRLEN] = "";
         double y[2];
-        cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
         ctc_integrator_dense(it, 0, y);
         cr_assert(y[0] == 1 && y[1] == 0, "after reset: (%g, %g)", y[0], y[1]);
         for (int i = 0; i < 7; i++) {
@@ -972,14 +958,12 @@ Test(integrator, min_step_spares_the_step_cut_short_to_land_on_tstop)
 {
     /* a smooth oscillator with a floor of 0.01 s: the last step to tstop = 1.0005 s is shorter
      * than the floor and still taken */
-    const double y0[2] = {1, 0};
     for (int m = 0; m < 2; m++) {
         char err[ERRLEN] = "";
         problem p = problem_default();
         ctc_integ_spec spec = adaptive_spec(m == 0 ? CTC_INTEG_DOPRI5 : CTC_INTEG_BDF, 1e-3, 1e-3);
         spec.min_step = 0.01;
-        ctc_integrator *it = make(&spec, 2, oscillator, &p);
-        cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
+        ctc_integrator *it = start_oscillator(&spec, &p);
         while (ctc_integrator_time(it) < 1.0005) {
             cr_assert_eq(ctc_integrator_step(it, 1.0005, err, sizeof err), 0, "%s", err);
         }
@@ -992,13 +976,11 @@ Test(integrator, dopri5_gives_up_on_a_non_finite_solution)
 {
     /* the rhs returns NaN for every t > 0: each attempt is cut to a fifth; the 10th fails */
     char err[ERRLEN] = "";
-    const double y0[2] = {1, 0};
     problem p = problem_default();
     p.nan_after = 0;
     ctc_integ_spec spec = adaptive_spec(CTC_INTEG_DOPRI5, 1e-6, 1e-6);
     spec.initial_step = 0.1;
-    ctc_integrator *it = make(&spec, 2, oscillator, &p);
-    cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
+    ctc_integrator *it = start_oscillator(&spec, &p);
     cr_assert_eq(ctc_integrator_step(it, 1.0, err, sizeof err), -1);
     cr_assert_str_eq(err, "solution not finite at t = 0 s after 10 step size reductions (last "
                           "step 5.12e-08 s)");
@@ -1013,14 +995,12 @@ Test(integrator, dopri5_gives_up_on_a_non_finite_solution)
 Test(integrator, max_steps_is_enforced)
 {
     char err[ERRLEN] = "", want[ERRLEN];
-    const double y0[2] = {1, 0};
     for (int m = 0; m < 3; m++) {
         problem p = problem_default();
         ctc_integ_spec spec = method_spec(m);
         spec.step = 0.1;
         spec.max_steps = 5;
-        ctc_integrator *it = make(&spec, 2, oscillator, &p);
-        cr_assert_eq(ctc_integrator_reset(it, 0, y0), 0);
+        ctc_integrator *it = start_oscillator(&spec, &p);
         for (int i = 0; i < 5; i++) {
             cr_assert_eq(ctc_integrator_step(it, 10.0, err, sizeof err), 0, "%s", err);
         }

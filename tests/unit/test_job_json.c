@@ -6,7 +6,8 @@
  * patches; and the normalised document, which must parse back to the same spec and print to the
  * same text.
  *
- * Jobs are written with single quotes for readability; json() turns them into JSON.
+ * Jobs are written with single quotes for readability; fixture_json (job_fixture.h) turns them
+ * into JSON.
  */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -16,6 +17,7 @@
 
 #include "job_json.h"
 #include "presets.h"
+#include "job_fixture.h"
 
 /* ---- writing jobs ---- */
 
@@ -69,17 +71,6 @@
     "{'scene':{'bodies':[" NAMED("arm") "," NAMED("palm") "," NAMED_ON(                            \
         "tip", parent) "]}," PASSIVE "," DUR "}"
 
-/* text with every ' turned into " (malloc'd) */
-static char *json(const char *text)
-{
-    char *s = strdup(text);
-    cr_assert_not_null(s);
-    for (char *c = s; *c != '\0'; c++) {
-        if (*c == '\'') *c = '"';
-    }
-    return s;
-}
-
 /* a passive chain of n hanging bodies (malloc'd JSON); duration and output as given */
 static char *chain_job(int n, const char *rest)
 {
@@ -89,7 +80,7 @@ static char *chain_job(int n, const char *rest)
     char *w = s + sprintf(s, "{\"scene\":{\"bodies\":[" BODY);
     for (int k = 1; k < n; k++) w += sprintf(w, "," BODY2);
     sprintf(w, "]}," PASSIVE ",%s}", rest);
-    char *out = json(s);
+    char *out = fixture_json(s);
     free(s);
     return out;
 }
@@ -115,7 +106,7 @@ static char *name_of_length(size_t n)
     char *s = malloc(n + 512);
     cr_assert_not_null(s);
     sprintf(s, "{'name':'%s'," SCENE1 "," PASSIVE "," DUR "}", name);
-    char *out = json(s);
+    char *out = fixture_json(s);
     free(name);
     free(s);
     return out;
@@ -132,19 +123,6 @@ static char *deeply_nested(void)
     memset(w + DEPTH, ']', DEPTH);
     strcpy(w + 2 * DEPTH, "}");
     return s;
-}
-
-static job *parse_ok(const char *text)
-{
-    char *doc = json(text);
-    job *j = NULL;
-    job_error err;
-    int rc = job_parse(doc, strlen(doc), &j, &err);
-    cr_assert_eq(rc, 0, "job rejected: %s at \"%s\": %s\n%s", job_error_code_name(err.code),
-                 err.field, err.message, doc);
-    cr_assert_not_null(j);
-    free(doc);
-    return j;
 }
 
 /* ---- every way to get a job wrong ---- */
@@ -768,7 +746,7 @@ Test(job_json, rejects_every_bad_job_with_its_code_field_and_message)
     cr_assert_geq(count, 40);
     for (int i = 0; i < count; i++) {
         const bad_job *b = &bad_jobs[i];
-        char *doc = b->make != NULL ? b->make() : json(b->text);
+        char *doc = b->make != NULL ? b->make() : fixture_json(b->text);
         job *j = (job *)0x1;
         job_error err;
         int rc = job_parse(doc, strlen(doc), &j, &err);
@@ -826,10 +804,12 @@ Test(job_json, rk4_work_is_bounded_by_steps_times_bodies)
 {
     /* 4e8 steps x 2 bodies = 8e8 body-steps pass; 6e8 x 2 = 1.2e9 are refused (the message is
        in the table of bad jobs): the bound counts bodies, not steps alone */
-    job *j = parse_ok(PASSIVE_JOB(",'integrator':{'method':'rk4','step':2.5e-9,'max_steps':1e9}"));
+    job *j = fixture_parse_ok(
+        PASSIVE_JOB(",'integrator':{'method':'rk4','step':2.5e-9,'max_steps':1e9}"));
     cr_assert_eq(j->spec.chain.nbodies, 2);
     job_free(j);
-    char *text = json(PASSIVE_JOB(",'integrator':{'method':'rk4','step':1.6e-9,'max_steps':1e9}"));
+    char *text =
+        fixture_json(PASSIVE_JOB(",'integrator':{'method':'rk4','step':1.6e-9,'max_steps':1e9}"));
     job_error err;
     cr_assert_eq(job_parse(text, strlen(text), &j, &err), -1);
     cr_assert_eq(err.code, JOB_LIMIT_EXCEEDED);
@@ -840,7 +820,7 @@ Test(job_json, rk4_work_is_bounded_by_steps_times_bodies)
 Test(job_json, reads_exactly_len_bytes_of_unterminated_text)
 {
     /* a buffer of exactly len bytes, no NUL: the sanitizer build catches any read beyond it */
-    char *doc = json(PASSIVE_JOB(""));
+    char *doc = fixture_json(PASSIVE_JOB(""));
     size_t len = strlen(doc);
     char *exact = malloc(len);
     memcpy(exact, doc, len);
@@ -868,7 +848,7 @@ Test(job_json, reads_exactly_len_bytes_of_unterminated_text)
 
 Test(job_json, fills_every_default_of_a_minimal_planar_job)
 {
-    job *j = parse_ok("{" SCENE1 "," PASSIVE "," DUR "}");
+    job *j = fixture_parse_ok("{" SCENE1 "," PASSIVE "," DUR "}");
     const ctc_sim_spec *s = &j->spec;
     cr_assert_str_eq(j->name, "job");
     cr_assert_null(j->preset);
@@ -906,7 +886,8 @@ Test(job_json, fills_every_default_of_a_minimal_planar_job)
     job_free(j);
 
     /* rk4's step; an interval no longer than a short duration; every channel with a controller */
-    j = parse_ok("{" SCENE1 "," PD "," HOLD ",'duration':0.004,'integrator':{'method':'rk4'}}");
+    j = fixture_parse_ok("{" SCENE1 "," PD "," HOLD
+                         ",'duration':0.004,'integrator':{'method':'rk4'}}");
     cr_assert_eq(j->spec.integrator.step, 1e-3);
     cr_assert_eq(j->spec.output_interval, 0.004);
     cr_assert_eq(j->spec.channels,
@@ -921,7 +902,7 @@ Test(job_json, fills_every_default_of_a_minimal_planar_job)
 
 Test(job_json, a_loop_counts_its_independent_coordinates_and_fills_its_defaults)
 {
-    job *j = parse_ok(LOOP_PD_JOB(""));
+    job *j = fixture_parse_ok(LOOP_PD_JOB(""));
     const ctc_sim_spec *s = &j->spec;
     cr_assert_eq(j->nq, 3);
     cr_assert_eq(j->nv, 3);
@@ -945,9 +926,10 @@ Test(job_json, a_loop_counts_its_independent_coordinates_and_fills_its_defaults)
     /* the normalised loop: every key in order, defaults written */
     const cJSON *scene = cJSON_GetObjectItemCaseSensitive(j->normalised, "scene");
     char *text = cJSON_PrintUnformatted(cJSON_GetObjectItemCaseSensitive(scene, "loop"));
-    char *want = json("{'joint':{'type':'revolute','axis':[0,0,1],'location':[0,-1,0],"
-                      "'independent':false},'anchor':[1,0,0],'stabilization':{'method':'project',"
-                      "'tol':1e-12},'cond_max':100000}");
+    char *want =
+        fixture_json("{'joint':{'type':'revolute','axis':[0,0,1],'location':[0,-1,0],"
+                     "'independent':false},'anchor':[1,0,0],'stabilization':{'method':'project',"
+                     "'tol':1e-12},'cond_max':100000}");
     cr_assert_str_eq(text, want);
     free(text);
     free(want);
@@ -955,18 +937,20 @@ Test(job_json, a_loop_counts_its_independent_coordinates_and_fills_its_defaults)
 
     /* baumgarte with its defaults; no stabilization; the closing joint independent instead of
        joint 0: still one coordinate, the closing joint's */
-    j = parse_ok("{'scene':{'bodies':[" DEP_BODY "," DEP_BODY "," DEP_BODY "],'loop':{'joint':{"
-                 "'type':'revolute','axis':[0,0,1],'location':[0,-1,0],'independent':true},"
-                 "'anchor':[1,0,0],'stabilization':{'method':'baumgarte','beta':5},'cond_max':1e8}"
-                 "," SQUARE_Q0 "}," PD "," HOLD "," DUR "}");
+    j = fixture_parse_ok(
+        "{'scene':{'bodies':[" DEP_BODY "," DEP_BODY "," DEP_BODY "],'loop':{'joint':{"
+        "'type':'revolute','axis':[0,0,1],'location':[0,-1,0],'independent':true},"
+        "'anchor':[1,0,0],'stabilization':{'method':'baumgarte','beta':5},'cond_max':1e8}"
+        "," SQUARE_Q0 "}," PD "," HOLD "," DUR "}");
     cr_assert_eq(j->nind, 1);
     cr_assert(j->independent[0] == 0 && j->independent[3] == 1);
     cr_assert_eq(j->spec.loop_stab, CTC_LOOP_BAUMGARTE);
     cr_assert(j->spec.baumgarte[0] == 10 && j->spec.baumgarte[1] == 5);
     cr_assert_eq(j->spec.loop_cond_max, 1e8);
     job_free(j);
-    j = parse_ok("{" LOOP_SCENE_WITH("{" CLOSING ",'anchor':[1,0,0],'stabilization':{'method':"
-                                     "'none'}}") "," PASSIVE "," DUR "}");
+    j = fixture_parse_ok("{" LOOP_SCENE_WITH("{" CLOSING
+                                             ",'anchor':[1,0,0],'stabilization':{'method':"
+                                             "'none'}}") "," PASSIVE "," DUR "}");
     cr_assert_eq(j->spec.loop_stab, CTC_LOOP_NONE);
     cr_assert_eq(j->spec.channels, CTC_CH_BIT(CTC_CH_Q) | CTC_CH_BIT(CTC_CH_QD) |
                                        CTC_CH_BIT(CTC_CH_TAU) | CTC_CH_BIT(CTC_CH_ENERGY) |
@@ -974,9 +958,9 @@ Test(job_json, a_loop_counts_its_independent_coordinates_and_fills_its_defaults)
     job_free(j);
 
     /* a passive loop may leave every joint dependent: no coordinate, no torque channel */
-    j = parse_ok("{'scene':{'bodies':[" DEP_BODY "," DEP_BODY "," DEP_BODY "],'loop':" LOOP
-                 "," SQUARE_Q0 "}," PASSIVE ",'disturbance':{'type':'constant','value':1}," DUR
-                 "}");
+    j = fixture_parse_ok("{'scene':{'bodies':[" DEP_BODY "," DEP_BODY "," DEP_BODY "],'loop':" LOOP
+                         "," SQUARE_Q0 "}," PASSIVE
+                         ",'disturbance':{'type':'constant','value':1}," DUR "}");
     cr_assert_eq(j->nind, 0);
     cr_assert_null(j->spec.disturb, "a disturbance of no coordinate is none");
     cr_assert_eq(j->spec.channels, CTC_CH_BIT(CTC_CH_Q) | CTC_CH_BIT(CTC_CH_QD) |
@@ -987,12 +971,13 @@ Test(job_json, a_loop_counts_its_independent_coordinates_and_fills_its_defaults)
 Test(job_json, shapes_give_the_textbook_bodies_in_a_spatial_scene)
 {
     /* box 1 x 0.1 x 0.2 of 3 kg at (0.5, 0, 0); cylinder r 0.1, L 0.6 of 2 kg along x */
-    job *j = parse_ok("{'scene':{'gravity':[0,0,-9.81],'bodies':["
-                      "{'mass':3,'shape':{'type':'box','size':[1,0.1,0.2],'centre':[0.5,0,0]},"
-                      "'joint':{'type':'revolute','axis':[0,0,2]}},"
-                      "{'mass':2,'shape':{'type':'cylinder','radius':0.1,'length':0.6,"
-                      "'axis':[1,0,0]},'joint':{'type':'cylindrical','axis':[1,0,0],"
-                      "'location':[1,0,0]}}]}," PASSIVE "," DUR "}");
+    job *j =
+        fixture_parse_ok("{'scene':{'gravity':[0,0,-9.81],'bodies':["
+                         "{'mass':3,'shape':{'type':'box','size':[1,0.1,0.2],'centre':[0.5,0,0]},"
+                         "'joint':{'type':'revolute','axis':[0,0,2]}},"
+                         "{'mass':2,'shape':{'type':'cylinder','radius':0.1,'length':0.6,"
+                         "'axis':[1,0,0]},'joint':{'type':'cylindrical','axis':[1,0,0],"
+                         "'location':[1,0,0]}}]}," PASSIVE "," DUR "}");
     const ctc_body_spec *box = &j->bodies[0], *cyl = &j->bodies[1];
     cr_assert_eq(j->nv, 3);
     cr_assert_eq(box->mass, 3);
@@ -1012,17 +997,19 @@ Test(job_json, shapes_give_the_textbook_bodies_in_a_spatial_scene)
 
 Test(job_json, inertia_as_rows_equals_inertia_as_a_diagonal)
 {
-    job *rows = parse_ok(BODY_JOB("{'mass':2,'com':[0.1,0.2,0.3],'inertia':[[1,0,0],[0,2,0],"
+    job *rows =
+        fixture_parse_ok(BODY_JOB("{'mass':2,'com':[0.1,0.2,0.3],'inertia':[[1,0,0],[0,2,0],"
                                   "[0,0,2.5]],'joint':" REV "}"));
-    job *diag =
-        parse_ok(BODY_JOB("{'mass':2,'com':[0.1,0.2,0.3],'inertia':[1,2,2.5],'joint':" REV "}"));
+    job *diag = fixture_parse_ok(
+        BODY_JOB("{'mass':2,'com':[0.1,0.2,0.3],'inertia':[1,2,2.5],'joint':" REV "}"));
     for (int i = 0; i < 9; i++) {
         cr_assert_eq(rows->bodies[0].inertia[i], diag->bodies[0].inertia[i], "inertia[%d]", i);
     }
     cr_assert_eq(rows->bodies[0].com[2], 0.3);
 
     /* a full tensor keeps its products of inertia */
-    job *full = parse_ok(BODY_JOB("{'mass':2,'com':[0,0,0],'inertia':[[2,0.1,0],[0.1,2,0],[0,0,"
+    job *full =
+        fixture_parse_ok(BODY_JOB("{'mass':2,'com':[0,0,0],'inertia':[[2,0.1,0],[0.1,2,0],[0,0,"
                                   "3]],'joint':" REV "}"));
     cr_assert_eq(full->bodies[0].inertia[1], 0.1);
     cr_assert_eq(full->bodies[0].inertia[3], 0.1);
@@ -1042,39 +1029,40 @@ static void expect_gains(const ctc_gains *g, double ki, double kp, double kv, do
 Test(job_json, every_controller_type_designs_the_paper_gains)
 {
     /* none */
-    job *j = parse_ok(PASSIVE_JOB(""));
+    job *j = fixture_parse_ok(PASSIVE_JOB(""));
     cr_assert_null(j->spec.gains);
     job_free(j);
 
     /* pd and pid as given (paper 7.1: kp 100, kv 20, ki 250) */
-    j = parse_ok(CTRL_JOB("{'type':'pd','kp':100,'kv':20}"));
+    j = fixture_parse_ok(CTRL_JOB("{'type':'pd','kp':100,'kv':20}"));
     cr_assert_eq(j->spec.controller, CTC_CTRL_PD);
     for (int i = 0; i < 2; i++) expect_gains(&j->gains[i], 0, 100, 20, 0, "pd");
     cr_assert_eq(j->spec.gains, j->gains);
     job_free(j);
-    j = parse_ok(CTRL_JOB("{'type':'pid','kp':100,'kv':20,'ki':250}"));
+    j = fixture_parse_ok(CTRL_JOB("{'type':'pid','kp':100,'kv':20,'ki':250}"));
     expect_gains(&j->gains[1], 250, 100, 20, 0, "pid");
     job_free(j);
 
     /* zeta and tau: wn = 1/tau, kp = wn^2, kv = 2 zeta wn */
-    j = parse_ok(CTRL_JOB("{'type':'pid','zeta':0.7,'tau':0.1,'ki':50}"));
+    j = fixture_parse_ok(CTRL_JOB("{'type':'pid','zeta':0.7,'tau':0.1,'ki':50}"));
     expect_gains(&j->gains[0], 50, 100, 14, 1e-14, "pid from zeta, tau");
     job_free(j);
 
     /* poles (-2, -2.1, -2.2): K = (9.24, 13.22, 6.3); a conjugate pair -1 +- 2i with -3:
        (s^2 + 2s + 5)(s + 3) = s^3 + 5 s^2 + 11 s + 15 */
-    j = parse_ok(CTRL_JOB("{'type':'poles','poles':[-2,-2.1,-2.2]}"));
+    j = fixture_parse_ok(CTRL_JOB("{'type':'poles','poles':[-2,-2.1,-2.2]}"));
     expect_gains(&j->gains[0], 9.24, 13.22, 6.3, 1e-14, "poles");
     job_free(j);
-    j = parse_ok(CTRL_JOB("{'type':'poles','poles':[{'re':-1,'im':2},-3,{'re':-1,'im':-2}]}"));
+    j = fixture_parse_ok(
+        CTRL_JOB("{'type':'poles','poles':[{'re':-1,'im':2},-3,{'re':-1,'im':-2}]}"));
     expect_gains(&j->gains[1], 15, 11, 5, 1e-14, "complex poles");
     job_free(j);
 
     /* LQR, Q = I, lambda = 0.01: K = (10, 18.2674, 11.6848), as rows or as a diagonal */
-    j = parse_ok(CTRL_JOB("{'type':'lqr','Q':[[1,0,0],[0,1,0],[0,0,1]],'lambda':0.01}"));
+    j = fixture_parse_ok(CTRL_JOB("{'type':'lqr','Q':[[1,0,0],[0,1,0],[0,0,1]],'lambda':0.01}"));
     expect_gains(&j->gains[0], 10, 18.2674, 11.6848, 1e-5, "lqr");
     job_free(j);
-    j = parse_ok(CTRL_JOB("{'type':'lqr','Q':[1,1,1],'lambda':0.01}"));
+    j = fixture_parse_ok(CTRL_JOB("{'type':'lqr','Q':[1,1,1],'lambda':0.01}"));
     expect_gains(&j->gains[1], 10, 18.2674, 11.6848, 1e-5, "lqr, diagonal Q");
     job_free(j);
 }
@@ -1082,22 +1070,25 @@ Test(job_json, every_controller_type_designs_the_paper_gains)
 Test(job_json, per_coordinate_overrides_replace_the_shared_gains)
 {
     /* three coordinates: kept, kp replaced, switched to zeta and tau */
-    job *j = parse_ok("{'scene':{'bodies':[" BODY "," BODY2 "," BODY2 "]},'controller':{'type':"
-                      "'pid','kp':100,'kv':20,'ki':250,'joints':[{},{'kp':50},{'zeta':1,'tau':0.2,"
-                      "'ki':10}]}," HOLD "," DUR "}");
+    job *j = fixture_parse_ok(
+        "{'scene':{'bodies':[" BODY "," BODY2 "," BODY2 "]},'controller':{'type':"
+        "'pid','kp':100,'kv':20,'ki':250,'joints':[{},{'kp':50},{'zeta':1,'tau':0.2,"
+        "'ki':10}]}," HOLD "," DUR "}");
     expect_gains(&j->gains[0], 250, 100, 20, 0, "kept");
     expect_gains(&j->gains[1], 250, 50, 20, 0, "kp replaced");
     expect_gains(&j->gains[2], 10, 25, 10, 1e-14, "zeta and tau");
     job_free(j);
 
     /* lqr: one coordinate with its own lambda; poles: one with its own poles */
-    j = parse_ok(CTRL_JOB("{'type':'lqr','Q':[1,1,1],'lambda':1,'joints':[{'lambda':0.01},{}]}"));
+    j = fixture_parse_ok(
+        CTRL_JOB("{'type':'lqr','Q':[1,1,1],'lambda':1,'joints':[{'lambda':0.01},{}]}"));
     expect_gains(&j->gains[0], 10, 18.2674, 11.6848, 1e-5, "lambda override");
     /* Q = I, lambda = 1: p(s) p(-s) = -s^6 + s^4 - s^2 + 1 gives ki = 1, kp = kv = 1 + sqrt 2 */
     expect_gains(&j->gains[1], 1, 1 + sqrt(2.0), 1 + sqrt(2.0), 1e-12, "lambda 1");
     job_free(j);
-    j = parse_ok(CTRL_JOB("{'type':'poles','poles':[-1,-1,-1],'joints':[{},{'poles':[-2,-2.1,"
-                          "-2.2]}]}"));
+    j = fixture_parse_ok(
+        CTRL_JOB("{'type':'poles','poles':[-1,-1,-1],'joints':[{},{'poles':[-2,-2.1,"
+                 "-2.2]}]}"));
     expect_gains(&j->gains[0], 1, 3, 3, 1e-14, "(s + 1)^3");
     expect_gains(&j->gains[1], 9.24, 13.22, 6.3, 1e-14, "poles override");
     job_free(j);
@@ -1106,9 +1097,10 @@ Test(job_json, per_coordinate_overrides_replace_the_shared_gains)
 Test(job_json, one_trajectory_object_serves_every_coordinate)
 {
     /* a cylindrical joint has two coordinates; a spline gives each its own knots */
-    job *j = parse_ok("{'scene':{'bodies':[{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{"
-                      "'type':'cylindrical','axis':[0,0,1]}}]}," PD ",'trajectory':{'type':"
-                      "'spline','times':[0,0.5,1],'values':[0,1,0]}," DUR "}");
+    job *j =
+        fixture_parse_ok("{'scene':{'bodies':[{'mass':1,'com':[0,0,0],'inertia':[1,1,1],'joint':{"
+                         "'type':'cylindrical','axis':[0,0,1]}}]}," PD ",'trajectory':{'type':"
+                         "'spline','times':[0,0.5,1],'values':[0,1,0]}," DUR "}");
     cr_assert_eq(j->nv, 2);
     for (int i = 0; i < 2; i++) {
         cr_assert_eq(j->traj[i].type, CTC_TRAJ_SPLINE);
@@ -1123,8 +1115,8 @@ Test(job_json, one_trajectory_object_serves_every_coordinate)
     job_free(j);
 
     /* an array: one type per coordinate, defaults filled */
-    j = parse_ok(TRAJ_JOB("[{'type':'cosine','amplitude':0.6,'period':1.5},"
-                          "{'type':'min_jerk','from':0,'to':1,'start':0.2,'end':0.8}]"));
+    j = fixture_parse_ok(TRAJ_JOB("[{'type':'cosine','amplitude':0.6,'period':1.5},"
+                                  "{'type':'min_jerk','from':0,'to':1,'start':0.2,'end':0.8}]"));
     cr_assert_eq(j->traj[0].type, CTC_TRAJ_COSINE);
     cr_assert_eq(j->traj[0].period, 1.5);
     cr_assert_eq(j->traj[0].phase, 0);
@@ -1136,16 +1128,16 @@ Test(job_json, one_trajectory_object_serves_every_coordinate)
 
 Test(job_json, plant_terms_reach_the_spec_and_an_ideal_plant_leaves_none)
 {
-    job *j = parse_ok(PD_JOB(",'plant':[{'torque_limit':50},{}]"));
+    job *j = fixture_parse_ok(PD_JOB(",'plant':[{'torque_limit':50},{}]"));
     cr_assert_not_null(j->spec.plant);
     cr_expect_eq(j->spec.plant[0].torque_limit, 50);
     cr_expect_eq(j->spec.plant[1].torque_limit, 0, "no key: no limit");
     job_free(j);
-    j = parse_ok(PD_JOB(",'plant':[{},{}]"));
+    j = fixture_parse_ok(PD_JOB(",'plant':[{},{}]"));
     cr_expect_null(j->spec.plant, "a plant with no term is the ideal one");
     job_free(j);
-    j = parse_ok(PASSIVE_JOB(",'plant':{'viscous':0.5,'coulomb':2,'coulomb_velocity':0.01,"
-                             "'spring':3,'spring_rest':-0.1,'known':true}"));
+    j = fixture_parse_ok(PASSIVE_JOB(",'plant':{'viscous':0.5,'coulomb':2,'coulomb_velocity':0.01,"
+                                     "'spring':3,'spring_rest':-0.1,'known':true}"));
     cr_assert_not_null(j->spec.plant, "joint forces apply to a passive run too");
     for (int i = 0; i < 2; i++) {
         const ctc_plant_coord *pc = &j->spec.plant[i];
@@ -1153,7 +1145,7 @@ Test(job_json, plant_terms_reach_the_spec_and_an_ideal_plant_leaves_none)
                   pc->spring == 3 && pc->spring_rest == -0.1 && pc->known == 1);
     }
     job_free(j);
-    j = parse_ok(PD_JOB(",'plant':[{},{'armature':0.25}]"));
+    j = fixture_parse_ok(PD_JOB(",'plant':[{},{'armature':0.25}]"));
     cr_assert_not_null(j->spec.plant, "an armature alone is a plant term");
     cr_expect(j->spec.plant[0].armature == 0 && j->spec.plant[1].armature == 0.25);
     job_free(j);
@@ -1161,11 +1153,11 @@ Test(job_json, plant_terms_reach_the_spec_and_an_ideal_plant_leaves_none)
 
 Test(job_json, a_disturbance_that_is_none_everywhere_leaves_none)
 {
-    job *j = parse_ok(PASSIVE_JOB(",'disturbance':[{'type':'none'},{'type':'none'}]"));
+    job *j = fixture_parse_ok(PASSIVE_JOB(",'disturbance':[{'type':'none'},{'type':'none'}]"));
     cr_assert_null(j->spec.disturb);
     job_free(j);
-    j = parse_ok(PASSIVE_JOB(",'disturbance':[{'type':'none'},{'type':'step','value':0.2,"
-                             "'time':0.5}]"));
+    j = fixture_parse_ok(PASSIVE_JOB(",'disturbance':[{'type':'none'},{'type':'step','value':0.2,"
+                                     "'time':0.5}]"));
     cr_assert_eq(j->spec.disturb, j->disturb);
     cr_assert_eq(j->disturb[0].type, CTC_DISTURB_NONE);
     cr_assert_eq(j->disturb[1].type, CTC_DISTURB_STEP);
@@ -1175,8 +1167,9 @@ Test(job_json, a_disturbance_that_is_none_everywhere_leaves_none)
 
 Test(job_json, spherical_joints_start_at_the_identity_quaternion)
 {
-    job *j = parse_ok("{'scene':{'bodies':[{'mass':1,'com':[0,0,-0.5],'inertia':[1,1,1],'joint':"
-                      "{'type':'spherical'}}],'v0':[0,1,0]}," PASSIVE "," DUR "}");
+    job *j =
+        fixture_parse_ok("{'scene':{'bodies':[{'mass':1,'com':[0,0,-0.5],'inertia':[1,1,1],'joint':"
+                         "{'type':'spherical'}}],'v0':[0,1,0]}," PASSIVE "," DUR "}");
     cr_assert_eq(j->nq, 4);
     cr_assert_eq(j->nv, 3);
     cr_assert(j->q0[0] == 1 && j->q0[1] == 0 && j->q0[2] == 0 && j->q0[3] == 0);
@@ -1194,11 +1187,8 @@ Test(job_json, the_spec_runs)
         "'integrator':{'method':'rk4','step':0.001}}",
     };
     for (int i = 0; i < 2; i++) {
-        job *j = parse_ok(jobs[i]);
-        ctc_sim_result *r = NULL;
-        char err[256] = "";
-        cr_assert_eq(ctc_sim_run(&j->spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-        cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+        job *j = fixture_parse_ok(jobs[i]);
+        ctc_sim_result *r = fixture_run_done(&j->spec);
         cr_assert_eq(r->nsamples, 6);
         cr_assert_eq(r->channels, j->spec.channels);
         ctc_sim_result_free(r);
@@ -1212,34 +1202,37 @@ Test(job_json, preset_name_names_an_overridden_controller)
 {
     /* another controller type (its object replaced whole): the name says which, and that the
        paper ran only the scene */
-    job *j = parse_ok("{'preset':'triple_pendulum_pid','controller':{'type':'lqr','Q':[1,1,1],"
-                      "'lambda':0.01}}");
+    job *j =
+        fixture_parse_ok("{'preset':'triple_pendulum_pid','controller':{'type':'lqr','Q':[1,1,1],"
+                         "'lambda':0.01}}");
     cr_assert_eq(j->spec.controller, CTC_CTRL_LQR);
     cr_assert_str_eq(j->name, "Triple pendulum, LQR (scene of Kingsley et al. 2017, sec. 7.1)");
     job_free(j);
-    j = parse_ok("{'preset':'spatial_double_pendulum_pd','controller':{'type':'poles',"
-                 "'poles':[-2,-2.1,-2.2]}}");
+    j = fixture_parse_ok("{'preset':'spatial_double_pendulum_pd','controller':{'type':'poles',"
+                         "'poles':[-2,-2.1,-2.2]}}");
     cr_assert_str_eq(j->name, "Spatial double pendulum, pole placement (scene of Kingsley et al. "
                               "2017, sec. 7.1; gravity -z)");
     job_free(j);
-    j = parse_ok("{'preset':'n_link_pendulum','n':5,'controller':{'type':'pid','kp':100,'kv':20,"
-                 "'ki':10}}");
+    j = fixture_parse_ok(
+        "{'preset':'n_link_pendulum','n':5,'controller':{'type':'pid','kp':100,'kv':20,"
+        "'ki':10}}");
     cr_assert_str_eq(j->name, "5-link pendulum, PID (scene of Kingsley et al. 2017, sec. 7.3)");
     job_free(j);
-    j = parse_ok("{'preset':'triple_pendulum_pd','controller':{'type':'none'},'trajectory':null,"
-                 "'disturbance':null}");
+    j = fixture_parse_ok(
+        "{'preset':'triple_pendulum_pd','controller':{'type':'none'},'trajectory':null,"
+        "'disturbance':null}");
     cr_assert_str_eq(j->name, "Triple pendulum, passive (scene of Kingsley et al. 2017, sec. 7.1)");
     job_free(j);
-    j = parse_ok("{'preset':'arm_four_bar_pd','controller':{'type':'pid','kp':100,'kv':20,"
-                 "'ki':10}}");
+    j = fixture_parse_ok("{'preset':'arm_four_bar_pd','controller':{'type':'pid','kp':100,'kv':20,"
+                         "'ki':10}}");
     cr_assert_str_eq(j->name, "Four-bar linkage on a swinging arm, PID");
     job_free(j);
 
     /* the same type with other gains is named after them (job_name.h); a name given is kept */
-    j = parse_ok("{'preset':'triple_pendulum_pd','controller':{'kp':400,'kv':40}}");
+    j = fixture_parse_ok("{'preset':'triple_pendulum_pd','controller':{'kp':400,'kv':40}}");
     cr_assert_str_eq(j->name, "triple_pendulum_pd, kp = 400, kv = 40");
     job_free(j);
-    j = parse_ok(
+    j = fixture_parse_ok(
         "{'preset':'triple_pendulum_pid','name':'mine','controller':{'type':'pd','kp':1,'kv':2}}");
     cr_assert_str_eq(j->name, "mine");
     job_free(j);
@@ -1268,8 +1261,8 @@ Test(job_json, preset_name_for_controller_replaces_the_label_only)
 Test(job_json, preset_overrides_are_an_rfc7386_merge_patch)
 {
     /* objects merge key by key, null deletes, anything else replaces */
-    job *j = parse_ok("{'preset':'triple_pendulum_pd','name':null,'disturbance':null,"
-                      "'controller':{'kp':50},'duration':1,'output':{'interval':0.1}}");
+    job *j = fixture_parse_ok("{'preset':'triple_pendulum_pd','name':null,'disturbance':null,"
+                              "'controller':{'kp':50},'duration':1,'output':{'interval':0.1}}");
     cr_assert_str_eq(j->preset, "triple_pendulum_pd");
     cr_assert_str_eq(j->name, "triple_pendulum_pd", "a deleted name defaults to the preset's");
     cr_assert_null(j->spec.disturb);
@@ -1281,9 +1274,10 @@ Test(job_json, preset_overrides_are_an_rfc7386_merge_patch)
     job_free(j);
 
     /* an array replaces the preset's whole array; a parameter is taken out of the patch */
-    j = parse_ok("{'preset':'n_link_pendulum','n':3,'scene':{'q0':[0.1,0.2,0.3]},"
-                 "'trajectory':[{'type':'constant','value':1},{'type':'constant','value':2},"
-                 "{'type':'constant','value':3}]}");
+    j = fixture_parse_ok(
+        "{'preset':'n_link_pendulum','n':3,'scene':{'q0':[0.1,0.2,0.3]},"
+        "'trajectory':[{'type':'constant','value':1},{'type':'constant','value':2},"
+        "{'type':'constant','value':3}]}");
     cr_assert_eq(j->spec.chain.nbodies, 3);
     cr_assert(j->q0[0] == 0.1 && j->q0[2] == 0.3);
     cr_assert_eq(j->traj[2].value, 3);
@@ -1291,7 +1285,7 @@ Test(job_json, preset_overrides_are_an_rfc7386_merge_patch)
     job_free(j);
 
     /* a new object below a key the preset lacks: nulls inside it are dropped */
-    j = parse_ok(
+    j = fixture_parse_ok(
         "{'preset':'triple_pendulum_passive','limits':{'max_speed':100,'wall_time':null}}");
     cr_assert_eq(j->spec.max_speed, 100);
     cr_assert_eq(j->spec.wall_limit, 0);
@@ -1299,8 +1293,9 @@ Test(job_json, preset_overrides_are_an_rfc7386_merge_patch)
 
     /* a changed controller type or method replaces the object, and the nulls that remove the old
        kind's keys are dropped with it rather than read as the new kind's keys */
-    j = parse_ok("{'preset':'triple_pendulum_pid','controller':{'type':'pd','kp':50,'kv':10,"
-                 "'ki':null},'integrator':{'method':'rk4','step':0.001,'rtol':null}}");
+    j = fixture_parse_ok(
+        "{'preset':'triple_pendulum_pid','controller':{'type':'pd','kp':50,'kv':10,"
+        "'ki':null},'integrator':{'method':'rk4','step':0.001,'rtol':null}}");
     cr_assert_eq(j->spec.controller, CTC_CTRL_PD);
     expect_gains(&j->gains[0], 0, 50, 10, 0, "the pd of the patch, no ki");
     cr_assert_eq(j->spec.integrator.method, CTC_INTEG_RK4);
@@ -1403,7 +1398,7 @@ static void expect_same_job(const job *a, const job *b)
  * normalised document itself (unprinted) parses to the same spec and document */
 static void expect_round_trip(const char *text, int from_text)
 {
-    char *doc = from_text ? strdup(text) : json(text);
+    char *doc = from_text ? strdup(text) : fixture_json(text);
     job *first = NULL, *second = NULL, *direct = NULL;
     job_error err;
     cr_assert_eq(job_parse(doc, strlen(doc), &first, &err), 0, "%s: %s", err.field, err.message);
@@ -1488,11 +1483,12 @@ Test(job_json, normalised_documents_parse_back_to_the_same_job)
 Test(job_json, normalised_keys_come_in_canonical_order)
 {
     /* given back to front, written in the format's order with every default */
-    job *j = parse_ok("{'duration':1,'output':{'channels':['qdot','q']},'controller':{'type':"
-                      "'none'},'scene':{'v0':[1],'bodies':[{'joint':{'axis':[0,0,1],'type':"
-                      "'revolute'},'inertia':[1,1,1],'com':[0,0,0],'mass':1}]}}");
+    job *j =
+        fixture_parse_ok("{'duration':1,'output':{'channels':['qdot','q']},'controller':{'type':"
+                         "'none'},'scene':{'v0':[1],'bodies':[{'joint':{'axis':[0,0,1],'type':"
+                         "'revolute'},'inertia':[1,1,1],'com':[0,0,0],'mass':1}]}}");
     char *text = cJSON_PrintUnformatted(j->normalised);
-    char *want = json(
+    char *want = fixture_json(
         "{'name':'job','scene':{'gravity':[0,-9.81,0],'form':'auto','bodies':[{'parent':-1,'mass':"
         "1,'com':[0,"
         "0,0],'inertia':[1,1,1],'joint':{'type':'revolute','axis':[0,0,1],'location':[0,0,0],"
@@ -1512,7 +1508,7 @@ Test(job_json, normalised_keys_come_in_canonical_order)
 /* the parents of job text's bodies, as parsed (spec.chain.parent) and as normalised */
 static void expect_parents(const char *text, const int *want, int n)
 {
-    job *j = parse_ok(text);
+    job *j = fixture_parse_ok(text);
     cr_assert_eq(j->spec.chain.nbodies, n);
     cr_assert_eq(j->spec.chain.parent, j->parent);
     const cJSON *bodies =
@@ -1547,7 +1543,7 @@ Test(job_json, parents_by_index_name_or_ground_are_written_as_indices)
 
     /* a loop's body by name, written as its index: a square four-bar on the arm's tip, closed
        on the arm (anchor (1, -1) in its frame) */
-    char *text = json("{'scene':{'bodies':[" NAMED("arm") "," BODY_AT(
+    char *text = fixture_json("{'scene':{'bodies':[" NAMED("arm") "," BODY_AT(
         "[0,-1,0]") "," DEP_BODY "," DEP_BODY "],'loop':{" CLOSING
                     ",'anchor':[1,-1,0],'body':'arm'},'q0':[0,"
                     "0,1.5707963267948966,1.5707963267948966]}," PASSIVE "," DUR "}");
@@ -1564,18 +1560,18 @@ Test(job_json, parents_by_index_name_or_ground_are_written_as_indices)
 
 Test(job_json, threads_are_the_runs_thread_count_also_over_a_preset)
 {
-    job *j = parse_ok(PASSIVE_JOB(",'threads':8"));
+    job *j = fixture_parse_ok(PASSIVE_JOB(",'threads':8"));
     cr_assert_eq(j->spec.threads, 8);
     const cJSON *t = cJSON_GetObjectItemCaseSensitive(j->normalised, "threads");
     cr_assert(cJSON_IsNumber(t) && t->valuedouble == 8);
     job_free(j);
 
-    j = parse_ok("{'preset':'n_link_pendulum','n':64,'threads':2}");
+    j = fixture_parse_ok("{'preset':'n_link_pendulum','n':64,'threads':2}");
     cr_assert_eq(j->spec.threads, 2);
     cr_assert_eq(j->spec.chain.nbodies, 64);
     job_free(j);
 
-    j = parse_ok(PASSIVE_JOB(",'threads':64"));
+    j = fixture_parse_ok(PASSIVE_JOB(",'threads':64"));
     cr_assert_eq(j->spec.threads, 64, "the largest count allowed");
     job_free(j);
 }

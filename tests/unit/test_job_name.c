@@ -14,24 +14,12 @@
 
 #include "job_json.h"
 #include "job_name.h"
-
-/* cJSON of text written with single quotes */
-static cJSON *parse(const char *text)
-{
-    char *s = strdup(text);
-    cr_assert_not_null(s);
-    for (char *c = s; *c; c++)
-        if (*c == '\'') *c = '"';
-    cJSON *v = cJSON_Parse(s);
-    cr_assert_not_null(v, "bad test JSON: %s", text);
-    free(s);
-    return v;
-}
+#include "job_fixture.h"
 
 /* the name of edited against base, and the count of changes */
 static int name_of(const char *base, const char *edited, char *out, size_t len)
 {
-    cJSON *a = parse(base), *b = parse(edited);
+    cJSON *a = fixture_cjson(base), *b = fixture_cjson(edited);
     int n = job_name_changes(a, b, "p", out, len);
     cJSON_Delete(a);
     cJSON_Delete(b);
@@ -105,7 +93,7 @@ Test(job_name, long_edits_are_cut_at_whole_changes_and_counted)
 /* the name job_from_json gives doc (single quotes) */
 static void expect_job_name(const char *doc, const char *want)
 {
-    cJSON *d = parse(doc);
+    cJSON *d = fixture_cjson(doc);
     job *j = NULL;
     job_error e;
     cr_assert_eq(job_from_json(d, &j, &e), 0, "%s: %s", e.field, e.message);
@@ -137,7 +125,7 @@ Test(job_name, preset_requests_are_named_after_their_edit)
 Test(job_name, a_whole_document_over_its_preset_is_named_as_its_edit)
 {
     /* the preset's normalised job, edited in one gain, posted whole with "preset" */
-    cJSON *req = parse("{'preset':'triple_pendulum_pd'}");
+    cJSON *req = fixture_cjson("{'preset':'triple_pendulum_pd'}");
     job *j = NULL;
     job_error e;
     cr_assert_eq(job_from_json(req, &j, &e), 0, "%s", e.message);
@@ -157,7 +145,7 @@ Test(job_name, a_whole_document_over_its_preset_is_named_as_its_edit)
 /* job_from_json(doc) fails at field with message */
 static void expect_error(const char *doc, const char *field, const char *message)
 {
-    cJSON *d = parse(doc);
+    cJSON *d = fixture_cjson(doc);
     job *j = NULL;
     job_error e;
     cr_assert_eq(job_from_json(d, &j, &e), -1, "%s should fail", doc);
@@ -186,7 +174,7 @@ Test(job_name, tags_are_checked_and_kept_as_given)
                  "'11','12','13','14','15','16','17']}",
                  "tags", "must have at most 16 tags (got 17)");
 
-    cJSON *d = parse("{'preset':'triple_pendulum_pd','tags':['sweep','kp = 400']}");
+    cJSON *d = fixture_cjson("{'preset':'triple_pendulum_pd','tags':['sweep','kp = 400']}");
     job *j = NULL;
     job_error e;
     cr_assert_eq(job_from_json(d, &j, &e), 0, "%s", e.message);
@@ -197,7 +185,7 @@ Test(job_name, tags_are_checked_and_kept_as_given)
     job_free(j);
     cJSON_Delete(d);
 
-    d = parse("{'preset':'triple_pendulum_pd'}");
+    d = fixture_cjson("{'preset':'triple_pendulum_pd'}");
     cr_assert_eq(job_from_json(d, &j, &e), 0, "%s", e.message);
     cr_assert_null(cJSON_GetObjectItemCaseSensitive(j->normalised, "tags"),
                    "none given: none kept");

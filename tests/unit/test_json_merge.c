@@ -11,25 +11,13 @@
 #include <string.h>
 
 #include "json_merge.h"
-
-/* cJSON of text written with single quotes */
-static cJSON *parse(const char *text)
-{
-    char *s = strdup(text);
-    cr_assert_not_null(s);
-    for (char *c = s; *c; c++)
-        if (*c == '\'') *c = '"';
-    cJSON *v = cJSON_Parse(s);
-    cr_assert_not_null(v, "bad test JSON: %s", text);
-    free(s);
-    return v;
-}
+#include "job_fixture.h"
 
 /* merge(target, patch) prints as expected (all in single quotes) */
 static void expect_merge(const char *target, const char *patch, const char *expected)
 {
-    cJSON *p = parse(patch), *want = parse(expected);
-    cJSON *got = json_merge_patch(parse(target), p, NULL);
+    cJSON *p = fixture_cjson(patch), *want = fixture_cjson(expected);
+    cJSON *got = json_merge_patch(fixture_cjson(target), p, NULL);
     cr_assert_not_null(got);
     char *g = cJSON_PrintUnformatted(got), *w = cJSON_PrintUnformatted(want);
     cr_assert_str_eq(g, w, "merge(%s, %s)", target, patch);
@@ -61,7 +49,7 @@ Test(json_merge, rfc7386_appendix_a_examples)
 
 Test(json_merge, a_null_target_is_an_empty_document)
 {
-    cJSON *p = parse("{'a':1,'b':null}");
+    cJSON *p = fixture_cjson("{'a':1,'b':null}");
     cJSON *got = json_merge_patch(NULL, p, NULL);
     char *g = cJSON_PrintUnformatted(got);
     cr_assert_str_eq(g, "{\"a\":1}");
@@ -102,9 +90,9 @@ Test(json_merge, a_repeated_patch_key_is_applied_twice_in_order)
 
 Test(json_merge, the_patch_is_not_changed_and_not_shared)
 {
-    cJSON *p = parse("{'a':{'b':[1,2]},'c':'s'}");
+    cJSON *p = fixture_cjson("{'a':{'b':[1,2]},'c':'s'}");
     char *before = cJSON_PrintUnformatted(p);
-    cJSON *got = json_merge_patch(parse("{'a':{'z':0}}"), p, NULL);
+    cJSON *got = json_merge_patch(fixture_cjson("{'a':{'z':0}}"), p, NULL);
     cJSON_Delete(got); /* would free the patch's items if it shared them */
     char *after = cJSON_PrintUnformatted(p);
     cr_assert_str_eq(after, before);

@@ -18,61 +18,23 @@
 
 #include "job_json.h"
 #include "sim.h"
+#include "job_fixture.h"
 
 #define G 9.81
 #define PI 3.14159265358979323846
 
-/* single quotes to double quotes, into a malloc'd string */
-static char *json(const char *text)
-{
-    char *s = strdup(text);
-    cr_assert_not_null(s);
-    for (char *c = s; *c; c++)
-        if (*c == '\'') *c = '"';
-    return s;
-}
-
-static job *parse_ok(const char *text)
-{
-    char *doc = json(text);
-    job *j = NULL;
-    job_error err;
-    int rc = job_parse(doc, strlen(doc), &j, &err);
-    cr_assert_eq(rc, 0, "job rejected: %s at \"%s\": %s", job_error_code_name(err.code), err.field,
-                 err.message);
-    free(doc);
-    return j;
-}
-
-static ctc_sim_result *run(const job *j)
-{
-    ctc_sim_result *r = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&j->spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
-    return r;
-}
-
-/* a rod of 1 m, 1 kg about z at the origin: centre of mass 0.5 m below, I_c = 1/12 about z */
-#define ROD                                                                                        \
-    "{'mass':1,'com':[0,-0.5,0],'inertia':[0.0833333333333333,0.0833333333333333,"                 \
-    "0.0833333333333333],'joint':{'type':'revolute','axis':[0,0,1]}}"
-#define ROD2                                                                                       \
-    "{'mass':1,'com':[0,-0.5,0],'inertia':[0.0833333333333333,0.0833333333333333,"                 \
-    "0.0833333333333333],'joint':{'type':'revolute','axis':[0,0,1],'location':[0,-1,0]}}"
-#define INTEG "'integrator':{'method':'dopri5','rtol':1e-11,'atol':1e-13}"
-
 Test(model_error, model_equal_to_the_plant_tracks_as_the_closed_form)
 {
-    job *j = parse_ok(
-        "{'scene':{'gravity':[0,-9.81,0],'bodies':[" ROD "," ROD2 "]},"
+    job *j = fixture_parse_ok(
+        "{'scene':{'gravity':[0,-9.81,0],'bodies':[" FIXTURE_ROD "," FIXTURE_ROD2 "]},"
         "'controller':{'type':'pd','kp':100,'kv':20,'model':{'gravity':[0,-9.81,0],'bodies':["
         "{'body':0,'mass':1,'com':[0,-0.5,0],'inertia':[0.0833333333333333,0.0833333333333333,"
         "0.0833333333333333]},{'body':1,'mass_scale':1,'inertia_scale':1}]}},"
-        "'trajectory':{'type':'sine','amplitude':0.6,'period':1.5},'duration':2," INTEG "}");
+        "'trajectory':{'type':'sine','amplitude':0.6,'period':1.5},'duration':2," FIXTURE_INTEG
+        "}");
     cr_assert_not_null(j->spec.model_bodies, "a model of its own");
     cr_assert_not_null(j->spec.model_gravity);
-    ctc_sim_result *r = run(j);
+    ctc_sim_result *r = fixture_run_done(&j->spec);
     const double de0 = 0.6 * 2 * PI / 1.5;
     double dev = 0;
     for (int k = 0; k < r->nsamples; k++) {
@@ -103,13 +65,14 @@ static double rest_angle(double inertia, double kp, double c, double q_d)
 Test(model_error, payload_gives_the_closed_form_steady_error_of_pd)
 {
     const double q_d = 1.0, mp = 0.5, lp = 1.0, ip = 1.0 / 3;
-    job *j = parse_ok("{'scene':{'gravity':[0,-9.81,0],'bodies':[" ROD "],'q0':[1]},"
-                      "'controller':{'type':'pd','kp':100,'kv':20,'model':{'payload':{'body':0,"
-                      "'mass':0.5,'point':[0,-1,0]}}},"
-                      "'trajectory':{'type':'constant','value':1},'duration':8," INTEG "}");
+    job *j = fixture_parse_ok(
+        "{'scene':{'gravity':[0,-9.81,0],'bodies':[" FIXTURE_ROD "],'q0':[1]},"
+        "'controller':{'type':'pd','kp':100,'kv':20,'model':{'payload':{'body':0,"
+        "'mass':0.5,'point':[0,-1,0]}}},"
+        "'trajectory':{'type':'constant','value':1},'duration':8," FIXTURE_INTEG "}");
     cr_expect_eq(j->bodies[0].mass, 1.5, "the plant carries the payload");
     cr_expect_eq(j->spec.model_bodies[0].mass, 1, "the model does not");
-    ctc_sim_result *r = run(j);
+    ctc_sim_result *r = fixture_run_done(&j->spec);
     const double q = rest_angle(ip, 100, mp * G * lp, q_d);
     cr_expect_leq(fabs(r->metrics.e_final[0] - (q_d - q)), 1e-9, "e = %.12g, closed form %.12g",
                   r->metrics.e_final[0], q_d - q);
@@ -121,10 +84,11 @@ Test(model_error, payload_gives_the_closed_form_steady_error_of_pd)
 Test(model_error, gravity_error_gives_the_closed_form_steady_error_of_pd)
 {
     const double q_d = 1.0, ip = 1.0 / 3, g_model = 9.0;
-    job *j = parse_ok("{'scene':{'gravity':[0,-9.81,0],'bodies':[" ROD "],'q0':[1]},"
-                      "'controller':{'type':'pd','kp':100,'kv':20,'model':{'gravity':[0,-9,0]}},"
-                      "'trajectory':{'type':'constant','value':1},'duration':8," INTEG "}");
-    ctc_sim_result *r = run(j);
+    job *j = fixture_parse_ok(
+        "{'scene':{'gravity':[0,-9.81,0],'bodies':[" FIXTURE_ROD "],'q0':[1]},"
+        "'controller':{'type':'pd','kp':100,'kv':20,'model':{'gravity':[0,-9,0]}},"
+        "'trajectory':{'type':'constant','value':1},'duration':8," FIXTURE_INTEG "}");
+    ctc_sim_result *r = fixture_run_done(&j->spec);
     const double q = rest_angle(ip, 100, 1 * (G - g_model) * 0.5, q_d);
     cr_expect_leq(fabs(r->metrics.e_final[0] - (q_d - q)), 1e-9, "e = %.12g, closed form %.12g",
                   r->metrics.e_final[0], q_d - q);
@@ -133,15 +97,16 @@ Test(model_error, gravity_error_gives_the_closed_form_steady_error_of_pd)
 }
 
 #define RANDOM_JOB(random)                                                                         \
-    "{'scene':{'bodies':[" ROD "," ROD2 "]},'controller':{'type':'pd','kp':100,'kv':20,"           \
+    "{'scene':{'bodies':[" FIXTURE_ROD "," FIXTURE_ROD2                                            \
+    "]},'controller':{'type':'pd','kp':100,'kv':20,"                                               \
     "'model':{'random':" random "}},'trajectory':{'type':'constant','value':0},'duration':0.1}"
 
 Test(model_error, random_draws_are_seeded_bounded_and_round_trip)
 {
-    job *a = parse_ok(RANDOM_JOB("{'seed':7,'mass':0.2,'com':0.01,'inertia':0.3}"));
-    job *b = parse_ok(RANDOM_JOB("{'seed':7,'mass':0.2,'com':0.01,'inertia':0.3}"));
-    job *c = parse_ok(RANDOM_JOB("{'seed':8,'mass':0.2,'com':0.01,'inertia':0.3}"));
-    job *z = parse_ok(RANDOM_JOB("{'seed':7}"));
+    job *a = fixture_parse_ok(RANDOM_JOB("{'seed':7,'mass':0.2,'com':0.01,'inertia':0.3}"));
+    job *b = fixture_parse_ok(RANDOM_JOB("{'seed':7,'mass':0.2,'com':0.01,'inertia':0.3}"));
+    job *c = fixture_parse_ok(RANDOM_JOB("{'seed':8,'mass':0.2,'com':0.01,'inertia':0.3}"));
+    job *z = fixture_parse_ok(RANDOM_JOB("{'seed':7}"));
     const size_t size = 2 * sizeof(ctc_body_spec);
     cr_expect(memcmp(a->spec.model_bodies, b->spec.model_bodies, size) == 0, "same seed");
     cr_expect(memcmp(a->spec.model_bodies, c->spec.model_bodies, size) != 0, "another seed");

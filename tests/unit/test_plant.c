@@ -19,6 +19,7 @@
 
 #include "chains.h"
 #include "sim.h"
+#include "run_fixture.h"
 
 #define PI 3.14159265358979323846
 #define G 9.81
@@ -60,15 +61,6 @@ static void rod_free(rod_scene *s)
     free(s);
 }
 
-static ctc_sim_result *run(const ctc_sim_spec *spec)
-{
-    ctc_sim_result *r = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
-    return r;
-}
-
 /* a pose whose gravity torque m g (l/2) sin(q) exceeds the limit, from rest at q0 = pi/2 with
    q_d = 2 above it: the clipped actuator gives the constant torque L throughout, and the rod
    swings conservatively about the equilibrium sin(q_eq) = L / (m g l/2), between q0 and the
@@ -80,7 +72,7 @@ Test(plant, held_pose_beyond_the_limit_sags_as_the_closed_form)
     s->q0[0] = q0;
     s->spec.controller = CTC_CTRL_PD;
     s->gains[0] = (ctc_gains){.kp = 100, .kv = 20};
-    ctc_sim_result *r = run(&s->spec);
+    ctc_sim_result *r = fixture_run_done(&s->spec);
 
     /* the first integral, and the lower turning point by bisection on it */
     const double c0 = -L * q0 - mgl2 * cos(q0);
@@ -145,7 +137,7 @@ Test(plant, pid_anti_windup_follows_the_linear_law_after_the_limit)
     s->gains[0] = g;
     s->spec.duration = 20;
     s->spec.output_interval = 0.01;
-    ctc_sim_result *r = run(&s->spec);
+    ctc_sim_result *r = fixture_run_done(&s->spec);
 
     /* kp (1 - a t^2 / 2) - kv a t = a */
     const double qa = g.kp * a / 2, qb = g.kv * a, qc = a - g.kp;
@@ -186,9 +178,9 @@ Test(plant, unreached_limit_gives_the_ideal_run_bitwise)
     s->spec.controller = CTC_CTRL_PID;
     s->gains[0] = (ctc_gains){.ki = 250, .kp = 100, .kv = 20};
     s->q0[0] = 1;
-    ctc_sim_result *limited = run(&s->spec);
+    ctc_sim_result *limited = fixture_run_done(&s->spec);
     s->spec.plant = NULL;
-    ctc_sim_result *ideal = run(&s->spec);
+    ctc_sim_result *ideal = fixture_run_done(&s->spec);
     cr_assert_eq(limited->nsamples, ideal->nsamples);
     for (int c = 0; c < CTC_NCHANNELS; c++) {
         if (!ideal->ch[c]) continue;
@@ -232,7 +224,7 @@ Test(plant, held_pose_beyond_the_limit_with_damping_rests_at_the_closed_form_equ
     s->gains[0] = (ctc_gains){.kp = 100, .kv = 20};
     s->spec.duration = 40;
     s->spec.output_interval = 0.01;
-    ctc_sim_result *r = run(&s->spec);
+    ctc_sim_result *r = fixture_run_done(&s->spec);
     int last = r->nsamples - 1;
     double q = r->ch[CTC_CH_Q][last], v = r->ch[CTC_CH_QD][last];
     cr_expect_leq(fabs(q - asin(L / mgl2)), 1e-9, "q %.12f, closed form %.12f", q, asin(L / mgl2));
@@ -256,7 +248,7 @@ static ctc_sim_result *loaded_rod(double F, double coulomb, double vs, double du
     s->spec.integrator = (ctc_integ_spec){.method = CTC_INTEG_BDF, .rtol = 1e-10, .atol = 1e-14};
     s->spec.duration = duration;
     s->spec.output_interval = 0.01;
-    ctc_sim_result *r = run(&s->spec);
+    ctc_sim_result *r = fixture_run_done(&s->spec);
     rod_free(s);
     return r;
 }
@@ -300,7 +292,7 @@ Test(plant, spring_and_damper_give_the_damped_oscillator)
     s->spec.traj = NULL;
     s->q0[0] = rest + x0;
     s->plant[0] = (ctc_plant_coord){.viscous = b, .spring = k, .spring_rest = rest};
-    ctc_sim_result *r = run(&s->spec);
+    ctc_sim_result *r = fixture_run_done(&s->spec);
     cr_expect(isnan(r->metrics.energy_drift), "the joint forces do work: no energy reference");
     const double sigma = b / (2 * ip), wd = sqrt(k / ip - sigma * sigma);
     double dev = 0;
@@ -319,45 +311,20 @@ Test(plant, spring_and_damper_give_the_damped_oscillator)
    integrator's tolerance); unknown, it does not */
 Test(plant, joint_forces_known_to_the_controller_keep_the_error_law_exact)
 {
-    test_chain *chain = test_chain_rod_pendulum(2, 1, 1);
-    ctc_gains gains[2];
-    ctc_traj traj[2];
     ctc_plant_coord plant[2];
-    double q0[2] = {0.3, -0.2}, v0[2] = {0, 0};
-    for (int i = 0; i < 2; i++) {
-        gains[i] = (ctc_gains){.kp = 100, .kv = 20};
-        traj[i] = (ctc_traj){.type = CTC_TRAJ_SINE, .amplitude = 0.6, .period = 1.5};
+    for (int i = 0; i < 2; i++)
         plant[i] = (ctc_plant_coord){.viscous = 0.5,
                                      .coulomb = 2,
                                      .coulomb_velocity = 0.01,
                                      .spring = 5,
-                                     .spring_rest = 0.1,
-                                     .known = 1};
-    }
-    ctc_sim_spec spec = {.chain = chain->spec,
-                         .q0 = q0,
-                         .v0 = v0,
-                         .controller = CTC_CTRL_PD,
-                         .gains = gains,
-                         .model_mass_scale = 1,
-                         .model_inertia_scale = 1,
-                         .traj = traj,
-                         .plant = plant,
-                         .integrator = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-10, .atol = 1e-12},
-                         .duration = 3,
-                         .output_interval = 0.01};
-    ctc_sim_result *known = run(&spec);
-    cr_expect_leq(known->metrics.errdyn_dev, 1e-7, "known: errdyn_dev %g",
-                  known->metrics.errdyn_dev);
-    for (int i = 0; i < 2; i++) plant[i].known = 0;
-    ctc_sim_result *unknown = run(&spec);
-    cr_expect(isnan(unknown->metrics.errdyn_dev), "unknown forces: no linear reference");
+                                     .spring_rest = 0.1};
+    ctc_sim_result *known, *unknown;
+    fixture_run_known_and_unknown(plant, "forces", &known, &unknown);
     cr_expect_gt(unknown->metrics.e_final[0] * unknown->metrics.e_final[0] +
                      unknown->metrics.e_final[1] * unknown->metrics.e_final[1],
                  1e-6, "the unknown forces leave an error");
     ctc_sim_result_free(known);
     ctc_sim_result_free(unknown);
-    test_chain_free(chain);
 }
 
 Test(plant, bad_joint_force_parameters_are_refused_with_their_names)

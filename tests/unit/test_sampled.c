@@ -19,6 +19,7 @@
 
 #include "chains.h"
 #include "sim.h"
+#include "run_fixture.h"
 
 typedef struct sampled_case {
     ctc_gains g;
@@ -54,10 +55,7 @@ static ctc_sim_result *run_rod(const sampled_case *sc, double q0, double qd, dou
         .integrator = {.method = sc->method, .rtol = 1e-12, .atol = 1e-14, .step = sc->period / 4},
         .duration = duration,
         .output_interval = sc->period};
-    ctc_sim_result *r = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    ctc_sim_result *r = fixture_run_done(&spec);
     test_chain_free(chain);
     return r;
 }

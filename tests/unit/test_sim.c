@@ -17,6 +17,7 @@
 #include "oracle.h"
 #include "shapes.h"
 #include "sim.h"
+#include "run_fixture.h"
 
 #define PI 3.14159265358979323846
 #define MAXV 64
@@ -682,21 +683,9 @@ static ctc_sim_result *five_bar_run(ctc_integ_spec integ, ctc_loop_stab stab)
         gains[i] = (ctc_gains){.kp = 100, .kv = 20};
         traj[i] = (ctc_traj){.type = CTC_TRAJ_CONSTANT, .value = target[i]};
     }
-    ctc_sim_spec spec = {.chain = s->spec,
-                         .q0 = s->q0,
-                         .controller = CTC_CTRL_PD,
-                         .gains = gains,
-                         .model_mass_scale = 1,
-                         .model_inertia_scale = 1,
-                         .traj = traj,
-                         .integrator = integ,
-                         .duration = 3,
-                         .output_interval = 0.01,
-                         .loop_stab = stab};
-    ctc_sim_result *r = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    ctc_sim_spec spec = fixture_pd_spec(&s->spec, s->q0, gains, traj, integ, 3, 0.01);
+    spec.loop_stab = stab;
+    ctc_sim_result *r = fixture_run_done(&spec);
     free(s);
     return r;
 }
@@ -890,31 +879,9 @@ Test(sim, a_controller_class_is_checked_with_exact_messages)
 static ctc_sim_result *long_pendulum(int n, ctc_integ_spec integ, double duration)
 {
     test_chain *c = test_chain_rod_pendulum(n, 1, 1);
-    double *q0 = calloc((size_t)n, sizeof *q0);
-    ctc_gains *gains = calloc((size_t)n, sizeof *gains);
-    ctc_traj *traj = calloc((size_t)n, sizeof *traj);
-    cr_assert(c && q0 && gains && traj);
-    for (int k = 0; k < n; k++) {
-        q0[k] = ((k + 1) % 2 ? -1 : 1) * PI / 6;
-        gains[k] = (ctc_gains){.kp = 100, .kv = 20};
-        traj[k] = (ctc_traj){.type = CTC_TRAJ_CONSTANT, .value = 0};
-    }
-    ctc_sim_spec spec = {.chain = c->spec,
-                         .q0 = q0,
-                         .controller = CTC_CTRL_PD,
-                         .gains = gains,
-                         .model_mass_scale = 1,
-                         .model_inertia_scale = 1,
-                         .traj = traj,
-                         .integrator = integ,
-                         .duration = duration,
-                         .output_interval = duration / 10};
-    ctc_sim_result *r = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    cr_assert_not_null(c);
+    ctc_sim_result *r = fixture_pd_to_rest(c, PI / 6, 1, integ, duration, duration / 10, 0);
     test_chain_free(c);
-    free(q0), free(gains), free(traj);
     return r;
 }
 

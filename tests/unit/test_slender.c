@@ -21,6 +21,7 @@
 #include "model_fixture.h"
 #include "oracle.h"
 #include "sim.h"
+#include "run_fixture.h"
 
 /* the largest error of ctc_gdca_forward's qdd against the dense solve over `states` random states
    (q uniform, v in [-1, 1] rad/s, f in [-5, 5] N m) of n rods of moment ratio `ratio` */
@@ -191,21 +192,10 @@ static long passive_run(double ratio, double *drift)
     test_chain *c = test_chain_slender_rods(16, ratio);
     double q0[16], v0[16];
     for (int i = 0; i < 16; i++) q0[i] = 0.3 * sin(i + 1.0), v0[i] = cos(i + 1.0);
-    ctc_sim_spec spec = {
-        .chain = c->spec,
-        .q0 = q0,
-        .v0 = v0,
-        .controller = CTC_CTRL_NONE,
-        .model_mass_scale = 1,
-        .model_inertia_scale = 1,
-        .integrator = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-12, .atol = 1e-12},
-        .duration = 3.0,
-        .output_interval = 0.01,
-    };
-    ctc_sim_result *res = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&spec, NULL, &res, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(res->status, CTC_RUN_DONE, "%s", res->message);
+    ctc_sim_spec spec = fixture_passive_spec(
+        &c->spec, q0, v0,
+        (ctc_integ_spec){.method = CTC_INTEG_DOPRI5, .rtol = 1e-12, .atol = 1e-12}, 3.0, 0.01);
+    ctc_sim_result *res = fixture_run_done(&spec);
     *drift = res->metrics.energy_drift;
     long steps = res->metrics.steps;
     ctc_sim_result_free(res);

@@ -39,6 +39,19 @@ static int prothero_robinson(double t, const double *y, double *ydot, void *ctx)
     return 0;
 }
 
+/* an integrator of spec's method on the Prothero-Robinson problem p, started at y(0) = 1 (on the
+ * solution cos t); the caller frees it */
+static ctc_integrator *pr_start(const ctc_integ_spec *spec, pr_problem *p)
+{
+    ctc_integrator *it = NULL;
+    char err[ERRLEN] = "";
+    cr_assert_eq(ctc_integrator_new(spec, 1, prothero_robinson, p, &it, err, sizeof err), CTC_OK,
+                 "%s", err);
+    const double y0 = 1;
+    cr_assert_eq(ctc_integrator_reset(it, 0, &y0), 0);
+    return it;
+}
+
 static int oscillator(double t, const double *y, double *ydot, void *ctx)
 {
     (void)t;
@@ -75,11 +88,9 @@ Test(stiff, dopri5_stops_a_long_stiff_run_at_its_stability_limit)
     /* lambda = 1e7 and 10 s to go: about 3e7 steps at the stability limit */
     pr_problem p = {.lambda = 1e7};
     ctc_integ_spec spec = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-6, .atol = 1e-8};
-    ctc_integrator *it = NULL;
+    ctc_integrator *it = pr_start(&spec, &p);
     char err[ERRLEN] = "";
-    cr_assert_eq(ctc_integrator_new(&spec, 1, prothero_robinson, &p, &it, err, sizeof err), CTC_OK);
-    const double y0 = 1, t_end = 10;
-    cr_assert_eq(ctc_integrator_reset(it, 0, &y0), 0);
+    const double t_end = 10;
     int rc = 0;
     double worst = 0;
     while (rc == 0 && ctc_integrator_stats(it)->steps < 100000) {
@@ -117,11 +128,9 @@ Test(stiff, dopri5_finishes_a_stiff_run_that_ends_soon)
     /* lambda = 1e5 over 0.5 s: stiff (h held near 3.3e-5 s), but only ~1.5e4 steps in all */
     pr_problem p = {.lambda = 1e5};
     ctc_integ_spec spec = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-6, .atol = 1e-8};
-    ctc_integrator *it = NULL;
+    ctc_integrator *it = pr_start(&spec, &p);
     char err[ERRLEN] = "";
-    cr_assert_eq(ctc_integrator_new(&spec, 1, prothero_robinson, &p, &it, err, sizeof err), CTC_OK);
-    const double y0 = 1, t_end = 0.5;
-    cr_assert_eq(ctc_integrator_reset(it, 0, &y0), 0);
+    const double t_end = 0.5;
     double worst = 0;
     while (ctc_integrator_time(it) < t_end) {
         cr_assert_eq(ctc_integrator_step(it, t_end, err, sizeof err), 0, "%s", err);
@@ -200,15 +209,23 @@ static double closed_form_deviation(const ctc_sim_result *r, double kp)
     return worst;
 }
 
+/* Runs j, a stiff_job of gain kp, and expects it done and on the closed form to tol rad; the
+ * caller frees the result. */
+static ctc_sim_result *expect_closed_form_run(const job *j, double kp, double tol)
+{
+    ctc_sim_result *r = run_job(j);
+    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
+    double dev = closed_form_deviation(r, kp);
+    cr_assert_leq(dev, tol, "deviation %g rad", dev);
+    return r;
+}
+
 Test(stiff, dopri5_finishes_the_triple_pendulum_at_kp_1e6_on_the_closed_form)
 {
     /* poles at -1000 (double): steps held near 2e-4 s at rtol 1e-8 (accuracy on the fast error
      * dynamics, not stability, which would allow 3.3e-3 s), so it finishes */
     job *j = stiff_job(1e6, 1, "{\"method\": \"dopri5\", \"rtol\": 1e-8, \"atol\": 1e-10}");
-    ctc_sim_result *r = run_job(j);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
-    double dev = closed_form_deviation(r, 1e6);
-    cr_assert_leq(dev, 1e-7, "deviation %g rad", dev);
+    ctc_sim_result *r = expect_closed_form_run(j, 1e6, 1e-7);
     ctc_sim_result_free(r);
     job_free(j);
 }
@@ -216,10 +233,7 @@ Test(stiff, dopri5_finishes_the_triple_pendulum_at_kp_1e6_on_the_closed_form)
 Test(stiff, bdf_finishes_the_triple_pendulum_at_kp_1e6_on_the_closed_form)
 {
     job *j = stiff_job(1e6, 5, "{\"method\": \"bdf\", \"rtol\": 1e-8, \"atol\": 1e-10}");
-    ctc_sim_result *r = run_job(j);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
-    double dev = closed_form_deviation(r, 1e6);
-    cr_assert_leq(dev, 1e-7, "deviation %g rad", dev);
+    ctc_sim_result *r = expect_closed_form_run(j, 1e6, 1e-7);
     cr_assert_lt(r->metrics.steps, 5000, "%ld steps", r->metrics.steps);
     ctc_sim_result_free(r);
     job_free(j);
@@ -259,10 +273,7 @@ Test(stiff, dopri5_stops_as_stiff_at_kp_1e10_and_the_job_reports_it_failed)
 Test(stiff, bdf_finishes_the_run_dopri5_stopped_on_the_closed_form)
 {
     job *j = stiff_job(1e10, 5, "{\"method\": \"bdf\", \"rtol\": 1e-4, \"atol\": 1e-6}");
-    ctc_sim_result *r = run_job(j);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
-    double dev = closed_form_deviation(r, 1e10);
-    cr_assert_leq(dev, 1e-4, "deviation %g rad", dev);
+    ctc_sim_result *r = expect_closed_form_run(j, 1e10, 1e-4);
     ctc_sim_result_free(r);
     job_free(j);
 }

@@ -88,6 +88,13 @@ static store *open_ok(const char *path)
     return s;
 }
 
+/* a new store in the test's folder: its path (ctcsim.db there) into path (len bytes), opened */
+static store *open_new(char *path, size_t len)
+{
+    path_of(path, len, "ctcsim.db");
+    return open_ok(path);
+}
+
 static int64_t insert_job(store *s, const char *name)
 {
     int64_t id = 0;
@@ -155,6 +162,13 @@ static void assert_integrity(const char *path)
     char text[256];
     raw_query(path, "PRAGMA integrity_check", 0, text, sizeof text);
     cr_assert_str_eq(text, "ok");
+}
+
+/* closes s and checks that its file at path passes SQLite's integrity check */
+static void close_intact(store *s, const char *path)
+{
+    store_close(s);
+    assert_integrity(path);
 }
 
 /* a hand-made result: nsamples samples of t, q (nq wide), tau (nv wide) and energy, with
@@ -228,8 +242,7 @@ Test(store, open_creates_the_current_schema_in_wal_mode)
     char path[256], mode[32];
     long counts[STORE_NSTATUS];
     char err[512] = "";
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     cr_assert_eq(access(path, F_OK), 0, "the file was not created");
     cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), STORE_SCHEMA_VERSION);
     raw_query(path, "PRAGMA journal_mode", 0, mode, sizeof mode);
@@ -251,8 +264,7 @@ Test(store, reopening_keeps_the_data_and_migrates_nothing)
     char path[256], before[8192], after[8192];
     char err[512] = "";
     store_job j;
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     int64_t id = insert_job(s, "kept");
     store_close(s);
     const char *dump = "SELECT group_concat(type || ' ' || name || ' ' || ifnull(sql, ''), '; ') "
@@ -386,8 +398,7 @@ Test(store, two_connections_in_two_threads_insert_400_distinct_jobs)
     long counts[STORE_NSTATUS];
     cr_assert_eq(store_count(s, counts, err, sizeof err), 0, "%s", err);
     cr_assert_eq(counts[STORE_QUEUED], 2 * NTHREAD_JOBS);
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
 }
 
 /* store_open must fail with exactly want (the path's "%s" filled in) and return no store */
@@ -450,8 +461,7 @@ Test(store, counting_5000_jobs_reads_the_counts_not_the_table)
      * through inserts, status changes and deletes, and store_count's work (SQLite VM steps)
      * does not grow with the table (a scan takes several steps a row, > 5,000 here) */
     char path[256], err[512] = "";
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     raw_exec(path, "BEGIN;"
                    "WITH RECURSIVE k(i) AS (SELECT 0 UNION ALL SELECT i + 1 FROM k WHERE i < 4999)"
                    "INSERT INTO jobs (name, status, created, nbodies, nv, controller, spec)"
@@ -474,25 +484,28 @@ Test(store, counting_5000_jobs_reads_the_counts_not_the_table)
     store_close(s);
 }
 
+/* the jobs and series tables as version 1 of store.c created them */
+#define V1_TABLES                                                                                  \
+    "CREATE TABLE jobs (id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT NOT NULL,"                 \
+    "  preset TEXT, status TEXT NOT NULL DEFAULT 'queued' CHECK (status IN ('queued',"             \
+    "  'running', 'done', 'failed', 'diverged', 'cancelled')),"                                    \
+    "  progress REAL NOT NULL DEFAULT 0, created REAL NOT NULL,"                                   \
+    "  started REAL NOT NULL DEFAULT 0, finished REAL NOT NULL DEFAULT 0,"                         \
+    "  nbodies INTEGER NOT NULL, nv INTEGER NOT NULL, controller TEXT NOT NULL,"                   \
+    "  spec TEXT NOT NULL, metrics TEXT, message TEXT, e_max REAL, wall_s REAL);"                  \
+    "CREATE INDEX jobs_by_status ON jobs (status);"                                                \
+    "CREATE TABLE series (job_id INTEGER NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,"         \
+    "  channel TEXT NOT NULL, width INTEGER NOT NULL CHECK (width > 0),"                           \
+    "  nsamples INTEGER NOT NULL CHECK (nsamples >= 0), data BLOB NOT NULL,"                       \
+    "  PRIMARY KEY (job_id, channel));"
+
 Test(store, a_version_1_database_is_migrated_with_its_counts)
 {
     /* a version 1 file (jobs and series, no job_counts) with jobs in it: open adds the counts,
      * taken from the table once, and keeps them after */
     char path[256], err[512] = "";
     path_of(path, sizeof path, "ctcsim.db");
-    raw_exec(path,
-             "CREATE TABLE jobs (id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT NOT NULL,"
-             "  preset TEXT, status TEXT NOT NULL DEFAULT 'queued' CHECK (status IN ('queued',"
-             "  'running', 'done', 'failed', 'diverged', 'cancelled')),"
-             "  progress REAL NOT NULL DEFAULT 0, created REAL NOT NULL,"
-             "  started REAL NOT NULL DEFAULT 0, finished REAL NOT NULL DEFAULT 0,"
-             "  nbodies INTEGER NOT NULL, nv INTEGER NOT NULL, controller TEXT NOT NULL,"
-             "  spec TEXT NOT NULL, metrics TEXT, message TEXT, e_max REAL, wall_s REAL);"
-             "CREATE INDEX jobs_by_status ON jobs (status);"
-             "CREATE TABLE series (job_id INTEGER NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,"
-             "  channel TEXT NOT NULL, width INTEGER NOT NULL CHECK (width > 0),"
-             "  nsamples INTEGER NOT NULL CHECK (nsamples >= 0), data BLOB NOT NULL,"
-             "  PRIMARY KEY (job_id, channel));"
+    raw_exec(path, V1_TABLES
              "INSERT INTO jobs (name, status, created, nbodies, nv, controller, spec) VALUES"
              "  ('a', 'done', 0, 1, 1, 'none', '{}'), ('b', 'done', 0, 1, 1, 'none', '{}'),"
              "  ('c', 'queued', 0, 1, 1, 'none', '{}'), ('d', 'failed', 0, 1, 1, 'none', '{}');"
@@ -509,19 +522,7 @@ Test(store, a_version_1_database_is_migrated_with_its_counts)
 }
 
 /* the schema of version 2 as that version of store.c created it (migrations 0 -> 1 -> 2) */
-static const char v2_schema[] =
-    "CREATE TABLE jobs (id INTEGER PRIMARY KEY AUTOINCREMENT, name TEXT NOT NULL,"
-    "  preset TEXT, status TEXT NOT NULL DEFAULT 'queued' CHECK (status IN ('queued',"
-    "  'running', 'done', 'failed', 'diverged', 'cancelled')),"
-    "  progress REAL NOT NULL DEFAULT 0, created REAL NOT NULL,"
-    "  started REAL NOT NULL DEFAULT 0, finished REAL NOT NULL DEFAULT 0,"
-    "  nbodies INTEGER NOT NULL, nv INTEGER NOT NULL, controller TEXT NOT NULL,"
-    "  spec TEXT NOT NULL, metrics TEXT, message TEXT, e_max REAL, wall_s REAL);"
-    "CREATE INDEX jobs_by_status ON jobs (status);"
-    "CREATE TABLE series (job_id INTEGER NOT NULL REFERENCES jobs (id) ON DELETE CASCADE,"
-    "  channel TEXT NOT NULL, width INTEGER NOT NULL CHECK (width > 0),"
-    "  nsamples INTEGER NOT NULL CHECK (nsamples >= 0), data BLOB NOT NULL,"
-    "  PRIMARY KEY (job_id, channel));"
+static const char v2_schema[] = V1_TABLES
     "CREATE TABLE job_counts (status TEXT PRIMARY KEY, n INTEGER NOT NULL CHECK (n >= 0))"
     "  WITHOUT ROWID;"
     "INSERT INTO job_counts (status, n) VALUES ('queued', 0), ('running', 0), ('done', 0),"
@@ -596,8 +597,7 @@ Test(store, a_version_2_database_is_migrated_and_keeps_every_job)
         store_family_insert(s, "f", "{}", "[\"n\"]", &m, 1, &family_id, &member, err, sizeof err),
         0, "%s", err);
     cr_assert(family_id == 1 && member == 4);
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
 }
 
 /* n members of one family, member i with values [i] */
@@ -634,8 +634,7 @@ static int64_t insert_family(store *s, long n, int64_t *ids)
 Test(store, a_family_round_trips_with_its_members_counts_and_table)
 {
     char path[256], err[512] = "";
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     int64_t lone = insert_job(s, "alone");
     int64_t ids[5];
     double before = wall_now();
@@ -707,15 +706,13 @@ Test(store, a_family_round_trips_with_its_members_counts_and_table)
     cr_assert_eq(raw_int(path, "SELECT count(*) FROM jobs", 0), 1);
     cr_assert_eq(raw_int(path, "SELECT count(*) FROM families", 0), 0);
     assert_counts_match_the_table(s, path);
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
 }
 
 Test(store, families_list_newest_first_with_counts_and_ten_thousand_members_insert_at_once)
 {
     char path[256], err[512] = "";
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     int64_t *ids = calloc(10000, sizeof *ids);
     cr_assert_not_null(ids);
     int64_t a = insert_family(s, 2, ids);
@@ -800,8 +797,7 @@ Test(store, a_job_round_trips_every_field_through_its_life)
     double e_max[3] = {0.25, NAN, 2.5};
     store_job j;
     int64_t id;
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
 
     /* inserted: queued, nothing measured yet */
     double t0 = wall_now();
@@ -881,8 +877,7 @@ Test(store, a_job_round_trips_every_field_through_its_life)
     cr_assert_gt(id2, id);
 
     cr_assert_eq(store_get(s, id2 + 100, &j, err, sizeof err), 1);
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
 }
 
 /* the call's return and message, with the id filled into want_fmt */
@@ -899,8 +894,7 @@ Test(store, transitions_refuse_jobs_in_the_wrong_state)
 {
     char path[256], err[512] = "";
     store_job j;
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     int64_t id = insert_job(s, "a");
     int64_t none = id + 1000;
 
@@ -961,8 +955,7 @@ Test(store, transitions_refuse_jobs_in_the_wrong_state)
     cr_assert_str_eq(err, "cannot store a job without a name");
     cr_assert_eq(store_insert(s, "x", NULL, 0, 1, "pd", "{}", &out, err, sizeof err), -1);
     cr_assert_str_eq(err, "cannot store a job of 0 bodies and 1 coordinates");
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
 }
 
 Test(store, a_finish_whose_series_fails_rolls_back_everything)
@@ -970,8 +963,7 @@ Test(store, a_finish_whose_series_fails_rolls_back_everything)
     char path[256], err[512] = "", want[256];
     store_job j;
     ctc_sim_result *got = NULL;
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     int64_t id = insert_job(s, "doomed");
     cr_assert_eq(store_start(s, id, err, sizeof err), 0, "%s", err);
     cr_assert_eq(store_progress(s, id, 0.5, err, sizeof err), 0, "%s", err);
@@ -1013,8 +1005,7 @@ Test(store, a_finish_whose_series_fails_rolls_back_everything)
     assert_same_series(r, got);
     ctc_sim_result_free(got);
     ctc_sim_result_free(r);
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
 }
 
 Test(store, recover_requeues_unfinished_jobs_and_drops_their_partial_series)
@@ -1023,8 +1014,7 @@ Test(store, recover_requeues_unfinished_jobs_and_drops_their_partial_series)
     int64_t *ids = NULL;
     int n = -1;
     store_job j;
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     ctc_sim_result *r = make_result(3, 3, 3, NULL);
 
     /* nothing to recover in an empty database */
@@ -1085,8 +1075,7 @@ Test(store, recover_requeues_unfinished_jobs_and_drops_their_partial_series)
     cr_assert_eq(j.status, STORE_CANCELLED);
     store_job_clear(&j);
     ctc_sim_result_free(r);
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
 }
 
 /* the jobs of search_finds_..., as inserted: name, preset, controller, tags (JSON or NULL) */
@@ -1141,8 +1130,7 @@ Test(store, search_finds_text_in_name_preset_controller_and_tags_and_a_tag_exact
 {
     char path[256], err[512] = "";
     int64_t ids[5];
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     for (int k = 0; k < 5; k++) {
         char spec[256];
         if (search_jobs[k].tags)
@@ -1215,8 +1203,7 @@ Test(store, list_pages_newest_first_with_a_status_filter)
     store_job *rows = NULL;
     int n = 0;
     long counts[STORE_NSTATUS];
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     /* job k: done when k % 3 == 0, running when k % 5 == 0 (and not done), else queued */
     for (int k = 0; k < 25; k++) {
         snprintf(name, sizeof name, "job %d", k);
@@ -1285,8 +1272,7 @@ Test(store, list_pages_newest_first_with_a_status_filter)
     cr_assert_str_eq(err, "unknown job status 6");
     cr_assert_null(rows);
     cr_assert_eq(n, 0);
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
 }
 
 Test(store, delete_removes_only_finished_jobs_with_their_series)
@@ -1294,8 +1280,7 @@ Test(store, delete_removes_only_finished_jobs_with_their_series)
     char path[256], err[512] = "";
     store_job j;
     ctc_sim_result *got = NULL;
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     ctc_sim_result *r = make_result(6, 3, 3, NULL);
     int64_t queued = insert_job(s, "queued");
     int64_t running = insert_job(s, "running");
@@ -1320,8 +1305,7 @@ Test(store, delete_removes_only_finished_jobs_with_their_series)
     /* ids are never reused, even the newest one's */
     cr_assert_gt(insert_job(s, "next"), done);
     ctc_sim_result_free(r);
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
 }
 
 /* ---- series ---- */
@@ -1386,8 +1370,7 @@ static void round_trip_run(const char *text)
     else
         cr_assert_eq(row.e_max, e_max);
     store_job_clear(&row);
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
 
     ctc_sim_result_free(got);
     ctc_sim_result_free(r);
@@ -1411,8 +1394,7 @@ Test(store, series_keep_every_bit_of_non_finite_and_signed_zero_values)
 {
     char path[256], err[512] = "";
     ctc_sim_result *got = NULL;
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
 
     /* odd values in every channel, including a NaN with a payload */
     ctc_sim_result *r = make_result(4, 4, 3, NULL);
@@ -1440,16 +1422,14 @@ Test(store, series_keep_every_bit_of_non_finite_and_signed_zero_values)
     cr_assert_eq(got->width[CTC_CH_TAU], 3);
     ctc_sim_result_free(got);
     ctc_sim_result_free(r);
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
 }
 
 Test(store, series_are_absent_until_a_run_is_stored)
 {
     char path[256], err[512] = "";
     ctc_sim_result *got = NULL;
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     int64_t queued = insert_job(s, "queued");
     int64_t running = insert_job(s, "running");
     cr_assert_eq(store_start(s, running, err, sizeof err), 0, "%s", err);
@@ -1482,8 +1462,7 @@ static void assert_damaged(store *s, int64_t id, const char *want)
 Test(store, a_damaged_series_row_is_an_error_not_a_crash)
 {
     char path[256], want[256];
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     ctc_sim_result *r = make_result(2, 3, 3, NULL);
     int64_t id = finished_job(s, "damaged", STORE_DONE, r);
     ctc_sim_result_free(r);
@@ -1535,8 +1514,7 @@ static double *read_in_pieces(store *s, int64_t id, int c, size_t bytes, size_t 
 Test(store, a_series_read_in_pieces_has_its_shape_and_every_bit)
 {
     char path[256], err[512] = "";
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     /* 3001 samples, q 4 wide, tau 3 wide: rows of several SQLite overflow pages */
     ctc_sim_result *r = make_result(3001, 4, 3, NULL);
     r->ch[CTC_CH_Q][5] = NAN, r->ch[CTC_CH_Q][6] = -0.0, r->ch[CTC_CH_TAU][7] = -INFINITY;
@@ -1652,8 +1630,7 @@ Test(store, a_write_lock_held_elsewhere_is_a_transient_fault_that_health_reports
     char path[256], err[512] = "";
     int64_t id = 0;
     long counts[STORE_NSTATUS];
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     store_health *h = store_health_new();
     cr_assert_not_null(h);
     store_attach(s, h);
@@ -1712,8 +1689,7 @@ Test(store, a_write_lock_held_elsewhere_is_a_transient_fault_that_health_reports
 Test(store, a_connection_that_does_not_wait_reports_no_lock_to_health)
 {
     char path[256], err[512] = "";
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     int64_t id = insert_job(s, "running");
     cr_assert_eq(store_start(s, id, err, sizeof err), 0, "%s", err);
     store_health *h = store_health_new();
@@ -1736,8 +1712,7 @@ Test(store, a_full_database_fails_the_series_keeps_what_is_stored_and_a_delete_f
 {
     char path[256], err[512] = "";
     store_job j;
-    path_of(path, sizeof path, "ctcsim.db");
-    store *s = open_ok(path);
+    store *s = open_new(path, sizeof path);
     store_health *h = store_health_new();
     store_attach(s, h);
     ctc_sim_result *small = make_result(50, 3, 3, NULL);
@@ -1817,8 +1792,7 @@ Test(store, reserve_allocates_the_logs_blocks_without_changing_its_size)
                   (long long)after.st_blocks);
     /* the log still reads: the reserved blocks lie past its end */
     insert_job(s, "two");
-    store_close(s);
-    assert_integrity(path);
+    close_intact(s, path);
     cr_assert_eq(raw_int(path, "SELECT count(*) FROM jobs", 0), 2);
 }
 

@@ -48,6 +48,7 @@
 #include <string.h>
 
 #include "ctc.h"
+#include "frames.h"
 #include "job_json.h"
 #include "model.h"
 #include "oracle.h"
@@ -80,23 +81,11 @@ static xf xf_id(void)
     return t;
 }
 
-static void mm(const double *a, const double *b, double *c)
-{
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            c[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
-}
-
-static void mv(const double *R, const double *x, double *y)
-{
-    for (int i = 0; i < 3; i++) y[i] = R[3 * i] * x[0] + R[3 * i + 1] * x[1] + R[3 * i + 2] * x[2];
-}
-
 static xf xf_mul(xf a, xf b)
 {
     xf t;
-    mm(a.R, b.R, t.R);
-    mv(a.R, b.p, t.p);
+    test_m3_mul(t.R, a.R, b.R);
+    test_m3_mulv(t.p, a.R, b.p);
     for (int i = 0; i < 3; i++) t.p[i] += a.p[i];
     return t;
 }
@@ -108,28 +97,17 @@ static void cross(const double *a, const double *b, double *c)
     c[0] = x, c[1] = y, c[2] = z;
 }
 
-/* rotation by angle q about unit axis u (Rodrigues) */
-static void rot_axis(const double *u, double q, double *R)
-{
-    double c = cos(q), s = sin(q), v = 1 - c;
-    double x = u[0], y = u[1], z = u[2];
-    double r[9] = {c + x * x * v,     x * y * v - z * s, x * z * v + y * s,
-                   y * x * v + z * s, c + y * y * v,     y * z * v - x * s,
-                   z * x * v - y * s, z * y * v + x * s, c + z * z * v};
-    memcpy(R, r, sizeof r);
-}
-
 /* URDF's rpy: Rz(y) Ry(p) Rx(r), written as the product of the three elementary rotations */
 static xf xf_rpy(double x, double y, double z, double r, double p, double yw)
 {
     static const double ex[3] = {1, 0, 0}, ey[3] = {0, 1, 0}, ez[3] = {0, 0, 1};
     double Rx[9], Ry[9], Rz[9], t[9];
     xf o;
-    rot_axis(ex, r, Rx);
-    rot_axis(ey, p, Ry);
-    rot_axis(ez, yw, Rz);
-    mm(Ry, Rx, t);
-    mm(Rz, t, o.R);
+    test_m3_rot(Rx, ex, r);
+    test_m3_rot(Ry, ey, p);
+    test_m3_rot(Rz, ez, yw);
+    test_m3_mul(t, Ry, Rx);
+    test_m3_mul(o.R, Rz, t);
     o.p[0] = x, o.p[1] = y, o.p[2] = z;
     return o;
 }
@@ -165,11 +143,11 @@ static int oracle_dynamics(const tjoint *J, const int *par, int n, const double 
         double u[3], len = sqrt(J[i].axis[0] * J[i].axis[0] + J[i].axis[1] * J[i].axis[1] +
                                 J[i].axis[2] * J[i].axis[2]);
         for (int k = 0; k < 3; k++) u[k] = J[i].axis[k] / len;
-        mv(Tj.R, u, z[i]);
+        test_m3_mulv(z[i], Tj.R, u);
         memcpy(o[i], Tj.p, sizeof o[i]);
         xf mot = xf_id();
         col[i] = J[i].type == T_FIXED ? -1 : nv++;
-        if (J[i].type == T_REV) rot_axis(u, q[col[i]], mot.R);
+        if (J[i].type == T_REV) test_m3_rot(mot.R, u, q[col[i]]);
         if (J[i].type == T_PRI)
             for (int k = 0; k < 3; k++) mot.p[k] = q[col[i]] * u[k];
         Tl[i] = xf_mul(xf_mul(Tj, mot), J[i].B);
@@ -204,12 +182,12 @@ static int oracle_dynamics(const tjoint *J, const int *par, int n, const double 
     /* every link, a massless one too: its rotational inertia counts (Puma 560's link 1) */
     for (int i = 0; i < n; i++) {
         double pc[3], Iw[9], RI[9], Rt[9];
-        mv(Rl[i], J[i].com, pc);
+        test_m3_mulv(pc, Rl[i], J[i].com);
         for (int k = 0; k < 3; k++) pc[k] += pl[i][k];
         for (int a = 0; a < 3; a++)
             for (int b = 0; b < 3; b++) Rt[3 * a + b] = Rl[i][3 * b + a];
-        mm(Rl[i], J[i].I, RI);
-        mm(RI, Rt, Iw);
+        test_m3_mul(RI, Rl[i], J[i].I);
+        test_m3_mul(Iw, RI, Rt);
         double Jv[MAXJ][3] = {{0}}, Jw[MAXJ][3] = {{0}};
         double vc[3] = {0, 0, 0};
         for (int j = 0; j <= i; j++) {
@@ -243,13 +221,13 @@ static int oracle_dynamics(const tjoint *J, const int *par, int n, const double 
             }
         }
         double Iaw[3], Iww[3], gyro[3], rot[3];
-        mv(Iw, aw, Iaw);
-        mv(Iw, w[i], Iww);
+        test_m3_mulv(Iaw, Iw, aw);
+        test_m3_mulv(Iww, Iw, w[i]);
         cross(w[i], Iww, gyro);
         for (int k = 0; k < 3; k++) rot[k] = Iaw[k] + gyro[k];
         for (int a = 0; a < nv; a++) {
             double IJa[3];
-            mv(Iw, Jw[a], IJa);
+            test_m3_mulv(IJa, Iw, Jw[a]);
             for (int b = 0; b < nv; b++) {
                 M[a * nv + b] +=
                     J[i].mass * (Jv[a][0] * Jv[b][0] + Jv[a][1] * Jv[b][1] + Jv[a][2] * Jv[b][2]) +
@@ -575,7 +553,7 @@ static void ur5_urdf(buf *b)
     for (int i = 0; i < 6; i++) {
         xf B = dh_standard(ur5_a[i], ur5_alpha[i], ur5_d[i], 0);
         double c[3];
-        mv(B.R, ur5_com[i], c);
+        test_m3_mulv(c, B.R, ur5_com[i]);
         for (int k = 0; k < 3; k++) c[k] += B.p[k];
         put(b,
             "  <link name=\"link%d\"><inertial><origin xyz=\"%.17g %.17g %.17g\" rpy=\"%.17g 0 "
@@ -821,8 +799,8 @@ static int frames_oracle(const tlink *L, int n, tjoint *J)
         double RI[9], Rt[9];
         for (int a = 0; a < 3; a++)
             for (int c = 0; c < 3; c++) Rt[3 * a + c] = in.R[3 * c + a];
-        mm(in.R, I, RI);
-        mm(RI, Rt, t->I);
+        test_m3_mul(RI, in.R, I);
+        test_m3_mul(t->I, RI, Rt);
         t->mass = l->mass;
         memcpy(t->com, in.p, sizeof t->com);
     }
@@ -1014,9 +992,9 @@ Test(urdf, panda_with_fingers_converts_to_a_tree_of_nine_bodies)
     memcpy(R7, acc.R, sizeof R7);
     xf hand = xf_rpy(0, 0, 0, 0, 0, -0.785398163397448);
     memcpy(Rz, hand.R, sizeof Rz);
-    mm(R7, Rz, t);
+    test_m3_mul(t, R7, Rz);
     double y[3] = {0, 1, 0};
-    mv(t, y, expect);
+    test_m3_mulv(expect, t, y);
     for (int i = 0; i < 3; i++) {
         cr_assert_float_eq(cJSON_GetArrayItem(axis, i)->valuedouble, expect[i], 1e-15);
         cr_assert_float_eq(cJSON_GetArrayItem(axis_r, i)->valuedouble, -expect[i], 1e-15);

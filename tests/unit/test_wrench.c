@@ -21,52 +21,9 @@
 #include "job_json.h"
 #include "kinematics.h"
 #include "sim.h"
+#include "job_fixture.h"
 
 #define PI 3.14159265358979323846
-
-/* single quotes to double quotes, into a malloc'd string */
-static char *json(const char *text)
-{
-    char *s = strdup(text);
-    cr_assert_not_null(s);
-    for (char *c = s; *c; c++)
-        if (*c == '\'') *c = '"';
-    return s;
-}
-
-static job *parse(const char *text, job_error *err)
-{
-    char *doc = json(text);
-    job *j = NULL;
-    int rc = job_parse(doc, strlen(doc), &j, err);
-    free(doc);
-    return rc == 0 ? j : NULL;
-}
-
-static job *parse_ok(const char *text)
-{
-    job_error err;
-    job *j = parse(text, &err);
-    cr_assert_not_null(j, "job rejected at \"%s\": %s", err.field, err.message);
-    return j;
-}
-
-static ctc_sim_result *run(const job *j)
-{
-    ctc_sim_result *r = NULL;
-    char err[256] = "";
-    cr_assert_eq(ctc_sim_run(&j->spec, NULL, &r, err, sizeof err), CTC_OK, "%s", err);
-    cr_assert_eq(r->status, CTC_RUN_DONE, "%s", r->message);
-    return r;
-}
-
-#define ROD                                                                                        \
-    "{'mass':1,'com':[0,-0.5,0],'inertia':[0.0833333333333333,0.0833333333333333,"                 \
-    "0.0833333333333333],'joint':{'type':'revolute','axis':[0,0,1]}}"
-#define ROD2                                                                                       \
-    "{'mass':1,'com':[0,-0.5,0],'inertia':[0.0833333333333333,0.0833333333333333,"                 \
-    "0.0833333333333333],'joint':{'type':'revolute','axis':[0,0,1],'location':[0,-1,0]}}"
-#define INTEG "'integrator':{'method':'dopri5','rtol':1e-11,'atol':1e-13}"
 
 /* the arm's point p (body k's frame) in the world at q: o_k + R(theta_k) p */
 static void arm_point(const double q[2], int k, const double p[2], double x[2])
@@ -115,8 +72,9 @@ static const arm_wrench held_wrenches[2] = {
 
 Test(wrench, generalised_forces_match_the_virtual_work_of_the_arm)
 {
-    job *j = parse_ok("{'scene':{'gravity':[0,-9.81,0],'bodies':[" ROD "," ROD2 "]},"
-                      "'controller':{'type':'none'},'duration':1," HELD_WRENCHES "}");
+    job *j = fixture_parse_ok("{'scene':{'gravity':[0,-9.81,0],'bodies':[" FIXTURE_ROD
+                              "," FIXTURE_ROD2 "]},"
+                              "'controller':{'type':'none'},'duration':1," HELD_WRENCHES "}");
     ctc_model *m = NULL;
     char err[256];
     cr_assert_eq(ctc_model_build(&j->spec.chain, &m, err, sizeof err), CTC_OK, "%s", err);
@@ -142,11 +100,12 @@ Test(wrench, generalised_forces_match_the_virtual_work_of_the_arm)
 Test(wrench, held_pose_settles_at_the_closed_form_steady_error_of_pd)
 {
     const double qd[2] = {0.4, -0.3}, kp = 100;
-    job *j = parse_ok("{'scene':{'gravity':[0,-9.81,0],'q0':[0.4,-0.3],'bodies':[" ROD "," ROD2
-                      "]},'controller':{'type':'pd_gravity','kp':100,'kv':20},"
-                      "'trajectory':[{'type':'constant','value':0.4},{'type':'constant','value':"
-                      "-0.3}],'duration':20," HELD_WRENCHES "," INTEG "}");
-    ctc_sim_result *r = run(j);
+    job *j =
+        fixture_parse_ok("{'scene':{'gravity':[0,-9.81,0],'q0':[0.4,-0.3],'bodies':[" FIXTURE_ROD
+                         "," FIXTURE_ROD2 "]},'controller':{'type':'pd_gravity','kp':100,'kv':20},"
+                         "'trajectory':[{'type':'constant','value':0.4},{'type':'constant','value':"
+                         "-0.3}],'duration':20," HELD_WRENCHES "," FIXTURE_INTEG "}");
+    ctc_sim_result *r = fixture_run_done(&j->spec);
     /* kp (q_d - q) = -tau_ext(q): q = q_d + tau_ext(q) / kp, a contraction for kp this large */
     double q[2] = {qd[0], qd[1]}, tau[2];
     for (int it = 0; it < 200; it++) {
@@ -168,21 +127,22 @@ Test(wrench, held_pose_settles_at_the_closed_form_steady_error_of_pd)
 
 Test(wrench, a_known_wrench_leaves_the_linear_error_law_of_ctc)
 {
-    job *j = parse_ok("{'scene':{'gravity':[0,-9.81,0],'bodies':[" ROD "," ROD2 "]},"
-                      "'controller':{'type':'pd','kp':100,'kv':20},"
-                      "'trajectory':{'type':'sine','amplitude':0.6,'period':1.5},'duration':3,"
-                      "'wrenches':[{'body':1,'point':[0.2,-0.7,0],'force':[3,-2,0],'profile':"
-                      "'sine','period':0.4,'known':true},{'body':0,'point':[0,-0.5,0],'torque':"
-                      "[0,0,0.8],'frame':'body','profile':'step','time':1.25,'known':true}],"
-                      "'output':{'interval':0.01}," INTEG "}");
-    ctc_sim_result *r = run(j);
+    job *j = fixture_parse_ok(
+        "{'scene':{'gravity':[0,-9.81,0],'bodies':[" FIXTURE_ROD "," FIXTURE_ROD2 "]},"
+        "'controller':{'type':'pd','kp':100,'kv':20},"
+        "'trajectory':{'type':'sine','amplitude':0.6,'period':1.5},'duration':3,"
+        "'wrenches':[{'body':1,'point':[0.2,-0.7,0],'force':[3,-2,0],'profile':"
+        "'sine','period':0.4,'known':true},{'body':0,'point':[0,-0.5,0],'torque':"
+        "[0,0,0.8],'frame':'body','profile':'step','time':1.25,'known':true}],"
+        "'output':{'interval':0.01}," FIXTURE_INTEG "}");
+    ctc_sim_result *r = fixture_run_done(&j->spec);
     cr_assert(isfinite(r->metrics.errdyn_dev), "tracked: every wrench is known");
     cr_expect_leq(r->metrics.errdyn_dev, 1e-8, "deviation from the linear law %.3e",
                   r->metrics.errdyn_dev);
     cr_log_info("known wrenches: deviation from the linear law %.3e", r->metrics.errdyn_dev);
     ctc_sim_result_free(r);
     j->wrenches[0].known = j->wrenches[1].known = 0;
-    r = run(j);
+    r = fixture_run_done(&j->spec);
     cr_expect_gt(r->metrics.e_max[1], 0.01, "unknown, the same wrenches push the arm off");
     cr_log_info("unknown wrenches: max |e| %.3g, %.3g rad", r->metrics.e_max[0],
                 r->metrics.e_max[1]);
@@ -193,13 +153,14 @@ Test(wrench, a_known_wrench_leaves_the_linear_error_law_of_ctc)
 Test(wrench, sine_push_on_a_passive_rod_does_the_work_the_energy_gains)
 {
     const double period = 0.7, phase = 0.3, f[2] = {2, 0.5}, n = 0.4, dt = 1e-3;
-    job *j = parse_ok("{'scene':{'gravity':[0,-9.81,0],'q0':[0.5],'bodies':[" ROD "]},"
-                      "'controller':{'type':'none'},'duration':2,"
-                      "'wrenches':[{'body':0,'point':[0,-1,0],'force':[2,0.5,0],'torque':[0,0,0.4],"
-                      "'profile':'sine','period':0.7,'phase':0.3}],"
-                      "'output':{'interval':0.001,'end_effector':{'body':0,'point':[0,-1,0]}},"
-                      "'integrator':{'method':'dopri5','rtol':1e-12,'atol':1e-14}}");
-    ctc_sim_result *r = run(j);
+    job *j = fixture_parse_ok(
+        "{'scene':{'gravity':[0,-9.81,0],'q0':[0.5],'bodies':[" FIXTURE_ROD "]},"
+        "'controller':{'type':'none'},'duration':2,"
+        "'wrenches':[{'body':0,'point':[0,-1,0],'force':[2,0.5,0],'torque':[0,0,0.4],"
+        "'profile':'sine','period':0.7,'phase':0.3}],"
+        "'output':{'interval':0.001,'end_effector':{'body':0,'point':[0,-1,0]}},"
+        "'integrator':{'method':'dopri5','rtol':1e-12,'atol':1e-14}}");
+    ctc_sim_result *r = fixture_run_done(&j->spec);
     cr_assert_eq(r->nsamples, 2001);
     double work = 0;
     for (int s = 0; s < r->nsamples; s++) {
@@ -231,13 +192,12 @@ Test(wrench, profiles_follow_their_formulas)
 }
 
 #define W_JOB(ctrl, wrenches)                                                                      \
-    "{'scene':{'bodies':[" ROD "]},'controller':" ctrl ",'duration':1,'wrenches':" wrenches "}"
+    "{'scene':{'bodies':[" FIXTURE_ROD "]},'controller':" ctrl                                     \
+    ",'duration':1,'wrenches':" wrenches "}"
 
 Test(wrench, bad_wrenches_are_refused_naming_the_field)
 {
-    static const struct {
-        const char *text, *field, *message;
-    } bad[] = {
+    static const fixture_bad_job bad[] = {
         {W_JOB("{'type':'none'}", "[{'body':1}]"), "wrenches[0].body",
          "must be a body index, a whole number from 0 to 0 (got 1)"},
         {W_JOB("{'type':'none'}", "[{'force':[1,0,0]}]"), "wrenches[0].body", "is required"},
@@ -258,18 +218,10 @@ Test(wrench, bad_wrenches_are_refused_naming_the_field)
         {"{'preset':'five_bar_pd','wrenches':[{'body':0}]}", "wrenches",
          "needs an open chain or tree (the scene has a loop)"},
     };
-    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-        job_error err;
-        job *j = parse(bad[i].text, &err);
-        cr_expect_null(j, "case %zu accepted", i);
-        job_free(j);
-        if (j) continue;
-        cr_expect_str_eq(err.field, bad[i].field, "case %zu", i);
-        cr_expect_str_eq(err.message, bad[i].message, "case %zu", i);
-    }
+    fixture_expect_refused(bad, sizeof bad / sizeof bad[0]);
     /* the library refuses what the format would not give it */
     job_error err;
-    job *j = parse(W_JOB("{'type':'none'}", "[{'body':0}]"), &err);
+    job *j = fixture_parse(W_JOB("{'type':'none'}", "[{'body':0}]"), &err);
     cr_assert_not_null(j, "%s: %s", err.field, err.message);
     char msg[256];
     j->wrenches[0].body = 4;
