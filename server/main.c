@@ -143,8 +143,8 @@ static const setting settings[] = {
     {"--max-series-streams", "CTCSIM_MAX_SERIES_STREAMS", SETTING_INTEGER, AT(max_series_streams),
      1, 100000, "N", "large series replies (over 1048576 values) sent at once; more get 503"},
     {"--db-max-size", "CTCSIM_DB_MAX_SIZE", SETTING_BYTES, AT(db_max_size), 0, 1LL << 50, "BYTES",
-     "largest size of the database file (0: as the disk allows); past it writes fail as on a "
-     "full disk (503 DATABASE_FULL) and DELETE frees room"},
+     "SQLite only: largest size of the database file (0: as the disk allows); past it writes "
+     "fail as on a full disk (503 DATABASE_FULL) and DELETE frees room"},
 };
 
 #define NSETTINGS (sizeof settings / sizeof settings[0])
@@ -182,8 +182,10 @@ static void print_help(const server_settings *def)
     printf("usage: ctcsim-server [OPTION ...]\n"
            "\n"
            "The ctcsim HTTP/JSON service: runs computed torque control simulations submitted\n"
-           "as jobs (POST /api/jobs), stores them and their results in SQLite, and serves the\n"
-           "web page. Every option also reads from its environment variable; a flag wins.\n"
+           "as jobs (POST /api/jobs), stores them and their results in a database (an SQLite\n"
+           "file for one process, or PostgreSQL shared by API and worker processes: --db,\n"
+           "--role), and serves the web page. Every option also reads from its environment\n"
+           "variable; a flag wins.\n"
            "\n");
     for (size_t i = 0; i < NSETTINGS; i++) {
         const setting *st = &settings[i];
