@@ -57,6 +57,28 @@ test('a worker killed with SIGKILL mid-job: the job runs again elsewhere, same s
     }
 });
 
+test('health on PostgreSQL counts the whole database: workers this process\'s, busy and jobs every one\'s', { skip: SKIP }, async () => {
+    const srv = await startServer({ workers: 2 });
+    /* a second API process on the same database, without workers */
+    const other = await startServer({ dir: srv.dir, workers: 1, args: [] });
+    await Promise.all(other.workers.map((w) => w.stop()));
+    other.workers = [];
+    try {
+        const id = (await submit(srv, MEDIUM)).id;
+        await waitJob(srv, id, { until: (j) => j.status === 'running', timeoutMs: 20000 });
+        for (const s of [srv, other]) {
+            const h = (await s.get('/api/health')).json;
+            assert.equal(h.workers, 0, `an API process has no workers: ${JSON.stringify(h)}`);
+            assert.equal(h.busy, 1, `the job running in a worker process: ${JSON.stringify(h)}`);
+            assert.equal(h.jobs.running, 1, JSON.stringify(h));
+        }
+        await srv.del(`/api/jobs/${id}`);
+    } finally {
+        await other.stop();
+        await srv.stop();
+    }
+});
+
 test('the API process killed with SIGKILL: the workers go on, a new API process answers', { skip: SKIP }, async () => {
     const first = await startServer({ workers: 2 });
     const ids = [];
