@@ -705,26 +705,15 @@ static int path_job(const http_request *req, http_reply *rep, const routes_ctx *
     return rc == 0 ? 0 : -1;
 }
 
-/* GET /api/jobs/{id}: the whole job, with queue_position (1 = next to start; null unless it
- * waits in this server's queue); ?brief=1 leaves out spec and metrics (a running job's page
- * polls it every second). */
-static void get_job(const http_request *req, http_reply *rep, void *arg)
+/* The answer to GET /api/jobs/{id} for a row read: 200 with the whole job (full) or its brief
+ * form, and queue_position. */
+static void reply_get_job(http_reply *rep, const routes_ctx *ctx, const store_job *row, int full)
 {
-    routes_ctx *ctx = arg;
-    store_job row = {0};
-    const char *brief = http_query(req, "brief");
-    if (brief && strcmp(brief, "0") != 0 && strcmp(brief, "1") != 0) {
-        http_reply_error(rep, 400, "INVALID_QUERY", "brief", "brief must be 0 or 1 (got \"%s\")",
-                         brief);
-        return;
-    }
-    if (path_job(req, rep, ctx, &row) != 0) return;
-    int full = !brief || strcmp(brief, "0") == 0;
-    cJSON *o = full ? job_full(&row) : job_row(&row);
+    cJSON *o = full ? job_full(row) : job_row(row);
     if (o && !full)
-        cJSON_AddItemToObject(o, "message",
-                              string_or_null(row.message && row.message[0] ? row.message : NULL));
-    int pos = row.status == STORE_QUEUED ? jobq_position(ctx->queue, row.id) : 0;
+        cJSON_AddItemToObject(
+            o, "message", string_or_null(row->message && row->message[0] ? row->message : NULL));
+    int pos = row->status == STORE_QUEUED ? jobq_position(ctx->queue, row->id) : 0;
     cJSON *place = pos > 0 ? cJSON_CreateNumber(pos) : cJSON_CreateNull();
     if (o && !(full ? cJSON_ReplaceItemInObjectCaseSensitive(o, "queue_position", place)
                     : cJSON_AddItemToObject(o, "queue_position", place))) {
@@ -733,6 +722,57 @@ static void get_job(const http_request *req, http_reply *rep, void *arg)
     }
     if (!o) cJSON_Delete(place);
     http_reply_json(rep, 200, o);
+}
+
+/* GET /api/jobs/{id}?wait: what its deferred part needs. */
+typedef struct get_wait {
+    const routes_ctx *ctx;
+    int64_t id;
+    int full;
+    double wait; /* s */
+} get_wait;
+
+/* Runs off libmicrohttpd's threads (http_defer): waits for the job, reads it again, answers. */
+static void finish_get_wait(http_reply *rep, void *arg)
+{
+    get_wait *w = arg;
+    (void)wait_for_job(w->ctx, w->id, w->wait);
+    store_job row = {0};
+    char err[256] = "";
+    store *s = thread_store(w->ctx, rep);
+    int rc = s ? store_get(s, w->id, &row, err, sizeof err) : -1;
+    if (rc == 0) reply_get_job(rep, w->ctx, &row, w->full);
+    if (rc == 1) http_reply_error(rep, 404, "NOT_FOUND", "id", "no job %" PRId64, w->id);
+    if (rc < 0 && s) database_failed(rep, "reading a job", err);
+    store_job_clear(&row);
+    free(w);
+}
+
+/* GET /api/jobs/{id}: the whole job, with queue_position (1 = next to start; null unless it
+ * waits in this server's queue); ?brief=1 leaves out spec and metrics (a running job's page
+ * polls it every second); ?wait=S holds the answer while the job is queued or running, up to S
+ * (off the HTTP threads, in one of the --max-waiters places; past them answered at once). */
+static void get_job(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    store_job row = {0};
+    double wait;
+    const char *brief = http_query(req, "brief");
+    if (brief && strcmp(brief, "0") != 0 && strcmp(brief, "1") != 0) {
+        http_reply_error(rep, 400, "INVALID_QUERY", "brief", "brief must be 0 or 1 (got \"%s\")",
+                         brief);
+        return;
+    }
+    if (query_wait(req, rep, ctx, &wait) != 0 || path_job(req, rep, ctx, &row) != 0) return;
+    int full = !brief || strcmp(brief, "0") == 0;
+    get_wait *w = wait > 0 && !job_finished(row.status) ? malloc(sizeof *w) : NULL;
+    if (w) *w = (get_wait){.ctx = ctx, .id = row.id, .full = full, .wait = wait};
+    if (w && http_defer(rep, finish_get_wait, w) == 0) {
+        store_job_clear(&row);
+        return;
+    }
+    free(w); /* no wait, or every waiting place taken: the job as it is */
+    reply_get_job(rep, ctx, &row, full);
     store_job_clear(&row);
 }
 
