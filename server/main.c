@@ -106,7 +106,8 @@ static const setting settings[] = {
     {"--job-threads", "CTCSIM_JOB_THREADS", SETTING_INTEGER, AT(job_threads), 1, CTC_MAX_THREADS,
      "N", "most threads one job's dynamics may use (its \"threads\"; more are refused with 400)"},
     {"--max-queue", "CTCSIM_MAX_QUEUE", SETTING_INTEGER, AT(max_queue), 1, 1000000, "N",
-     "jobs waiting at most; more are refused with 503"},
+     "single jobs waiting at most (on PostgreSQL in the whole database, checked atomically "
+     "with the insert); more are refused with 503"},
     {"--max-body", "CTCSIM_MAX_BODY", SETTING_BYTES, AT(max_body), 1024, 1LL << 30, "BYTES",
      "largest request body (suffix K or M for KiB, MiB)"},
     {"--token", "CTCSIM_TOKEN", SETTING_TEXT, AT(token), 0, 0, "TOKEN",
@@ -461,6 +462,7 @@ int main(int argc, char **argv)
                       .job_threads = (int)cfg.job_threads,
                       .jobs_by_client = client_count_new(),
                       .max_jobs_per_client = (unsigned)cfg.max_jobs_per_client,
+                      .max_queue = (long)cfg.max_queue,
                       .max_family = (long)cfg.max_family,
                       .max_series_streams = (int)cfg.max_series_streams,
                       .db_max_size = cfg.db_max_size,

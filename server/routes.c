@@ -558,8 +558,16 @@ static void post_job_work(http_reply *rep, const routes_ctx *ctx, const char *cl
 
     /* stored first, then queued: a job answered 202 is in the database */
     int64_t id;
-    if (store_insert(s, j->name, j->preset, j->spec.chain.nbodies, j->nv,
-                     ctc_ctrl_type_name(j->spec.controller), spec, &id, err, sizeof err) != 0) {
+    int stored =
+        store_insert_bounded(s, ctx->max_queue, j->name, j->preset, j->spec.chain.nbodies, j->nv,
+                             ctc_ctrl_type_name(j->spec.controller), spec, &id, err, sizeof err);
+    if (stored == 2) {
+        rep->retry_after = ROUTES_RETRY_AFTER;
+        http_reply_error(rep, 503, "QUEUE_FULL", "",
+                         "the queue is full; try again in a few seconds");
+        goto done;
+    }
+    if (stored != 0) {
         database_failed(rep, "storing the job", err);
         goto done;
     }

@@ -1063,8 +1063,17 @@ done:
 int store_insert(store *s, const char *name, const char *preset, int nbodies, int nv,
                  const char *controller, const char *spec, int64_t *id, char *err, size_t errlen)
 {
+    return store_insert_bounded(s, 0, name, preset, nbodies, nv, controller, spec, id, err, errlen);
+}
+
+int store_insert_bounded(store *s, long max_queued, const char *name, const char *preset,
+                         int nbodies, int nv, const char *controller, const char *spec, int64_t *id,
+                         char *err, size_t errlen)
+{
     if (s->pg)
-        return store_pg_insert(s->pg, name, preset, nbodies, nv, controller, spec, id, err, errlen);
+        return store_pg_insert(s->pg, max_queued, name, preset, nbodies, nv, controller, spec, id,
+                               err, errlen);
+    /* SQLite: one process owns the file, and its queue holds the bound (jobq_submit) */
     call_begin(s);
     return write_end(s, insert_job(s, name, preset, nbodies, nv, controller, spec, id, err, errlen),
                      1);

@@ -145,6 +145,12 @@ static const char *const migrations[STORE_PG_SCHEMA_VERSION] = {
     "(jobs.metrics::json -> 'e_final')::text, (jobs.metrics::json -> 'e_rms')::text, "             \
     "nullif((jobs.spec::json -> 'tags')::text, 'null')"
 #define ACTIVE "status IN ('queued', 'running')"
+/* a queued job no cancel stops; jobs_queued_lanes's condition, which the claim's index scans
+ * must repeat to use it */
+#define CLAIMABLE "status = 'queued' AND NOT cancel_requested"
+/* the advisory locks' keys: the schema's migration, and the queue's bound (store_pg_insert) */
+#define LOCK_SCHEMA "7237151624"
+#define LOCK_QUEUE_BOUND "7237151625"
 #define DB_NOW "extract(epoch from clock_timestamp())::float8"
 
 struct store_pg {
@@ -456,7 +462,7 @@ static int migrate(store_pg *p, const char *shown, char *err, size_t errlen)
     PGresult *r = NULL;
     if (run_simple(p, "BEGIN", err, errlen, "cannot open the database") != 0) goto done;
     /* one migration at a time across every process that opens the database */
-    r = run(p, "SELECT pg_advisory_xact_lock(7237151624)", 0, NULL, 0, err, errlen,
+    r = run(p, "SELECT pg_advisory_xact_lock(" LOCK_SCHEMA ")", 0, NULL, 0, err, errlen,
             "locking the schema");
     if (!r) goto done;
     PQclear(r);
@@ -602,8 +608,9 @@ int store_pg_reserve(store_pg *p, long long bytes, char *err, size_t errlen)
 
 /* ---- jobs ---- */
 
-int store_pg_insert(store_pg *p, const char *name, const char *preset, int nbodies, int nv,
-                    const char *controller, const char *spec, int64_t *id, char *err, size_t errlen)
+int store_pg_insert(store_pg *p, long max_queued, const char *name, const char *preset, int nbodies,
+                    int nv, const char *controller, const char *spec, int64_t *id, char *err,
+                    size_t errlen)
 {
     call_begin(p);
     if (!name || !controller || !spec) {
@@ -617,20 +624,46 @@ int store_pg_insert(store_pg *p, const char *name, const char *preset, int nbodi
         set_err(err, errlen, "cannot store a job of %d bodies and %d coordinates", nbodies, nv);
         return -1;
     }
+    int rc = -1;
+    PGresult *r = NULL;
     char created[40], nb[16], nvs[16], what[300];
     fmt_real(created, sizeof created, now_s());
     snprintf(nb, sizeof nb, "%d", nbodies);
     snprintf(nvs, sizeof nvs, "%d", nv);
     snprintf(what, sizeof what, "cannot store job '%.200s'", name);
+    if (max_queued > 0) {
+        /* the bound's check and the insert in one transaction, one at a time across every
+           process: the lock is taken before the count's statement, whose snapshot then sees
+           every insert committed under the lock before it */
+        if (run_simple(p, "BEGIN", err, errlen, what) != 0) goto done;
+        r = run(p, "SELECT pg_advisory_xact_lock(" LOCK_QUEUE_BOUND ")", 0, NULL, 0, err, errlen,
+                what);
+        if (!r) goto done;
+        PQclear(r);
+        r = run(p, "SELECT count(*) FROM jobs WHERE " CLAIMABLE " AND coalesce(family_id, 0) = 0",
+                0, NULL, 0, err, errlen, what);
+        if (!r) goto done;
+        long queued = atol(PQgetvalue(r, 0, 0));
+        PQclear(r);
+        r = NULL;
+        if (queued >= max_queued) {
+            rc = 2;
+            goto done;
+        }
+    }
     const char *v[] = {name, preset, created, nb, nvs, controller, spec};
-    PGresult *r = run(p,
-                      "INSERT INTO jobs (name, preset, status, progress, created, nbodies, nv, "
-                      "controller, spec) VALUES ($1, $2, 'queued', 0, $3, $4, $5, $6, $7) "
-                      "RETURNING id",
-                      7, v, 0, err, errlen, what);
-    if (r) *id = strtoll(PQgetvalue(r, 0, 0), NULL, 10);
+    r = run(p,
+            "INSERT INTO jobs (name, preset, status, progress, created, nbodies, nv, controller, "
+            "spec) VALUES ($1, $2, 'queued', 0, $3, $4, $5, $6, $7) RETURNING id",
+            7, v, 0, err, errlen, what);
+    if (!r) goto done;
+    *id = strtoll(PQgetvalue(r, 0, 0), NULL, 10);
+    if (max_queued > 0 && run_simple(p, "COMMIT", err, errlen, what) != 0) goto done;
+    rc = 0;
+done:
     PQclear(r);
-    return write_end(p, r ? 0 : -1, 1);
+    rollback(p);
+    return write_end(p, rc, 1);
 }
 
 int store_pg_recover(store_pg *p, int64_t **ids, int *n, char *err, size_t errlen)
@@ -1219,9 +1252,6 @@ int store_pg_count(store_pg *p, long counts[STORE_NSTATUS], char *err, size_t er
 
 /* ---- claims, heartbeats, notifications ---- */
 
-/* a queued job no cancel stops; jobs_queued_lanes's condition, which the claim's index scans
- * must repeat to use it */
-#define CLAIMABLE "status = 'queued' AND NOT cancel_requested"
 /* the oldest jobs of each lane the claim considers: more than one, so that claims at the same
  * moment, which skip each other's locked rows, still find one in the lane served least
  * recently */

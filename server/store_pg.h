@@ -129,8 +129,8 @@ store_fault store_pg_last_fault(const store_pg *p);
 void store_pg_attach(store_pg *p, store_health *h);
 int store_pg_probe(store_pg *p, char *err, size_t errlen);
 int store_pg_reserve(store_pg *p, long long bytes, char *err, size_t errlen);
-int store_pg_insert(store_pg *p, const char *name, const char *preset, int nbodies, int nv,
-                    const char *controller, const char *spec, int64_t *id, char *err,
+int store_pg_insert(store_pg *p, long max_queued, const char *name, const char *preset, int nbodies,
+                    int nv, const char *controller, const char *spec, int64_t *id, char *err,
                     size_t errlen);
 int store_pg_recover(store_pg *p, int64_t **ids, int *n, char *err, size_t errlen);
 int store_pg_start(store_pg *p, int64_t id, char *err, size_t errlen);

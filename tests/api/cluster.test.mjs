@@ -79,6 +79,35 @@ test('health on PostgreSQL counts the whole database: workers this process\'s, b
     }
 });
 
+test('--max-queue holds across API processes: concurrent POSTs to two of them queue at most the bound', { skip: SKIP }, async () => {
+    const BOUND = 3;
+    const args = ['--max-queue', String(BOUND)];
+    const first = await startServer({ workers: 2, args });
+    const second = await startServer({ dir: first.dir, workers: 1, args });
+    /* no workers: what is accepted stays queued */
+    for (const srv of [first, second]) {
+        await Promise.all(srv.workers.map((w) => w.stop()));
+        srv.workers = [];
+    }
+    try {
+        for (let round = 0; round < 3; round++) {
+            const posts = [];
+            for (let i = 0; i < 16; i++) posts.push((i % 2 ? second : first).post('/api/jobs', SMALL));
+            const answers = await Promise.all(posts);
+            const accepted = answers.filter((r) => r.status === 202);
+            const full = answers.filter((r) => r.status === 503 && r.json?.error?.code === 'QUEUE_FULL');
+            assert.equal(accepted.length + full.length, answers.length, answers.map((r) => r.text).join('\n'));
+            assert.equal(accepted.length, BOUND, `round ${round}: ${accepted.length} accepted`);
+            assert.equal(sql(first, "SELECT count(*) FROM jobs WHERE status = 'queued'"), String(BOUND));
+            for (const r of accepted) assert.ok([200, 202].includes((await first.del(`/api/jobs/${r.json.id}`)).status));
+            for (const r of accepted) assert.equal((await first.del(`/api/jobs/${r.json.id}`)).status, 204);
+        }
+    } finally {
+        await second.stop();
+        await first.stop();
+    }
+});
+
 test('the API process killed with SIGKILL: the workers go on, a new API process answers', { skip: SKIP }, async () => {
     const first = await startServer({ workers: 2 });
     const ids = [];
