@@ -27,7 +27,8 @@
  * Counts. Version 2 adds job_counts, one row per status kept exact by triggers on jobs in the
  * transaction of each insert, delete and status change, whoever writes (the workers, the HTTP
  * threads, another process): store_count reads its six rows, in time independent of the number
- * of jobs (GET /api/health runs it on every call).
+ * of jobs (GET /api/health runs it on every call). A family's counts are a GROUP BY over its
+ * members that version 4's index jobs_by_family_status (family_id, status) answers alone.
  *
  * Series. store_finish writes one series row per recorded channel, "t" (width 1) first, with the
  * samples as nsamples x width float64, row-major, little-endian: the result's own arrays are
@@ -158,6 +159,11 @@ static const char *const migrations[STORE_SCHEMA_VERSION] = {
     "ALTER TABLE jobs ADD COLUMN family_values TEXT;"
     "CREATE INDEX jobs_by_family ON jobs (family_id, family_member) WHERE family_id IS NOT NULL;"
     "PRAGMA user_version = 3;",
+    /* 3 -> 4: a family's status counts (store_family_get, every GET of a family) read this
+     * covering index, its rows already grouped, instead of each member's row: 0.4 ms instead of
+     * 14-22 ms for 10,000 members (bench figures in the commit) */
+    ("CREATE INDEX jobs_by_family_status ON jobs (family_id, status) WHERE family_id IS NOT NULL;"
+     "PRAGMA user_version = 4;"),
 };
 
 /* the statements of a connection, prepared once at open */
@@ -273,7 +279,7 @@ static const char *const stmt_sql[ST_NSTMT] = {
     [ST_FAMILY_COUNTS] = "SELECT status, count(*) FROM jobs WHERE family_id = ?1 GROUP BY status",
     [ST_FAMILY_MEMBERS] = "SELECT id, family_member, family_replica, status, family_values, "
                           "metrics, message FROM jobs WHERE family_id = ?1 ORDER BY family_member",
-    [ST_FAMILY_ACTIVE] = "SELECT id FROM jobs WHERE family_id = ?1 AND " ACTIVE,
+    [ST_FAMILY_ACTIVE] = "SELECT id FROM jobs WHERE family_id = ?1 AND " ACTIVE " ORDER BY id",
     [ST_FAMILY_DELETE_JOBS] = "DELETE FROM jobs WHERE family_id = ?1",
     [ST_FAMILY_DELETE] = "DELETE FROM families WHERE id = ?1",
     [ST_FAMILY_OF] = "SELECT family_id FROM jobs WHERE id = ?1",

@@ -55,7 +55,7 @@
 
 #include "sim.h"
 
-#define STORE_SCHEMA_VERSION 3
+#define STORE_SCHEMA_VERSION 4
 
 /* Job statuses as stored (and as the API shows them). */
 typedef enum store_status {
@@ -356,8 +356,8 @@ int store_family_members(store *s, int64_t id, store_member **rows, long *n, cha
                          size_t errlen);
 void store_members_free(store_member *rows, long n);
 
-/* The ids of a family's members that are queued or running, into a new array *ids (free()) of
- * *n. */
+/* The ids of a family's members that are queued or running, in increasing order, into a new
+ * array *ids (free()) of *n. */
 int store_family_active(store *s, int64_t id, int64_t **ids, long *n, char *err, size_t errlen);
 
 /* Records every queued member of a family cancelled (finished = now, message) in one

@@ -230,7 +230,8 @@ test('a version 2 database is migrated to families and keeps every job; its queu
     assert.equal(r.status, 0, r.stderr);
     const srv = await startServer({ dir, workers: 1 });
     try {
-        assert.equal(sql(srv, 'SELECT version FROM schema_version'), '3');
+        assert.equal(sql(srv, 'SELECT version FROM schema_version'), '4');
+        assert.equal(sql(srv, "SELECT count(*) FROM pg_indexes WHERE indexname = 'jobs_by_family_status'"), '1');
         const old = (await srv.get('/api/jobs/1')).json;
         assert.equal(old.status, 'done');
         assert.equal(old.name, 'finished before');

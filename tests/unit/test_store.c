@@ -556,7 +556,7 @@ Test(store, a_version_2_database_is_migrated_and_keeps_every_job)
              "INSERT INTO series (job_id, channel, width, nsamples, data) VALUES"
              "  (1, 't', 1, 1, x'0000000000000000');");
     store *s = open_ok(path);
-    cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), 3);
+    cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), STORE_SCHEMA_VERSION);
     assert_integrity(path);
 
     store_job j;
@@ -746,13 +746,38 @@ Test(store, families_list_newest_first_with_counts_and_ten_thousand_members_inse
     store_close(s);
 }
 
+Test(store, a_familys_counts_read_the_covering_index_alone)
+{
+    /* the plan of the counts' statement (store.c's ST_FAMILY_COUNTS), as SQLite makes it on a
+     * database that store_open made: a search of jobs_by_family_status with no table rows
+     * read, and no temporary tree for the grouping (the index gives the rows grouped) */
+    char path[256];
+    path_of(path, sizeof path, "ctcsim.db");
+    store_close(open_ok(path));
+    sqlite3 *db = raw_open(path);
+    sqlite3_stmt *q = NULL;
+    cr_assert_eq(sqlite3_prepare_v2(db,
+                                    "EXPLAIN QUERY PLAN SELECT status, count(*) FROM jobs WHERE "
+                                    "family_id = ?1 GROUP BY status",
+                                    -1, &q, NULL),
+                 SQLITE_OK, "%s", sqlite3_errmsg(db));
+    char plan[1024] = "";
+    size_t used = 0;
+    while (sqlite3_step(q) == SQLITE_ROW && used < sizeof plan)
+        used += (size_t)snprintf(plan + used, sizeof plan - used, "%s;",
+                                 (const char *)sqlite3_column_text(q, 3));
+    sqlite3_finalize(q);
+    sqlite3_close(db);
+    cr_assert_str_eq(plan, "SEARCH jobs USING COVERING INDEX jobs_by_family_status (family_id=?);");
+}
+
 Test(store, refuses_a_newer_schema)
 {
     char path[256];
     path_of(path, sizeof path, "ctcsim.db");
     raw_exec(path, "CREATE TABLE jobs (id INTEGER PRIMARY KEY, future TEXT); "
                    "PRAGMA user_version = 7;");
-    assert_open_fails(path, "database %s has schema version 7, newer than this ctcsim (3): "
+    assert_open_fails(path, "database %s has schema version 7, newer than this ctcsim (4): "
                             "upgrade ctcsim");
     cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), 7);
 }
