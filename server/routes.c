@@ -633,15 +633,57 @@ void routes_job_left(void *arg, int64_t id)
     client_count_give_id(ctx->jobs_by_client, id);
 }
 
+/* ---- lists (GET /api/jobs, GET /api/families) ---- */
+
+/* ?limit (1..ROUTES_LIST_MAX, default ROUTES_LIST_DEFAULT) and ?cursor (an id: the rows below it;
+ * 0 when absent) of a list; 0, or -1 after replying 400 INVALID_QUERY. */
+static int query_page(const http_request *req, http_reply *rep, long long *limit, long long *cursor)
+{
+    if (query_integer(req, rep, "limit", 1, ROUTES_LIST_MAX, ROUTES_LIST_DEFAULT, limit) != 0)
+        return -1;
+    return query_integer(req, rep, "cursor", 1, INT64_MAX, 0, cursor);
+}
+
+/* Replies 200 {key: [the first limit rows], "next_cursor": the last shown row's id, or null when
+ * n <= limit}: the store was asked for limit + 1 rows, so one more tells that a next page exists.
+ * row(rows, i, &id) makes row i's JSON (NULL out of memory) and gives its id; the reply is
+ * NO_MEMORY when any part could not be made. */
+static void reply_page(http_reply *rep, const char *key, const void *rows, int n, long long limit,
+                       cJSON *(*row)(const void *rows, int i, int64_t *id))
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON *list = cJSON_AddArrayToObject(o, key);
+    int shown = n > limit ? (int)limit : n;
+    int64_t last = 0;
+    for (int i = 0; i < shown; i++) cJSON_AddItemToArray(list, row(rows, i, &last));
+    if (n > limit)
+        cJSON_AddNumberToObject(o, "next_cursor", (double)last);
+    else
+        cJSON_AddNullToObject(o, "next_cursor");
+    int complete = list && cJSON_GetArraySize(list) == shown &&
+                   cJSON_GetObjectItemCaseSensitive(o, "next_cursor");
+    if (!complete) {
+        cJSON_Delete(o);
+        o = NULL;
+    }
+    http_reply_json(rep, 200, o);
+}
+
 /* ---- GET /api/jobs ---- */
+
+/* reply_page's row of the job list */
+static cJSON *job_list_row(const void *rows, int i, int64_t *id)
+{
+    const store_job *j = (const store_job *)rows + i;
+    *id = j->id;
+    return job_row(j);
+}
 
 static void get_jobs(const http_request *req, http_reply *rep, void *arg)
 {
     routes_ctx *ctx = arg;
     long long limit, cursor;
-    if (query_integer(req, rep, "limit", 1, ROUTES_LIST_MAX, ROUTES_LIST_DEFAULT, &limit) != 0)
-        return;
-    if (query_integer(req, rep, "cursor", 1, INT64_MAX, 0, &cursor) != 0) return;
+    if (query_page(req, rep, &limit, &cursor) != 0) return;
     int status = -1;
     const char *st = http_query(req, "status");
     if (st && (status = store_status_parse(st)) < 0) {
@@ -679,22 +721,8 @@ static void get_jobs(const http_request *req, http_reply *rep, void *arg)
         database_failed(rep, "listing jobs", err);
         return;
     }
-    cJSON *o = cJSON_CreateObject();
-    cJSON *list = cJSON_AddArrayToObject(o, "jobs");
-    int shown = n > limit ? (int)limit : n;
-    for (int i = 0; i < shown; i++) cJSON_AddItemToArray(list, job_row(&rows[i]));
-    if (n > limit)
-        cJSON_AddNumberToObject(o, "next_cursor", (double)rows[shown - 1].id);
-    else
-        cJSON_AddNullToObject(o, "next_cursor");
-    int complete = list && cJSON_GetArraySize(list) == shown &&
-                   cJSON_GetObjectItemCaseSensitive(o, "next_cursor");
+    reply_page(rep, "jobs", rows, n, limit, job_list_row);
     store_jobs_free(rows, n);
-    if (!complete) {
-        cJSON_Delete(o);
-        o = NULL;
-    }
-    http_reply_json(rep, 200, o);
 }
 
 /* ---- GET /api/jobs/{id} ---- */
@@ -1432,13 +1460,19 @@ static void post_families(const http_request *req, http_reply *rep, void *arg)
     run_post_at(req, rep, ctx, 0, -1, post_family_work);
 }
 
+/* reply_page's row of the family list */
+static cJSON *family_list_row(const void *rows, int i, int64_t *id)
+{
+    const store_family *f = (const store_family *)rows + i;
+    *id = f->id;
+    return family_row_json(f);
+}
+
 static void get_families(const http_request *req, http_reply *rep, void *arg)
 {
     routes_ctx *ctx = arg;
     long long limit, cursor;
-    if (query_integer(req, rep, "limit", 1, ROUTES_LIST_MAX, ROUTES_LIST_DEFAULT, &limit) != 0)
-        return;
-    if (query_integer(req, rep, "cursor", 1, INT64_MAX, 0, &cursor) != 0) return;
+    if (query_page(req, rep, &limit, &cursor) != 0) return;
     store *s = thread_store(ctx, rep);
     if (!s) return;
     store_family *rows = NULL;
@@ -1448,22 +1482,8 @@ static void get_families(const http_request *req, http_reply *rep, void *arg)
         database_failed(rep, "listing families", err);
         return;
     }
-    cJSON *o = cJSON_CreateObject();
-    cJSON *list = cJSON_AddArrayToObject(o, "families");
-    int shown = n > limit ? (int)limit : n;
-    for (int i = 0; i < shown; i++) cJSON_AddItemToArray(list, family_row_json(&rows[i]));
-    if (n > limit)
-        cJSON_AddNumberToObject(o, "next_cursor", (double)rows[shown - 1].id);
-    else
-        cJSON_AddNullToObject(o, "next_cursor");
-    int complete = list && cJSON_GetArraySize(list) == shown &&
-                   cJSON_GetObjectItemCaseSensitive(o, "next_cursor");
+    reply_page(rep, "families", rows, n, limit, family_list_row);
     store_families_free(rows, n);
-    if (!complete) {
-        cJSON_Delete(o);
-        o = NULL;
-    }
-    http_reply_json(rep, 200, o);
 }
 
 /* The family id of the path; 0, or -1 after replying 400 INVALID_ID. */
