@@ -82,6 +82,7 @@
 #include <cjson/cJSON.h>
 #include <sqlite3.h>
 
+#include "store_common.h"
 #include "store_pg.h"
 
 /* series blobs are the host's doubles byte for byte: they must be IEEE 754 binary64 and
@@ -93,8 +94,7 @@
 _Static_assert(sizeof(double) == 8 && DBL_MANT_DIG == 53 && FLT_RADIX == 2,
                "store.c writes series as IEEE 754 binary64 doubles");
 
-#define STORE_BUSY_MS 5000 /* how long a connection waits for another's lock */
-#define STORE_MAX_LIST 1000
+#define STORE_BUSY_MS 5000         /* how long a connection waits for another's lock */
 #define STORE_ROOM_BYTES (1 << 20) /* free bytes that make a full database writable again */
 
 /* migrations[v] takes the schema from version v to v + 1 (run in one transaction) */
@@ -328,17 +328,7 @@ int store_status_parse(const char *name)
 
 /* ---- helpers ---- */
 
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (!err || errlen == 0) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
+#define set_err store_set_err /* store_common.h */
 
 /* the fault of an SQLite result code (primary or extended) */
 static store_fault fault_of(int code)
@@ -588,17 +578,12 @@ done:
     return rc;
 }
 
-/* the reason an update that needs a running job changed nothing ("cannot WHAT job 3: no such
- * job", "cannot WHAT job 3: it is done, not running") */
+/* the reason an update that needs a running job changed nothing (store_not_running_err) */
 static void not_running_err(store *s, int64_t id, const char *what, char *err, size_t errlen)
 {
-    store_status st;
+    store_status st = STORE_QUEUED;
     int found = status_of(s, id, &st, err, errlen);
-    if (found == 1)
-        set_err(err, errlen, "cannot %s job %lld: no such job", what, (long long)id);
-    else if (found == 0)
-        set_err(err, errlen, "cannot %s job %lld: it is %s, not running", what, (long long)id,
-                store_status_name(st));
+    store_not_running_err(id, what, found, st, err, errlen);
 }
 
 /* column i as a new string, or NULL for SQL NULL; -1 when out of memory */
@@ -1037,17 +1022,7 @@ static int insert_job(store *s, const char *name, const char *preset, int nbodie
 {
     sqlite3_stmt *q = s->stmt[ST_INSERT];
     int rc = -1;
-    if (!name || !controller || !spec) {
-        set_err(err, errlen, "cannot store a job without %s",
-                !name         ? "a name"
-                : !controller ? "a controller"
-                              : "a spec");
-        goto done;
-    }
-    if (nbodies < 1 || nv < 0) {
-        set_err(err, errlen, "cannot store a job of %d bodies and %d coordinates", nbodies, nv);
-        goto done;
-    }
+    if (store_check_job(name, controller, spec, nbodies, nv, err, errlen) != 0) goto done;
     if (sqlite3_bind_text(q, 1, name, -1, SQLITE_STATIC) != SQLITE_OK ||
         (preset ? sqlite3_bind_text(q, 2, preset, -1, SQLITE_STATIC) : sqlite3_bind_null(q, 2)) !=
             SQLITE_OK ||
@@ -1248,22 +1223,6 @@ static int bind_real(sqlite3_stmt *q, int i, double x)
     return isnan(x) ? sqlite3_bind_null(q, i) : sqlite3_bind_double(q, i, x);
 }
 
-/* checks that r's arrays can be stored: sizes that fit and arrays that exist */
-static int check_result(const ctc_sim_result *r, int64_t id, char *err, size_t errlen)
-{
-    if (r->nsamples < 0) {
-        set_err(err, errlen, "cannot finish job %lld: the result has %d samples", (long long)id,
-                r->nsamples);
-        return -1;
-    }
-    if (r->nsamples > 0 && !r->t) {
-        set_err(err, errlen, "cannot finish job %lld: the result has samples but no times",
-                (long long)id);
-        return -1;
-    }
-    return 0;
-}
-
 /* writes one series row; data holds nsamples x width doubles */
 static int put_series(store *s, int64_t id, const char *channel, int width, int nsamples,
                       const double *data, char *err, size_t errlen)
@@ -1294,14 +1253,7 @@ static int finish_job(store *s, int64_t id, store_status status, const char *mes
     sqlite3_stmt *q = s->stmt[ST_FINISH];
     sqlite3_stmt *del = s->stmt[ST_SERIES_DELETE];
     int rc = -1, in_tx = 0;
-    if (status < STORE_DONE || status >= STORE_NSTATUS) {
-        set_err(err, errlen,
-                "cannot finish job %lld as %s: the status must be done, failed, diverged or "
-                "cancelled",
-                (long long)id, store_status_name(status));
-        goto done;
-    }
-    if (r && check_result(r, id, err, errlen)) goto done;
+    if (store_check_finish(id, status, r, err, errlen) != 0) goto done;
     if (tx_step(s, ST_BEGIN) != SQLITE_OK) {
         db_err(s, err, errlen, "cannot finish job %lld", (long long)id);
         goto done;
@@ -1321,13 +1273,9 @@ static int finish_job(store *s, int64_t id, store_status status, const char *mes
         goto done;
     }
     if (sqlite3_changes(s->db) != 1) {
-        store_status st;
+        store_status st = STORE_QUEUED;
         int found = status_of(s, id, &st, err, errlen);
-        if (found == 1)
-            set_err(err, errlen, "cannot finish job %lld: no such job", (long long)id);
-        else if (found == 0)
-            set_err(err, errlen, "cannot finish job %lld: it is already %s", (long long)id,
-                    store_status_name(st));
+        store_not_finishable_err(id, found, st, err, errlen);
         goto done;
     }
     /* the series: t, then every recorded channel, replacing any rows left behind */
@@ -1439,24 +1387,6 @@ done:
     return rc;
 }
 
-/* the checks store_list and store_search share; 0 or -1 */
-static int list_args(int64_t before, int status, int limit, char *err, size_t errlen)
-{
-    if (limit < 1 || limit > STORE_MAX_LIST) {
-        set_err(err, errlen, "limit must be between 1 and %d (got %d)", STORE_MAX_LIST, limit);
-        return -1;
-    }
-    if (before < 0) {
-        set_err(err, errlen, "before must be 0 or a job id (got %lld)", (long long)before);
-        return -1;
-    }
-    if (status < -1 || status >= STORE_NSTATUS) {
-        set_err(err, errlen, "unknown job status %d", status);
-        return -1;
-    }
-    return 0;
-}
-
 int store_list(store *s, int64_t before, int status, int limit, store_job **rows, int *n, char *err,
                size_t errlen)
 {
@@ -1466,7 +1396,7 @@ int store_list(store *s, int64_t before, int status, int limit, store_job **rows
     int rc = -1;
     *rows = NULL;
     *n = 0;
-    if (list_args(before, status, limit, err, errlen) != 0) goto done;
+    if (store_check_list(before, status, limit, err, errlen) != 0) goto done;
     /* id < INT64_MAX is every id: the one statement serves "from the newest" too */
     sqlite3_bind_int64(q, 1, before > 0 ? before : INT64_MAX);
     sqlite3_bind_int(q, 2, limit);
@@ -1487,7 +1417,7 @@ int store_search(store *s, int64_t before, const store_filter *f, int limit, sto
     char *text = NULL;
     *rows = NULL;
     *n = 0;
-    if (list_args(before, f->status, limit, err, errlen) != 0) goto done;
+    if (store_check_list(before, f->status, limit, err, errlen) != 0) goto done;
     if (f->text) {
         /* lower() of SQLite folds ASCII only: so does this */
         if (!(text = strdup(f->text))) {
@@ -1896,10 +1826,7 @@ static int insert_family(store *s, const char *name, const char *spec, const cha
     sqlite3_stmt *fq = s->stmt[ST_FAMILY_INSERT], *mq = s->stmt[ST_MEMBER_INSERT];
     int rc = -1, in_tx = 0;
     double now = now_s();
-    if (!name || !spec || !axes || n < 0) {
-        set_err(err, errlen, "cannot store a family without a name, a spec and its axes");
-        return -1;
-    }
+    if (store_check_family(name, spec, axes, n, err, errlen) != 0) return -1;
     if (tx_step(s, ST_BEGIN) != SQLITE_OK) {
         db_err(s, err, errlen, "cannot store family '%s'", name);
         goto done;
@@ -2057,10 +1984,7 @@ int store_family_list(store *s, int64_t before, int limit, store_family **rows, 
     store_family *list = NULL;
     *rows = NULL;
     *n = 0;
-    if (limit < 1 || limit > STORE_MAX_LIST) {
-        set_err(err, errlen, "limit must be between 1 and %d (got %d)", STORE_MAX_LIST, limit);
-        goto done;
-    }
+    if (store_check_limit(limit, err, errlen) != 0) goto done;
     list = calloc((size_t)limit, sizeof *list);
     if (!list) {
         set_err(err, errlen, "listing families: out of memory");

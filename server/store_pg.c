@@ -36,6 +36,7 @@
 #define _GNU_SOURCE /* gethostname's HOST_NAME_MAX, endian.h */
 
 #include "store_pg.h"
+#include "store_common.h"
 
 #include <endian.h>
 #include <errno.h>
@@ -51,8 +52,6 @@
 
 #include <cjson/cJSON.h>
 #include <libpq-fe.h>
-
-#define PG_MAX_LIST 1000
 
 /* migrations[v] takes the schema from version v to v + 1, in one transaction */
 static const char *const migrations[STORE_PG_SCHEMA_VERSION] = {
@@ -173,17 +172,7 @@ struct store_pg {
 
 /* ---- helpers ---- */
 
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (!err || errlen == 0) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
+#define set_err store_set_err /* store_common.h */
 
 static double now_s(void)
 {
@@ -444,17 +433,12 @@ static int status_of(store_pg *p, int64_t id, store_status *st, char *err, size_
     return rc;
 }
 
+/* the reason an update that needs a running job changed nothing (store_not_running_err) */
 static void not_running_err(store_pg *p, int64_t id, const char *what, char *err, size_t errlen)
 {
-    store_status st;
+    store_status st = STORE_QUEUED;
     int found = status_of(p, id, &st, err, errlen);
-    if (found == 1)
-        set_err(err, errlen, "cannot %s job %lld: no such job", what, (long long)id);
-    else if (found == 0 && st == STORE_RUNNING)
-        set_err(err, errlen, "cannot %s job %lld: another worker holds it", what, (long long)id);
-    else if (found == 0)
-        set_err(err, errlen, "cannot %s job %lld: it is %s, not running", what, (long long)id,
-                store_status_name(st));
+    store_not_running_err(id, what, found, st, err, errlen);
 }
 
 /* ---- opening ---- */
@@ -617,17 +601,7 @@ int store_pg_insert(store_pg *p, long max_queued, const char *name, const char *
                     size_t errlen)
 {
     call_begin(p);
-    if (!name || !controller || !spec) {
-        set_err(err, errlen, "cannot store a job without %s",
-                !name         ? "a name"
-                : !controller ? "a controller"
-                              : "a spec");
-        return -1;
-    }
-    if (nbodies < 1 || nv < 0) {
-        set_err(err, errlen, "cannot store a job of %d bodies and %d coordinates", nbodies, nv);
-        return -1;
-    }
+    if (store_check_job(name, controller, spec, nbodies, nv, err, errlen) != 0) return -1;
     int rc = -1;
     PGresult *r = NULL;
     char created[40], nb[16], nvs[16], what[300];
@@ -833,18 +807,7 @@ int store_pg_finish(store_pg *p, int64_t id, store_status status, const char *me
     PGresult *q = NULL;
     char what[64];
     snprintf(what, sizeof what, "cannot finish job %lld", (long long)id);
-    if (status < STORE_DONE || status >= STORE_NSTATUS) {
-        set_err(err, errlen,
-                "cannot finish job %lld as %s: the status must be done, failed, diverged or "
-                "cancelled",
-                (long long)id, store_status_name(status));
-        goto done;
-    }
-    if (r && (r->nsamples < 0 || (r->nsamples > 0 && !r->t))) {
-        set_err(err, errlen, "cannot finish job %lld: the result has %s", (long long)id,
-                r->nsamples < 0 ? "a negative sample count" : "samples but no times");
-        goto done;
-    }
+    if (store_check_finish(id, status, r, err, errlen) != 0) goto done;
     if (run_simple(p, "BEGIN", err, errlen, what) != 0) goto done;
     char ids[24], emax[40], wall[40], fin[40];
     fmt_i64(ids, sizeof ids, id);
@@ -866,15 +829,9 @@ int store_pg_finish(store_pg *p, int64_t id, store_status status, const char *me
             8, v, 0, err, errlen, what);
     if (!q) goto done;
     if (changes(q) != 1) {
-        store_status st;
+        store_status st = STORE_QUEUED;
         int found = status_of(p, id, &st, err, errlen);
-        if (found == 1)
-            set_err(err, errlen, "cannot finish job %lld: no such job", (long long)id);
-        else if (found == 0 && st == STORE_RUNNING)
-            set_err(err, errlen, "cannot finish job %lld: another worker holds it", (long long)id);
-        else if (found == 0)
-            set_err(err, errlen, "cannot finish job %lld: it is already %s", (long long)id,
-                    store_status_name(st));
+        store_not_finishable_err(id, found, st, err, errlen);
         goto done;
     }
     PQclear(q);
@@ -923,18 +880,7 @@ int store_pg_list(store_pg *p, int64_t before, int status, int limit, store_job 
     call_begin(p);
     *rows = NULL;
     *n = 0;
-    if (limit < 1 || limit > PG_MAX_LIST) {
-        set_err(err, errlen, "limit must be between 1 and %d (got %d)", PG_MAX_LIST, limit);
-        return -1;
-    }
-    if (before < 0) {
-        set_err(err, errlen, "before must be 0 or a job id (got %lld)", (long long)before);
-        return -1;
-    }
-    if (status < -1 || status >= STORE_NSTATUS) {
-        set_err(err, errlen, "unknown job status %d", status);
-        return -1;
-    }
+    if (store_check_list(before, status, limit, err, errlen) != 0) return -1;
     char bs[24], ls[16];
     fmt_i64(bs, sizeof bs, before > 0 ? before : INT64_MAX);
     snprintf(ls, sizeof ls, "%d", limit);
@@ -985,18 +931,7 @@ int store_pg_search(store_pg *p, int64_t before, const store_filter *f, int limi
     call_begin(p);
     *rows = NULL;
     *n = 0;
-    if (limit < 1 || limit > PG_MAX_LIST) {
-        set_err(err, errlen, "limit must be between 1 and %d (got %d)", PG_MAX_LIST, limit);
-        return -1;
-    }
-    if (before < 0) {
-        set_err(err, errlen, "before must be 0 or a job id (got %lld)", (long long)before);
-        return -1;
-    }
-    if (f->status < -1 || f->status >= STORE_NSTATUS) {
-        set_err(err, errlen, "unknown job status %d", f->status);
-        return -1;
-    }
+    if (store_check_list(before, f->status, limit, err, errlen) != 0) return -1;
     char bs[24], ls[16], *text = NULL;
     if (f->text) {
         if (!(text = strdup(f->text))) {
@@ -1494,10 +1429,7 @@ int store_pg_family_insert(store_pg *p, const char *name, const char *spec, cons
                            int64_t *ids, char *err, size_t errlen)
 {
     call_begin(p);
-    if (!name || !spec || !axes || n < 0) {
-        set_err(err, errlen, "cannot store a family without a name, a spec and its axes");
-        return -1;
-    }
+    if (store_check_family(name, spec, axes, n, err, errlen) != 0) return -1;
     int rc = -1;
     long bad;
     PGresult *r = NULL;
@@ -1618,10 +1550,7 @@ int store_pg_family_list(store_pg *p, int64_t before, int limit, store_family **
     call_begin(p);
     *rows = NULL;
     *n = 0;
-    if (limit < 1 || limit > PG_MAX_LIST) {
-        set_err(err, errlen, "limit must be between 1 and %d (got %d)", PG_MAX_LIST, limit);
-        return -1;
-    }
+    if (store_check_limit(limit, err, errlen) != 0) return -1;
     char bs[24], ls[16];
     fmt_i64(bs, sizeof bs, before > 0 ? before : INT64_MAX);
     snprintf(ls, sizeof ls, "%d", limit);

@@ -135,14 +135,21 @@ static void raw_exec(const char *path, const char *sql)
     sqlite3_close(db);
 }
 
+/* sql prepared on a raw connection (the test fails when it does not prepare) */
+static sqlite3_stmt *raw_prepare(sqlite3 *db, const char *sql)
+{
+    sqlite3_stmt *q = NULL;
+    cr_assert_eq(sqlite3_prepare_v2(db, sql, -1, &q, NULL), SQLITE_OK, "%s: %s", sql,
+                 sqlite3_errmsg(db));
+    return q;
+}
+
 /* the first column of the first row of sql, with ?1 bound to arg when sql has a parameter;
  * text goes to buf (may be NULL) */
 static long long raw_query(const char *path, const char *sql, long long arg, char *buf, size_t len)
 {
     sqlite3 *db = raw_open(path);
-    sqlite3_stmt *q = NULL;
-    cr_assert_eq(sqlite3_prepare_v2(db, sql, -1, &q, NULL), SQLITE_OK, "%s: %s", sql,
-                 sqlite3_errmsg(db));
+    sqlite3_stmt *q = raw_prepare(db, sql);
     if (sqlite3_bind_parameter_count(q) > 0) sqlite3_bind_int64(q, 1, arg);
     cr_assert_eq(sqlite3_step(q), SQLITE_ROW, "%s: no row", sql);
     long long v = sqlite3_column_int64(q, 0);
@@ -439,10 +446,7 @@ static void assert_counts_match_the_table(store *s, const char *path)
     char err[512] = "";
     cr_assert_eq(store_count(s, counts, err, sizeof err), 0, "%s", err);
     sqlite3 *db = raw_open(path);
-    sqlite3_stmt *q = NULL;
-    cr_assert_eq(
-        sqlite3_prepare_v2(db, "SELECT count(*) FROM jobs WHERE status = ?1", -1, &q, NULL),
-        SQLITE_OK);
+    sqlite3_stmt *q = raw_prepare(db, "SELECT count(*) FROM jobs WHERE status = ?1");
     for (int st = 0; st < STORE_NSTATUS; st++) {
         sqlite3_bind_text(q, 1, store_status_name((store_status)st), -1, SQLITE_STATIC);
         cr_assert_eq(sqlite3_step(q), SQLITE_ROW);
@@ -755,12 +759,8 @@ Test(store, a_familys_counts_read_the_covering_index_alone)
     path_of(path, sizeof path, "ctcsim.db");
     store_close(open_ok(path));
     sqlite3 *db = raw_open(path);
-    sqlite3_stmt *q = NULL;
-    cr_assert_eq(sqlite3_prepare_v2(db,
-                                    "EXPLAIN QUERY PLAN SELECT status, count(*) FROM jobs WHERE "
-                                    "family_id = ?1 GROUP BY status",
-                                    -1, &q, NULL),
-                 SQLITE_OK, "%s", sqlite3_errmsg(db));
+    sqlite3_stmt *q = raw_prepare(db, "EXPLAIN QUERY PLAN SELECT status, count(*) FROM jobs WHERE "
+                                      "family_id = ?1 GROUP BY status");
     char plan[1024] = "";
     size_t used = 0;
     while (sqlite3_step(q) == SQLITE_ROW && used < sizeof plan)
@@ -1059,12 +1059,8 @@ Test(store, recover_requeues_unfinished_jobs_and_drops_their_partial_series)
     cr_assert_eq(store_start(s, crashed, err, sizeof err), 0, "%s", err);
     /* a partial series, as a crash of some earlier version might have left */
     sqlite3 *db = raw_open(path);
-    sqlite3_stmt *q = NULL;
-    cr_assert_eq(sqlite3_prepare_v2(db,
-                                    "INSERT INTO series (job_id, channel, width, nsamples, data) "
-                                    "VALUES (?1, 't', 1, 0, x'')",
-                                    -1, &q, NULL),
-                 SQLITE_OK);
+    sqlite3_stmt *q = raw_prepare(db, "INSERT INTO series (job_id, channel, width, nsamples, data) "
+                                      "VALUES (?1, 't', 1, 0, x'')");
     sqlite3_bind_int64(q, 1, crashed);
     cr_assert_eq(sqlite3_step(q), SQLITE_DONE);
     sqlite3_finalize(q);
