@@ -1351,31 +1351,43 @@ void store_job_clear(store_job *j)
     memset(j, 0, sizeof *j);
 }
 
-/* the rows of the bound list statement q (at most limit), into *rows and *n; 0 or -1 */
-static int list_rows(store *s, sqlite3_stmt *q, int limit, store_job **rows, int *n, char *err,
-                     size_t errlen)
+/* How step_rows reads a list: each element's size, the reader of one row (0, or -1 with err),
+ * and the free of n elements read (those a failed read left half filled included). */
+typedef struct row_reader {
+    size_t size;
+    int (*read)(sqlite3_stmt *q, void *elem, char *err, size_t errlen);
+    void (*free_rows)(void *rows, long n);
+} row_reader;
+
+/* Steps the bound statement q to its end, reading each row with rr->read into a zeroed element of
+ * a new array grown as needed: 0 with *rows (free with rr->free_rows) and *n, or -1 with err
+ * ("WHAT: out of memory", or the database's message after what) and nothing handed out. */
+static int step_rows(store *s, sqlite3_stmt *q, const row_reader *rr, void **rows, long *n,
+                     const char *what, char *err, size_t errlen)
 {
-    int rc = -1, count = 0, cap = limit < 64 ? limit : 64, step;
-    store_job *list = calloc((size_t)cap, sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "listing jobs: out of memory");
-        goto done;
-    }
+    int rc = -1, step;
+    long count = 0, cap = 0;
+    char *list = NULL;
+    *rows = NULL;
+    *n = 0;
     while ((step = sqlite3_step(q)) == SQLITE_ROW) {
         if (count == cap) {
-            store_job *grown = realloc(list, 2 * (size_t)cap * sizeof *list);
-            if (!grown) {
-                set_err(err, errlen, "listing jobs: out of memory");
+            long grow = cap ? 2 * cap : 64;
+            char *bigger = realloc(list, (size_t)grow * rr->size);
+            if (!bigger) {
+                set_err(err, errlen, "%s: out of memory", what);
                 goto done;
             }
-            list = grown;
-            cap *= 2;
+            list = bigger;
+            cap = grow;
         }
-        if (read_job(q, 0, &list[count], err, errlen)) goto done;
+        void *elem = list + (size_t)count * rr->size;
+        memset(elem, 0, rr->size);
         count++;
+        if (rr->read(q, elem, err, errlen) != 0) goto done;
     }
     if (step != SQLITE_DONE) {
-        db_err(s, err, errlen, "listing jobs");
+        db_err(s, err, errlen, "%s", what);
         goto done;
     }
     *rows = list;
@@ -1383,8 +1395,31 @@ static int list_rows(store *s, sqlite3_stmt *q, int limit, store_job **rows, int
     list = NULL;
     rc = 0;
 done:
-    store_jobs_free(list, count);
+    if (list) rr->free_rows(list, count);
     return rc;
+}
+
+static int job_row_read(sqlite3_stmt *q, void *elem, char *err, size_t errlen)
+{
+    return read_job(q, 0, elem, err, errlen);
+}
+
+static void job_rows_free(void *rows, long n)
+{
+    store_jobs_free(rows, (int)n);
+}
+
+static const row_reader job_rows = {sizeof(store_job), job_row_read, job_rows_free};
+
+/* the rows of the bound list statement q (at most limit), into *rows and *n; 0 or -1 */
+static int list_rows(store *s, sqlite3_stmt *q, store_job **rows, int *n, char *err, size_t errlen)
+{
+    void *list;
+    long count;
+    if (step_rows(s, q, &job_rows, &list, &count, "listing jobs", err, errlen) != 0) return -1;
+    *rows = list;
+    *n = (int)count;
+    return 0;
 }
 
 int store_list(store *s, int64_t before, int status, int limit, store_job **rows, int *n, char *err,
@@ -1401,7 +1436,7 @@ int store_list(store *s, int64_t before, int status, int limit, store_job **rows
     sqlite3_bind_int64(q, 1, before > 0 ? before : INT64_MAX);
     sqlite3_bind_int(q, 2, limit);
     if (status >= 0) sqlite3_bind_text(q, 3, store_status_name(status), -1, SQLITE_STATIC);
-    rc = list_rows(s, q, limit, rows, n, err, errlen);
+    rc = list_rows(s, q, rows, n, err, errlen);
 done:
     release(q);
     return rc;
@@ -1432,7 +1467,7 @@ int store_search(store *s, int64_t before, const store_filter *f, int limit, sto
     if (f->status >= 0) sqlite3_bind_text(q, 3, store_status_name(f->status), -1, SQLITE_STATIC);
     if (text) sqlite3_bind_text(q, 4, text, -1, SQLITE_STATIC);
     if (f->tag) sqlite3_bind_text(q, 5, f->tag, -1, SQLITE_STATIC);
-    rc = list_rows(s, q, limit, rows, n, err, errlen);
+    rc = list_rows(s, q, rows, n, err, errlen);
 done:
     release(q);
     free(text);
@@ -1974,22 +2009,33 @@ done:
     return rc;
 }
 
+/* step_rows's reader of a family row (FAMILY_COLUMNS, no spec); its counts come after */
+static int family_row_read(sqlite3_stmt *q, void *elem, char *err, size_t errlen)
+{
+    return read_family(q, 0, elem, err, errlen);
+}
+
+static void family_rows_free(void *rows, long n)
+{
+    store_families_free(rows, (int)n);
+}
+
+static const row_reader family_list_rows = {sizeof(store_family), family_row_read,
+                                            family_rows_free};
+
 int store_family_list(store *s, int64_t before, int limit, store_family **rows, int *n, char *err,
                       size_t errlen)
 {
     if (s->pg) return store_pg_family_list(s->pg, before, limit, rows, n, err, errlen);
     call_begin(s);
     sqlite3_stmt *q = s->stmt[ST_FAMILY_LIST];
-    int rc = -1, count = 0, step, in_tx = 0;
-    store_family *list = NULL;
+    int rc = -1, in_tx = 0;
+    void *list = NULL;
+    long count = 0;
     *rows = NULL;
     *n = 0;
     if (store_check_limit(limit, err, errlen) != 0) goto done;
-    list = calloc((size_t)limit, sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "listing families: out of memory");
-        goto done;
-    }
+    /* the rows and their counts from one snapshot */
     if (tx_step(s, ST_BEGIN_READ) != SQLITE_OK) {
         db_err(s, err, errlen, "listing families");
         goto done;
@@ -1997,25 +2043,19 @@ int store_family_list(store *s, int64_t before, int limit, store_family **rows, 
     in_tx = 1;
     sqlite3_bind_int64(q, 1, before > 0 ? before : INT64_MAX);
     sqlite3_bind_int(q, 2, limit);
-    while (count < limit && (step = sqlite3_step(q)) == SQLITE_ROW) {
-        if (read_family(q, 0, &list[count], err, errlen)) goto done;
-        count++;
-    }
-    if (count < limit && step != SQLITE_DONE) {
-        db_err(s, err, errlen, "listing families");
+    if (step_rows(s, q, &family_list_rows, &list, &count, "listing families", err, errlen) != 0)
         goto done;
-    }
     release(q);
-    for (int i = 0; i < count; i++)
-        if (family_counts(s, &list[i], err, errlen)) goto done;
+    for (long i = 0; i < count; i++)
+        if (family_counts(s, (store_family *)list + i, err, errlen)) goto done;
     *rows = list;
-    *n = count;
+    *n = (int)count;
     list = NULL;
     rc = 0;
 done:
     release(q);
     if (in_tx) tx_rollback(s);
-    store_families_free(list, count);
+    store_families_free(list, (int)count);
     return rc;
 }
 
@@ -2025,54 +2065,67 @@ void store_families_free(store_family *rows, int n)
     free(rows);
 }
 
+/* step_rows's reader of a member: ST_FAMILY_MEMBERS's columns */
+static int member_row_read(sqlite3_stmt *q, void *elem, char *err, size_t errlen)
+{
+    store_member *m = elem;
+    m->job = sqlite3_column_int64(q, 0);
+    m->index = (long)sqlite3_column_int64(q, 1);
+    m->replica = sqlite3_column_int(q, 2);
+    int st = store_status_parse((const char *)sqlite3_column_text(q, 3));
+    m->status = st < 0 ? STORE_FAILED : (store_status)st;
+    if (dup_column(q, 4, &m->values) || dup_column(q, 5, &m->metrics) ||
+        dup_column(q, 6, &m->message)) {
+        set_err(err, errlen, "job %lld: out of memory", (long long)m->job);
+        return -1;
+    }
+    return 0;
+}
+
+static void member_rows_free(void *rows, long n)
+{
+    store_members_free(rows, n);
+}
+
+static const row_reader member_rows = {sizeof(store_member), member_row_read, member_rows_free};
+
+/* step_rows's reader of an id (column 0) */
+static int id_row_read(sqlite3_stmt *q, void *elem, char *err, size_t errlen)
+{
+    (void)err, (void)errlen;
+    *(int64_t *)elem = sqlite3_column_int64(q, 0);
+    return 0;
+}
+
+static void id_rows_free(void *rows, long n)
+{
+    (void)n;
+    free(rows);
+}
+
+static const row_reader id_rows = {sizeof(int64_t), id_row_read, id_rows_free};
+
+/* the rows of a family's statement (ST_FAMILY_MEMBERS, ST_FAMILY_ACTIVE) with ?1 = id */
+static int family_rows(store *s, stmt_id which, const row_reader *rr, int64_t id, void **rows,
+                       long *n, char *err, size_t errlen)
+{
+    sqlite3_stmt *q = s->stmt[which];
+    char what[64];
+    snprintf(what, sizeof what, "reading the members of family %lld", (long long)id);
+    sqlite3_bind_int64(q, 1, id);
+    int rc = step_rows(s, q, rr, rows, n, what, err, errlen);
+    release(q);
+    return rc;
+}
+
 int store_family_members(store *s, int64_t id, store_member **rows, long *n, char *err,
                          size_t errlen)
 {
     if (s->pg) return store_pg_family_members(s->pg, id, rows, n, err, errlen);
     call_begin(s);
-    sqlite3_stmt *q = s->stmt[ST_FAMILY_MEMBERS];
-    int rc = -1, step;
-    long count = 0, cap = 0;
-    store_member *list = NULL;
-    *rows = NULL;
-    *n = 0;
-    sqlite3_bind_int64(q, 1, id);
-    while ((step = sqlite3_step(q)) == SQLITE_ROW) {
-        if (count == cap) {
-            long grow = cap ? 2 * cap : 64;
-            store_member *bigger = realloc(list, (size_t)grow * sizeof *list);
-            if (!bigger) {
-                set_err(err, errlen, "family %lld: out of memory", (long long)id);
-                goto done;
-            }
-            list = bigger;
-            cap = grow;
-        }
-        store_member *m = &list[count];
-        memset(m, 0, sizeof *m);
-        m->job = sqlite3_column_int64(q, 0);
-        m->index = (long)sqlite3_column_int64(q, 1);
-        m->replica = sqlite3_column_int(q, 2);
-        int st = store_status_parse((const char *)sqlite3_column_text(q, 3));
-        m->status = st < 0 ? STORE_FAILED : (store_status)st;
-        count++;
-        if (dup_column(q, 4, &m->values) || dup_column(q, 5, &m->metrics) ||
-            dup_column(q, 6, &m->message)) {
-            set_err(err, errlen, "family %lld: out of memory", (long long)id);
-            goto done;
-        }
-    }
-    if (step != SQLITE_DONE) {
-        db_err(s, err, errlen, "reading the members of family %lld", (long long)id);
-        goto done;
-    }
+    void *list;
+    int rc = family_rows(s, ST_FAMILY_MEMBERS, &member_rows, id, &list, n, err, errlen);
     *rows = list;
-    *n = count;
-    list = NULL;
-    rc = 0;
-done:
-    release(q);
-    store_members_free(list, count);
     return rc;
 }
 
@@ -2090,37 +2143,9 @@ int store_family_active(store *s, int64_t id, int64_t **ids, long *n, char *err,
 {
     if (s->pg) return store_pg_family_active(s->pg, id, ids, n, err, errlen);
     call_begin(s);
-    sqlite3_stmt *q = s->stmt[ST_FAMILY_ACTIVE];
-    int rc = -1, step;
-    long count = 0, cap = 0;
-    int64_t *list = NULL;
-    *ids = NULL;
-    *n = 0;
-    sqlite3_bind_int64(q, 1, id);
-    while ((step = sqlite3_step(q)) == SQLITE_ROW) {
-        if (count == cap) {
-            long grow = cap ? 2 * cap : 64;
-            int64_t *bigger = realloc(list, (size_t)grow * sizeof *list);
-            if (!bigger) {
-                set_err(err, errlen, "family %lld: out of memory", (long long)id);
-                goto done;
-            }
-            list = bigger;
-            cap = grow;
-        }
-        list[count++] = sqlite3_column_int64(q, 0);
-    }
-    if (step != SQLITE_DONE) {
-        db_err(s, err, errlen, "reading the members of family %lld", (long long)id);
-        goto done;
-    }
+    void *list;
+    int rc = family_rows(s, ST_FAMILY_ACTIVE, &id_rows, id, &list, n, err, errlen);
     *ids = list;
-    *n = count;
-    list = NULL;
-    rc = 0;
-done:
-    release(q);
-    free(list);
     return rc;
 }
 

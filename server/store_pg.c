@@ -874,6 +874,66 @@ int store_pg_get(store_pg *p, int64_t id, store_job *out, char *err, size_t errl
     return rc;
 }
 
+/* How pg_rows reads a result: each element's size, the reader of row k (0, or -1 with err), and
+ * the free of n elements read (a half-filled one included). */
+typedef struct pg_row_reader {
+    size_t size;
+    int (*read)(const PGresult *r, int k, void *elem, char *err, size_t errlen);
+    void (*free_rows)(void *rows, long n);
+} pg_row_reader;
+
+/* Reads every row of r (NULL: a failed query, err says why) with rr->read into zeroed elements of
+ * a new array, then clears r: 0 with *rows (free with rr->free_rows) and *n, or -1 with err
+ * ("WHAT: out of memory", or the reader's message) and nothing handed out. */
+static int pg_rows(PGresult *r, const pg_row_reader *rr, void **rows, long *n, const char *what,
+                   char *err, size_t errlen)
+{
+    *rows = NULL;
+    *n = 0;
+    if (!r) return -1;
+    int count = PQntuples(r), got = 0, rc = -1;
+    char *list = calloc((size_t)(count > 0 ? count : 1), rr->size);
+    if (!list) {
+        set_err(err, errlen, "%s: out of memory", what);
+        goto done;
+    }
+    while (got < count) {
+        got++;
+        if (rr->read(r, got - 1, list + (size_t)(got - 1) * rr->size, err, errlen) != 0) goto done;
+    }
+    *rows = list;
+    *n = count;
+    list = NULL;
+    rc = 0;
+done:
+    PQclear(r);
+    if (list) rr->free_rows(list, got);
+    return rc;
+}
+
+static int job_row_read(const PGresult *r, int k, void *elem, char *err, size_t errlen)
+{
+    return read_job(r, k, 0, elem, err, errlen);
+}
+
+static void job_rows_free(void *rows, long n)
+{
+    store_jobs_free(rows, (int)n);
+}
+
+static const pg_row_reader job_rows = {sizeof(store_job), job_row_read, job_rows_free};
+
+/* the jobs of a list's result (NULL: the query failed) into *rows and *n; 0 or -1 */
+static int job_list(PGresult *r, store_job **rows, int *n, char *err, size_t errlen)
+{
+    void *list;
+    long count;
+    int rc = pg_rows(r, &job_rows, &list, &count, "listing jobs", err, errlen);
+    *rows = list;
+    *n = (int)count;
+    return rc;
+}
+
 int store_pg_list(store_pg *p, int64_t before, int status, int limit, store_job **rows, int *n,
                   char *err, size_t errlen)
 {
@@ -891,23 +951,7 @@ int store_pg_list(store_pg *p, int64_t before, int status, int limit, store_job 
                                   : "SELECT " JOB_COLUMNS " FROM jobs WHERE id < $1 ORDER BY id "
                                     "DESC LIMIT $2",
                       status >= 0 ? 3 : 2, v, 0, err, errlen, "listing jobs");
-    if (!r) return -1;
-    int count = PQntuples(r), rc = -1, got = 0;
-    store_job *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "listing jobs: out of memory");
-        goto done;
-    }
-    for (; got < count; got++)
-        if (read_job(r, got, 0, &list[got], err, errlen)) goto done;
-    *rows = list;
-    *n = count;
-    list = NULL;
-    rc = 0;
-done:
-    PQclear(r);
-    store_jobs_free(list, got);
-    return rc;
+    return job_list(r, rows, n, err, errlen);
 }
 
 /* translate(x, AZ) folds x's ASCII letters to lowercase, as SQLite's lower() does, which
@@ -950,23 +994,7 @@ int store_pg_search(store_pg *p, int64_t before, const store_filter *f, int limi
                       "status = $3) AND " SEARCH_WHERE " ORDER BY id DESC LIMIT $2",
                       5, v, 0, err, errlen, "listing jobs");
     free(text);
-    if (!r) return -1;
-    int count = PQntuples(r), rc = -1, got = 0;
-    store_job *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "listing jobs: out of memory");
-        goto done;
-    }
-    for (; got < count; got++)
-        if (read_job(r, got, 0, &list[got], err, errlen)) goto done;
-    *rows = list;
-    *n = count;
-    list = NULL;
-    rc = 0;
-done:
-    PQclear(r);
-    store_jobs_free(list, got);
-    return rc;
+    return job_list(r, rows, n, err, errlen);
 }
 
 #define SERIES_SHAPE                                                                               \
@@ -1544,6 +1572,72 @@ int store_pg_family_get(store_pg *p, int64_t id, store_family *out, char *err, s
     return rc;
 }
 
+static int family_row_read(const PGresult *r, int k, void *elem, char *err, size_t errlen)
+{
+    return read_family(r, k, 0, elem, err, errlen);
+}
+
+static void family_rows_free(void *rows, long n)
+{
+    store_families_free(rows, (int)n);
+}
+
+static const pg_row_reader family_list_rows = {sizeof(store_family), family_row_read,
+                                               family_rows_free};
+
+/* pg_rows's reader of a member: id, family_member, family_replica, status, family_values,
+ * metrics, message */
+static int member_row_read(const PGresult *r, int k, void *elem, char *err, size_t errlen)
+{
+    store_member *m = elem;
+    m->job = strtoll(PQgetvalue(r, k, 0), NULL, 10);
+    m->index = strtol(PQgetvalue(r, k, 1), NULL, 10);
+    m->replica = atoi(PQgetvalue(r, k, 2));
+    int st = store_status_parse(PQgetvalue(r, k, 3));
+    m->status = st < 0 ? STORE_FAILED : (store_status)st;
+    if (dup_col(r, k, 4, &m->values) || dup_col(r, k, 5, &m->metrics) ||
+        dup_col(r, k, 6, &m->message)) {
+        set_err(err, errlen, "job %lld: out of memory", (long long)m->job);
+        return -1;
+    }
+    return 0;
+}
+
+static void member_rows_free(void *rows, long n)
+{
+    store_members_free(rows, n);
+}
+
+static const pg_row_reader member_rows = {sizeof(store_member), member_row_read, member_rows_free};
+
+/* pg_rows's reader of an id (column 0) */
+static int id_row_read(const PGresult *r, int k, void *elem, char *err, size_t errlen)
+{
+    (void)err, (void)errlen;
+    *(int64_t *)elem = strtoll(PQgetvalue(r, k, 0), NULL, 10);
+    return 0;
+}
+
+static void id_rows_free(void *rows, long n)
+{
+    (void)n;
+    free(rows);
+}
+
+static const pg_row_reader id_rows = {sizeof(int64_t), id_row_read, id_rows_free};
+
+/* the rows of sql, a query of family id's members with $1 = id */
+static int family_rows(store_pg *p, const char *sql, const pg_row_reader *rr, int64_t id,
+                       void **rows, long *n, char *err, size_t errlen)
+{
+    call_begin(p);
+    char ids[24], what[64];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(what, sizeof what, "reading the members of family %lld", (long long)id);
+    const char *v[] = {ids};
+    return pg_rows(run(p, sql, 1, v, 0, err, errlen, what), rr, rows, n, what, err, errlen);
+}
+
 int store_pg_family_list(store_pg *p, int64_t before, int limit, store_family **rows, int *n,
                          char *err, size_t errlen)
 {
@@ -1559,97 +1653,34 @@ int store_pg_family_list(store_pg *p, int64_t before, int limit, store_family **
                       "SELECT " FAMILY_COLUMNS " FROM families AS f WHERE f.id < $1 ORDER BY f.id "
                       "DESC LIMIT $2",
                       2, v, 0, err, errlen, "listing families");
-    if (!r) return -1;
-    int count = PQntuples(r), rc = -1, got = 0;
-    store_family *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "listing families: out of memory");
-        goto done;
-    }
-    for (; got < count; got++)
-        if (read_family(r, got, 0, &list[got], err, errlen)) goto done;
+    void *list;
+    long count;
+    int rc = pg_rows(r, &family_list_rows, &list, &count, "listing families", err, errlen);
     *rows = list;
-    *n = count;
-    list = NULL;
-    rc = 0;
-done:
-    PQclear(r);
-    store_families_free(list, got);
+    *n = (int)count;
     return rc;
 }
 
 int store_pg_family_members(store_pg *p, int64_t id, store_member **rows, long *n, char *err,
                             size_t errlen)
 {
-    call_begin(p);
-    *rows = NULL;
-    *n = 0;
-    char ids[24], what[64];
-    fmt_i64(ids, sizeof ids, id);
-    snprintf(what, sizeof what, "reading the members of family %lld", (long long)id);
-    const char *v[] = {ids};
-    PGresult *r = run(p,
-                      "SELECT id, family_member, family_replica, status, family_values, metrics, "
-                      "message FROM jobs WHERE family_id = $1 ORDER BY family_member",
-                      1, v, 0, err, errlen, what);
-    if (!r) return -1;
-    long count = PQntuples(r), got = 0;
-    int rc = -1;
-    store_member *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "family %lld: out of memory", (long long)id);
-        goto done;
-    }
-    for (; got < count; got++) {
-        store_member *m = &list[got];
-        int k = (int)got;
-        m->job = strtoll(PQgetvalue(r, k, 0), NULL, 10);
-        m->index = strtol(PQgetvalue(r, k, 1), NULL, 10);
-        m->replica = atoi(PQgetvalue(r, k, 2));
-        int st = store_status_parse(PQgetvalue(r, k, 3));
-        m->status = st < 0 ? STORE_FAILED : (store_status)st;
-        if (dup_col(r, k, 4, &m->values) || dup_col(r, k, 5, &m->metrics) ||
-            dup_col(r, k, 6, &m->message)) {
-            set_err(err, errlen, "family %lld: out of memory", (long long)id);
-            got++;
-            goto done;
-        }
-    }
+    void *list;
+    int rc = family_rows(p,
+                         "SELECT id, family_member, family_replica, status, family_values, "
+                         "metrics, message FROM jobs WHERE family_id = $1 ORDER BY family_member",
+                         &member_rows, id, &list, n, err, errlen);
     *rows = list;
-    *n = count;
-    list = NULL;
-    rc = 0;
-done:
-    PQclear(r);
-    store_members_free(list, got);
     return rc;
 }
 
 int store_pg_family_active(store_pg *p, int64_t id, int64_t **ids, long *n, char *err,
                            size_t errlen)
 {
-    call_begin(p);
-    *ids = NULL;
-    *n = 0;
-    char fid[24], what[64];
-    fmt_i64(fid, sizeof fid, id);
-    snprintf(what, sizeof what, "reading the members of family %lld", (long long)id);
-    const char *v[] = {fid};
-    PGresult *r = run(p, "SELECT id FROM jobs WHERE family_id = $1 AND " ACTIVE " ORDER BY id", 1,
-                      v, 0, err, errlen, what);
-    if (!r) return -1;
-    long count = PQntuples(r);
-    int64_t *list = malloc((size_t)(count > 0 ? count : 1) * sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "family %lld: out of memory", (long long)id);
-        PQclear(r);
-        return -1;
-    }
-    for (long k = 0; k < count; k++) list[k] = strtoll(PQgetvalue(r, (int)k, 0), NULL, 10);
-    PQclear(r);
+    void *list;
+    int rc = family_rows(p, "SELECT id FROM jobs WHERE family_id = $1 AND " ACTIVE " ORDER BY id",
+                         &id_rows, id, &list, n, err, errlen);
     *ids = list;
-    *n = count;
-    return 0;
+    return rc;
 }
 
 int store_pg_family_cancel(store_pg *p, int64_t id, const char *message, long *n, char *err,
