@@ -158,6 +158,35 @@ static void print_summary(const job *j, const ctc_sim_result *r)
     if (r->message[0]) fprintf(stderr, "%s: %s\n", j->name, r->message);
 }
 
+/* An option's integer value from lo to hi into *out: 0, or -1 after printing "ctcsim: FLAG must
+ * be WHAT (got "TEXT")". */
+static int option_integer(const char *flag, const char *text, long lo, long hi, const char *what,
+                          long *out)
+{
+    char *end;
+    errno = 0;
+    long x = strtol(text, &end, 10);
+    if (end == text || *end || errno == ERANGE || x < lo || x > hi) {
+        fprintf(stderr, "ctcsim: %s must be %s (got \"%s\")\n", flag, what, text);
+        return -1;
+    }
+    *out = x;
+    return 0;
+}
+
+/* A command's argument a that is no option it knows: its one FILE (or - for standard input),
+ * taken into *path: 0, or -1 after printing "ctcsim: CMD: unexpected argument" and the usage
+ * (an option, or a second FILE). */
+static int take_path(const char *cmd, const char *a, const char **path)
+{
+    if (!*path && (a[0] != '-' || strcmp(a, "-") == 0)) {
+        *path = a;
+        return 0;
+    }
+    fprintf(stderr, "ctcsim: %s: unexpected argument \"%s\"\n%s", cmd, a, usage);
+    return -1;
+}
+
 static int cmd_run(int argc, char **argv)
 {
     const char *path = NULL, *outpath = NULL, *format = "csv";
@@ -180,20 +209,13 @@ static int cmd_run(int argc, char **argv)
                 return EXIT_USAGE;
             }
         } else if (strcmp(a, "--every") == 0 && i + 1 < argc) {
-            char *end;
-            long n = strtol(argv[++i], &end, 10);
-            if (*end || n < 1 || n > INT_MAX) {
-                fprintf(stderr, "ctcsim: --every must be a positive integer (got \"%s\")\n",
-                        argv[i]);
+            long n;
+            if (option_integer(a, argv[++i], 1, INT_MAX, "a positive integer", &n) != 0)
                 return EXIT_USAGE;
-            }
             every = (int)n;
         } else if (strcmp(a, "--quiet") == 0) {
             quiet = 1;
-        } else if (!path && (a[0] != '-' || strcmp(a, "-") == 0)) {
-            path = a;
-        } else {
-            fprintf(stderr, "ctcsim: run: unexpected argument \"%s\"\n%s", a, usage);
+        } else if (take_path("run", a, &path) != 0) {
             return EXIT_USAGE;
         }
     }
@@ -561,19 +583,9 @@ static int cmd_sweep(int argc, char **argv)
         } else if (strcmp(a, "--validate") == 0) {
             validate = 1;
         } else if (strcmp(a, "--threads") == 0 && i + 1 < argc) {
-            char *end;
-            threads = strtol(argv[++i], &end, 10);
-            if (*end || threads < 1 || threads > 1024) {
-                fprintf(stderr,
-                        "ctcsim: --threads must be an integer from 1 to 1024 (got "
-                        "\"%s\")\n",
-                        argv[i]);
+            if (option_integer(a, argv[++i], 1, 1024, "an integer from 1 to 1024", &threads) != 0)
                 return EXIT_USAGE;
-            }
-        } else if (!path && (a[0] != '-' || strcmp(a, "-") == 0)) {
-            path = a;
-        } else {
-            fprintf(stderr, "ctcsim: sweep: unexpected argument \"%s\"\n%s", a, usage);
+        } else if (take_path("sweep", a, &path) != 0) {
             return EXIT_USAGE;
         }
     }

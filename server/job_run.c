@@ -117,6 +117,26 @@ done:
     return rc;
 }
 
+/* One number member of an item: its key, REQUIRED or OPTIONAL (then 0 when absent), where it
+ * goes. */
+typedef struct number_member {
+    const char *key;
+    int required;
+    double *value;
+} number_member;
+
+/* Reads the members m[0..] (up to the one with key NULL) of v, in order, as numbers, and puts
+ * each into out, the item's normalised form, under its key; 0, or -1 at the first that fails. */
+static int numbers_through(parser *p, const cJSON *v, const char *path, cJSON *out,
+                           const number_member *m)
+{
+    for (; m->key; m++) {
+        if (json_member_number(p, v, path, m->key, m->required, 0, m->value) != 0) return -1;
+        json_put_number(p, out, m->key, *m->value);
+    }
+    return 0;
+}
+
 static int parse_traj_item(parser *p, const cJSON *v, const char *path, int first, int count,
                            cJSON *out)
 {
@@ -132,21 +152,19 @@ static int parse_traj_item(parser *p, const cJSON *v, const char *path, int firs
     json_put_string(p, out, "type", traj_names[type]);
     switch (tr.type) {
     case CTC_TRAJ_CONSTANT:
-        if (json_member_number(p, v, path, "value", REQUIRED, 0, &tr.value) != 0) return -1;
-        json_put_number(p, out, "value", tr.value);
+        if (numbers_through(p, v, path, out,
+                            (number_member[]){{"value", REQUIRED, &tr.value}, {NULL, 0, NULL}}))
+            return -1;
         break;
     case CTC_TRAJ_SINE:
     case CTC_TRAJ_COSINE:
-        if (json_member_number(p, v, path, "amplitude", REQUIRED, 0, &tr.amplitude) != 0 ||
-            json_member_number(p, v, path, "period", REQUIRED, 0, &tr.period) != 0 ||
-            json_member_number(p, v, path, "phase", OPTIONAL, 0, &tr.phase) != 0 ||
-            json_member_number(p, v, path, "offset", OPTIONAL, 0, &tr.offset) != 0) {
+        if (numbers_through(p, v, path, out,
+                            (number_member[]){{"amplitude", REQUIRED, &tr.amplitude},
+                                              {"period", REQUIRED, &tr.period},
+                                              {"phase", OPTIONAL, &tr.phase},
+                                              {"offset", OPTIONAL, &tr.offset},
+                                              {NULL, 0, NULL}}))
             return -1;
-        }
-        json_put_number(p, out, "amplitude", tr.amplitude);
-        json_put_number(p, out, "period", tr.period);
-        json_put_number(p, out, "phase", tr.phase);
-        json_put_number(p, out, "offset", tr.offset);
         break;
     case CTC_TRAJ_POLYNOMIAL: {
         const cJSON *c = json_required_member(p, v, path, "coefficients", "");
@@ -162,16 +180,13 @@ static int parse_traj_item(parser *p, const cJSON *v, const char *path, int firs
         break;
     }
     case CTC_TRAJ_MIN_JERK:
-        if (json_member_number(p, v, path, "from", REQUIRED, 0, &tr.q0) != 0 ||
-            json_member_number(p, v, path, "to", REQUIRED, 0, &tr.q1) != 0 ||
-            json_member_number(p, v, path, "start", REQUIRED, 0, &tr.t0) != 0 ||
-            json_member_number(p, v, path, "end", REQUIRED, 0, &tr.t1) != 0) {
+        if (numbers_through(p, v, path, out,
+                            (number_member[]){{"from", REQUIRED, &tr.q0},
+                                              {"to", REQUIRED, &tr.q1},
+                                              {"start", REQUIRED, &tr.t0},
+                                              {"end", REQUIRED, &tr.t1},
+                                              {NULL, 0, NULL}}))
             return -1;
-        }
-        json_put_number(p, out, "from", tr.q0);
-        json_put_number(p, out, "to", tr.q1);
-        json_put_number(p, out, "start", tr.t0);
-        json_put_number(p, out, "end", tr.t1);
         break;
     case CTC_TRAJ_SPLINE:
         return parse_spline(p, v, path, first, count, out);
@@ -232,28 +247,25 @@ static int parse_disturb_item(parser *p, const cJSON *v, const char *path, int f
     case CTC_DISTURB_NONE:
         break;
     case CTC_DISTURB_CONSTANT:
-        if (json_member_number(p, v, path, "value", REQUIRED, 0, &z.value) != 0) return -1;
-        json_put_number(p, out, "value", z.value);
+        if (numbers_through(p, v, path, out,
+                            (number_member[]){{"value", REQUIRED, &z.value}, {NULL, 0, NULL}}))
+            return -1;
         break;
     case CTC_DISTURB_SINE:
-        if (json_member_number(p, v, path, "amplitude", REQUIRED, 0, &z.amplitude) != 0 ||
-            json_member_number(p, v, path, "period", REQUIRED, 0, &z.period) != 0 ||
-            json_member_number(p, v, path, "phase", OPTIONAL, 0, &z.phase) != 0 ||
-            json_member_number(p, v, path, "offset", OPTIONAL, 0, &z.offset) != 0) {
+        if (numbers_through(p, v, path, out,
+                            (number_member[]){{"amplitude", REQUIRED, &z.amplitude},
+                                              {"period", REQUIRED, &z.period},
+                                              {"phase", OPTIONAL, &z.phase},
+                                              {"offset", OPTIONAL, &z.offset},
+                                              {NULL, 0, NULL}}))
             return -1;
-        }
-        json_put_number(p, out, "amplitude", z.amplitude);
-        json_put_number(p, out, "period", z.period);
-        json_put_number(p, out, "phase", z.phase);
-        json_put_number(p, out, "offset", z.offset);
         break;
     case CTC_DISTURB_STEP:
-        if (json_member_number(p, v, path, "value", REQUIRED, 0, &z.value) != 0 ||
-            json_member_number(p, v, path, "time", REQUIRED, 0, &z.time) != 0) {
+        if (numbers_through(p, v, path, out,
+                            (number_member[]){{"value", REQUIRED, &z.value},
+                                              {"time", REQUIRED, &z.time},
+                                              {NULL, 0, NULL}}))
             return -1;
-        }
-        json_put_number(p, out, "value", z.value);
-        json_put_number(p, out, "time", z.time);
         break;
     }
     if (ctc_disturb_check(&z, msg, sizeof msg) != CTC_OK) {

@@ -145,6 +145,10 @@ struct jobq {
     int listener_started;
     int64_t *pending; /* (cap_pending) jobs submitted here and not yet seen final, under lock */
     int npending, cap_pending;
+    int64_t *watched; /* (cap_watched) jobs not submitted here that jobq_wait waits for (a
+                         family's members, another API process's jobs): one entry per waiting
+                         call, all of an id's dropped when it is seen final; under lock */
+    int nwatched, cap_watched;
 };
 
 static double monotonic_now(void)
@@ -704,22 +708,66 @@ static int pending_drop(jobq *q, int64_t id)
     return pos >= 0;
 }
 
+/* Position of an entry of id among the watched jobs, or -1 (caller holds q->lock). */
+static int watched_find(const jobq *q, int64_t id)
+{
+    for (int i = 0; i < q->nwatched; i++)
+        if (q->watched[i] == id) return i;
+    return -1;
+}
+
+/* Adds one entry of id to the watched jobs; 0, or -1 out of memory (caller holds q->lock). */
+static int watched_add(jobq *q, int64_t id)
+{
+    if (q->nwatched == q->cap_watched) {
+        int cap = q->cap_watched ? 2 * q->cap_watched : 16;
+        int64_t *grown = realloc(q->watched, (size_t)cap * sizeof *grown);
+        if (!grown) return -1;
+        q->watched = grown, q->cap_watched = cap;
+    }
+    q->watched[q->nwatched++] = id;
+    return 0;
+}
+
+/* Removes one entry of id from the watched jobs, if any (caller holds q->lock). */
+static void watched_remove_one(jobq *q, int64_t id)
+{
+    int pos = watched_find(q, id);
+    if (pos >= 0) q->watched[pos] = q->watched[--q->nwatched];
+}
+
+/* Drops every entry of id, a job seen final, and wakes its waiters. */
+static void watched_drop(jobq *q, int64_t id)
+{
+    pthread_mutex_lock(&q->lock);
+    int dropped = 0;
+    for (int pos; (pos = watched_find(q, id)) >= 0; dropped = 1)
+        q->watched[pos] = q->watched[--q->nwatched];
+    if (dropped) pthread_cond_broadcast(&q->finished);
+    pthread_mutex_unlock(&q->lock);
+}
+
 /* a notification on the listener's connection: a job that reached a final status leaves */
 static void listener_note(void *arg, int64_t id, int status)
 {
     jobq *q = arg;
     if (status < STORE_DONE) return;
+    watched_drop(q, id);
     if (pending_drop(q, id) && q->config.left) q->config.left(q->config.left_arg, id);
 }
 
-/* One query for the statuses of the jobs followed here; those final or gone leave. 0 or -1. */
+/* One query for the statuses of the jobs followed and watched here; those final or gone leave.
+ * 0 or -1. */
 static int listener_reconcile(jobq *q, store *db, char *err, size_t errlen)
 {
     pthread_mutex_lock(&q->lock);
-    int n = q->npending;
+    int n = q->npending + q->nwatched;
     int64_t *ids = n ? malloc((size_t)n * sizeof *ids) : NULL;
     int *st = n ? malloc((size_t)n * sizeof *st) : NULL;
-    if (ids) memcpy(ids, q->pending, (size_t)n * sizeof *ids);
+    if (ids) {
+        memcpy(ids, q->pending, (size_t)q->npending * sizeof *ids);
+        if (q->nwatched) memcpy(ids + q->npending, q->watched, (size_t)q->nwatched * sizeof *ids);
+    }
     pthread_mutex_unlock(&q->lock);
     int rc = 0;
     if (n && (!ids || !st)) {
@@ -789,6 +837,7 @@ static void jobq_free(jobq *q)
     for (int i = 0; q->workers && i < q->config.workers; i++) store_close(q->workers[i].db);
     store_close(q->ctl);
     free(q->pending);
+    free(q->watched);
     if (q->sync_ready) {
         pthread_mutex_destroy(&q->ctl_lock);
         pthread_cond_destroy(&q->finished);
@@ -1038,7 +1087,7 @@ int jobq_submit_family(jobq *q, int64_t family, const int64_t *ids, long n)
     pthread_mutex_lock(&q->lock);
     if (q->shared) {
         /* the members are in the database, which the workers claim from in fair turns; they are
-           not followed here (jobq_wait does not wait for them) */
+           not followed here (jobq_wait watches one while it waits for it) */
         rc = atomic_load(&q->stopping) ? 2 : 0;
     } else if (atomic_load(&q->stopping))
         rc = 2;
@@ -1234,6 +1283,45 @@ int jobq_position(jobq *q, int64_t id)
     return ahead >= INT_MAX - 1 ? INT_MAX : (int)ahead + 1;
 }
 
+/* jobq_wait on a shared queue. A job submitted here is followed already (pending); any other (a
+ * family's member, a job another API process took) is watched for this call: its entry is
+ * added before its status is read, so the notification of a job finishing after that read
+ * drops it, and one finished before is seen by the read. Without a listener nothing is
+ * followed: 0 at once. */
+static int shared_wait(jobq *q, int64_t id, const struct timespec *deadline)
+{
+    if (!q->config.listen) return 0;
+    pthread_mutex_lock(&q->lock);
+    int followed = pending_find(q, id) >= 0;
+    int watching = !followed && watched_add(q, id) == 0;
+    pthread_mutex_unlock(&q->lock);
+    if (!followed && !watching) return 0; /* out of memory: answered as it is */
+    if (watching) {
+        int status = -1;
+        char err[256];
+        pthread_mutex_lock(&q->ctl_lock);
+        int rc = store_pg_statuses(q->ctl, &id, 1, &status, err, sizeof err);
+        pthread_mutex_unlock(&q->ctl_lock);
+        if (rc == 0 && (status < 0 || status >= STORE_DONE)) {
+            pthread_mutex_lock(&q->lock);
+            watched_remove_one(q, id);
+            pthread_mutex_unlock(&q->lock);
+            return 0;
+        }
+        /* a failed read: the notification, the listener's next read or the deadline ends it */
+    }
+    pthread_mutex_lock(&q->lock);
+    int here = followed ? pending_find(q, id) >= 0 : watched_find(q, id) >= 0;
+    while (here) {
+        int e = pthread_cond_timedwait(&q->finished, &q->lock, deadline);
+        here = followed ? pending_find(q, id) >= 0 : watched_find(q, id) >= 0;
+        if (e == ETIMEDOUT) break;
+    }
+    if (watching && here) watched_remove_one(q, id);
+    pthread_mutex_unlock(&q->lock);
+    return here ? 1 : 0;
+}
+
 int jobq_wait(jobq *q, int64_t id, double timeout_s)
 {
     /* the deadline on the monotonic clock, which `finished` waits on */
@@ -1249,12 +1337,12 @@ int jobq_wait(jobq *q, int64_t id, double timeout_s)
         deadline.tv_nsec -= 1000000000L;
     }
 
+    if (q->shared) return shared_wait(q, id, &deadline);
     pthread_mutex_lock(&q->lock);
-    /* a shared queue: while it is followed here (the listener drops it when it is final) */
-    int here = q->shared ? pending_find(q, id) >= 0 : job_here(q, id);
+    int here = job_here(q, id);
     while (here) {
         int e = pthread_cond_timedwait(&q->finished, &q->lock, &deadline);
-        here = q->shared ? pending_find(q, id) >= 0 : job_here(q, id);
+        here = job_here(q, id);
         if (e == ETIMEDOUT) break;
     }
     pthread_mutex_unlock(&q->lock);

@@ -47,7 +47,8 @@
  * are the whole database's queued and running jobs, workers this process's. Families need no
  * lanes here: the claim itself serves the single jobs and each family in turn, across every
  * worker process (store_pg_claim); jobq_submit_family only checks that the queue is not
- * stopping (its members are not followed: jobq_wait returns at once for them), and
+ * stopping (its members are not followed; jobq_wait watches a job it was not given, a member
+ * or another API process's job, while it waits: one status read, then the notifications), and
  * jobq_cancel_family flags the family's active members in the database (store_pg_request_cancel_
  * family), handing back no ids. jobq_live_info and jobq_live_read know only the jobs this
  * process's workers run: an API process without workers has no live samples to give.
@@ -149,7 +150,9 @@ int jobq_live_read(jobq *q, int64_t id, int channel, uint64_t offset, void *buf,
 int jobq_position(jobq *q, int64_t id);
 
 /* Waits until the job is no longer queued or running here, or timeout_s passes. Returns 0 when it
- * finished (or was never here), 1 on timeout. */
+ * finished (or was never here), 1 on timeout. A shared queue waits for any job of the database,
+ * a family's member or another process's too, when it listens (config.listen); without a
+ * listener it returns 0 at once. */
 int jobq_wait(jobq *q, int64_t id, double timeout_s);
 
 /* Current counters. */

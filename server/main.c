@@ -106,7 +106,8 @@ static const setting settings[] = {
     {"--job-threads", "CTCSIM_JOB_THREADS", SETTING_INTEGER, AT(job_threads), 1, CTC_MAX_THREADS,
      "N", "most threads one job's dynamics may use (its \"threads\"; more are refused with 400)"},
     {"--max-queue", "CTCSIM_MAX_QUEUE", SETTING_INTEGER, AT(max_queue), 1, 1000000, "N",
-     "jobs waiting at most; more are refused with 503"},
+     "single jobs waiting at most (on PostgreSQL in the whole database, checked atomically "
+     "with the insert); more are refused with 503"},
     {"--max-body", "CTCSIM_MAX_BODY", SETTING_BYTES, AT(max_body), 1024, 1LL << 30, "BYTES",
      "largest request body (suffix K or M for KiB, MiB)"},
     {"--token", "CTCSIM_TOKEN", SETTING_TEXT, AT(token), 0, 0, "TOKEN",
@@ -143,8 +144,8 @@ static const setting settings[] = {
     {"--max-series-streams", "CTCSIM_MAX_SERIES_STREAMS", SETTING_INTEGER, AT(max_series_streams),
      1, 100000, "N", "large series replies (over 1048576 values) sent at once; more get 503"},
     {"--db-max-size", "CTCSIM_DB_MAX_SIZE", SETTING_BYTES, AT(db_max_size), 0, 1LL << 50, "BYTES",
-     "largest size of the database file (0: as the disk allows); past it writes fail as on a "
-     "full disk (503 DATABASE_FULL) and DELETE frees room"},
+     "SQLite only: largest size of the database file (0: as the disk allows); past it writes "
+     "fail as on a full disk (503 DATABASE_FULL) and DELETE frees room"},
 };
 
 #define NSETTINGS (sizeof settings / sizeof settings[0])
@@ -182,8 +183,10 @@ static void print_help(const server_settings *def)
     printf("usage: ctcsim-server [OPTION ...]\n"
            "\n"
            "The ctcsim HTTP/JSON service: runs computed torque control simulations submitted\n"
-           "as jobs (POST /api/jobs), stores them and their results in SQLite, and serves the\n"
-           "web page. Every option also reads from its environment variable; a flag wins.\n"
+           "as jobs (POST /api/jobs), stores them and their results in a database (an SQLite\n"
+           "file for one process, or PostgreSQL shared by API and worker processes: --db,\n"
+           "--role), and serves the web page. Every option also reads from its environment\n"
+           "variable; a flag wins.\n"
            "\n");
     for (size_t i = 0; i < NSETTINGS; i++) {
         const setting *st = &settings[i];
@@ -459,6 +462,7 @@ int main(int argc, char **argv)
                       .job_threads = (int)cfg.job_threads,
                       .jobs_by_client = client_count_new(),
                       .max_jobs_per_client = (unsigned)cfg.max_jobs_per_client,
+                      .max_queue = (long)cfg.max_queue,
                       .max_family = (long)cfg.max_family,
                       .max_series_streams = (int)cfg.max_series_streams,
                       .db_max_size = cfg.db_max_size,

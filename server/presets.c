@@ -625,6 +625,25 @@ static void arm_four_bar_q0(double q0[ARM_FOUR_BAR_N])
     q0[3] = fb[2];
 }
 
+/* The drive of a four-bar on an arm (arm_four_bar_pd, y_four_bar_pd): PD, the arm (coordinate 0)
+ * at q0 + 0.3 sin(2 pi t / 4), the crank (coordinate 1) at q0 + pi t. Returns the trajectory
+ * array, to which a scene with more independent joints adds theirs. */
+static cJSON *put_arm_crank_drive(doc_builder *b, cJSON *doc, const double *q0)
+{
+    put_controller(b, doc, PRESET_PD);
+    cJSON *traj = put_array(b, doc, "trajectory");
+    cJSON *arm = put_object(b, traj, NULL);
+    put_string(b, arm, "type", "sine");
+    put_number(b, arm, "amplitude", 0.3);
+    put_number(b, arm, "period", 4);
+    put_number(b, arm, "offset", q0[0]);
+    cJSON *crank = put_object(b, traj, NULL);
+    put_string(b, crank, "type", "polynomial");
+    const double coef[2] = {q0[1], printable(PRESETS_PI)};
+    put_vector(b, crank, "coefficients", 2, coef);
+    return traj;
+}
+
 /* A planar four-bar crank-rocker whose ground link is an arm (a loop closed on body 0, not on the
  * ground): PD drives the arm along a sine about +x and the crank round at 1 turn per 2 s; the
  * coupler, the rocker and the closing joint follow. */
@@ -650,18 +669,7 @@ static cJSON *arm_four_bar_pd(const cJSON *request, job_error *err)
     put_vector(&b, scene, "q0", ARM_FOUR_BAR_N, q0);
     put_vector(&b, scene, "v0", ARM_FOUR_BAR_N, v0);
 
-    /* the arm: q0 + 0.3 sin(2 pi t / 4); the crank: q0 + pi t */
-    put_controller(&b, doc, PRESET_PD);
-    cJSON *traj = put_array(&b, doc, "trajectory");
-    cJSON *arm = put_object(&b, traj, NULL);
-    put_string(&b, arm, "type", "sine");
-    put_number(&b, arm, "amplitude", 0.3);
-    put_number(&b, arm, "period", 4);
-    put_number(&b, arm, "offset", q0[0]);
-    cJSON *crank = put_object(&b, traj, NULL);
-    put_string(&b, crank, "type", "polynomial");
-    const double coef[2] = {q0[1], printable(PRESETS_PI)};
-    put_vector(&b, crank, "coefficients", 2, coef);
+    put_arm_crank_drive(&b, doc, q0);
     put_run_settings_of(&b, doc, 10, 1e-8, 1e-10);
     return finish(&b, doc, "arm_four_bar_pd", err);
 }
@@ -883,18 +891,8 @@ static cJSON *y_four_bar_pd(const cJSON *request, job_error *err)
     put_vector(&b, scene, "q0", Y_FOUR_BAR_N, q0);
     put_vector(&b, scene, "v0", Y_FOUR_BAR_N, v0);
 
-    /* the arm: q0 + 0.3 sin(2 pi t / 4); the crank: q0 + pi t; the pendulum's joints: sines */
-    put_controller(&b, doc, PRESET_PD);
-    cJSON *traj = put_array(&b, doc, "trajectory");
-    cJSON *arm = put_object(&b, traj, NULL);
-    put_string(&b, arm, "type", "sine");
-    put_number(&b, arm, "amplitude", 0.3);
-    put_number(&b, arm, "period", 4);
-    put_number(&b, arm, "offset", q0[0]);
-    cJSON *crank = put_object(&b, traj, NULL);
-    put_string(&b, crank, "type", "polynomial");
-    const double coef[2] = {q0[1], printable(PRESETS_PI)};
-    put_vector(&b, crank, "coefficients", 2, coef);
+    /* the arm and the crank as on the arm's four-bar; the pendulum's joints: sines */
+    cJSON *traj = put_arm_crank_drive(&b, doc, q0);
     for (int i = 3; i <= 4 && !b.failed; i++) {
         cJSON *tr = put_object(&b, traj, NULL);
         put_string(&b, tr, "type", "sine");

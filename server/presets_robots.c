@@ -60,6 +60,7 @@
  * an arm 0.412 m tall, yet as inches or centimetres they give different arms. Without Paul's
  * tables to settle which, any correction would be a guess no source backs.
  */
+#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -357,38 +358,50 @@ static const iiwa_joint iiwa14[7] = {
      "2.356194490192345", "0 0 0.02", "1.2", "0.001", "0.001", "0.001"},
 };
 
+/* Appends printf's text of fmt at buf + *n, buf being len bytes in all, and advances *n: 0, or -1
+ * when it does not fit (buf then holds a truncated, terminated text). */
+static int append(char *buf, size_t len, size_t *n, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+static int append(char *buf, size_t len, size_t *n, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int k = vsnprintf(buf + *n, len - *n, fmt, ap);
+    va_end(ap);
+    if (k < 0 || (size_t)k >= len - *n) return -1;
+    *n += (size_t)k;
+    return 0;
+}
+
 /* the URDF text into buf (len bytes); -1 when it does not fit */
 static int iiwa14_text(char *buf, size_t len)
 {
     size_t n = 0;
-    int k = snprintf(buf, len, "%s", iiwa14_urdf);
-    if (k < 0 || (size_t)k >= len) return -1;
-    n = (size_t)k;
+    if (append(buf, len, &n, "%s", iiwa14_urdf) != 0) return -1;
     for (int i = 0; i < 7; i++) {
         const iiwa_joint *j = &iiwa14[i];
-        k = snprintf(buf + n, len - n,
-                     "  <joint name=\"iiwa_joint_%d\" type=\"revolute\">\n"
-                     "    <parent link=\"iiwa_link_%d\"/><child link=\"iiwa_link_%d\"/>\n"
-                     "    <origin rpy=\"%s\" xyz=\"%s\"/><axis xyz=\"0 0 1\"/>\n"
-                     "    <limit effort=\"%s\" lower=\"-%s\" upper=\"%s\" velocity=\"%s\"/>\n"
-                     "    <dynamics damping=\"0.5\"/>\n"
-                     "  </joint>\n"
-                     "  <link name=\"iiwa_link_%d\"><inertial><origin xyz=\"%s\"/>"
-                     "<mass value=\"%s\"/>\n"
-                     "    <inertia ixx=\"%s\" iyy=\"%s\" izz=\"%s\"/></inertial></link>\n",
-                     i + 1, i, i + 1, j->rpy, j->xyz, j->effort, j->limit, j->limit, j->velocity,
-                     i + 1, j->com, j->mass, j->ixx, j->iyy, j->izz);
-        if (k < 0 || (size_t)k >= len - n) return -1;
-        n += (size_t)k;
+        if (append(buf, len, &n,
+                   "  <joint name=\"iiwa_joint_%d\" type=\"revolute\">\n"
+                   "    <parent link=\"iiwa_link_%d\"/><child link=\"iiwa_link_%d\"/>\n"
+                   "    <origin rpy=\"%s\" xyz=\"%s\"/><axis xyz=\"0 0 1\"/>\n"
+                   "    <limit effort=\"%s\" lower=\"-%s\" upper=\"%s\" velocity=\"%s\"/>\n"
+                   "    <dynamics damping=\"0.5\"/>\n"
+                   "  </joint>\n"
+                   "  <link name=\"iiwa_link_%d\"><inertial><origin xyz=\"%s\"/>"
+                   "<mass value=\"%s\"/>\n"
+                   "    <inertia ixx=\"%s\" iyy=\"%s\" izz=\"%s\"/></inertial></link>\n",
+                   i + 1, i, i + 1, j->rpy, j->xyz, j->effort, j->limit, j->limit, j->velocity,
+                   i + 1, j->com, j->mass, j->ixx, j->iyy, j->izz) != 0)
+            return -1;
     }
-    k = snprintf(buf + n, len - n,
-                 "  <joint name=\"iiwa_joint_ee\" type=\"fixed\">\n"
-                 "    <parent link=\"iiwa_link_7\"/><child link=\"iiwa_link_ee\"/>\n"
-                 "    <origin rpy=\"0 -1.570796326794897 0\" xyz=\"0 0 0.045\"/>\n"
-                 "  </joint>\n"
-                 "  <link name=\"iiwa_link_ee\"/>\n"
-                 "</robot>\n");
-    return k < 0 || (size_t)k >= len - n ? -1 : 0;
+    return append(buf, len, &n,
+                  "  <joint name=\"iiwa_joint_ee\" type=\"fixed\">\n"
+                  "    <parent link=\"iiwa_link_7\"/><child link=\"iiwa_link_ee\"/>\n"
+                  "    <origin rpy=\"0 -1.570796326794897 0\" xyz=\"0 0 0.045\"/>\n"
+                  "  </joint>\n"
+                  "  <link name=\"iiwa_link_ee\"/>\n"
+                  "</robot>\n");
 }
 
 cJSON *presets_iiwa14(const cJSON *request, job_error *err)
@@ -484,28 +497,24 @@ static const char panda_urdf_tail[] =
 static int panda_text(char *buf, size_t len)
 {
     size_t n = 0;
-    int k = snprintf(buf, len, "%s", panda_urdf_head);
-    if (k < 0 || (size_t)k >= len) return -1;
-    n = (size_t)k;
+    if (append(buf, len, &n, "%s", panda_urdf_head) != 0) return -1;
     for (int i = 0; i < 7; i++) {
         const panda_joint *j = &panda[i];
-        k = snprintf(buf + n, len - n,
-                     "  <joint name=\"panda_joint%d\" type=\"revolute\">\n"
-                     "    <parent link=\"panda_link%d\"/><child link=\"panda_link%d\"/>\n"
-                     "    <origin xyz=\"%s\" rpy=\"%s\"/><axis xyz=\"0 0 1\"/>\n"
-                     "    <limit effort=\"%s\" lower=\"%s\" upper=\"%s\" velocity=\"%s\"/>\n"
-                     "  </joint>\n"
-                     "  <link name=\"panda_link%d\"><inertial><origin xyz=\"%s\"/>"
-                     "<mass value=\"%s\"/>\n"
-                     "    <inertia ixx=\"%s\" iyy=\"%s\" izz=\"%s\" ixy=\"%s\" ixz=\"%s\" "
-                     "iyz=\"%s\"/></inertial></link>\n",
-                     i + 1, i, i + 1, j->xyz, j->rpy, j->effort, j->lower, j->upper, j->velocity,
-                     i + 1, j->com, j->mass, j->ixx, j->iyy, j->izz, j->ixy, j->ixz, j->iyz);
-        if (k < 0 || (size_t)k >= len - n) return -1;
-        n += (size_t)k;
+        if (append(buf, len, &n,
+                   "  <joint name=\"panda_joint%d\" type=\"revolute\">\n"
+                   "    <parent link=\"panda_link%d\"/><child link=\"panda_link%d\"/>\n"
+                   "    <origin xyz=\"%s\" rpy=\"%s\"/><axis xyz=\"0 0 1\"/>\n"
+                   "    <limit effort=\"%s\" lower=\"%s\" upper=\"%s\" velocity=\"%s\"/>\n"
+                   "  </joint>\n"
+                   "  <link name=\"panda_link%d\"><inertial><origin xyz=\"%s\"/>"
+                   "<mass value=\"%s\"/>\n"
+                   "    <inertia ixx=\"%s\" iyy=\"%s\" izz=\"%s\" ixy=\"%s\" ixz=\"%s\" "
+                   "iyz=\"%s\"/></inertial></link>\n",
+                   i + 1, i, i + 1, j->xyz, j->rpy, j->effort, j->lower, j->upper, j->velocity,
+                   i + 1, j->com, j->mass, j->ixx, j->iyy, j->izz, j->ixy, j->ixz, j->iyz) != 0)
+            return -1;
     }
-    k = snprintf(buf + n, len - n, "%s", panda_urdf_tail);
-    return k < 0 || (size_t)k >= len - n ? -1 : 0;
+    return append(buf, len, &n, "%s", panda_urdf_tail);
 }
 
 cJSON *presets_panda(const cJSON *request, job_error *err)

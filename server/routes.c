@@ -558,8 +558,16 @@ static void post_job_work(http_reply *rep, const routes_ctx *ctx, const char *cl
 
     /* stored first, then queued: a job answered 202 is in the database */
     int64_t id;
-    if (store_insert(s, j->name, j->preset, j->spec.chain.nbodies, j->nv,
-                     ctc_ctrl_type_name(j->spec.controller), spec, &id, err, sizeof err) != 0) {
+    int stored =
+        store_insert_bounded(s, ctx->max_queue, j->name, j->preset, j->spec.chain.nbodies, j->nv,
+                             ctc_ctrl_type_name(j->spec.controller), spec, &id, err, sizeof err);
+    if (stored == 2) {
+        rep->retry_after = ROUTES_RETRY_AFTER;
+        http_reply_error(rep, 503, "QUEUE_FULL", "",
+                         "the queue is full; try again in a few seconds");
+        goto done;
+    }
+    if (stored != 0) {
         database_failed(rep, "storing the job", err);
         goto done;
     }
@@ -625,15 +633,57 @@ void routes_job_left(void *arg, int64_t id)
     client_count_give_id(ctx->jobs_by_client, id);
 }
 
+/* ---- lists (GET /api/jobs, GET /api/families) ---- */
+
+/* ?limit (1..ROUTES_LIST_MAX, default ROUTES_LIST_DEFAULT) and ?cursor (an id: the rows below it;
+ * 0 when absent) of a list; 0, or -1 after replying 400 INVALID_QUERY. */
+static int query_page(const http_request *req, http_reply *rep, long long *limit, long long *cursor)
+{
+    if (query_integer(req, rep, "limit", 1, ROUTES_LIST_MAX, ROUTES_LIST_DEFAULT, limit) != 0)
+        return -1;
+    return query_integer(req, rep, "cursor", 1, INT64_MAX, 0, cursor);
+}
+
+/* Replies 200 {key: [the first limit rows], "next_cursor": the last shown row's id, or null when
+ * n <= limit}: the store was asked for limit + 1 rows, so one more tells that a next page exists.
+ * row(rows, i, &id) makes row i's JSON (NULL out of memory) and gives its id; the reply is
+ * NO_MEMORY when any part could not be made. */
+static void reply_page(http_reply *rep, const char *key, const void *rows, int n, long long limit,
+                       cJSON *(*row)(const void *rows, int i, int64_t *id))
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON *list = cJSON_AddArrayToObject(o, key);
+    int shown = n > limit ? (int)limit : n;
+    int64_t last = 0;
+    for (int i = 0; i < shown; i++) cJSON_AddItemToArray(list, row(rows, i, &last));
+    if (n > limit)
+        cJSON_AddNumberToObject(o, "next_cursor", (double)last);
+    else
+        cJSON_AddNullToObject(o, "next_cursor");
+    int complete = list && cJSON_GetArraySize(list) == shown &&
+                   cJSON_GetObjectItemCaseSensitive(o, "next_cursor");
+    if (!complete) {
+        cJSON_Delete(o);
+        o = NULL;
+    }
+    http_reply_json(rep, 200, o);
+}
+
 /* ---- GET /api/jobs ---- */
+
+/* reply_page's row of the job list */
+static cJSON *job_list_row(const void *rows, int i, int64_t *id)
+{
+    const store_job *j = (const store_job *)rows + i;
+    *id = j->id;
+    return job_row(j);
+}
 
 static void get_jobs(const http_request *req, http_reply *rep, void *arg)
 {
     routes_ctx *ctx = arg;
     long long limit, cursor;
-    if (query_integer(req, rep, "limit", 1, ROUTES_LIST_MAX, ROUTES_LIST_DEFAULT, &limit) != 0)
-        return;
-    if (query_integer(req, rep, "cursor", 1, INT64_MAX, 0, &cursor) != 0) return;
+    if (query_page(req, rep, &limit, &cursor) != 0) return;
     int status = -1;
     const char *st = http_query(req, "status");
     if (st && (status = store_status_parse(st)) < 0) {
@@ -671,22 +721,8 @@ static void get_jobs(const http_request *req, http_reply *rep, void *arg)
         database_failed(rep, "listing jobs", err);
         return;
     }
-    cJSON *o = cJSON_CreateObject();
-    cJSON *list = cJSON_AddArrayToObject(o, "jobs");
-    int shown = n > limit ? (int)limit : n;
-    for (int i = 0; i < shown; i++) cJSON_AddItemToArray(list, job_row(&rows[i]));
-    if (n > limit)
-        cJSON_AddNumberToObject(o, "next_cursor", (double)rows[shown - 1].id);
-    else
-        cJSON_AddNullToObject(o, "next_cursor");
-    int complete = list && cJSON_GetArraySize(list) == shown &&
-                   cJSON_GetObjectItemCaseSensitive(o, "next_cursor");
+    reply_page(rep, "jobs", rows, n, limit, job_list_row);
     store_jobs_free(rows, n);
-    if (!complete) {
-        cJSON_Delete(o);
-        o = NULL;
-    }
-    http_reply_json(rep, 200, o);
 }
 
 /* ---- GET /api/jobs/{id} ---- */
@@ -705,26 +741,15 @@ static int path_job(const http_request *req, http_reply *rep, const routes_ctx *
     return rc == 0 ? 0 : -1;
 }
 
-/* GET /api/jobs/{id}: the whole job, with queue_position (1 = next to start; null unless it
- * waits in this server's queue); ?brief=1 leaves out spec and metrics (a running job's page
- * polls it every second). */
-static void get_job(const http_request *req, http_reply *rep, void *arg)
+/* The answer to GET /api/jobs/{id} for a row read: 200 with the whole job (full) or its brief
+ * form, and queue_position. */
+static void reply_get_job(http_reply *rep, const routes_ctx *ctx, const store_job *row, int full)
 {
-    routes_ctx *ctx = arg;
-    store_job row = {0};
-    const char *brief = http_query(req, "brief");
-    if (brief && strcmp(brief, "0") != 0 && strcmp(brief, "1") != 0) {
-        http_reply_error(rep, 400, "INVALID_QUERY", "brief", "brief must be 0 or 1 (got \"%s\")",
-                         brief);
-        return;
-    }
-    if (path_job(req, rep, ctx, &row) != 0) return;
-    int full = !brief || strcmp(brief, "0") == 0;
-    cJSON *o = full ? job_full(&row) : job_row(&row);
+    cJSON *o = full ? job_full(row) : job_row(row);
     if (o && !full)
-        cJSON_AddItemToObject(o, "message",
-                              string_or_null(row.message && row.message[0] ? row.message : NULL));
-    int pos = row.status == STORE_QUEUED ? jobq_position(ctx->queue, row.id) : 0;
+        cJSON_AddItemToObject(
+            o, "message", string_or_null(row->message && row->message[0] ? row->message : NULL));
+    int pos = row->status == STORE_QUEUED ? jobq_position(ctx->queue, row->id) : 0;
     cJSON *place = pos > 0 ? cJSON_CreateNumber(pos) : cJSON_CreateNull();
     if (o && !(full ? cJSON_ReplaceItemInObjectCaseSensitive(o, "queue_position", place)
                     : cJSON_AddItemToObject(o, "queue_position", place))) {
@@ -733,6 +758,57 @@ static void get_job(const http_request *req, http_reply *rep, void *arg)
     }
     if (!o) cJSON_Delete(place);
     http_reply_json(rep, 200, o);
+}
+
+/* GET /api/jobs/{id}?wait: what its deferred part needs. */
+typedef struct get_wait {
+    const routes_ctx *ctx;
+    int64_t id;
+    int full;
+    double wait; /* s */
+} get_wait;
+
+/* Runs off libmicrohttpd's threads (http_defer): waits for the job, reads it again, answers. */
+static void finish_get_wait(http_reply *rep, void *arg)
+{
+    get_wait *w = arg;
+    (void)wait_for_job(w->ctx, w->id, w->wait);
+    store_job row = {0};
+    char err[256] = "";
+    store *s = thread_store(w->ctx, rep);
+    int rc = s ? store_get(s, w->id, &row, err, sizeof err) : -1;
+    if (rc == 0) reply_get_job(rep, w->ctx, &row, w->full);
+    if (rc == 1) http_reply_error(rep, 404, "NOT_FOUND", "id", "no job %" PRId64, w->id);
+    if (rc < 0 && s) database_failed(rep, "reading a job", err);
+    store_job_clear(&row);
+    free(w);
+}
+
+/* GET /api/jobs/{id}: the whole job, with queue_position (1 = next to start; null unless it
+ * waits in this server's queue); ?brief=1 leaves out spec and metrics (a running job's page
+ * polls it every second); ?wait=S holds the answer while the job is queued or running, up to S
+ * (off the HTTP threads, in one of the --max-waiters places; past them answered at once). */
+static void get_job(const http_request *req, http_reply *rep, void *arg)
+{
+    routes_ctx *ctx = arg;
+    store_job row = {0};
+    double wait;
+    const char *brief = http_query(req, "brief");
+    if (brief && strcmp(brief, "0") != 0 && strcmp(brief, "1") != 0) {
+        http_reply_error(rep, 400, "INVALID_QUERY", "brief", "brief must be 0 or 1 (got \"%s\")",
+                         brief);
+        return;
+    }
+    if (query_wait(req, rep, ctx, &wait) != 0 || path_job(req, rep, ctx, &row) != 0) return;
+    int full = !brief || strcmp(brief, "0") == 0;
+    get_wait *w = wait > 0 && !job_finished(row.status) ? malloc(sizeof *w) : NULL;
+    if (w) *w = (get_wait){.ctx = ctx, .id = row.id, .full = full, .wait = wait};
+    if (w && http_defer(rep, finish_get_wait, w) == 0) {
+        store_job_clear(&row);
+        return;
+    }
+    free(w); /* no wait, or every waiting place taken: the job as it is */
+    reply_get_job(rep, ctx, &row, full);
     store_job_clear(&row);
 }
 
@@ -1384,13 +1460,19 @@ static void post_families(const http_request *req, http_reply *rep, void *arg)
     run_post_at(req, rep, ctx, 0, -1, post_family_work);
 }
 
+/* reply_page's row of the family list */
+static cJSON *family_list_row(const void *rows, int i, int64_t *id)
+{
+    const store_family *f = (const store_family *)rows + i;
+    *id = f->id;
+    return family_row_json(f);
+}
+
 static void get_families(const http_request *req, http_reply *rep, void *arg)
 {
     routes_ctx *ctx = arg;
     long long limit, cursor;
-    if (query_integer(req, rep, "limit", 1, ROUTES_LIST_MAX, ROUTES_LIST_DEFAULT, &limit) != 0)
-        return;
-    if (query_integer(req, rep, "cursor", 1, INT64_MAX, 0, &cursor) != 0) return;
+    if (query_page(req, rep, &limit, &cursor) != 0) return;
     store *s = thread_store(ctx, rep);
     if (!s) return;
     store_family *rows = NULL;
@@ -1400,22 +1482,8 @@ static void get_families(const http_request *req, http_reply *rep, void *arg)
         database_failed(rep, "listing families", err);
         return;
     }
-    cJSON *o = cJSON_CreateObject();
-    cJSON *list = cJSON_AddArrayToObject(o, "families");
-    int shown = n > limit ? (int)limit : n;
-    for (int i = 0; i < shown; i++) cJSON_AddItemToArray(list, family_row_json(&rows[i]));
-    if (n > limit)
-        cJSON_AddNumberToObject(o, "next_cursor", (double)rows[shown - 1].id);
-    else
-        cJSON_AddNullToObject(o, "next_cursor");
-    int complete = list && cJSON_GetArraySize(list) == shown &&
-                   cJSON_GetObjectItemCaseSensitive(o, "next_cursor");
+    reply_page(rep, "families", rows, n, limit, family_list_row);
     store_families_free(rows, n);
-    if (!complete) {
-        cJSON_Delete(o);
-        o = NULL;
-    }
-    http_reply_json(rep, 200, o);
 }
 
 /* The family id of the path; 0, or -1 after replying 400 INVALID_ID. */

@@ -137,6 +137,9 @@ typedef struct routes_ctx {
     int job_threads;              /* the most "threads" a job may ask for (--job-threads) */
     client_count *jobs_by_client; /* each client address's queued and running jobs */
     unsigned max_jobs_per_client; /* past them POST /api/jobs answers 429 (0 = no limit) */
+    long max_queue;               /* queued single jobs at most (--max-queue); past them POST
+                                     /api/jobs answers 503 QUEUE_FULL (the insert checks it on
+                                     PostgreSQL, the queue on SQLite: store_insert_bounded) */
     long max_family;              /* members of one family at most (--max-family); past them
                                      POST /api/families answers 413 */
     long long db_max_size;        /* bytes each connection may grow the database to; 0 = no cap */

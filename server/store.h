@@ -55,7 +55,7 @@
 
 #include "sim.h"
 
-#define STORE_SCHEMA_VERSION 3
+#define STORE_SCHEMA_VERSION 4
 
 /* Job statuses as stored (and as the API shows them). */
 typedef enum store_status {
@@ -184,6 +184,16 @@ int store_reserve(store *s, long long bytes, char *err, size_t errlen);
  * normalised spec JSON. *id receives its id (increasing). */
 int store_insert(store *s, const char *name, const char *preset, int nbodies, int nv,
                  const char *controller, const char *spec, int64_t *id, char *err, size_t errlen);
+
+/* As store_insert, but refused when the database holds max_queued queued single jobs (a family's
+ * members and jobs whose cancel was asked for do not count) or more: returns 2 and stores
+ * nothing. On PostgreSQL the count and the insert are one transaction under an advisory lock, so
+ * API processes inserting at once cannot pass the bound together. On SQLite one process owns
+ * the file and its queue holds the bound under its lock (jobq_submit answers 1), so the bound is
+ * not read here. max_queued <= 0: no bound. */
+int store_insert_bounded(store *s, long max_queued, const char *name, const char *preset,
+                         int nbodies, int nv, const char *controller, const char *spec, int64_t *id,
+                         char *err, size_t errlen);
 
 /* Start-up recovery: every job found queued or running becomes queued with progress 0 (a running
  * one restarts from t = 0; its partial series, if any, is deleted). *ids receives a new array
@@ -346,8 +356,8 @@ int store_family_members(store *s, int64_t id, store_member **rows, long *n, cha
                          size_t errlen);
 void store_members_free(store_member *rows, long n);
 
-/* The ids of a family's members that are queued or running, into a new array *ids (free()) of
- * *n. */
+/* The ids of a family's members that are queued or running, in increasing order, into a new
+ * array *ids (free()) of *n. */
 int store_family_active(store *s, int64_t id, int64_t **ids, long *n, char *err, size_t errlen);
 
 /* Records every queued member of a family cancelled (finished = now, message) in one

@@ -36,6 +36,7 @@
 #define _GNU_SOURCE /* gethostname's HOST_NAME_MAX, endian.h */
 
 #include "store_pg.h"
+#include "store_common.h"
 
 #include <endian.h>
 #include <errno.h>
@@ -51,8 +52,6 @@
 
 #include <cjson/cJSON.h>
 #include <libpq-fe.h>
-
-#define PG_MAX_LIST 1000
 
 /* migrations[v] takes the schema from version v to v + 1, in one transaction */
 static const char *const migrations[STORE_PG_SCHEMA_VERSION] = {
@@ -134,6 +133,10 @@ static const char *const migrations[STORE_PG_SCHEMA_VERSION] = {
     "  lane BIGINT PRIMARY KEY,"
     "  served DOUBLE PRECISION NOT NULL);"
     "UPDATE schema_version SET version = 3;",
+    /* 3 -> 4: a family's status counts read this index alone (an index-only scan: 1.8 ms instead
+     * of 11-30 ms for 10,000 members), as on SQLite */
+    ("CREATE INDEX jobs_by_family_status ON jobs (family_id, status) WHERE family_id IS NOT NULL;"
+     "UPDATE schema_version SET version = 4;"),
 };
 
 #define JOB_COLUMNS                                                                                \
@@ -145,6 +148,12 @@ static const char *const migrations[STORE_PG_SCHEMA_VERSION] = {
     "(jobs.metrics::json -> 'e_final')::text, (jobs.metrics::json -> 'e_rms')::text, "             \
     "nullif((jobs.spec::json -> 'tags')::text, 'null')"
 #define ACTIVE "status IN ('queued', 'running')"
+/* a queued job no cancel stops; jobs_queued_lanes's condition, which the claim's index scans
+ * must repeat to use it */
+#define CLAIMABLE "status = 'queued' AND NOT cancel_requested"
+/* the advisory locks' keys: the schema's migration, and the queue's bound (store_pg_insert) */
+#define LOCK_SCHEMA "7237151624"
+#define LOCK_QUEUE_BOUND "7237151625"
 #define DB_NOW "extract(epoch from clock_timestamp())::float8"
 
 struct store_pg {
@@ -163,17 +172,7 @@ struct store_pg {
 
 /* ---- helpers ---- */
 
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-
-static void set_err(char *err, size_t errlen, const char *fmt, ...)
-{
-    if (!err || errlen == 0) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(err, errlen, fmt, ap);
-    va_end(ap);
-}
+#define set_err store_set_err /* store_common.h */
 
 static double now_s(void)
 {
@@ -434,17 +433,12 @@ static int status_of(store_pg *p, int64_t id, store_status *st, char *err, size_
     return rc;
 }
 
+/* the reason an update that needs a running job changed nothing (store_not_running_err) */
 static void not_running_err(store_pg *p, int64_t id, const char *what, char *err, size_t errlen)
 {
-    store_status st;
+    store_status st = STORE_QUEUED;
     int found = status_of(p, id, &st, err, errlen);
-    if (found == 1)
-        set_err(err, errlen, "cannot %s job %lld: no such job", what, (long long)id);
-    else if (found == 0 && st == STORE_RUNNING)
-        set_err(err, errlen, "cannot %s job %lld: another worker holds it", what, (long long)id);
-    else if (found == 0)
-        set_err(err, errlen, "cannot %s job %lld: it is %s, not running", what, (long long)id,
-                store_status_name(st));
+    store_not_running_err(id, what, found, st, err, errlen);
 }
 
 /* ---- opening ---- */
@@ -456,7 +450,7 @@ static int migrate(store_pg *p, const char *shown, char *err, size_t errlen)
     PGresult *r = NULL;
     if (run_simple(p, "BEGIN", err, errlen, "cannot open the database") != 0) goto done;
     /* one migration at a time across every process that opens the database */
-    r = run(p, "SELECT pg_advisory_xact_lock(7237151624)", 0, NULL, 0, err, errlen,
+    r = run(p, "SELECT pg_advisory_xact_lock(" LOCK_SCHEMA ")", 0, NULL, 0, err, errlen,
             "locking the schema");
     if (!r) goto done;
     PQclear(r);
@@ -602,35 +596,52 @@ int store_pg_reserve(store_pg *p, long long bytes, char *err, size_t errlen)
 
 /* ---- jobs ---- */
 
-int store_pg_insert(store_pg *p, const char *name, const char *preset, int nbodies, int nv,
-                    const char *controller, const char *spec, int64_t *id, char *err, size_t errlen)
+int store_pg_insert(store_pg *p, long max_queued, const char *name, const char *preset, int nbodies,
+                    int nv, const char *controller, const char *spec, int64_t *id, char *err,
+                    size_t errlen)
 {
     call_begin(p);
-    if (!name || !controller || !spec) {
-        set_err(err, errlen, "cannot store a job without %s",
-                !name         ? "a name"
-                : !controller ? "a controller"
-                              : "a spec");
-        return -1;
-    }
-    if (nbodies < 1 || nv < 0) {
-        set_err(err, errlen, "cannot store a job of %d bodies and %d coordinates", nbodies, nv);
-        return -1;
-    }
+    if (store_check_job(name, controller, spec, nbodies, nv, err, errlen) != 0) return -1;
+    int rc = -1;
+    PGresult *r = NULL;
     char created[40], nb[16], nvs[16], what[300];
     fmt_real(created, sizeof created, now_s());
     snprintf(nb, sizeof nb, "%d", nbodies);
     snprintf(nvs, sizeof nvs, "%d", nv);
     snprintf(what, sizeof what, "cannot store job '%.200s'", name);
+    if (max_queued > 0) {
+        /* the bound's check and the insert in one transaction, one at a time across every
+           process: the lock is taken before the count's statement, whose snapshot then sees
+           every insert committed under the lock before it */
+        if (run_simple(p, "BEGIN", err, errlen, what) != 0) goto done;
+        r = run(p, "SELECT pg_advisory_xact_lock(" LOCK_QUEUE_BOUND ")", 0, NULL, 0, err, errlen,
+                what);
+        if (!r) goto done;
+        PQclear(r);
+        r = run(p, "SELECT count(*) FROM jobs WHERE " CLAIMABLE " AND coalesce(family_id, 0) = 0",
+                0, NULL, 0, err, errlen, what);
+        if (!r) goto done;
+        long queued = atol(PQgetvalue(r, 0, 0));
+        PQclear(r);
+        r = NULL;
+        if (queued >= max_queued) {
+            rc = 2;
+            goto done;
+        }
+    }
     const char *v[] = {name, preset, created, nb, nvs, controller, spec};
-    PGresult *r = run(p,
-                      "INSERT INTO jobs (name, preset, status, progress, created, nbodies, nv, "
-                      "controller, spec) VALUES ($1, $2, 'queued', 0, $3, $4, $5, $6, $7) "
-                      "RETURNING id",
-                      7, v, 0, err, errlen, what);
-    if (r) *id = strtoll(PQgetvalue(r, 0, 0), NULL, 10);
+    r = run(p,
+            "INSERT INTO jobs (name, preset, status, progress, created, nbodies, nv, controller, "
+            "spec) VALUES ($1, $2, 'queued', 0, $3, $4, $5, $6, $7) RETURNING id",
+            7, v, 0, err, errlen, what);
+    if (!r) goto done;
+    *id = strtoll(PQgetvalue(r, 0, 0), NULL, 10);
+    if (max_queued > 0 && run_simple(p, "COMMIT", err, errlen, what) != 0) goto done;
+    rc = 0;
+done:
     PQclear(r);
-    return write_end(p, r ? 0 : -1, 1);
+    rollback(p);
+    return write_end(p, rc, 1);
 }
 
 int store_pg_recover(store_pg *p, int64_t **ids, int *n, char *err, size_t errlen)
@@ -796,18 +807,7 @@ int store_pg_finish(store_pg *p, int64_t id, store_status status, const char *me
     PGresult *q = NULL;
     char what[64];
     snprintf(what, sizeof what, "cannot finish job %lld", (long long)id);
-    if (status < STORE_DONE || status >= STORE_NSTATUS) {
-        set_err(err, errlen,
-                "cannot finish job %lld as %s: the status must be done, failed, diverged or "
-                "cancelled",
-                (long long)id, store_status_name(status));
-        goto done;
-    }
-    if (r && (r->nsamples < 0 || (r->nsamples > 0 && !r->t))) {
-        set_err(err, errlen, "cannot finish job %lld: the result has %s", (long long)id,
-                r->nsamples < 0 ? "a negative sample count" : "samples but no times");
-        goto done;
-    }
+    if (store_check_finish(id, status, r, err, errlen) != 0) goto done;
     if (run_simple(p, "BEGIN", err, errlen, what) != 0) goto done;
     char ids[24], emax[40], wall[40], fin[40];
     fmt_i64(ids, sizeof ids, id);
@@ -829,15 +829,9 @@ int store_pg_finish(store_pg *p, int64_t id, store_status status, const char *me
             8, v, 0, err, errlen, what);
     if (!q) goto done;
     if (changes(q) != 1) {
-        store_status st;
+        store_status st = STORE_QUEUED;
         int found = status_of(p, id, &st, err, errlen);
-        if (found == 1)
-            set_err(err, errlen, "cannot finish job %lld: no such job", (long long)id);
-        else if (found == 0 && st == STORE_RUNNING)
-            set_err(err, errlen, "cannot finish job %lld: another worker holds it", (long long)id);
-        else if (found == 0)
-            set_err(err, errlen, "cannot finish job %lld: it is already %s", (long long)id,
-                    store_status_name(st));
+        store_not_finishable_err(id, found, st, err, errlen);
         goto done;
     }
     PQclear(q);
@@ -880,24 +874,73 @@ int store_pg_get(store_pg *p, int64_t id, store_job *out, char *err, size_t errl
     return rc;
 }
 
+/* How pg_rows reads a result: each element's size, the reader of row k (0, or -1 with err), and
+ * the free of n elements read (a half-filled one included). */
+typedef struct pg_row_reader {
+    size_t size;
+    int (*read)(const PGresult *r, int k, void *elem, char *err, size_t errlen);
+    void (*free_rows)(void *rows, long n);
+} pg_row_reader;
+
+/* Reads every row of r (NULL: a failed query, err says why) with rr->read into zeroed elements of
+ * a new array, then clears r: 0 with *rows (free with rr->free_rows) and *n, or -1 with err
+ * ("WHAT: out of memory", or the reader's message) and nothing handed out. */
+static int pg_rows(PGresult *r, const pg_row_reader *rr, void **rows, long *n, const char *what,
+                   char *err, size_t errlen)
+{
+    *rows = NULL;
+    *n = 0;
+    if (!r) return -1;
+    int count = PQntuples(r), got = 0, rc = -1;
+    char *list = calloc((size_t)(count > 0 ? count : 1), rr->size);
+    if (!list) {
+        set_err(err, errlen, "%s: out of memory", what);
+        goto done;
+    }
+    while (got < count) {
+        got++;
+        if (rr->read(r, got - 1, list + (size_t)(got - 1) * rr->size, err, errlen) != 0) goto done;
+    }
+    *rows = list;
+    *n = count;
+    list = NULL;
+    rc = 0;
+done:
+    PQclear(r);
+    if (list) rr->free_rows(list, got);
+    return rc;
+}
+
+static int job_row_read(const PGresult *r, int k, void *elem, char *err, size_t errlen)
+{
+    return read_job(r, k, 0, elem, err, errlen);
+}
+
+static void job_rows_free(void *rows, long n)
+{
+    store_jobs_free(rows, (int)n);
+}
+
+static const pg_row_reader job_rows = {sizeof(store_job), job_row_read, job_rows_free};
+
+/* the jobs of a list's result (NULL: the query failed) into *rows and *n; 0 or -1 */
+static int job_list(PGresult *r, store_job **rows, int *n, char *err, size_t errlen)
+{
+    void *list;
+    long count;
+    int rc = pg_rows(r, &job_rows, &list, &count, "listing jobs", err, errlen);
+    *rows = list;
+    *n = (int)count;
+    return rc;
+}
+
 int store_pg_list(store_pg *p, int64_t before, int status, int limit, store_job **rows, int *n,
                   char *err, size_t errlen)
 {
     call_begin(p);
     *rows = NULL;
     *n = 0;
-    if (limit < 1 || limit > PG_MAX_LIST) {
-        set_err(err, errlen, "limit must be between 1 and %d (got %d)", PG_MAX_LIST, limit);
-        return -1;
-    }
-    if (before < 0) {
-        set_err(err, errlen, "before must be 0 or a job id (got %lld)", (long long)before);
-        return -1;
-    }
-    if (status < -1 || status >= STORE_NSTATUS) {
-        set_err(err, errlen, "unknown job status %d", status);
-        return -1;
-    }
+    if (store_check_list(before, status, limit, err, errlen) != 0) return -1;
     char bs[24], ls[16];
     fmt_i64(bs, sizeof bs, before > 0 ? before : INT64_MAX);
     snprintf(ls, sizeof ls, "%d", limit);
@@ -908,23 +951,7 @@ int store_pg_list(store_pg *p, int64_t before, int status, int limit, store_job 
                                   : "SELECT " JOB_COLUMNS " FROM jobs WHERE id < $1 ORDER BY id "
                                     "DESC LIMIT $2",
                       status >= 0 ? 3 : 2, v, 0, err, errlen, "listing jobs");
-    if (!r) return -1;
-    int count = PQntuples(r), rc = -1, got = 0;
-    store_job *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "listing jobs: out of memory");
-        goto done;
-    }
-    for (; got < count; got++)
-        if (read_job(r, got, 0, &list[got], err, errlen)) goto done;
-    *rows = list;
-    *n = count;
-    list = NULL;
-    rc = 0;
-done:
-    PQclear(r);
-    store_jobs_free(list, got);
-    return rc;
+    return job_list(r, rows, n, err, errlen);
 }
 
 /* translate(x, AZ) folds x's ASCII letters to lowercase, as SQLite's lower() does, which
@@ -948,18 +975,7 @@ int store_pg_search(store_pg *p, int64_t before, const store_filter *f, int limi
     call_begin(p);
     *rows = NULL;
     *n = 0;
-    if (limit < 1 || limit > PG_MAX_LIST) {
-        set_err(err, errlen, "limit must be between 1 and %d (got %d)", PG_MAX_LIST, limit);
-        return -1;
-    }
-    if (before < 0) {
-        set_err(err, errlen, "before must be 0 or a job id (got %lld)", (long long)before);
-        return -1;
-    }
-    if (f->status < -1 || f->status >= STORE_NSTATUS) {
-        set_err(err, errlen, "unknown job status %d", f->status);
-        return -1;
-    }
+    if (store_check_list(before, f->status, limit, err, errlen) != 0) return -1;
     char bs[24], ls[16], *text = NULL;
     if (f->text) {
         if (!(text = strdup(f->text))) {
@@ -978,23 +994,7 @@ int store_pg_search(store_pg *p, int64_t before, const store_filter *f, int limi
                       "status = $3) AND " SEARCH_WHERE " ORDER BY id DESC LIMIT $2",
                       5, v, 0, err, errlen, "listing jobs");
     free(text);
-    if (!r) return -1;
-    int count = PQntuples(r), rc = -1, got = 0;
-    store_job *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "listing jobs: out of memory");
-        goto done;
-    }
-    for (; got < count; got++)
-        if (read_job(r, got, 0, &list[got], err, errlen)) goto done;
-    *rows = list;
-    *n = count;
-    list = NULL;
-    rc = 0;
-done:
-    PQclear(r);
-    store_jobs_free(list, got);
-    return rc;
+    return job_list(r, rows, n, err, errlen);
 }
 
 #define SERIES_SHAPE                                                                               \
@@ -1219,9 +1219,6 @@ int store_pg_count(store_pg *p, long counts[STORE_NSTATUS], char *err, size_t er
 
 /* ---- claims, heartbeats, notifications ---- */
 
-/* a queued job no cancel stops; jobs_queued_lanes's condition, which the claim's index scans
- * must repeat to use it */
-#define CLAIMABLE "status = 'queued' AND NOT cancel_requested"
 /* the oldest jobs of each lane the claim considers: more than one, so that claims at the same
  * moment, which skip each other's locked rows, still find one in the lane served least
  * recently */
@@ -1460,10 +1457,7 @@ int store_pg_family_insert(store_pg *p, const char *name, const char *spec, cons
                            int64_t *ids, char *err, size_t errlen)
 {
     call_begin(p);
-    if (!name || !spec || !axes || n < 0) {
-        set_err(err, errlen, "cannot store a family without a name, a spec and its axes");
-        return -1;
-    }
+    if (store_check_family(name, spec, axes, n, err, errlen) != 0) return -1;
     int rc = -1;
     long bad;
     PGresult *r = NULL;
@@ -1578,16 +1572,79 @@ int store_pg_family_get(store_pg *p, int64_t id, store_family *out, char *err, s
     return rc;
 }
 
+static int family_row_read(const PGresult *r, int k, void *elem, char *err, size_t errlen)
+{
+    return read_family(r, k, 0, elem, err, errlen);
+}
+
+static void family_rows_free(void *rows, long n)
+{
+    store_families_free(rows, (int)n);
+}
+
+static const pg_row_reader family_list_rows = {sizeof(store_family), family_row_read,
+                                               family_rows_free};
+
+/* pg_rows's reader of a member: id, family_member, family_replica, status, family_values,
+ * metrics, message */
+static int member_row_read(const PGresult *r, int k, void *elem, char *err, size_t errlen)
+{
+    store_member *m = elem;
+    m->job = strtoll(PQgetvalue(r, k, 0), NULL, 10);
+    m->index = strtol(PQgetvalue(r, k, 1), NULL, 10);
+    m->replica = atoi(PQgetvalue(r, k, 2));
+    int st = store_status_parse(PQgetvalue(r, k, 3));
+    m->status = st < 0 ? STORE_FAILED : (store_status)st;
+    if (dup_col(r, k, 4, &m->values) || dup_col(r, k, 5, &m->metrics) ||
+        dup_col(r, k, 6, &m->message)) {
+        set_err(err, errlen, "job %lld: out of memory", (long long)m->job);
+        return -1;
+    }
+    return 0;
+}
+
+static void member_rows_free(void *rows, long n)
+{
+    store_members_free(rows, n);
+}
+
+static const pg_row_reader member_rows = {sizeof(store_member), member_row_read, member_rows_free};
+
+/* pg_rows's reader of an id (column 0) */
+static int id_row_read(const PGresult *r, int k, void *elem, char *err, size_t errlen)
+{
+    (void)err, (void)errlen;
+    *(int64_t *)elem = strtoll(PQgetvalue(r, k, 0), NULL, 10);
+    return 0;
+}
+
+static void id_rows_free(void *rows, long n)
+{
+    (void)n;
+    free(rows);
+}
+
+static const pg_row_reader id_rows = {sizeof(int64_t), id_row_read, id_rows_free};
+
+/* the rows of sql, a query of family id's members with $1 = id */
+static int family_rows(store_pg *p, const char *sql, const pg_row_reader *rr, int64_t id,
+                       void **rows, long *n, char *err, size_t errlen)
+{
+    call_begin(p);
+    char ids[24], what[64];
+    fmt_i64(ids, sizeof ids, id);
+    snprintf(what, sizeof what, "reading the members of family %lld", (long long)id);
+    const char *v[] = {ids};
+    return pg_rows(run(p, sql, 1, v, 0, err, errlen, what), rr, rows, n, what, err, errlen);
+}
+
 int store_pg_family_list(store_pg *p, int64_t before, int limit, store_family **rows, int *n,
                          char *err, size_t errlen)
 {
     call_begin(p);
     *rows = NULL;
     *n = 0;
-    if (limit < 1 || limit > PG_MAX_LIST) {
-        set_err(err, errlen, "limit must be between 1 and %d (got %d)", PG_MAX_LIST, limit);
-        return -1;
-    }
+    if (store_check_limit(limit, err, errlen) != 0) return -1;
     char bs[24], ls[16];
     fmt_i64(bs, sizeof bs, before > 0 ? before : INT64_MAX);
     snprintf(ls, sizeof ls, "%d", limit);
@@ -1596,97 +1653,34 @@ int store_pg_family_list(store_pg *p, int64_t before, int limit, store_family **
                       "SELECT " FAMILY_COLUMNS " FROM families AS f WHERE f.id < $1 ORDER BY f.id "
                       "DESC LIMIT $2",
                       2, v, 0, err, errlen, "listing families");
-    if (!r) return -1;
-    int count = PQntuples(r), rc = -1, got = 0;
-    store_family *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "listing families: out of memory");
-        goto done;
-    }
-    for (; got < count; got++)
-        if (read_family(r, got, 0, &list[got], err, errlen)) goto done;
+    void *list;
+    long count;
+    int rc = pg_rows(r, &family_list_rows, &list, &count, "listing families", err, errlen);
     *rows = list;
-    *n = count;
-    list = NULL;
-    rc = 0;
-done:
-    PQclear(r);
-    store_families_free(list, got);
+    *n = (int)count;
     return rc;
 }
 
 int store_pg_family_members(store_pg *p, int64_t id, store_member **rows, long *n, char *err,
                             size_t errlen)
 {
-    call_begin(p);
-    *rows = NULL;
-    *n = 0;
-    char ids[24], what[64];
-    fmt_i64(ids, sizeof ids, id);
-    snprintf(what, sizeof what, "reading the members of family %lld", (long long)id);
-    const char *v[] = {ids};
-    PGresult *r = run(p,
-                      "SELECT id, family_member, family_replica, status, family_values, metrics, "
-                      "message FROM jobs WHERE family_id = $1 ORDER BY family_member",
-                      1, v, 0, err, errlen, what);
-    if (!r) return -1;
-    long count = PQntuples(r), got = 0;
-    int rc = -1;
-    store_member *list = calloc((size_t)(count > 0 ? count : 1), sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "family %lld: out of memory", (long long)id);
-        goto done;
-    }
-    for (; got < count; got++) {
-        store_member *m = &list[got];
-        int k = (int)got;
-        m->job = strtoll(PQgetvalue(r, k, 0), NULL, 10);
-        m->index = strtol(PQgetvalue(r, k, 1), NULL, 10);
-        m->replica = atoi(PQgetvalue(r, k, 2));
-        int st = store_status_parse(PQgetvalue(r, k, 3));
-        m->status = st < 0 ? STORE_FAILED : (store_status)st;
-        if (dup_col(r, k, 4, &m->values) || dup_col(r, k, 5, &m->metrics) ||
-            dup_col(r, k, 6, &m->message)) {
-            set_err(err, errlen, "family %lld: out of memory", (long long)id);
-            got++;
-            goto done;
-        }
-    }
+    void *list;
+    int rc = family_rows(p,
+                         "SELECT id, family_member, family_replica, status, family_values, "
+                         "metrics, message FROM jobs WHERE family_id = $1 ORDER BY family_member",
+                         &member_rows, id, &list, n, err, errlen);
     *rows = list;
-    *n = count;
-    list = NULL;
-    rc = 0;
-done:
-    PQclear(r);
-    store_members_free(list, got);
     return rc;
 }
 
 int store_pg_family_active(store_pg *p, int64_t id, int64_t **ids, long *n, char *err,
                            size_t errlen)
 {
-    call_begin(p);
-    *ids = NULL;
-    *n = 0;
-    char fid[24], what[64];
-    fmt_i64(fid, sizeof fid, id);
-    snprintf(what, sizeof what, "reading the members of family %lld", (long long)id);
-    const char *v[] = {fid};
-    PGresult *r = run(p, "SELECT id FROM jobs WHERE family_id = $1 AND " ACTIVE " ORDER BY id", 1,
-                      v, 0, err, errlen, what);
-    if (!r) return -1;
-    long count = PQntuples(r);
-    int64_t *list = malloc((size_t)(count > 0 ? count : 1) * sizeof *list);
-    if (!list) {
-        set_err(err, errlen, "family %lld: out of memory", (long long)id);
-        PQclear(r);
-        return -1;
-    }
-    for (long k = 0; k < count; k++) list[k] = strtoll(PQgetvalue(r, (int)k, 0), NULL, 10);
-    PQclear(r);
+    void *list;
+    int rc = family_rows(p, "SELECT id FROM jobs WHERE family_id = $1 AND " ACTIVE " ORDER BY id",
+                         &id_rows, id, &list, n, err, errlen);
     *ids = list;
-    *n = count;
-    return 0;
+    return rc;
 }
 
 int store_pg_family_cancel(store_pg *p, int64_t id, const char *message, long *n, char *err,

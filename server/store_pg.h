@@ -34,8 +34,9 @@
  * families (the families table, jobs' family_id, family_member, family_replica and
  * family_values; the jobs stored before keep their rows, with no family), and the claims' lanes
  * table (lane: 0 for the single jobs, else a family id; served: when a job of it was last
- * claimed, on the database's clock). A family is stored with one INSERT of all its members
- * (json_to_recordset), so 10,000 members cost one round trip.
+ * claimed, on the database's clock). Version 4 adds SQLite's jobs_by_family_status (family_id,
+ * status), which a family's status counts read with an index-only scan. A family is stored
+ * with one INSERT of all its members (json_to_recordset), so 10,000 members cost one round trip.
  *
  * Claims. A worker claims the oldest job that is queued, or running under a lease that has
  * expired, with SELECT ... FOR UPDATE SKIP LOCKED (concurrent claims never wait for each other
@@ -56,7 +57,7 @@
 
 #include "store.h"
 
-#define STORE_PG_SCHEMA_VERSION 3
+#define STORE_PG_SCHEMA_VERSION 4
 #define STORE_PG_LOCK_MS 5000          /* lock_timeout of every connection */
 #define STORE_PG_CHANNEL "ctcsim_jobs" /* the NOTIFY channel of job status changes */
 
@@ -129,8 +130,8 @@ store_fault store_pg_last_fault(const store_pg *p);
 void store_pg_attach(store_pg *p, store_health *h);
 int store_pg_probe(store_pg *p, char *err, size_t errlen);
 int store_pg_reserve(store_pg *p, long long bytes, char *err, size_t errlen);
-int store_pg_insert(store_pg *p, const char *name, const char *preset, int nbodies, int nv,
-                    const char *controller, const char *spec, int64_t *id, char *err,
+int store_pg_insert(store_pg *p, long max_queued, const char *name, const char *preset, int nbodies,
+                    int nv, const char *controller, const char *spec, int64_t *id, char *err,
                     size_t errlen);
 int store_pg_recover(store_pg *p, int64_t **ids, int *n, char *err, size_t errlen);
 int store_pg_start(store_pg *p, int64_t id, char *err, size_t errlen);

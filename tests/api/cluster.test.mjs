@@ -57,6 +57,57 @@ test('a worker killed with SIGKILL mid-job: the job runs again elsewhere, same s
     }
 });
 
+test('health on PostgreSQL counts the whole database: workers this process\'s, busy and jobs every one\'s', { skip: SKIP }, async () => {
+    const srv = await startServer({ workers: 2 });
+    /* a second API process on the same database, without workers */
+    const other = await startServer({ dir: srv.dir, workers: 1, args: [] });
+    await Promise.all(other.workers.map((w) => w.stop()));
+    other.workers = [];
+    try {
+        const id = (await submit(srv, MEDIUM)).id;
+        await waitJob(srv, id, { until: (j) => j.status === 'running', timeoutMs: 20000 });
+        for (const s of [srv, other]) {
+            const h = (await s.get('/api/health')).json;
+            assert.equal(h.workers, 0, `an API process has no workers: ${JSON.stringify(h)}`);
+            assert.equal(h.busy, 1, `the job running in a worker process: ${JSON.stringify(h)}`);
+            assert.equal(h.jobs.running, 1, JSON.stringify(h));
+        }
+        await srv.del(`/api/jobs/${id}`);
+    } finally {
+        await other.stop();
+        await srv.stop();
+    }
+});
+
+test('--max-queue holds across API processes: concurrent POSTs to two of them queue at most the bound', { skip: SKIP }, async () => {
+    const BOUND = 3;
+    const args = ['--max-queue', String(BOUND)];
+    const first = await startServer({ workers: 2, args });
+    const second = await startServer({ dir: first.dir, workers: 1, args });
+    /* no workers: what is accepted stays queued */
+    for (const srv of [first, second]) {
+        await Promise.all(srv.workers.map((w) => w.stop()));
+        srv.workers = [];
+    }
+    try {
+        for (let round = 0; round < 3; round++) {
+            const posts = [];
+            for (let i = 0; i < 16; i++) posts.push((i % 2 ? second : first).post('/api/jobs', SMALL));
+            const answers = await Promise.all(posts);
+            const accepted = answers.filter((r) => r.status === 202);
+            const full = answers.filter((r) => r.status === 503 && r.json?.error?.code === 'QUEUE_FULL');
+            assert.equal(accepted.length + full.length, answers.length, answers.map((r) => r.text).join('\n'));
+            assert.equal(accepted.length, BOUND, `round ${round}: ${accepted.length} accepted`);
+            assert.equal(sql(first, "SELECT count(*) FROM jobs WHERE status = 'queued'"), String(BOUND));
+            for (const r of accepted) assert.ok([200, 202].includes((await first.del(`/api/jobs/${r.json.id}`)).status));
+            for (const r of accepted) assert.equal((await first.del(`/api/jobs/${r.json.id}`)).status, 204);
+        }
+    } finally {
+        await second.stop();
+        await first.stop();
+    }
+});
+
 test('the API process killed with SIGKILL: the workers go on, a new API process answers', { skip: SKIP }, async () => {
     const first = await startServer({ workers: 2 });
     const ids = [];
@@ -179,7 +230,8 @@ test('a version 2 database is migrated to families and keeps every job; its queu
     assert.equal(r.status, 0, r.stderr);
     const srv = await startServer({ dir, workers: 1 });
     try {
-        assert.equal(sql(srv, 'SELECT version FROM schema_version'), '3');
+        assert.equal(sql(srv, 'SELECT version FROM schema_version'), '4');
+        assert.equal(sql(srv, "SELECT count(*) FROM pg_indexes WHERE indexname = 'jobs_by_family_status'"), '1');
         const old = (await srv.get('/api/jobs/1')).json;
         assert.equal(old.status, 'done');
         assert.equal(old.name, 'finished before');

@@ -169,6 +169,34 @@ test('bad axes: 400 naming the axis, the value and the member\'s error', async (
     assert.equal(listed, 2, 'nothing refused was stored');
 });
 
+test('GET /api/jobs/{id}?wait holds the answer until a family\'s member finishes, as for a single job', async () => {
+    const res = await srv.post('/api/families', { base: { ...MEDIUM, duration: 8 }, axes: [{ path: 'controller.kp', values: [60, 70, 80, 90] }] });
+    assert.equal(res.status, 202, res.text);
+    const members = (await family(srv, res.json.id)).table.rows.map((r) => r.job);
+    const single = (await srv.post('/api/jobs', { ...MEDIUM, duration: 8 })).json.id;
+    /* the last member waits behind the others (half a second each, two workers) */
+    const ids = [members[3], single];
+    for (const id of ids) {
+        const before = (await srv.get(`/api/jobs/${id}?brief=1`)).json;
+        assert.ok(!FINAL.has(before.status), `job ${id} finished before the wait: ${before.status}`);
+    }
+    const t0 = Date.now();
+    const got = await Promise.all(ids.map((id) => srv.get(`/api/jobs/${id}?wait=60&brief=1`)));
+    for (const [i, r] of got.entries()) {
+        assert.equal(r.status, 200, r.text);
+        assert.equal(r.json.status, 'done', `job ${ids[i]} answered after ${Date.now() - t0} ms unfinished`);
+        assert.equal(r.json.spec, undefined, 'brief=1 still applies');
+    }
+    /* a finished job answers at once; a bad wait is refused */
+    const t1 = Date.now();
+    assert.equal((await srv.get(`/api/jobs/${members[0]}?wait=60`)).json.status, 'done');
+    assert.ok(Date.now() - t1 < 2000);
+    const bad = await srv.get(`/api/jobs/${members[0]}?wait=0`);
+    assert.equal(bad.status, 400, bad.text);
+    assert.equal(bad.json.error.field, 'wait');
+    await waitFamily(srv, res.json.id);
+});
+
 test('DELETE cancels the queued and running members (202), a second DELETE deletes them (204)', async () => {
     const res = await srv.post('/api/families', { base: LONG, axes: [{ path: 'controller.kp', linspace: [50, 100, 5] }] });
     assert.equal(res.status, 202, res.text);

@@ -46,6 +46,18 @@ test('every option of --help has its environment variable, --http-threads too', 
     assert.deepEqual(opts.find((o) => o.flag === '--http-threads'), { flag: '--http-threads', env: 'CTCSIM_HTTP_THREADS' });
 });
 
+test('--help names both stores: SQLite for one process, PostgreSQL for --role api/worker', () => {
+    const r = spawnSync(SERVER, ['--help'], { encoding: 'utf8', env: envWith({}) });
+    assert.equal(r.status, 0, r.stderr);
+    const intro = r.stdout.split('\n\n')[1].replace(/\s+/g, ' ');
+    assert.match(intro, /SQLite/);
+    assert.match(intro, /PostgreSQL/);
+    assert.match(intro, /--db/);
+    assert.match(intro, /--role/);
+    const dbMax = r.stdout.split('\n').find((l) => l.startsWith('  --db-max-size '));
+    assert.match(dbMax, /SQLite only/);
+});
+
 test('the server reads each variable: a bad value stops it with exit 2, naming the variable', () => {
     const opts = options().filter((o) => CHECKED.has(o.flag));
     assert.equal(opts.length, CHECKED.size);

@@ -91,6 +91,18 @@ test('GET /api/openapi.yaml is api/openapi.yaml as application/yaml', async () =
     assert.match(res.text, /^openapi: 3\.0\.3$/m);
 });
 
+test('openapi.yaml says the scope of health\'s counters on SQLite and on PostgreSQL', async () => {
+    const text = await readFile(path.join(ROOT, 'api', 'openapi.yaml'), 'utf8');
+    const health = /^ {4}Health:\n([\s\S]*?)\n {4}[A-Z]/m.exec(text)[1].replace(/\s+/g, ' ');
+    assert.match(health, /On SQLite .* this process's/);
+    assert.match(health, /On PostgreSQL .* `busy`, `queued` and `jobs` are database-wide/);
+    for (const field of ['busy', 'queued', 'jobs']) {
+        const desc = new RegExp(` ${field}: .*?description: >- (.*?)(?: [a-z]+: type:|$)`).exec(health)[1];
+        assert.match(desc, /SQLite/, `${field}'s description names no store`);
+        assert.match(desc, /PostgreSQL/, `${field}'s description names no store`);
+    }
+});
+
 test('the server stops cleanly on SIGTERM', async () => {
     const r = await srv.stop('SIGTERM');
     assert.equal(r.killed, undefined, 'it had to be killed');

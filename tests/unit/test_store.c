@@ -135,14 +135,21 @@ static void raw_exec(const char *path, const char *sql)
     sqlite3_close(db);
 }
 
+/* sql prepared on a raw connection (the test fails when it does not prepare) */
+static sqlite3_stmt *raw_prepare(sqlite3 *db, const char *sql)
+{
+    sqlite3_stmt *q = NULL;
+    cr_assert_eq(sqlite3_prepare_v2(db, sql, -1, &q, NULL), SQLITE_OK, "%s: %s", sql,
+                 sqlite3_errmsg(db));
+    return q;
+}
+
 /* the first column of the first row of sql, with ?1 bound to arg when sql has a parameter;
  * text goes to buf (may be NULL) */
 static long long raw_query(const char *path, const char *sql, long long arg, char *buf, size_t len)
 {
     sqlite3 *db = raw_open(path);
-    sqlite3_stmt *q = NULL;
-    cr_assert_eq(sqlite3_prepare_v2(db, sql, -1, &q, NULL), SQLITE_OK, "%s: %s", sql,
-                 sqlite3_errmsg(db));
+    sqlite3_stmt *q = raw_prepare(db, sql);
     if (sqlite3_bind_parameter_count(q) > 0) sqlite3_bind_int64(q, 1, arg);
     cr_assert_eq(sqlite3_step(q), SQLITE_ROW, "%s: no row", sql);
     long long v = sqlite3_column_int64(q, 0);
@@ -439,10 +446,7 @@ static void assert_counts_match_the_table(store *s, const char *path)
     char err[512] = "";
     cr_assert_eq(store_count(s, counts, err, sizeof err), 0, "%s", err);
     sqlite3 *db = raw_open(path);
-    sqlite3_stmt *q = NULL;
-    cr_assert_eq(
-        sqlite3_prepare_v2(db, "SELECT count(*) FROM jobs WHERE status = ?1", -1, &q, NULL),
-        SQLITE_OK);
+    sqlite3_stmt *q = raw_prepare(db, "SELECT count(*) FROM jobs WHERE status = ?1");
     for (int st = 0; st < STORE_NSTATUS; st++) {
         sqlite3_bind_text(q, 1, store_status_name((store_status)st), -1, SQLITE_STATIC);
         cr_assert_eq(sqlite3_step(q), SQLITE_ROW);
@@ -556,7 +560,7 @@ Test(store, a_version_2_database_is_migrated_and_keeps_every_job)
              "INSERT INTO series (job_id, channel, width, nsamples, data) VALUES"
              "  (1, 't', 1, 1, x'0000000000000000');");
     store *s = open_ok(path);
-    cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), 3);
+    cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), STORE_SCHEMA_VERSION);
     assert_integrity(path);
 
     store_job j;
@@ -746,13 +750,34 @@ Test(store, families_list_newest_first_with_counts_and_ten_thousand_members_inse
     store_close(s);
 }
 
+Test(store, a_familys_counts_read_the_covering_index_alone)
+{
+    /* the plan of the counts' statement (store.c's ST_FAMILY_COUNTS), as SQLite makes it on a
+     * database that store_open made: a search of jobs_by_family_status with no table rows
+     * read, and no temporary tree for the grouping (the index gives the rows grouped) */
+    char path[256];
+    path_of(path, sizeof path, "ctcsim.db");
+    store_close(open_ok(path));
+    sqlite3 *db = raw_open(path);
+    sqlite3_stmt *q = raw_prepare(db, "EXPLAIN QUERY PLAN SELECT status, count(*) FROM jobs WHERE "
+                                      "family_id = ?1 GROUP BY status");
+    char plan[1024] = "";
+    size_t used = 0;
+    while (sqlite3_step(q) == SQLITE_ROW && used < sizeof plan)
+        used += (size_t)snprintf(plan + used, sizeof plan - used, "%s;",
+                                 (const char *)sqlite3_column_text(q, 3));
+    sqlite3_finalize(q);
+    sqlite3_close(db);
+    cr_assert_str_eq(plan, "SEARCH jobs USING COVERING INDEX jobs_by_family_status (family_id=?);");
+}
+
 Test(store, refuses_a_newer_schema)
 {
     char path[256];
     path_of(path, sizeof path, "ctcsim.db");
     raw_exec(path, "CREATE TABLE jobs (id INTEGER PRIMARY KEY, future TEXT); "
                    "PRAGMA user_version = 7;");
-    assert_open_fails(path, "database %s has schema version 7, newer than this ctcsim (3): "
+    assert_open_fails(path, "database %s has schema version 7, newer than this ctcsim (4): "
                             "upgrade ctcsim");
     cr_assert_eq(raw_int(path, "PRAGMA user_version", 0), 7);
 }
@@ -1034,12 +1059,8 @@ Test(store, recover_requeues_unfinished_jobs_and_drops_their_partial_series)
     cr_assert_eq(store_start(s, crashed, err, sizeof err), 0, "%s", err);
     /* a partial series, as a crash of some earlier version might have left */
     sqlite3 *db = raw_open(path);
-    sqlite3_stmt *q = NULL;
-    cr_assert_eq(sqlite3_prepare_v2(db,
-                                    "INSERT INTO series (job_id, channel, width, nsamples, data) "
-                                    "VALUES (?1, 't', 1, 0, x'')",
-                                    -1, &q, NULL),
-                 SQLITE_OK);
+    sqlite3_stmt *q = raw_prepare(db, "INSERT INTO series (job_id, channel, width, nsamples, data) "
+                                      "VALUES (?1, 't', 1, 0, x'')");
     sqlite3_bind_int64(q, 1, crashed);
     cr_assert_eq(sqlite3_step(q), SQLITE_DONE);
     sqlite3_finalize(q);
