@@ -94,6 +94,22 @@
  * when >= 0, else by the rule above CTC_REFINE_MAX_STEPS (mass ratio), 1 (length) or 0. */
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d);
 
+/* The most refinement steps after the reference form (gdca.h ctc_gdca_forward_from): a model
+ * with singular or slender bodies gets gdca_refine_steps (its bias-free pass solves with the
+ * augmented inertias, M_aug^-1, and the steps remove that error); any other none unless
+ * d->opt.fwd_refine >= 0 asks for that many, since its bias-free pass is M^-1 itself up to
+ * rounding relative to |f - f_ref|, with nothing to cancel. */
+int gdca_refine_steps_ref(const ctc_model *m, const ctc_data *d);
+
+/* 1 if ctc_gdca_forward on m with d's settings takes the reference form with a_ref = 0: only
+ * when d->opt.fwd_form = CTC_FWD_REFERENCE, and never on a loop model. With a_ref = 0 the
+ * bias-free pass solves M qdd = f - N, whose right-hand side is as large as the literal pass's,
+ * and the balanced tree's order then misses the backward error of the literal pass refined
+ * (autoTree n = 1024: 1.3e-8 against 1e-10 of the forces) and slender ill-conditioned chains
+ * converge worse (bench/NOTEBOOK.md, "The reference form (issue 26)"), so the default keeps the
+ * literal pass; the reference form pays where a_ref is close to the answer (sim_rhs.c). */
+int gdca_forward_takes_ref(const ctc_model *m, const ctc_data *d);
+
 /* What the step rule keeps between the steps of one ctc_gdca_forward; zero it before the first. */
 typedef struct gdca_refine_rule {
     int augmented;   /* the model has singular or slender bodies: the rate rule (set it first) */
