@@ -19,6 +19,12 @@
  * one, so one step brings the accelerations to the accuracy of the forces' residual. A loop
  * model's residual and correction include the closing joint's load and the closure
  * (gdca_refine_residual).
+ *
+ * The reference form (gdca.h ctc_gdca_forward_from) starts where a refinement step would: its
+ * reference's forces f_ref come from the composite inverse, and its pass is the bias-free one
+ * (forming its own factors), so an evenly proportioned chain needs no step after it at any
+ * length; a stiffly proportioned chain (the bias-free pass itself loses digits to the mass
+ * ratio) and a model with augmented bodies keep their steps (gdca_refine_steps_ref).
  */
 #ifndef CTC_GDCA_REFINE_H
 #define CTC_GDCA_REFINE_H
