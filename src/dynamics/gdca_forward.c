@@ -17,10 +17,17 @@
  * joint b + 1, and the root solve takes that node's two parts with joints 0, b + 1 and the
  * closing joint together.
  *
- * The refinement's correction (gdca_refine.h) is this pass in a bias-free mode (correct = 1):
- * every body's h13 = h23 = 0 and every beta = 0, the driving forces replaced by the force
- * residual, the factors E and the assembled matrices reused, so that only the vectors are
- * recomputed, by the same kernels and on the same threads.
+ * The refinement's correction (gdca_refine.h) is this pass in a bias-free mode (correct =
+ * GDCA_FWD_CORRECT, gdca_forward_joint.h): every body's h13 = h23 = 0 and every beta = 0, the
+ * driving forces replaced by the force residual, the factors E and the assembled matrices reused,
+ * so that only the vectors are recomputed, by the same kernels and on the same threads. The
+ * reference form (gdca.h ctc_gdca_forward_from) is the same bias-free pass forming its own
+ * factors and matrices (GDCA_FWD_BIASFREE): with f_ref = M a_ref + N from the composite inverse,
+ *     M qdd + N = f  <=>  M (qdd - a_ref) = f - f_ref,
+ * so qdd = a_ref + dq with dq the bias-free pass's solution for the forces f - f_ref; its joint
+ * loads are those of M dq = f - f_ref alone, and the whole loads add the reference's, which the
+ * composite inverse recorded (d->jnt_load_inv): the loads are linear in (qdd, f) once the state's
+ * velocity and gravity terms are all on the reference's side.
  *
  * On a branched tree the plan's SUM and RAKE nodes rake each light subtree into its parent body
  * (gdca_rake.h): its root joint is solved as a chain's ground joint is, with the parent's point
@@ -159,9 +166,10 @@ static inline int forward_light(const forward_args *a, int k, int c, int x, doub
     const ctc_model *m = a->m;
     ctc_data *d = a->d;
     double r[3], kappa[CTC_DENSE_MAX];
-    int st = forward_joint(m, d, c, NULL, ctc_data_handles(m, d, x, 0), gdca_zero6,
-                           forward_bias(a, x, 0, dim, correct),
-                           gdca_forward_beta(d, c, dim, correct), a->f, !correct, NULL, dim);
+    int st =
+        forward_joint(m, d, c, NULL, ctc_data_handles(m, d, x, 0), gdca_zero6,
+                      forward_bias(a, x, 0, dim, correct), gdca_forward_beta(d, c, dim, correct),
+                      a->f, correct != GDCA_FWD_CORRECT, NULL, dim);
     gdca_rake_point(d, k, c, dim, r, kappa);
     gdca_rake_light(dim, (int)m->joints[c].type, dim - m->jnt_nv[c], d->fwd_E + dim * dim * c, r,
                     correct ? NULL : kappa, d->fwd_z + dim * c, s, b);
@@ -177,12 +185,13 @@ static inline int forward_operand(const forward_args *a, int k, int x, int c, do
     const double *ps = ts, *pb = tb;
     int st = 0;
     if (c >= 0) {
-        st = forward_light(a, k, c, x, correct ? NULL : ts, tb, dim, correct);
+        st = forward_light(a, k, c, x, correct == GDCA_FWD_CORRECT ? NULL : ts, tb, dim, correct);
     } else {
         const double *rec = ctc_data_handles(a->m, a->d, x, 0);
         ps = rec + H11(dim), pb = rec + H13(dim);
     }
-    for (int i = 0; !correct && i < dim * dim; i++) s[i] = add ? s[i] + ps[i] : ps[i];
+    for (int i = 0; correct != GDCA_FWD_CORRECT && i < dim * dim; i++)
+        s[i] = add ? s[i] + ps[i] : ps[i];
     for (int i = 0; i < dim; i++) b[i] = add ? b[i] + pb[i] : pb[i];
     return st;
 }
@@ -205,17 +214,20 @@ static inline int forward_rake_node(const forward_args *a, const ctc_tree_node *
     double mm[CTC_DENSE_MAX * CTC_DENSE_MAX], b[CTC_DENSE_MAX], sb[CTC_DENSE_MAX];
     double s[CTC_DENSE_MAX * CTC_DENSE_MAX], k1[CTC_DENSE_MAX], k2[CTC_DENSE_MAX];
     st |= forward_operand(a, k, node->left, node->ljoint, s, sb, 0, dim, correct);
+    if (correct != GDCA_FWD_CORRECT) {
+        gdca_rake_body(m, d, k, dim, mm, b);
+        for (int i = 0; i < dim * dim; i++) mm[i] += s[i];
+    }
     if (correct) {
         for (int i = 0; i < dim; i++) b[i] = -sb[i];
     } else {
-        gdca_rake_body(m, d, k, dim, mm, b);
-        for (int i = 0; i < dim * dim; i++) mm[i] += s[i];
         for (int i = 0; i < dim; i++) b[i] -= sb[i];
         gdca_rake_kappa(d, k, dim, d->hr + 6 * k, k1);
         gdca_rake_kappa(d, k, dim, d->hr + 6 * k + 3, k2);
     }
     st |= gdca_rake_record(dim, mm, b, d->hr + 6 * k, d->hr + 6 * k + 3, correct ? NULL : k1,
-                           correct ? NULL : k2, gdca_rake_slot(d, k, dim), out, !correct);
+                           correct ? NULL : k2, gdca_rake_slot(d, k, dim), out,
+                           correct != GDCA_FWD_CORRECT);
     return st;
 }
 
@@ -238,7 +250,7 @@ static inline void forward_light_down(const forward_args *a, int k, int c, int s
         a1[i] += b13[i];
         tl[i] = fc[i];
         tl[dim + i] = 0;
-        load[i] = correct ? load[i] + fc[i] : fc[i];
+        load[i] = correct == GDCA_FWD_CORRECT ? load[i] + fc[i] : fc[i];
     }
     forward_accel(m, d, c, a1, ac, gdca_forward_beta(d, c, dim, correct), a->qacc, dim);
 }
@@ -296,16 +308,15 @@ static inline int forward_assemble(const forward_args *a, int lo, int hi, const 
         double *out = d->hfwd + (size_t)i * hs;
         if (forward_joint(m, d, j, left, right, forward_bias(a, node->left, 1, dim, correct),
                           forward_bias(a, node->right, 0, dim, correct),
-                          gdca_forward_beta(a->d, j, dim, correct), a->f, !correct, NULL,
-                          dim) != 0 &&
+                          gdca_forward_beta(a->d, j, dim, correct), a->f,
+                          correct != GDCA_FWD_CORRECT, NULL, dim) != 0 &&
             first < 0) {
             first = i;
         }
-        if (correct) {
+        if (correct != GDCA_FWD_CORRECT) gdca_assemble(dim, nc, left, right, e, z, out);
+        if (correct) { /* the biases again, from the bodies' zero ones */
             gdca_assemble_bias(dim, left, right, forward_bias(a, node->left, 0, dim, correct),
                                forward_bias(a, node->right, 1, dim, correct), z, out);
-        } else {
-            gdca_assemble(dim, nc, left, right, e, z, out);
         }
     }
     return first;
@@ -321,14 +332,15 @@ static inline void forward_root_joint(const forward_args *a, int j, int x, const
     const double *b13 = forward_bias(a, x, 0, dim, correct),
                  *beta = gdca_forward_beta(a->d, j, dim, correct);
     double *tl = d->tload + (size_t)x * 2 * dim, a1[CTC_DENSE_MAX], *load = d->jnt_load + dim * j;
-    if (forward_joint(m, d, j, NULL, root, gdca_zero6, b13, beta, a->f, !correct, NULL, dim) != 0 &&
+    if (forward_joint(m, d, j, NULL, root, gdca_zero6, b13, beta, a->f, correct != GDCA_FWD_CORRECT,
+                      NULL, dim) != 0 &&
         d->singular_joint < 0) {
         d->singular_joint = j;
     }
     for (int r = 0; r < dim; r++) {
         tl[r] = d->fwd_z[dim * j + r];
         tl[dim + r] = 0;
-        load[r] = correct ? load[r] + tl[r] : tl[r];
+        load[r] = correct == GDCA_FWD_CORRECT ? load[r] + tl[r] : tl[r];
     }
     ctc_dense_mulv(dim, dim, root + H11(dim), tl, a1);
     for (int r = 0; r < dim; r++) a1[r] += b13[r];
@@ -386,7 +398,8 @@ static inline void forward_disassemble(const forward_args *a, int lo, int hi, co
         for (int r = 0; r < dim; r++) a2l[r] += b23l[r] - t[r];
         forward_accel(m, d, j, a1r, a2l, gdca_forward_beta(a->d, j, dim, correct), a->qacc, dim);
 
-        for (int r = 0; r < dim; r++) load[r] = correct ? load[r] + fj[r] : fj[r];
+        for (int r = 0; r < dim; r++)
+            load[r] = correct == GDCA_FWD_CORRECT ? load[r] + fj[r] : fj[r];
         gdca_pass_loads(dim, d->tload, node, f1, f2, fj);
     }
 }
@@ -403,51 +416,53 @@ static inline void forward_disassemble(const forward_args *a, int lo, int hi, co
         forward_disassemble(a, lo, hi, dim, correct, tree);                                        \
     }
 
-FORWARD_STAGES(planar, 3, 0, 0)
-FORWARD_STAGES(spatial, 6, 0, 0)
-FORWARD_STAGES(correct_planar, 3, 1, 0)
-FORWARD_STAGES(correct_spatial, 6, 1, 0)
-FORWARD_STAGES(planar_tree, 3, 0, 1)
-FORWARD_STAGES(spatial_tree, 6, 0, 1)
-FORWARD_STAGES(correct_planar_tree, 3, 1, 1)
-FORWARD_STAGES(correct_spatial_tree, 6, 1, 1)
+FORWARD_STAGES(planar, 3, GDCA_FWD_FULL, 0)
+FORWARD_STAGES(spatial, 6, GDCA_FWD_FULL, 0)
+FORWARD_STAGES(correct_planar, 3, GDCA_FWD_CORRECT, 0)
+FORWARD_STAGES(correct_spatial, 6, GDCA_FWD_CORRECT, 0)
+FORWARD_STAGES(biasfree_planar, 3, GDCA_FWD_BIASFREE, 0)
+FORWARD_STAGES(biasfree_spatial, 6, GDCA_FWD_BIASFREE, 0)
+FORWARD_STAGES(planar_tree, 3, GDCA_FWD_FULL, 1)
+FORWARD_STAGES(spatial_tree, 6, GDCA_FWD_FULL, 1)
+FORWARD_STAGES(correct_planar_tree, 3, GDCA_FWD_CORRECT, 1)
+FORWARD_STAGES(correct_spatial_tree, 6, GDCA_FWD_CORRECT, 1)
+FORWARD_STAGES(biasfree_planar_tree, 3, GDCA_FWD_BIASFREE, 1)
+FORWARD_STAGES(biasfree_spatial_tree, 6, GDCA_FWD_BIASFREE, 1)
 
-static CTC_SPECIALISE void root_planar(void *a)
-{
-    forward_root(a, 3, 0);
-}
+#define FORWARD_ROOT(name, dim, mode)                                                              \
+    static CTC_SPECIALISE void root_##name(void *a)                                                \
+    {                                                                                              \
+        forward_root(a, dim, mode);                                                                \
+    }
 
-static CTC_SPECIALISE void root_spatial(void *a)
-{
-    forward_root(a, 6, 0);
-}
+FORWARD_ROOT(planar, 3, GDCA_FWD_FULL)
+FORWARD_ROOT(spatial, 6, GDCA_FWD_FULL)
+FORWARD_ROOT(correct_planar, 3, GDCA_FWD_CORRECT)
+FORWARD_ROOT(correct_spatial, 6, GDCA_FWD_CORRECT)
+FORWARD_ROOT(biasfree_planar, 3, GDCA_FWD_BIASFREE)
+FORWARD_ROOT(biasfree_spatial, 6, GDCA_FWD_BIASFREE)
 
-static CTC_SPECIALISE void correct_root_planar(void *a)
-{
-    forward_root(a, 3, 1);
-}
-
-static CTC_SPECIALISE void correct_root_spatial(void *a)
-{
-    forward_root(a, 6, 1);
-}
-
-/* the stage functions by [spatial][correct][tree] */
-static int (*const forward_assemble_fn[2][2][2])(void *, int, int) = {
+/* the stage functions by [spatial][mode][tree] */
+static int (*const forward_assemble_fn[2][3][2])(void *, int, int) = {
     {{assemble_planar, assemble_planar_tree},
-     {assemble_correct_planar, assemble_correct_planar_tree}},
+     {assemble_correct_planar, assemble_correct_planar_tree},
+     {assemble_biasfree_planar, assemble_biasfree_planar_tree}},
     {{assemble_spatial, assemble_spatial_tree},
-     {assemble_correct_spatial, assemble_correct_spatial_tree}}};
-static void (*const forward_disassemble_fn[2][2][2])(void *, int, int) = {
+     {assemble_correct_spatial, assemble_correct_spatial_tree},
+     {assemble_biasfree_spatial, assemble_biasfree_spatial_tree}}};
+static void (*const forward_disassemble_fn[2][3][2])(void *, int, int) = {
     {{disassemble_planar, disassemble_planar_tree},
-     {disassemble_correct_planar, disassemble_correct_planar_tree}},
+     {disassemble_correct_planar, disassemble_correct_planar_tree},
+     {disassemble_biasfree_planar, disassemble_biasfree_planar_tree}},
     {{disassemble_spatial, disassemble_spatial_tree},
-     {disassemble_correct_spatial, disassemble_correct_spatial_tree}}};
-static void (*const forward_root_fn[2][2])(void *) = {{root_planar, correct_root_planar},
-                                                      {root_spatial, correct_root_spatial}};
+     {disassemble_correct_spatial, disassemble_correct_spatial_tree},
+     {disassemble_biasfree_spatial, disassemble_biasfree_spatial_tree}}};
+static void (*const forward_root_fn[2][3])(void *) = {
+    {root_planar, root_correct_planar, root_biasfree_planar},
+    {root_spatial, root_correct_spatial, root_biasfree_spatial}};
 
-/* assembly and disassembly over the plan, serial or a height at a time (gdca_par.h); the full
-   pass (correct = 0) or the correction */
+/* assembly and disassembly over the plan, serial or a height at a time (gdca_par.h), in mode
+   `correct` (gdca_forward_joint.h) */
 static void forward_plan(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
                          int correct)
 {
@@ -462,7 +477,8 @@ static void forward_plan(const ctc_model *m, ctc_data *d, const double *f, doubl
                           .min_bodies =
                               sp ? FORWARD_MIN_BODIES_SPATIAL : FORWARD_MIN_BODIES_PLANAR};
     /* a loop model's pass is gated here; an open model's tree order was chosen by its gate */
-    if (m->has_loop) pass.gate = correct ? CTC_GATE_FWD_CORRECT : CTC_GATE_FWD_TREE;
+    if (m->has_loop)
+        pass.gate = correct == GDCA_FWD_CORRECT ? CTC_GATE_FWD_CORRECT : CTC_GATE_FWD_TREE;
     gdca_par_run(m, d, &pass);
 }
 
@@ -485,9 +501,9 @@ int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d)
 void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, double *dq)
 {
     if (gdca_forward_order_seq(m, d)) {
-        (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, r, dq, 1);
+        (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, r, dq, GDCA_FWD_CORRECT);
     } else {
-        forward_plan(m, d, r, dq, 1);
+        forward_plan(m, d, r, dq, GDCA_FWD_CORRECT);
     }
 }
 
@@ -524,30 +540,30 @@ static int refine_undo_if_grown(const ctc_model *m, ctc_data *d, double *qacc, c
     return 1;
 }
 
-void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
+/* One pass in mode `mode` (gdca_forward_joint.h) in the order of the setting, or where the tree
+ * on threads may pay, of the gate's timings; records the way taken in d->fwd_split for the
+ * correction */
+static void forward_pass(const ctc_model *m, ctc_data *d, const double *f, double *qacc, int mode)
 {
-    if (m->has_loop) { /* dependent joints carry no driving force */
-        double *fm = d->xbuf;
-        memset(fm, 0, (size_t)m->nvx * sizeof *fm);
-        for (int i = 0; i < m->nind; i++) fm[m->ind_coord[i]] = f[m->ind_coord[i]];
-        f = fm;
-    }
-    /* the order: by the setting, or where the tree on threads may pay, by the gate's timings */
     const int candidate = gdca_forward_tree_candidate(m, d);
     ctc_pool_gate *g = candidate && !d->opt.par_split ? &d->gate[CTC_GATE_FWD_ORDER] : NULL;
     d->fwd_split = candidate && (g == NULL || ctc_pool_gate_way(g));
     const double t0 = g != NULL ? ctc_pool_clock() : 0;
     if (gdca_forward_order_seq(m, d)) {
-        (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, f, qacc, 0);
+        (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, f, qacc, mode);
     } else {
-        forward_plan(m, d, f, qacc, 0);
+        forward_plan(m, d, f, qacc, mode);
     }
     if (g != NULL) ctc_pool_gate_record(g, d->fwd_split, ctc_pool_clock() - t0);
+}
 
-    /* refinement (gdca_refine.h): r = f - (M qacc + N) by the composite inverse, qacc += w M^-1 r,
-       until the step rule (gdca_refine_step) stops it; on a long open chain a step whose residual
-       grew is undone, and the last step is checked by one more residual */
-    const int steps = gdca_refine_steps(m, d);
+/* The refinement (gdca_refine.h) of qacc under the forces f, at most `steps` steps: r = f -
+ * (M qacc + N) by the composite inverse, qacc += w M^-1 r, until the step rule
+ * (gdca_refine_step) stops it; on a long open chain a step whose residual grew is undone, and
+ * the last step is checked by one more residual */
+static void forward_refine(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
+                           int steps)
+{
     const int guard = !m->has_loop && m->nbodies >= CTC_REFINE_CHECK_MIN_BODIES;
     double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, *dq_last = d->fwd_res + 2 * m->nvx;
     double rlast = INFINITY;
@@ -566,4 +582,55 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         gdca_refine_residual(m, d, f, qacc, r);
         refine_undo_if_grown(m, d, qacc, r, &rlast);
     }
+}
+
+/* The reference form (gdca.h ctc_gdca_forward_from) on an open model: qacc = a_ref (NULL: 0) +
+ * M^-1 (f - f_ref) by the bias-free pass, d->jnt_load = the pass's loads + d->jnt_load_inv (the
+ * reference's), then the refinement the rule gives the reference form (gdca_refine_steps_ref) */
+static void forward_reference(const ctc_model *m, ctc_data *d, const double *f, const double *a_ref,
+                              const double *f_ref, double *qacc)
+{
+    double *r = d->fwd_res;
+    const int nv = m->nv;
+    for (int i = 0; i < nv; i++) r[i] = f[i] - f_ref[i];
+    forward_pass(m, d, r, qacc, GDCA_FWD_BIASFREE);
+    for (int i = 0; a_ref != NULL && i < nv; i++) qacc[i] += a_ref[i];
+    const size_t nl = (size_t)m->nbodies * (size_t)m->dim;
+    for (size_t i = 0; i < nl; i++) d->jnt_load[i] += d->jnt_load_inv[i];
+    forward_refine(m, d, f, qacc, gdca_refine_steps_ref(m, d));
+}
+
+int gdca_forward_takes_ref(const ctc_model *m, const ctc_data *d)
+{
+    return !m->has_loop && d->opt.fwd_form == CTC_FWD_REFERENCE;
+}
+
+void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
+{
+    /* the reference form with a_ref = 0: f_ref = N(q, v) by the composite inverse */
+    if (gdca_forward_takes_ref(m, d)) {
+        double *zero = d->fwd_res + m->nvx, *f_ref = d->fwd_res + 2 * m->nvx;
+        memset(zero, 0, (size_t)m->nv * sizeof *zero);
+        ctc_gdca_inverse(m, d, zero, f_ref);
+        forward_reference(m, d, f, NULL, f_ref, qacc);
+        return;
+    }
+    if (m->has_loop) { /* dependent joints carry no driving force */
+        double *fm = d->xbuf;
+        memset(fm, 0, (size_t)m->nvx * sizeof *fm);
+        for (int i = 0; i < m->nind; i++) fm[m->ind_coord[i]] = f[m->ind_coord[i]];
+        f = fm;
+    }
+    forward_pass(m, d, f, qacc, GDCA_FWD_FULL);
+    forward_refine(m, d, f, qacc, gdca_refine_steps(m, d));
+}
+
+void ctc_gdca_forward_from(const ctc_model *m, ctc_data *d, const double *f, const double *a_ref,
+                           const double *f_ref, double *qacc)
+{
+    if (m->has_loop || d->opt.fwd_form == CTC_FWD_LITERAL) {
+        ctc_gdca_forward(m, d, f, qacc);
+        return;
+    }
+    forward_reference(m, d, f, a_ref, f_ref, qacc);
 }

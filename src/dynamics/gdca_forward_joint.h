@@ -10,6 +10,20 @@
 #include "data.h"
 #include "gdca_tree.h"
 
+/* The modes of one forward pass, a constant in each specialised stage function (the argument
+ * named `correct` in gdca_forward.c, gdca_forward_seq.c, gdca_forward_tseq.c):
+ *   GDCA_FWD_FULL:     the pass of DESIGN.md section 4: the factors E, K and the assembled
+ *                      matrices formed, the bodies' h13, h23 and the joints' beta taken;
+ *   GDCA_FWD_CORRECT:  the refinement's correction (gdca_refine.h): every body's h13 = h23 = 0
+ *                      and every beta = 0, the factors and matrices of the full pass just made
+ *                      reused, the joint loads added to d->jnt_load;
+ *   GDCA_FWD_BIASFREE: the reference form's pass (gdca.h ctc_gdca_forward_from): bias-free as
+ *                      the correction, but forming the factors and matrices itself, the joint
+ *                      loads written.
+ * So a mode is bias-free when it is not GDCA_FWD_FULL and forms its factors when it is not
+ * GDCA_FWD_CORRECT. */
+enum { GDCA_FWD_FULL = 0, GDCA_FWD_CORRECT = 1, GDCA_FWD_BIASFREE = 2 };
+
 /* out = A x for A (dim x dim) symmetric (K, h11, h22) and x = P f, the motion or load along a
  * joint of type `type`: in spatial form a revolute joint's P is (axis; 0) and a prismatic one's
  * (0; axis), so half of x is zero and its columns of A are skipped (18 multiply-adds of 36); the
@@ -77,7 +91,7 @@ static inline int forward_joint(const ctc_model *m, ctc_data *d, int j, const do
     return st;
 }
 
-/* joint j's beta: zero in the refinement's bias-free correction */
+/* joint j's beta: zero in the bias-free modes */
 static inline const double *gdca_forward_beta(const ctc_data *d, int j, const int dim,
                                               const int correct)
 {

@@ -41,10 +41,12 @@
  * run's downdate and h13, the base run's disassembly) read its columns and stay scalar (a
  * transposed copy of h12 costs the handles more than it saves: bench/NOTEBOOK.md, "Latest").
  *
- * The refinement's correction (gdca_refine.h) is this pass in a bias-free mode (correct = 1), as
- * in gdca_forward.c: bodies' h13 = h23 = 0, beta = 0, E, K and the records' matrices reused, the
- * vectors recomputed into the records' bias slots, d->fwd_z and d->tload (the correction's own
- * joint loads, which are added to d->jnt_load).
+ * The refinement's correction (gdca_refine.h) is this pass in a bias-free mode (correct =
+ * GDCA_FWD_CORRECT, gdca_forward_joint.h), as in gdca_forward.c: bodies' h13 = h23 = 0, beta = 0,
+ * E, K and the records' matrices reused, the vectors recomputed into the records' bias slots,
+ * d->fwd_z and d->tload (the correction's own joint loads, which are added to d->jnt_load). The
+ * reference form's pass (GDCA_FWD_BIASFREE; gdca.h ctc_gdca_forward_from) is bias-free too but
+ * forms E, K and the matrices as the full pass does, and writes its loads.
  */
 #include "gdca_forward_seq.h"
 
@@ -129,9 +131,9 @@ static inline int seq_tip_assemble(const seq_args *a, int i, const int dim, cons
     const int st =
         forward_joint(a->m, d, j, left, right, seq_body_bias(a, i, H23(dim), correct),
                       seq_tip_bias(a, j, dim, correct), gdca_forward_beta(a->d, j, dim, correct),
-                      a->f, !correct, out + H22(dim), dim);
+                      a->f, correct != GDCA_FWD_CORRECT, out + H22(dim), dim);
     const double *e = d->fwd_E + dim * dim * j, *z = d->fwd_z + dim * j;
-    if (!correct) {
+    if (correct != GDCA_FWD_CORRECT) {
         seq_downdate_joint(a, j, left + H11(dim), left + H12(dim), 0, e, out + H11(dim), dim);
     }
     ctc_dense_mulv(dim, dim, left + H12(dim), z, t);
@@ -150,10 +152,10 @@ static inline int seq_base_assemble(const seq_args *a, int k, const int dim, con
     double *out = d->hfwd + (size_t)k * d->hsize, t[CTC_DENSE_MAX];
     const int st = forward_joint(a->m, d, k, left, right, seq_base_bias(a, k - 1, dim),
                                  seq_body_bias(a, k, H13(dim), correct),
-                                 gdca_forward_beta(a->d, k, dim, correct), a->f, !correct,
-                                 out + H11(dim), dim);
+                                 gdca_forward_beta(a->d, k, dim, correct), a->f,
+                                 correct != GDCA_FWD_CORRECT, out + H11(dim), dim);
     const double *e = d->fwd_E + dim * dim * k, *z = d->fwd_z + dim * k;
-    if (!correct) {
+    if (correct != GDCA_FWD_CORRECT) {
         seq_downdate_joint(a, k, right + H22(dim), right + H12(dim), 1, e, out + H22(dim), dim);
     }
     gdca_tmulv(dim, right + H12(dim), z, t);
@@ -212,8 +214,9 @@ static inline int seq_root(const seq_args *a, const int dim, const int correct)
     const double *left = r > 0 ? seq_part(a, r - 1) : NULL, *right = seq_part(a, r);
     const double *b23l = seq_base_bias(a, r - 1, dim), *b13r = seq_tip_bias(a, r, dim, correct);
     double *fr = d->tload + dim * r, a1[CTC_DENSE_MAX], a2[CTC_DENSE_MAX];
-    int st = forward_joint(a->m, d, r, left, right, b23l, b13r,
-                           gdca_forward_beta(a->d, r, dim, correct), a->f, !correct, NULL, dim);
+    int st =
+        forward_joint(a->m, d, r, left, right, b23l, b13r, gdca_forward_beta(a->d, r, dim, correct),
+                      a->f, correct != GDCA_FWD_CORRECT, NULL, dim);
     for (int i = 0; i < dim; i++) fr[i] = d->fwd_z[dim * r + i];
     /* A1^R = h11^R F + h13^R,  A2^L = -h22^L F + h23^L */
     gdca_tmulv(dim, right + H11(dim), fr, a1); /* h11 and h22 are symmetric */
@@ -252,36 +255,31 @@ static inline void seq_pass(const seq_args *a, const int dim, const int correct)
         if (t < r) seq_base_disassemble(a, r - 1 - t, dim, correct);
     }
     for (int i = 0; i < dim * n; i++) {
-        d->jnt_load[i] = correct ? d->jnt_load[i] + d->tload[i] : d->tload[i];
+        d->jnt_load[i] = correct == GDCA_FWD_CORRECT ? d->jnt_load[i] + d->tload[i] : d->tload[i];
     }
 }
 
-static CTC_SPECIALISE void seq_planar(const seq_args *a)
-{
-    seq_pass(a, 3, 0);
-}
+/* the pass specialised by form and mode (gdca_forward_joint.h) */
+#define SEQ_PASS(name, dim, mode)                                                                  \
+    static CTC_SPECIALISE void seq_##name(const seq_args *a)                                       \
+    {                                                                                              \
+        seq_pass(a, dim, mode);                                                                    \
+    }
 
-static CTC_SPECIALISE void seq_spatial(const seq_args *a)
-{
-    seq_pass(a, 6, 0);
-}
+SEQ_PASS(planar, 3, GDCA_FWD_FULL)
+SEQ_PASS(spatial, 6, GDCA_FWD_FULL)
+SEQ_PASS(correct_planar, 3, GDCA_FWD_CORRECT)
+SEQ_PASS(correct_spatial, 6, GDCA_FWD_CORRECT)
+SEQ_PASS(biasfree_planar, 3, GDCA_FWD_BIASFREE)
+SEQ_PASS(biasfree_spatial, 6, GDCA_FWD_BIASFREE)
 
-static CTC_SPECIALISE void seq_correct_planar(const seq_args *a)
-{
-    seq_pass(a, 3, 1);
-}
+/* by [spatial][mode] */
+static void (*const seq_fn[2][3])(const seq_args *) = {
+    {seq_planar, seq_correct_planar, seq_biasfree_planar},
+    {seq_spatial, seq_correct_spatial, seq_biasfree_spatial}};
 
-static CTC_SPECIALISE void seq_correct_spatial(const seq_args *a)
-{
-    seq_pass(a, 6, 1);
-}
-
-void gdca_forward_seq(const ctc_model *m, ctc_data *d, const double *f, double *qacc, int correct)
+void gdca_forward_seq(const ctc_model *m, ctc_data *d, const double *f, double *qacc, int mode)
 {
     const seq_args a = {m, d, f, qacc, (m->nbodies - 1) / 2};
-    if (m->form == CTC_FORM_PLANAR) {
-        (correct ? seq_correct_planar : seq_planar)(&a);
-    } else {
-        (correct ? seq_correct_spatial : seq_spatial)(&a);
-    }
+    seq_fn[m->form != CTC_FORM_PLANAR][mode](&a);
 }

@@ -22,7 +22,8 @@
  * Records (d->hfwd, 2n slots for a tree): slot k holds S_k's h11, h13 and K of joint h in its h22
  * slot; slot n + k holds R_k's whole record when k has light children. Joint loads go to
  * d->tload at [dim k] and then to d->jnt_load. The refinement's bias-free correction (correct =
- * 1) reuses E, K, the records' matrices and each R_k's M'^-1, as in gdca_forward_seq.c.
+ * GDCA_FWD_CORRECT) reuses E, K, the records' matrices and each R_k's M'^-1, as in
+ * gdca_forward_seq.c; the reference form's bias-free pass (GDCA_FWD_BIASFREE) forms them.
  */
 #include "gdca_forward_seq.h"
 
@@ -90,29 +91,33 @@ static inline int tseq_rake(const tseq_args *a, int k, const int dim, const int 
     for (int c = m->body_child[k]; c >= 0; c = m->body_sibling[c]) {
         if (c == m->body_heavy[k]) continue;
         if (forward_joint(m, d, c, NULL, tseq_S(a, c), gdca_zero6, tseq_S_bias(a, c, dim, correct),
-                          gdca_forward_beta(d, c, dim, correct), a->f, !correct, NULL, dim) != 0) {
+                          gdca_forward_beta(d, c, dim, correct), a->f, correct != GDCA_FWD_CORRECT,
+                          NULL, dim) != 0) {
             singular = tseq_first(singular, c);
         }
         gdca_rake_point(d, k, c, dim, r, kappa);
         gdca_rake_light(dim, (int)m->joints[c].type, dim - m->jnt_nv[c], d->fwd_E + dim * dim * c,
-                        r, correct ? NULL : kappa, d->fwd_z + dim * c, correct ? NULL : ts, tb);
-        for (int i = 0; !correct && i < dim * dim; i++) s[i] += ts[i];
+                        r, correct ? NULL : kappa, d->fwd_z + dim * c,
+                        correct == GDCA_FWD_CORRECT ? NULL : ts, tb);
+        for (int i = 0; correct != GDCA_FWD_CORRECT && i < dim * dim; i++) s[i] += ts[i];
         for (int i = 0; i < dim; i++) sb[i] += tb[i];
     }
     double mm[CTC_DENSE_MAX * CTC_DENSE_MAX], b[CTC_DENSE_MAX], k1[CTC_DENSE_MAX];
     double k2[CTC_DENSE_MAX];
+    if (correct != GDCA_FWD_CORRECT) {
+        gdca_rake_body(m, d, k, dim, mm, b);
+        for (int i = 0; i < dim * dim; i++) mm[i] += s[i];
+    }
     if (correct) {
         for (int i = 0; i < dim; i++) b[i] = -sb[i];
     } else {
-        gdca_rake_body(m, d, k, dim, mm, b);
-        for (int i = 0; i < dim * dim; i++) mm[i] += s[i];
         for (int i = 0; i < dim; i++) b[i] -= sb[i];
         gdca_rake_kappa(d, k, dim, d->hr + 6 * k, k1);
         gdca_rake_kappa(d, k, dim, d->hr + 6 * k + 3, k2);
     }
     if (gdca_rake_record(dim, mm, b, d->hr + 6 * k, d->hr + 6 * k + 3, correct ? NULL : k1,
                          correct ? NULL : k2, gdca_rake_slot(d, k, dim), tseq_R(a, k),
-                         !correct) != 0) {
+                         correct != GDCA_FWD_CORRECT) != 0) {
         singular = tseq_first(singular, m->body_child[k]);
     }
     return singular;
@@ -130,9 +135,9 @@ static inline int tseq_assemble(const tseq_args *a, int k, int h, const int dim,
     const int st =
         forward_joint(m, d, h, left, tseq_S(a, h), tseq_R_bias(a, k, H23(dim), correct),
                       tseq_S_bias(a, h, dim, correct), gdca_forward_beta(d, h, dim, correct), a->f,
-                      !correct, out + H22(dim), dim);
+                      correct != GDCA_FWD_CORRECT, out + H22(dim), dim);
     const double *e = d->fwd_E + dim * dim * h, *z = d->fwd_z + dim * h;
-    if (!correct) {
+    if (correct != GDCA_FWD_CORRECT) {
         const ctc_joint_type type = m->joints[h].type;
         if (gdca_joint_factor_is_typed(dim, type)) { /* nc = dim - 1, a constant */
             gdca_mul_E_typed(dim, type, dim - 1, left + H12(dim), 0, e, x);
@@ -207,7 +212,7 @@ static inline void tseq_pass(const tseq_args *a, const int dim, const int correc
         const double *sg = tseq_S(a, g), *b13 = tseq_S_bias(a, g, dim, correct);
         double *fg = d->tload + dim * g, a1[CTC_DENSE_MAX];
         if (forward_joint(m, d, g, NULL, sg, gdca_zero6, b13, gdca_forward_beta(d, g, dim, correct),
-                          a->f, !correct, NULL, dim) != 0) {
+                          a->f, correct != GDCA_FWD_CORRECT, NULL, dim) != 0) {
             singular = tseq_first(singular, g);
         }
         for (int i = 0; i < dim; i++) fg[i] = d->fwd_z[dim * g + i];
@@ -218,37 +223,31 @@ static inline void tseq_pass(const tseq_args *a, const int dim, const int correc
     d->singular_joint = singular;
     for (int k = 0; k < n; k++) tseq_disassemble(a, k, dim, correct);
     for (int i = 0; i < dim * n; i++) {
-        d->jnt_load[i] = correct ? d->jnt_load[i] + d->tload[i] : d->tload[i];
+        d->jnt_load[i] = correct == GDCA_FWD_CORRECT ? d->jnt_load[i] + d->tload[i] : d->tload[i];
     }
 }
 
-static CTC_SPECIALISE void tseq_planar(const tseq_args *a)
-{
-    tseq_pass(a, 3, 0);
-}
+/* the pass specialised by form and mode (gdca_forward_joint.h) */
+#define TSEQ_PASS(name, dim, mode)                                                                 \
+    static CTC_SPECIALISE void tseq_##name(const tseq_args *a)                                     \
+    {                                                                                              \
+        tseq_pass(a, dim, mode);                                                                   \
+    }
 
-static CTC_SPECIALISE void tseq_spatial(const tseq_args *a)
-{
-    tseq_pass(a, 6, 0);
-}
+TSEQ_PASS(planar, 3, GDCA_FWD_FULL)
+TSEQ_PASS(spatial, 6, GDCA_FWD_FULL)
+TSEQ_PASS(correct_planar, 3, GDCA_FWD_CORRECT)
+TSEQ_PASS(correct_spatial, 6, GDCA_FWD_CORRECT)
+TSEQ_PASS(biasfree_planar, 3, GDCA_FWD_BIASFREE)
+TSEQ_PASS(biasfree_spatial, 6, GDCA_FWD_BIASFREE)
 
-static CTC_SPECIALISE void tseq_correct_planar(const tseq_args *a)
-{
-    tseq_pass(a, 3, 1);
-}
+/* by [spatial][mode] */
+static void (*const tseq_fn[2][3])(const tseq_args *) = {
+    {tseq_planar, tseq_correct_planar, tseq_biasfree_planar},
+    {tseq_spatial, tseq_correct_spatial, tseq_biasfree_spatial}};
 
-static CTC_SPECIALISE void tseq_correct_spatial(const tseq_args *a)
-{
-    tseq_pass(a, 6, 1);
-}
-
-void gdca_forward_seq_tree(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
-                           int correct)
+void gdca_forward_seq_tree(const ctc_model *m, ctc_data *d, const double *f, double *qacc, int mode)
 {
     const tseq_args a = {m, d, f, qacc};
-    if (m->form == CTC_FORM_PLANAR) {
-        (correct ? tseq_correct_planar : tseq_planar)(&a);
-    } else {
-        (correct ? tseq_correct_spatial : tseq_spatial)(&a);
-    }
+    tseq_fn[m->form != CTC_FORM_PLANAR][mode](&a);
 }

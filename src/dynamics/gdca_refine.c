@@ -27,6 +27,13 @@ int gdca_refine_steps(const ctc_model *m, const ctc_data *d)
     return m->nbodies >= CTC_REFINE_MIN_BODIES ? 1 : 0;
 }
 
+int gdca_refine_steps_ref(const ctc_model *m, const ctc_data *d)
+{
+    if (m->nsingular > 0 || m->nslender > 0) return gdca_refine_steps(m, d);
+    if (d->opt.fwd_refine >= 0) return d->opt.fwd_refine;
+    return m->mass_ratio >= CTC_REFINE_MASS_RATIO ? CTC_REFINE_MAX_STEPS : 0;
+}
+
 int gdca_refine_step(gdca_refine_rule *rule, int nvx, const double *dq, double *dq_last,
                      double *qacc)
 {

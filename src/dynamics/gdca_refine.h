@@ -19,6 +19,12 @@
  * one, so one step brings the accelerations to the accuracy of the forces' residual. A loop
  * model's residual and correction include the closing joint's load and the closure
  * (gdca_refine_residual).
+ *
+ * The reference form (gdca.h ctc_gdca_forward_from) starts where a refinement step would: its
+ * reference's forces f_ref come from the composite inverse, and its pass is the bias-free one
+ * (forming its own factors), so an evenly proportioned chain needs no step after it at any
+ * length; a stiffly proportioned chain (the bias-free pass itself loses digits to the mass
+ * ratio) and a model with augmented bodies keep their steps (gdca_refine_steps_ref).
  */
 #ifndef CTC_GDCA_REFINE_H
 #define CTC_GDCA_REFINE_H
@@ -93,6 +99,22 @@
 /* The most refinement steps ctc_gdca_forward makes on model m with settings d: d->opt.fwd_refine
  * when >= 0, else by the rule above CTC_REFINE_MAX_STEPS (mass ratio), 1 (length) or 0. */
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d);
+
+/* The most refinement steps after the reference form (gdca.h ctc_gdca_forward_from): a model
+ * with singular or slender bodies gets gdca_refine_steps (its bias-free pass solves with the
+ * augmented inertias, M_aug^-1, and the steps remove that error); any other none unless
+ * d->opt.fwd_refine >= 0 asks for that many, since its bias-free pass is M^-1 itself up to
+ * rounding relative to |f - f_ref|, with nothing to cancel. */
+int gdca_refine_steps_ref(const ctc_model *m, const ctc_data *d);
+
+/* 1 if ctc_gdca_forward on m with d's settings takes the reference form with a_ref = 0: only
+ * when d->opt.fwd_form = CTC_FWD_REFERENCE, and never on a loop model. With a_ref = 0 the
+ * bias-free pass solves M qdd = f - N, whose right-hand side is as large as the literal pass's,
+ * and the balanced tree's order then misses the backward error of the literal pass refined
+ * (autoTree n = 1024: 1.3e-8 against 1e-10 of the forces) and slender ill-conditioned chains
+ * converge worse (bench/NOTEBOOK.md, "The reference form (issue 26)"), so the default keeps the
+ * literal pass; the reference form pays where a_ref is close to the answer (sim_rhs.c). */
+int gdca_forward_takes_ref(const ctc_model *m, const ctc_data *d);
 
 /* What the step rule keeps between the steps of one ctc_gdca_forward; zero it before the first. */
 typedef struct gdca_refine_rule {

@@ -49,10 +49,31 @@
 
 /* Forward dynamics: joint accelerations qacc (nv, nvx for loops; rad/s^2, m/s^2) from the
  * driving forces f (nv, nvx for loops; N m, N) applied by each joint, gravity included. Also fills
- * d->jnt_load (the whole load on body k at joint k: constraint plus drive). On long or stiffly
- * proportioned chains, open or closed, the literal pass is refined by the composite inverse's
- * residual (gdca_refine.h; d->opt.fwd_refine, d->fwd_refine_done). qacc may not alias f. */
+ * d->jnt_load (the whole load on body k at joint k: constraint plus drive). The literal pass of
+ * DESIGN.md section 4; on long or stiffly proportioned chains, open or closed, and with singular
+ * or slender bodies, refined by the composite inverse's residual (gdca_refine.h;
+ * d->opt.fwd_refine, d->fwd_refine_done). With d->opt.fwd_form = CTC_FWD_REFERENCE an open model
+ * takes the reference form of ctc_gdca_forward_from with a_ref = 0 instead, its f_ref = N(q, v)
+ * from one composite inverse. Overwrites d->jnt_load_inv where it refines or takes the reference
+ * form. qacc may not alias f. */
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc);
+
+/* Forward dynamics in the reference form: for any reference acceleration a_ref,
+ *     M qdd + N = f   <=>   qdd = a_ref + M^-1 (f - f_ref),   f_ref = M a_ref + N,
+ * so qacc (nv; rad/s^2, m/s^2) = a_ref + dq with M dq = f - f_ref solved by the forward pass in
+ * its bias-free mode (every body's h13 = h23 = 0, every beta = 0: the velocity and gravity terms
+ * are in f_ref and nothing cancels, so dq's error is relative to |f - f_ref|, not to the forces'
+ * size; gdca_forward_joint.h). f_ref (nv; N m, N) must be what ctc_gdca_inverse(m, d, a_ref,
+ * f_ref) returned on this d at this state, its d->jnt_load_inv untouched since: d->jnt_load is
+ * the bias-free pass's loads plus those, the whole loads as ctc_gdca_forward gives them. a_ref
+ * (nv) may be NULL for 0. In a CTC step with an exact model, a_ref = u and f_ref = the
+ * controller's iGDCA(u), so the pass costs one bias-free sweep (sim_rhs.c). A model with singular
+ * or slender bodies solves with augmented inertias, and its result is refined as ctc_gdca_forward
+ * refines (gdca_refine.h gdca_refine_steps_ref); others are refined only if d->opt.fwd_refine >= 0
+ * asks for steps. A loop model, or d->opt.fwd_form = CTC_FWD_LITERAL, takes ctc_gdca_forward(m,
+ * d, f, qacc) instead (a_ref and f_ref unused). qacc may not alias f, a_ref or f_ref. */
+void ctc_gdca_forward_from(const ctc_model *m, ctc_data *d, const double *f, const double *a_ref,
+                           const double *f_ref, double *qacc);
 
 /* Inverse dynamics for CTC (iGDCA): the driving forces f (nv, nvx for loops; N m, N) that make
  * the (independent) joint accelerations equal the commanded u (nv, nvx for loops), i.e. f = M(q) u

@@ -24,11 +24,22 @@ enum {
                            gdca_forward_tseq.c); loops take the tree */
 };
 
+/* the forward pass's form on an open model (gdca.h ctc_gdca_forward_from) */
+enum {
+    CTC_FWD_AUTO = 0,     /* ctc_gdca_forward_from: the reference form; ctc_gdca_forward: the
+                             literal pass (gdca_refine.h gdca_forward_takes_ref) */
+    CTC_FWD_LITERAL = 1,  /* the literal pass with its bias terms, refined by rule (both entry
+                             points; ctc_gdca_forward_from ignores its reference) */
+    CTC_FWD_REFERENCE = 2 /* the reference form everywhere (ctc_gdca_forward: a_ref = 0) */
+};
+
 typedef struct ctc_options {
     int fwd_order;  /* CTC_ORDER_*: the forward pass's assembly order on an open chain or tree */
     int fwd_refine; /* most refinement steps of ctc_gdca_forward (gdca_refine.h): -1 = its rule
                        (CTC_REFINE_MAX_STEPS on stiffly proportioned chains, one on long ones,
                        else none); >= 0: at most that many */
+    int fwd_form;   /* CTC_FWD_*: literal pass or reference form; loop models always take the
+                       literal pass */
     int inv_full;   /* 1: the mobility-form inverse pass of a loop model disassembles every node
                        (no early stop once every driving force is known); 0 = the early stop */
     int par_grain;  /* the least items per chunk of a split stage of a pass (one tree height, or
@@ -45,6 +56,7 @@ static inline ctc_options ctc_options_default(void)
 {
     return (ctc_options){.fwd_order = CTC_ORDER_AUTO,
                          .fwd_refine = -1,
+                         .fwd_form = CTC_FWD_AUTO,
                          .inv_full = 0,
                          .par_grain = 0,
                          .par_split = 0};

@@ -227,7 +227,7 @@ static ctc_status setup_context(sim_ctx *c, char *err, size_t errlen)
     c->dc = c->ctrl_model ? ctc_data_new(c->ctrl_model) : own ? ctc_data_new(plant) : c->dp;
     c->xq = malloc((nq + nv + (size_t)c->nv + 1) * sizeof(double));
     c->qn = malloc((nq + 1) * sizeof(double));
-    c->u = malloc((nvx * 5 + nv * 7) * sizeof(double));
+    c->u = malloc((nvx * 6 + nv * 7) * sizeof(double));
     c->y_eval = malloc((size_t)(c->ny + 1) * sizeof(double));
     if (!c->dp || !c->dc || !c->qn || !c->u || !c->y_eval || !c->xq)
         return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
@@ -239,6 +239,7 @@ static ctc_status setup_context(sim_ctx *c, char *err, size_t errlen)
     c->f = c->u + nvx, c->fz = c->f + nvx, c->acc = c->fz + nvx, c->fp = c->acc + nvx;
     c->w = c->fp + nvx;
     c->des = c->w + nv, c->qi = c->des + 3 * nv, c->vi = c->qi + nv, c->clip = c->vi + nv;
+    c->fref = c->clip + nv;
     memset(c->w, 0, nv * 7 * sizeof(double));
     c->jknown = 1;
     c->wrenched = spec->nwrenches > 0;

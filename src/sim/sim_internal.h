@@ -39,6 +39,10 @@ typedef struct sim_ctx {
     double *u, *f;   /* (nvx) commanded accelerations, controller forces */
     double *fz;      /* (nvx) applied forces f + z */
     double *acc;     /* (nvx) accelerations from the forward pass */
+    double *fref;    /* (nvx) the plant's iGDCA(u) of this evaluation, before anything is added
+                        to it: the forward pass's reference (gdca.h ctc_gdca_forward_from) */
+    int ref_valid;   /* 1: fref and dp's inverse loads are this evaluation's, at the plant's own
+                        state and model (sim_rhs.c) */
     double *w;       /* (nind) controller output */
     double *des;     /* (nind x 3) desired q, qd, qdd */
     double *qi, *vi; /* (nind) the controlled coordinates' positions and rates */

@@ -25,6 +25,12 @@
  * armature (plant.h) the plant's pass is ctc_plant_forward_armature, and a known armature adds
  * armature u to the controller's force.
  *
+ * When the controller is a computed-torque one on the plant's own model, at the plant's own state
+ * (no controller model, not sampled, no loop, no armature), its f_ref = iGDCA(q, v, u) is the
+ * reference of the plant's pass: qdd = u + M^-1 (f_applied - f_ref) (gdca.h
+ * ctc_gdca_forward_from), one bias-free forward sweep whose right-hand side is only what the
+ * plant adds to the command (disturbance, clipping, joint forces, wrenches), so nothing cancels.
+ *
  * Loop models: the controller's coordinates are the independent ones (the closing joint's
  * position and rate come from the loop kinematics), the forces and accelerations of the passes
  * are extended vectors (nvx), and an evaluation whose boundary solve is singular beyond
@@ -99,6 +105,7 @@ int sim_evaluate(sim_ctx *c, double t, const double *y, unsigned what)
     const double *q = y, *v = y + c->nq;
     const int forces = (what & (SIM_EVAL_FORCES | SIM_EVAL_ACC)) != 0;
     c->eval_valid = 0;
+    c->ref_valid = 0;
     if (c->has_quat) {
         memcpy(c->qn, q, (size_t)c->nq * sizeof *q);
         ctc_model_q_normalize(m, c->qn);
@@ -135,6 +142,9 @@ int sim_evaluate(sim_ctx *c, double t, const double *y, unsigned what)
                 ctc_gdca_inverse(c->ctrl_model, c->dc, c->u, c->f);
             } else if (forces) {
                 ctc_gdca_inverse(m, c->dp, c->u, c->f);
+                /* the forward pass's reference: the plant's own model at the plant's own state */
+                memcpy(c->fref, c->f, (size_t)c->nvx * sizeof *c->fref);
+                c->ref_valid = !c->sampled && !m->has_loop && !c->armed;
             }
         }
         if (forces && m->has_loop) c->cond = c->dc->loop_cond;
@@ -181,6 +191,8 @@ int sim_evaluate(sim_ctx *c, double t, const double *y, unsigned what)
     }
     if (c->armed) {
         ctc_plant_forward_armature(m, c->dp, c->arm, fwd, c->acc, c->arm + c->nv);
+    } else if (c->ref_valid) { /* qdd = u + M^-1 (f - iGDCA(u)): nothing to cancel */
+        ctc_gdca_forward_from(m, c->dp, fwd, c->u, c->fref, c->acc);
     } else {
         ctc_gdca_forward(m, c->dp, fwd, c->acc);
     }

@@ -16,6 +16,10 @@
  * start has evaluated the accelerations a0 there: the round trip of a0 through the plant's own
  * passes, on a data block of its own (the run's data and results are not touched),
  *     delta = max_i |GDCA(iGDCA(a0))_i - a0_i|  (rad/s^2, m/s^2),
+ * where a run whose plant pass takes the reference form (sim_rhs.c: a computed-torque controller
+ * on the plant's own model) uses it here too, from the first evaluation's u0 and f_ref =
+ * iGDCA(u0): GDCA(iGDCA(a0)) = u0 + M^-1 (iGDCA(a0) - iGDCA(u0)) (gdca.h ctc_gdca_forward_from),
+ * whose error is the inverse passes' rounding carried through M^-1,
  *     rho = delta / max(max |a0|, max |GDCA(0)|),
  * the rounding of accelerations of the run's own size, where the driving forces balance the bias
  * terms as in every CTC step. rho is relative to the larger of the accelerations and the free
@@ -80,8 +84,14 @@ ctc_status sim_tolerance_floor(const sim_ctx *c, const double *y0, ctc_integ_spe
     memcpy(a0, c->acc, (size_t)nv * sizeof *a0);
     ctc_kinematics(m, d, y0, y0 + c->nq);
     ctc_handles(m, d);
-    ctc_gdca_inverse(m, d, a0, f);
-    ctc_gdca_forward(m, d, f, a);
+    if (c->ref_valid) { /* the run's pass is the reference form from u0 (sim_rhs.c) */
+        ctc_gdca_inverse(m, d, a0, f);
+        ctc_gdca_inverse(m, d, c->u, afree);
+        ctc_gdca_forward_from(m, d, f, c->u, afree, a);
+    } else {
+        ctc_gdca_inverse(m, d, a0, f);
+        ctc_gdca_forward(m, d, f, a);
+    }
     memset(f, 0, (size_t)nv * sizeof *f);
     ctc_gdca_forward(m, d, f, afree);
     const double delta = max_diff(a, a0, nv),

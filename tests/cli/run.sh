@@ -85,12 +85,20 @@ echo '{"preset": "triple_pendulum_pid", "duration": 0.2, "controller": {"type": 
 expect_exit 0 "run a preset with another controller" "$CTCSIM" run "$tmp/lqr.json" -o "$tmp/lqr.csv"
 expect_grep "its summary names the controller" "$tmp/err" "Triple pendulum, LQR (scene of Kingsley et al. 2017, sec. 7.1): done, planar lqr,"
 
-# long chains: a default run of 4096 rods floors its tolerances on the accelerations' rounding
-# and says so (src/sim/sim_tol.c); 65536 rods, the job format's limit, run 3 ms of CTC with rk4
-# without diverging (every |e| stays at its start, pi/6, to 1e-2), and 65537 are refused
-echo '{"preset": "n_link_pendulum", "n": 4096, "duration": 0.1}' >"$tmp/n4096.json"
-expect_exit 0 "a default run of 4096 rods" "$CTCSIM" run "$tmp/n4096.json" -o "$tmp/n4096.csv"
+# long chains: a default run of 4096 rods whose controller has a model of its own (the plant's
+# literal forward pass) floors its tolerances on the accelerations' rounding and says so
+# (src/sim/sim_tol.c); with the exact model the plant's pass starts from u (sim_rhs.c), its
+# accelerations carry no such rounding and nothing is floored; 65536 rods, the job format's
+# limit, run 3 ms of CTC with rk4 without diverging (every |e| stays at its start, pi/6, to
+# 1e-2), and 65537 are refused
+echo '{"preset": "n_link_pendulum", "n": 4096, "duration": 0.1, "controller": {"model": {"mass_scale": 1.1}}}' >"$tmp/n4096.json"
+expect_exit 0 "a default run of 4096 rods, model error" "$CTCSIM" run "$tmp/n4096.json" -o "$tmp/n4096.csv"
 expect_grep "its tolerance floor is reported" "$tmp/err" "tolerance floor: atol 1e-10 raised to "
+echo '{"preset": "n_link_pendulum", "n": 4096, "duration": 0.1}' >"$tmp/n4096x.json"
+expect_exit 0 "a default run of 4096 rods, exact model" "$CTCSIM" run "$tmp/n4096x.json" -o "$tmp/n4096x.csv"
+if grep -q "tolerance floor" "$tmp/err"; then fail "the exact model's run was floored: $(cat "$tmp/err")"; else pass; fi
+grep -qE "error-dynamics deviation [0-9.]+e-(09|1[0-9])" "$tmp/err" && pass ||
+    fail "the exact model's error dynamics: $(cat "$tmp/err")"
 echo '{"preset": "n_link_pendulum", "n": 65536, "duration": 0.003, "integrator": {"method": "rk4", "step": 0.001}, "output": {"interval": 0.001, "channels": ["e"]}}' >"$tmp/n65536.json"
 expect_exit 0 "3 ms of CTC on 65536 rods" "$CTCSIM" run "$tmp/n65536.json" -o "$tmp/n65536.csv"
 expect_grep "65536 rods done" "$tmp/err" "done, planar pd, 4 samples to t = 0.003 s"

@@ -147,7 +147,9 @@ Test(gdca_parallel, pool_runs_again_after_its_workers_have_blocked)
 /* everything one state's passes produce */
 typedef struct outputs {
     double *qacc, *f, *fm;      /* (nvx) forward; composite (or loop) inverse; mobility inverse */
+    double *qref, *fref;        /* (nvx) the reference form from u (gdca.h), its f_ref */
     double *load, *load_inv;    /* (njoints x dim) after the forward, the composite inverse */
+    double *load_ref;           /* (njoints x dim) after the reference form */
     double *load_mob;           /* (njoints x dim) after the mobility inverse */
     int sing_f, sing_i, sing_m; /* d->singular_joint after each */
 } outputs;
@@ -159,6 +161,9 @@ static outputs *outputs_new(const ctc_model *m)
     cr_assert_not_null(o);
     o->qacc = calloc(nvx, sizeof(double)), o->f = calloc(nvx, sizeof(double));
     o->fm = calloc(nvx, sizeof(double));
+    o->qref = calloc(nvx, sizeof(double)), o->fref = calloc(nvx, sizeof(double));
+    o->load_ref = calloc(nl, sizeof(double));
+    cr_assert(o->qref && o->fref && o->load_ref);
     o->load = calloc(nl, sizeof(double)), o->load_inv = calloc(nl, sizeof(double));
     o->load_mob = calloc(nl, sizeof(double));
     cr_assert(o->qacc && o->f && o->fm && o->load && o->load_inv && o->load_mob);
@@ -168,10 +173,12 @@ static outputs *outputs_new(const ctc_model *m)
 static void outputs_free(outputs *o)
 {
     free(o->qacc), free(o->f), free(o->fm), free(o->load), free(o->load_inv), free(o->load_mob);
+    free(o->qref), free(o->fref), free(o->load_ref);
     free(o);
 }
 
-/* the inverse passes on u, then the forward pass on tau, at (q, v) */
+/* the inverse passes on u, then the forward pass on tau, then the reference form from u on tau
+   (a loop model: the forward pass again), at (q, v) */
 static void run_passes(const ctc_model *m, ctc_data *d, const double *q, const double *v,
                        const double *u, const double *tau, outputs *o)
 {
@@ -187,6 +194,9 @@ static void run_passes(const ctc_model *m, ctc_data *d, const double *q, const d
     ctc_gdca_forward(m, d, tau, o->qacc);
     o->sing_f = d->singular_joint;
     memcpy(o->load, d->jnt_load, nl);
+    ctc_gdca_inverse(m, d, u, o->fref);
+    ctc_gdca_forward_from(m, d, tau, u, o->fref, o->qref);
+    memcpy(o->load_ref, d->jnt_load, nl);
 }
 
 /* asserts bitwise equality of two arrays of count doubles */
@@ -244,6 +254,10 @@ static void compare_on(const ctc_model *m, const double *q, const double *v, uin
                 expect_same(s->f, p->f, (size_t)nvx, "f", label, n, threads, grain);
                 expect_same(s->fm, p->fm, (size_t)nvx, "f (mobility)", label, n, threads, grain);
                 expect_same(s->load, p->load, nl, "jnt_load", label, n, threads, grain);
+                expect_same(s->qref, p->qref, (size_t)nvx, "qacc (reference form)", label, n,
+                            threads, grain);
+                expect_same(s->load_ref, p->load_ref, nl, "jnt_load (reference form)", label, n,
+                            threads, grain);
                 expect_same(s->load_inv, p->load_inv, nl, "jnt_load_inv", label, n, threads, grain);
                 expect_same(s->load_mob, p->load_mob, nl, "jnt_load_inv (mobility)", label, n,
                             threads, grain);

@@ -875,14 +875,21 @@ Test(sim, a_controller_class_is_checked_with_exact_messages)
 /* ---- the tolerance floor (sim_tol.c) ---- */
 
 /* The PD run of the n-link rod pendulum from q0_k = +-pi/6 to rest, on the given integrator,
- * for duration s. */
-static ctc_sim_result *long_pendulum(int n, ctc_integ_spec integ, double duration)
+ * for duration s, the controller's model's masses scaled by mass_scale (1: the exact model). */
+static ctc_sim_result *long_pendulum_model(int n, ctc_integ_spec integ, double duration,
+                                           double mass_scale)
 {
     test_chain *c = test_chain_rod_pendulum(n, 1, 1);
     cr_assert_not_null(c);
-    ctc_sim_result *r = fixture_pd_to_rest(c, PI / 6, 1, integ, duration, duration / 10, 0);
+    ctc_sim_result *r =
+        fixture_pd_to_rest(c, PI / 6, mass_scale, integ, duration, duration / 10, 0);
     test_chain_free(c);
     return r;
+}
+
+static ctc_sim_result *long_pendulum(int n, ctc_integ_spec integ, double duration)
+{
+    return long_pendulum_model(n, integ, duration, 1);
 }
 
 /* The paper's scenes stay far below the floor: their tolerances are kept exactly (so their runs
@@ -904,15 +911,19 @@ Test(sim, the_tolerance_floor_leaves_short_chains_alone)
     scene_free(s);
 }
 
-/* On 1024 rods the default tolerances ask for more than the accelerations carry (their round
- * trip at the start is about 2e-5 rad/s^2, 4e-7 of their size): both are raised, with the reason,
- * the run takes tens of steps instead of thousands, and its error stays where the closed-form
- * error dynamics put it (errdyn_dev, measured 1.7e-8 over 5 s; 1e-6 asserted over 0.5 s). A
- * job's own tolerances above the floor are kept; rk4 has none to floor. */
+/* On 1024 rods with a controller model of its own (masses 1.1 times the plant's), the plant's
+ * pass is the literal one refined, and the default tolerances ask for more than its accelerations
+ * carry (their round trip at the start is about 2e-5 rad/s^2, 4e-7 of their size): both are
+ * raised, with the reason, and the run takes tens of steps instead of thousands. With the exact
+ * model the plant's pass takes the reference form (sim_rhs.c), whose accelerations are u plus
+ * M^-1 of what the plant adds (nothing here) and carry no such rounding: nothing is raised, the
+ * run is as short, and its error stays where the closed-form error dynamics put it (errdyn_dev,
+ * 1e-6 asserted over 0.5 s). A job's own tolerances above the floor are kept; rk4 has none to
+ * floor. */
 Test(sim, the_tolerance_floor_raises_what_a_long_chain_cannot_meet, .timeout = 60)
 {
     ctc_integ_spec def = {.method = CTC_INTEG_DOPRI5, .rtol = 1e-8, .atol = 1e-10};
-    ctc_sim_result *r = long_pendulum(1024, def, 0.5);
+    ctc_sim_result *r = long_pendulum_model(1024, def, 0.5, 1.1);
     const ctc_sim_metrics *m = &r->metrics;
     cr_expect_eq(m->tol_floored, 3, "both raised");
     cr_expect(m->accel_rounding > 1e-7 && m->accel_rounding < 1e-3, "rounding %g",
@@ -921,6 +932,14 @@ Test(sim, the_tolerance_floor_raises_what_a_long_chain_cannot_meet, .timeout = 6
     cr_expect(m->tol_rtol > 1e-8 && m->tol_rtol < 1e-5, "rtol %g", m->tol_rtol);
     cr_expect(strstr(m->tol_reason, "atol 1e-10 raised to ") == m->tol_reason, "%s", m->tol_reason);
     cr_expect(strstr(m->tol_reason, ", rtol 1e-08 raised to ") != NULL, "%s", m->tol_reason);
+    cr_expect_lt(m->steps, 100, "%ld steps", m->steps);
+    ctc_sim_result_free(r);
+
+    r = long_pendulum(1024, def, 0.5);
+    m = &r->metrics;
+    cr_expect_eq(m->tol_floored, 0, "%s", m->tol_reason);
+    cr_expect(m->accel_rounding >= 0 && m->accel_rounding < 1e-10, "rounding %g",
+              m->accel_rounding);
     cr_expect_lt(m->steps, 100, "%ld steps", m->steps);
     cr_expect_lt(m->errdyn_dev, 1e-6, "errdyn_dev %g", m->errdyn_dev);
     ctc_sim_result_free(r);
