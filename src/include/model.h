@@ -178,11 +178,16 @@ typedef struct ctc_body_spec {
  * generic configuration (each coordinate q_i = sin(i + 1), each quaternion normalised from (1, 0.1
  * sin(i + 1), 0.2, 0.3)) and refuses a pivot <= CTC_MASS_MATRIX_PIVOT_REL times the largest
  * diagonal entry, naming the joint's body: a massless tip on a moving joint, a point mass on a
- * revolute axis through it. A loop model is held to the same test on its open chain (the chain
- * without the closing joint): its forward pass is augmented and refined alike (the refinement's
- * residual carries the closure, gdca_refine.h), and its CTC inverse inverts no body
- * (gdca_inverse_loop.h). That refuses a massless tip, which the closing joint would hold in
- * place. Models without a singular body skip all of this and are unchanged. */
+ * revolute axis through it. A loop model is held to the same test on the closure's tangent space
+ * at that configuration (the reduced mass matrix Z^T M Z, Z a basis of the null space of the
+ * closure's Jacobian G, loop.h; tested as M + rho G^T G with G's rows scaled to 1 and rho the
+ * largest diagonal entry of M, positive definite exactly when Z^T M Z is): a massless tip that
+ * the closing joint holds is accepted, one whose turning the closure leaves free is refused
+ * ("body 4: the loop's joint-space mass matrix is singular: ..., nor does the loop's closure hold
+ * it"). Its forward pass is augmented and refined alike (the refinement's residual carries the
+ * closure, gdca_refine.h; a massless tip's augmentation takes the model's smallest inertia and
+ * mass), and its CTC inverse inverts no body (gdca_inverse_loop.h). Models without a singular
+ * body skip all of this and are unchanged. */
 #define CTC_MASS_ZERO_REL 1e-12
 #define CTC_INERTIA_ZERO_REL 1e-12
 #define CTC_SINGULAR_AUGMENT_REL 1e-6

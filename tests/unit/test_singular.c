@@ -431,52 +431,74 @@ static void check_loop_against_oracle(const ctc_chain_spec *spec, const double *
     ctc_model_free(m);
 }
 
-/* Loop models take point masses and massless bodies where the open chain's M(q) is positive
- * definite: the forward pass augments them and its refinement reaches the oracle, and the loop's
- * CTC inverse (gdca_inverse_loop.h) inverts no body. The paper's five-bar with its 0.5 m link
- * massless (planar), or a point mass at that link's far end (planar: no inertia about the
- * normal), and a spatial loop of 8 boxes with body 3 a point mass and body 5 massless. */
+/* Loop models take point masses and massless bodies where the loop's reduced mass matrix (M(q) on
+ * the closure's tangent space) is positive definite: the forward pass augments them and its
+ * refinement reaches the oracle, and the loop's CTC inverse (gdca_inverse_loop.h) inverts no
+ * body. The paper's five-bar with its 0.5 m link massless (planar), or a point mass at that
+ * link's far end (planar: no inertia about the normal), or its last link massless (the closing
+ * joint holds it; the open chain's M is singular there); a spatial loop of 8 boxes with body 3 a
+ * point mass and body 5 massless, and the same loop with its tip massless. */
 Test(singular, loops_with_point_masses_and_massless_bodies_match_the_oracle)
 {
-    for (int c = 0; c < 3; c++) {
+    static const char *const what[] = {"five-bar, massless link", "five-bar, point mass",
+                                       "five-bar, massless tip", "spatial loop",
+                                       "spatial loop, massless tip"};
+    for (int c = 0; c < 5; c++) {
         double fwd, inv;
-        if (c < 2) {
+        if (c < 3) {
             loop_scene *s = loop_scene_five_bar();
-            ctc_body_spec *b = &s->bodies[2];
+            ctc_body_spec *b = &s->bodies[c < 2 ? 2 : 4];
             memset(b->inertia, 0, sizeof b->inertia);
-            if (c == 0) {
-                b->mass = 0;
-            } else {
+            if (c == 1) {
                 ctc_v3_set(b->com, 0, -0.5, 0); /* the link's far end */
+            } else {
+                b->mass = 0;
             }
             check_loop_against_oracle(&s->spec, s->q0, 20, &fwd, &inv);
             free(s);
         } else {
             test_loop *l = test_loop_spatial(8, 7);
             cr_assert(l != NULL);
-            memset(l->bodies[3].inertia, 0, sizeof l->bodies[3].inertia);
-            l->bodies[5].mass = 0;
-            memset(l->bodies[5].inertia, 0, sizeof l->bodies[5].inertia);
+            const int tip = c == 4 ? 7 : 5;
+            if (c == 3) memset(l->bodies[3].inertia, 0, sizeof l->bodies[3].inertia);
+            l->bodies[tip].mass = 0;
+            memset(l->bodies[tip].inertia, 0, sizeof l->bodies[tip].inertia);
             check_loop_against_oracle(&l->spec, l->q0, 20, &fwd, &inv);
             test_loop_free(l);
         }
-        static const char *const what[] = {"five-bar, massless link", "five-bar, point mass",
-                                           "spatial loop"};
         cr_log_info("%s: forward %.1e, inverse %.1e\n", what[c], fwd, inv);
         cr_expect_lt(fwd, 1e-10, "%s: GDCA vs the oracle %g", what[c], fwd);
         cr_expect_lt(inv, 1e-10, "%s: iGDCA vs the oracle %g", what[c], inv);
     }
 }
 
-/* ... and refuse one whose open chain's M(q) is singular, naming the body: a massless tip. */
+/* ... and refuse one whose reduced mass matrix is singular, naming the body: the five-bar's
+ * massless tip with the closing joint at the tip's own joint (the closure pins that point, and
+ * nothing resists the tip's turning about it), and the same on the spatial loop, whose spherical
+ * closing joint sits on the tip's joint axis. */
 Test(singular, loop_models_refuse_a_singular_mass_matrix_naming_the_body)
 {
     loop_scene *s = loop_scene_five_bar();
     s->bodies[4].mass = 0;
     memset(s->bodies[4].inertia, 0, sizeof s->bodies[4].inertia);
-    expect_error(&s->spec, "body 4: the joint-space mass matrix is singular: joint 4 (revolute) "
-                           "moves no mass or inertia that the joints before it do not (relative "
-                           "pivot 0 <= 1e-10); body 4 and the bodies beyond it need mass off the "
-                           "joint's axis or inertia about it");
+    memset(s->loop.joint.location, 0, sizeof s->loop.joint.location);
+    expect_error(&s->spec, "body 4: the loop's joint-space mass matrix is singular: joint 4 "
+                           "(revolute) moves no mass or inertia that the joints before it do not, "
+                           "nor does the loop's closure hold it (relative pivot 0 <= 1e-10); body "
+                           "4 and the bodies beyond it need mass off the joint's axis or inertia "
+                           "about it");
     free(s);
+
+    test_loop *l = test_loop_spatial(8, 7);
+    cr_assert(l != NULL);
+    l->bodies[7].mass = 0;
+    memset(l->bodies[7].inertia, 0, sizeof l->bodies[7].inertia);
+    for (int a = 0; a < 3; a++) l->loop.joint.location[a] = 0.3 * l->joints[7].axis[a];
+    ctc_model *m = NULL;
+    char err[512] = "";
+    cr_assert_eq(ctc_model_build(&l->spec, &m, err, sizeof err), CTC_EINVAL);
+    cr_expect(strstr(err, "body 7: the loop's joint-space mass matrix is singular: joint 7 "
+                          "(revolute)") == err,
+              "%s", err);
+    test_loop_free(l);
 }
