@@ -195,7 +195,7 @@ typedef struct ctc_body_spec {
 
 /* ---- slender bodies ----
  *
- * A body of a spatial open model that is not singular but whose smallest principal moment is
+ * A body of a spatial model that is not singular but whose smallest principal moment is
  * under CTC_SLENDER_RATIO times its largest (a rod, a thin beam) is slender. The forward pass's
  * handle equations carry its inverse inertia, and rounding there costs about eps times the
  * body's largest / smallest moment in qdd whether or not any joint spins the body about its thin
@@ -210,9 +210,13 @@ typedef struct ctc_body_spec {
  * 1e-12, in two steps. Ratios
  * from CTC_SLENDER_RATIO up lose at most about 1e-12 of qdd unrefined, and 7e-11 in the round
  * trip GDCA(RNEA(u)) of CTC-like forces (16 rods; 2e-3 lost 3e-10 there). The thresholds are
- * measured (bench/NOTEBOOK.md). A loop model's slender bodies are not augmented (nslender is 0
- * there): its threshold and fraction were measured on open chains only (a loop model's singular
- * bodies are augmented as above). */
+ * measured (bench/NOTEBOOK.md). A loop model's slender bodies are augmented alike (the
+ * refinement's residual carries the closure): a spatial loop of 16 rods then matches the loop
+ * oracle to 2e-13 at every ratio from 2e-3 to 1e-10 in two steps (unaugmented, 5.6e-5 at 1e-10)
+ * and one of 256 to its thick rods' level, 4.7e-11, where unaugmented rods of 1e-6 missed the
+ * round trip by 3.5e3; the fraction measured again there (1e-4: three steps, 1e-6: no gain), and
+ * rods of 1e-2, unaugmented, lose 5.7e-13 of qdd and 2.5e-10 in the round trip of CTC forces
+ * (bench/NOTEBOOK.md, "Issue 18, the rest"). */
 #define CTC_SLENDER_RATIO 1e-2
 #define CTC_SLENDER_AUGMENT_REL 1e-5
 
@@ -308,7 +312,7 @@ typedef struct ctc_model {
                                      the chain's bodies with mass (>= 1) */
     int nsingular;                /* the singular bodies (see "singular bodies" above) */
     int nslender;                 /* the slender bodies (see "slender bodies" above; 0 in planar
-                                     form and in loop models) */
+                                     form) */
     unsigned char *body_singular; /* (n) 1: body k is singular; NULL when nsingular = 0 */
     ctc_body_spec *fwd_bodies;    /* (n) the bodies of the forward pass's handle equations:
                                      `bodies` itself (the same pointer) when nsingular = nslender

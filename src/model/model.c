@@ -876,17 +876,17 @@ static void setup_mass_ratio(ctc_model *m)
     m->mass_ratio = fmax(mhi > 0 ? mhi / mlo : 1.0, thi > 0 ? thi / tlo : 1.0);
 }
 
-/* 1 when body k of a spatial open model (n == NULL: spatial form) is slender (model.h "slender
+/* 1 when body k of a spatial model (n == NULL: spatial form) is slender (model.h "slender
  * bodies"): not singular, smallest principal moment under CTC_SLENDER_RATIO times its largest */
 static int is_slender(const ctc_model *m, const double *moments, const double *n, int k)
 {
     const double *e = &moments[3 * k];
-    return n == NULL && !m->has_loop && !(m->body_singular != NULL && m->body_singular[k]) &&
+    return n == NULL && !(m->body_singular != NULL && m->body_singular[k]) &&
            e[0] < CTC_SLENDER_RATIO * e[2];
 }
 
 /* Marks the singular bodies of form `form` (model.h "singular bodies"; n: the plane normal in
- * planar form) and the slender ones (model.h "slender bodies": spatial open models only, each of
+ * planar form) and the slender ones (model.h "slender bodies": spatial models only, each of
  * their principal moments gets CTC_SLENDER_AUGMENT_REL times the largest) and makes fwd_bodies: a
  * singular body's principal moments each get CTC_SINGULAR_AUGMENT_REL times J_ref, the smallest
  * positive J_own(j) = m_j |c_j|^2 + tr(I_j) / 2 (its inertia about its own joint's centre, c_j from
