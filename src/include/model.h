@@ -176,13 +176,16 @@ typedef struct ctc_body_spec {
  * three steps, 1e-8 and less lose digits to the augmented bodies' own conditioning. The joint-space
  * mass matrix M(q) must then be positive definite: with a singular body the builder factors M at a
  * generic configuration (each coordinate q_i = sin(i + 1), each quaternion normalised from (1, 0.1
- * sin(i + 1), 0.2, 0.3)) and refuses a pivot <= CTC_MASS_MATRIX_PIVOT_REL times the largest
- * diagonal entry, naming the joint's body: a massless tip on a moving joint, a point mass on a
- * revolute axis through it. A loop model is held to the same test on the closure's tangent space
- * at that configuration (the reduced mass matrix Z^T M Z, Z a basis of the null space of the
- * closure's Jacobian G, loop.h; tested as M + rho G^T G with G's rows scaled to 1 and rho the
- * largest diagonal entry of M, positive definite exactly when Z^T M Z is): a massless tip that
- * the closing joint holds is accepted, one whose turning the closure leaves free is refused
+ * sin(i + 1), 0.2, 0.3)) and refuses a pivot <= CTC_MASS_MATRIX_PIVOT_REL times its own
+ * diagonal entry (the share of the coordinate's inertia that the coordinates before it leave;
+ * own, not the largest entry's, since a long chain's tip has 6e-11 of the base's at 4096 point
+ * masses; an entry under 1e-15 of the largest counts as 0), naming the joint's body: a massless tip
+ * on a moving joint, a point mass on a revolute axis through it. A loop model is held to the same
+ * test on the closure's tangent space at that configuration (the reduced mass matrix Z^T M Z, Z a
+ * basis of the null space of the closure's Jacobian G, loop.h; tested as M + rho G^T G with G's
+ * rows scaled to 1 and rho the largest diagonal entry of M, positive definite exactly when Z^T M Z
+ * is): a massless tip that the closing joint holds is accepted, one whose turning the closure
+ * leaves free is refused
  * ("body 4: the loop's joint-space mass matrix is singular: ..., nor does the loop's closure hold
  * it"). Its forward pass is augmented and refined alike (the refinement's residual carries the
  * closure, gdca_refine.h; a massless tip's augmentation takes the model's smallest inertia and

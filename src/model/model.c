@@ -1022,7 +1022,8 @@ static ctc_status add_closure(const ctc_model *m, const double *q, double *mm, d
 /* A model with a singular body: refuses it unless the joint-space mass matrix is positive
  * definite at a generic configuration (model.h "singular bodies"), on a loop model on the
  * closure's tangent space (add_closure), by an LDL^T factorisation in coordinate order: a pivot at
- * or under CTC_MASS_MATRIX_PIVOT_REL times the largest diagonal entry of M means the coordinate
+ * or under CTC_MASS_MATRIX_PIVOT_REL times its own diagonal entry (an entry at rounding level,
+ * 1e-15 of the largest, counts as 0) means the coordinate
  * moves no mass or inertia that the coordinates before it do not (and, on a loop, that the
  * closure does not hold it). */
 static ctc_status check_mass_matrix(const ctc_model *m, char *err, size_t errlen)
@@ -1049,14 +1050,18 @@ static ctc_status check_mass_matrix(const ctc_model *m, char *err, size_t errlen
     for (int i = 0; i < nv; i++) dmax = fmax(dmax, mm[i * nv + i]);
     ctc_status st = m->has_loop ? add_closure(m, q, mm, dmax, err, errlen) : CTC_OK;
 
-    /* LDL^T in place, lower triangle: mm[i][j] = L_ij d_j, mm[i][i] = d_i */
+    /* LDL^T in place, lower triangle: mm[i][j] = L_ij d_j, mm[i][i] = d_i; each pivot relative
+       to its own diagonal entry (the share of coordinate i's inertia that the coordinates before
+       it leave), so that a long chain's tip, whose entries are far under the base's, is judged
+       alike (4096 point masses: the tip's entry is 6e-11 of the largest) */
     for (int i = 0; i < nv && st == CTC_OK; i++) {
+        const double diag = mm[i * nv + i];
         for (int j = 0; j <= i; j++) {
             double s = mm[i * nv + j];
             for (int l = 0; l < j; l++) s -= mm[i * nv + l] * mm[j * nv + l] / mm[l * nv + l];
             mm[i * nv + j] = s;
         }
-        const double rel = dmax > 0 ? mm[i * nv + i] / dmax : 0;
+        const double rel = diag > 1e-15 * dmax ? mm[i * nv + i] / diag : 0;
         if (!(rel > CTC_MASS_MATRIX_PIVOT_REL)) {
             int k = 0;
             while (k + 1 < m->nbodies && m->jnt_vadr[k + 1] <= i) k++;
