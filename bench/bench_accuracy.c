@@ -41,7 +41,8 @@
  * "rt aba" instead. ctc_gdca_forward is measured as it stands, so a change to it shows by simply
  * running this again. Last, slender rods (issue 18): GDCA against a dense solve, against ABA and
  * in a round trip, over each rod's moment ratio 1 .. 1e-12 at n = 2 ... 4096 (model.h "slender
- * bodies"). Usage: bench_accuracy [max_n] [states]
+ * bodies"), and the same chains of point masses, some with massless links between them (model.h
+ * "singular bodies"). Usage: bench_accuracy [max_n] [states]
  */
 #include <lapacke.h>
 #include <math.h>
@@ -350,6 +351,8 @@ static const int slender_n[] = {2, 16, 256, 1024, 4096};
 #define NSLN ((int)(sizeof slender_n / sizeof *slender_n))
 #define SLENDER_DENSE_MAX 1024 /* the dense solve's O(n^3) cost beyond */
 
+static int measure_rods(test_chain *c, double ratio, int states, double out[4]);
+
 /* n rods of moment ratio `ratio` at `states` random states (v in [-1, 1] rad/s): the largest
  * error of ctc_gdca_forward's qdd against the dense solve of M qdd = f - N (CRBA, RNEA,
  * Cholesky; n <= SLENDER_DENSE_MAX, else NAN) and against ABA for f in [-5, 5] N m (out[0],
@@ -357,8 +360,14 @@ static const int slender_n[] = {2, 16, 256, 1024, 4096};
  * refinement steps of the last call. Returns 1 if a result is not finite. */
 static int measure_slender(int n, double ratio, int states, double out[4])
 {
+    return measure_rods(test_chain_slender_rods(n, ratio), ratio, states, out);
+}
+
+/* the same measures on the chain c (freed here), whose rods are named by `ratio` in messages */
+static int measure_rods(test_chain *c, double ratio, int states, double out[4])
+{
     char err[256];
-    test_chain *c = test_chain_slender_rods(n, ratio);
+    const int n = c->spec.nbodies;
     ctc_model *m = NULL;
     if (ctc_model_build(&c->spec, &m, err, sizeof err) != CTC_OK) {
         fprintf(stderr, "slender n = %d ratio %g: %s\n", n, ratio, err);
@@ -434,6 +443,40 @@ static int print_slender(int max_n, int states)
     return bad;
 }
 
+/* point masses (issue 18): test_chain_slender_rods of ratio 1 with every rod's inertia 0 (each a
+   point mass at its rod's centre), or every other rod also massless (mass 0: a massless link
+   between point masses) */
+static int print_point_masses(int max_n, int states)
+{
+    int bad = 0;
+    printf("\nPoint masses (issue 18; the rods above with inertia 0: a point mass at each rod's "
+           "centre;\n\"massless\": every odd rod also of mass 0), the largest over %d states:\n"
+           "GDCA qdd vs the dense solve (n <= %d) | vs ABA | round trip GDCA(RNEA(u)) vs u | "
+           "refinement steps\n\n%9s",
+           states, SLENDER_DENSE_MAX, "chain");
+    for (int j = 0; j < NSLN && slender_n[j] <= max_n; j++) printf(" %31d", slender_n[j]);
+    printf("\n");
+    for (int kind = 0; kind < 2; kind++) {
+        printf("%9s", kind ? "massless" : "points");
+        for (int j = 0; j < NSLN && slender_n[j] <= max_n; j++) {
+            const int n = slender_n[j];
+            test_chain *c = test_chain_slender_rods(n, 1);
+            for (int k = 0; k < n; k++) {
+                for (int e = 0; e < 9; e++) c->bodies[k].inertia[e] = 0;
+                if (kind && k % 2 && k + 1 < n) c->bodies[k].mass = 0;
+            }
+            double x[4] = {NAN, NAN, NAN, NAN};
+            int fail = measure_rods(c, 0, states, x);
+            bad |= fail;
+            printf("  %7.1e %7.1e %7.1e %2.0f%s", x[0], x[1], x[2], x[3], fail ? "!" : " ");
+        }
+        printf("\n");
+        fflush(stdout);
+    }
+    printf("(! : a non-finite result or a refused model)\n");
+    return bad;
+}
+
 int main(int argc, char **argv)
 {
     int max_n = argc > 1 ? atoi(argv[1]) : sizes[NSIZES - 1];
@@ -468,5 +511,6 @@ int main(int argc, char **argv)
     print_ratios();
     bad |= print_requirement();
     bad |= print_slender(max_n, states);
+    bad |= print_point_masses(max_n, states);
     return bad;
 }

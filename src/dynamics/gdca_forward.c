@@ -51,6 +51,7 @@
 
 #include "gdca_forward_joint.h"
 #include "gdca_forward_seq.h"
+#include "gdca_inverse_loop.h"
 #include "gdca_loop.h"
 #include "gdca_par.h"
 #include "gdca_rake.h"
@@ -110,6 +111,17 @@ static inline gdca_end forward_end(const forward_args *a, int k, double *pf, con
                       gdca_forward_beta(a->d, k, dim, correct), off};
 }
 
+/* the condition estimate a loop model's forward pass records: its root solve's, which on a model
+ * with augmented bodies (model.h "singular bodies") carries their augmented mobility (about 1e5
+ * for a massless tip that only the closure holds) rather than the loop's; there the dependent
+ * joints' kinematic estimate (gdca_inverse_loop.h) when it is defined */
+static inline double forward_loop_cond(const ctc_model *m, const ctc_data *d, double root)
+{
+    if (m->nsingular == 0) return root;
+    const double kin = gdca_loop_dependent_cond(m, d);
+    return isnan(kin) ? root : kin;
+}
+
 /* a loop model's root (gdca_loop.h): the loop's record R, joint 0 and the closing joint n on the
  * ground; or, for a loop on body b, the root's two parts L (bodies 0..b) and R with joints 0,
  * b + 1 and n, whose loads it hands to the parts' disassembly (the pass leaves the top node to
@@ -145,7 +157,7 @@ static inline void forward_loop_root(const forward_args *a, const int dim, const
         p.lb[1] = forward_bias(a, left, 1, dim, correct);
     }
     if (gdca_loop_solve(&p, &s) != 0 && d->singular_joint < 0) d->singular_joint = n;
-    if (!correct) d->loop_cond = s.cond;
+    if (!correct) d->loop_cond = forward_loop_cond(m, d, s.cond);
     gdca_loop_hand_down(m, &s, d->loop_r, correct, d->tload, d->jnt_load);
     if (j > 0) {
         forward_accel(m, d, 0, s.al1, gdca_zero6, gdca_forward_beta(a->d, 0, dim, correct), a->qacc,

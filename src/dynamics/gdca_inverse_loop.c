@@ -94,6 +94,48 @@ static double lu_cond1(int n, const double *lu, const int *piv, double anorm)
     return anorm * inorm;
 }
 
+/* B (dim x dim; column j: dependent coordinate j, (dep_k[j], dep_c[j])) equilibrated by rows rs
+ * then columns cs, and its LU factors with pivots piv; returns the 1-norm condition estimate of
+ * the equilibrated B, or INFINITY when it is singular. Needs exactly dim dependent coordinates. */
+static double dependent_factor(const ctc_model *m, const ctc_data *d, double *b, int *piv,
+                               double *rs, double *cs, int *dep_k, int *dep_c)
+{
+    const int n = m->nbodies, dim = m->dim;
+    int nd = 0;
+    for (int k = 0; k <= n; k++) {
+        for (int c = 0; !m->jnt_indep[k] && c < m->jnt_nv[k]; c++) {
+            double col[CTC_DENSE_MAX];
+            dependent_column(m, d, k, c, col);
+            for (int r = 0; r < dim; r++) b[r * dim + nd] = col[r];
+            dep_k[nd] = k, dep_c[nd] = c, nd++;
+        }
+    }
+    for (int r = 0; r < dim; r++) {
+        double s = 0;
+        for (int j = 0; j < dim; j++) s = fmax(s, fabs(b[r * dim + j]));
+        rs[r] = s > 0 ? 1.0 / s : 1.0;
+        for (int j = 0; j < dim; j++) b[r * dim + j] *= rs[r];
+    }
+    double bnorm = 0;
+    for (int j = 0; j < dim; j++) {
+        double s = 0, sum = 0;
+        for (int r = 0; r < dim; r++) s = fmax(s, fabs(b[r * dim + j]));
+        cs[j] = s > 0 ? 1.0 / s : 1.0;
+        for (int r = 0; r < dim; r++) sum += fabs(b[r * dim + j] *= cs[j]);
+        bnorm = fmax(bnorm, sum);
+    }
+    if (lu_factor(dim, b, piv) != 0) return INFINITY;
+    return lu_cond1(dim, b, piv, bnorm);
+}
+
+double gdca_loop_dependent_cond(const ctc_model *m, const ctc_data *d)
+{
+    double b[CTC_DENSE_MAX * CTC_DENSE_MAX], rs[CTC_DENSE_MAX], cs[CTC_DENSE_MAX];
+    int piv[CTC_DENSE_MAX], dep_k[CTC_DENSE_MAX], dep_c[CTC_DENSE_MAX];
+    if (m->nvx - m->nind != m->dim) return NAN;
+    return dependent_factor(m, d, b, piv, rs, cs, dep_k, dep_c);
+}
+
 static void fail(const ctc_model *m, ctc_data *d, double *f)
 {
     for (int i = 0; i < m->nvx; i++) f[i] = NAN;
@@ -122,43 +164,22 @@ void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double 
         return;
     }
     double *qdd = d->xbuf, *tau = d->xbuf + m->nvx;
-    int dep_k[CTC_DENSE_MAX], dep_c[CTC_DENSE_MAX], nd = 0;
+    int dep_k[CTC_DENSE_MAX], dep_c[CTC_DENSE_MAX];
     double b[CTC_DENSE_MAX * CTC_DENSE_MAX], rs[CTC_DENSE_MAX], cs[CTC_DENSE_MAX];
     int piv[CTC_DENSE_MAX];
     d->singular_joint = -1;
-
-    /* the commanded accelerations, the dependent ones 0, and B (column j: dependent coordinate
-       j), equilibrated by rows then columns */
     for (int k = 0; k <= n; k++) {
         for (int c = 0; c < m->jnt_nv[k]; c++) {
             const int i = m->jnt_vadr[k] + c;
             qdd[i] = m->jnt_indep[k] ? u[i] : 0.0;
-            if (m->jnt_indep[k]) continue;
-            double col[CTC_DENSE_MAX];
-            dependent_column(m, d, k, c, col);
-            for (int r = 0; r < dim; r++) b[r * dim + nd] = col[r];
-            dep_k[nd] = k, dep_c[nd] = c, nd++;
         }
     }
-    for (int r = 0; r < dim; r++) {
-        double s = 0;
-        for (int j = 0; j < dim; j++) s = fmax(s, fabs(b[r * dim + j]));
-        rs[r] = s > 0 ? 1.0 / s : 1.0;
-        for (int j = 0; j < dim; j++) b[r * dim + j] *= rs[r];
-    }
-    double bnorm = 0;
-    for (int j = 0; j < dim; j++) {
-        double s = 0, sum = 0;
-        for (int r = 0; r < dim; r++) s = fmax(s, fabs(b[r * dim + j]));
-        cs[j] = s > 0 ? 1.0 / s : 1.0;
-        for (int r = 0; r < dim; r++) sum += fabs(b[r * dim + j] *= cs[j]);
-        bnorm = fmax(bnorm, sum);
-    }
-    if (lu_factor(dim, b, piv) != 0) {
+    double cond = dependent_factor(m, d, b, piv, rs, cs, dep_k, dep_c);
+    if (!isfinite(cond)) {
         fail(m, d, f);
         return;
     }
-    d->loop_cond = lu_cond1(dim, b, piv, bnorm);
+    d->loop_cond = cond;
 
     /* 1. the closure: B x = -(P_n qdd_n + beta_n - (A_child - A_t)) at u0; with B = R^-1 Bs C^-1,
        x = C y and Bs y = R rhs */

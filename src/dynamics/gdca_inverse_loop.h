@@ -40,6 +40,13 @@
  * d->singular_joint = n, and leaves d->jnt_load_inv as it was. Uses d->xbuf. */
 void gdca_inverse_loop(const ctc_model *m, ctc_data *d, const double *u, double *f);
 
+/* The 1-norm condition estimate of B (above: the dependent coordinates' unit twists at p_t and
+ * the closing joint's dependent columns), equilibrated by rows then columns, at the state of the
+ * last ctc_kinematics: how well the dependent joints determine the loop, a kinematic measure that
+ * no body's inertia enters; INFINITY when B is singular, NaN when the dependent coordinates do
+ * not number dim. gdca_inverse_loop records the same value in d->loop_cond. */
+double gdca_loop_dependent_cond(const ctc_model *m, const ctc_data *d);
+
 /* The open chain's composite iGDCA (gdca_inverse.c) on the chain's coordinates: f (nv) =
  * M(q) u + N(q, v) for u (nv), free tip; for a loop model the closing joint is ignored. */
 void gdca_inverse_composite(const ctc_model *m, ctc_data *d, const double *u, double *f);

@@ -16,6 +16,11 @@
  * F1 = (h11)^-1 (P u + beta - h13) (Eq. 46). The disassembly recovers each joint's load and its
  * driving force f = P^T F (Eq. 51-52: D^T P = 0, P^T P = 1).
  *
+ * Its records are the forward pass's, built from the model's fwd_bodies: on a model with
+ * augmented bodies (a singular body, which has no inverse inertia, or a slender one; model.h)
+ * they describe other bodies, and the forces were off by 1e-7 to 1e-5 (bench/NOTEBOOK.md, "Issue
+ * 18, the rest"), so there the public entry gives the composite form's forces (gdca.h).
+ *
  * Loop models (paper section 5): ctc_gdca_inverse uses this form for them only when their
  * dependent coordinates do not number dim (gdca_inverse_loop.h); it is the paper's
  * closed-chain iGDCA. Across a dependent joint the acceleration
@@ -371,6 +376,11 @@ static CTC_SPECIALISE void disassemble_spatial_tree(void *a, int lo, int hi)
 
 void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u, double *f)
 {
+    /* augmented bodies (model.h "singular bodies", "slender bodies"): no literal form (gdca.h) */
+    if (m->fwd_bodies != m->bodies && !(m->has_loop && m->nvx - m->nind != m->dim)) {
+        ctc_gdca_inverse(m, d, u, f);
+        return;
+    }
     mobility_args a = {m, d, u, f};
     const int planar = m->form == CTC_FORM_PLANAR;
     gdca_par_pass pass = {

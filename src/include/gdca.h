@@ -88,7 +88,16 @@ void ctc_gdca_inverse(const ctc_model *m, ctc_data *d, const double *u, double *
  * stiffly proportioned chains (about eps cond(M)); for comparison and benchmarks. For loop models
  * it is the paper's closed-chain iGDCA with the mixed assembly rule and the early stop
  * (d->opt.inv_full = 1 turns the early stop off); ctc_gdca_inverse uses it only for loops whose
- * dependent coordinates do not number dim (passive ones). */
+ * dependent coordinates do not number dim (passive ones).
+ *
+ * The literal form needs every body's inverse inertia (Eq. 42-43): a singular body (a point mass,
+ * a massless body; model.h "singular bodies") has none, and the forward pass's records, which this
+ * form shares, hold an augmented one instead, as they do for slender bodies; its forces would be
+ * those of the augmented bodies (off by 1e-7 to 1e-5 of the largest). So on a model with augmented
+ * bodies (m->fwd_bodies != m->bodies) it returns ctc_gdca_inverse's forces, bitwise, which are
+ * exact there; except on a loop whose dependent coordinates do not number dim, which
+ * ctc_gdca_inverse itself sends here: there the literal pass runs on the augmented records (a
+ * passive loop's forces are all 0 either way; a run refuses any other such loop, loop.h). */
 void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u, double *f);
 
 #endif

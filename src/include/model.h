@@ -176,13 +176,21 @@ typedef struct ctc_body_spec {
  * three steps, 1e-8 and less lose digits to the augmented bodies' own conditioning. The joint-space
  * mass matrix M(q) must then be positive definite: with a singular body the builder factors M at a
  * generic configuration (each coordinate q_i = sin(i + 1), each quaternion normalised from (1, 0.1
- * sin(i + 1), 0.2, 0.3)) and refuses a pivot <= CTC_MASS_MATRIX_PIVOT_REL times the largest
- * diagonal entry, naming the joint's body: a massless tip on a moving joint, a point mass on a
- * revolute axis through it. A loop model is held to the same test on its open chain (the chain
- * without the closing joint): its forward pass is augmented and refined alike (the refinement's
- * residual carries the closure, gdca_refine.h), and its CTC inverse inverts no body
- * (gdca_inverse_loop.h). That refuses a massless tip, which the closing joint would hold in
- * place. Models without a singular body skip all of this and are unchanged. */
+ * sin(i + 1), 0.2, 0.3)) and refuses a pivot <= CTC_MASS_MATRIX_PIVOT_REL times its own
+ * diagonal entry (the share of the coordinate's inertia that the coordinates before it leave;
+ * own, not the largest entry's, since a long chain's tip has 6e-11 of the base's at 4096 point
+ * masses; an entry under 1e-15 of the largest counts as 0), naming the joint's body: a massless tip
+ * on a moving joint, a point mass on a revolute axis through it. A loop model is held to the same
+ * test on the closure's tangent space at that configuration (the reduced mass matrix Z^T M Z, Z a
+ * basis of the null space of the closure's Jacobian G, loop.h; tested as M + rho G^T G with G's
+ * rows scaled to 1 and rho the largest diagonal entry of M, positive definite exactly when Z^T M Z
+ * is): a massless tip that the closing joint holds is accepted, one whose turning the closure
+ * leaves free is refused
+ * ("body 4: the loop's joint-space mass matrix is singular: ..., nor does the loop's closure hold
+ * it"). Its forward pass is augmented and refined alike (the refinement's residual carries the
+ * closure, gdca_refine.h; a massless tip's augmentation takes the model's smallest inertia and
+ * mass), and its CTC inverse inverts no body (gdca_inverse_loop.h). Models without a singular
+ * body skip all of this and are unchanged. */
 #define CTC_MASS_ZERO_REL 1e-12
 #define CTC_INERTIA_ZERO_REL 1e-12
 #define CTC_SINGULAR_AUGMENT_REL 1e-6
@@ -190,7 +198,7 @@ typedef struct ctc_body_spec {
 
 /* ---- slender bodies ----
  *
- * A body of a spatial open model that is not singular but whose smallest principal moment is
+ * A body of a spatial model that is not singular but whose smallest principal moment is
  * under CTC_SLENDER_RATIO times its largest (a rod, a thin beam) is slender. The forward pass's
  * handle equations carry its inverse inertia, and rounding there costs about eps times the
  * body's largest / smallest moment in qdd whether or not any joint spins the body about its thin
@@ -205,9 +213,13 @@ typedef struct ctc_body_spec {
  * 1e-12, in two steps. Ratios
  * from CTC_SLENDER_RATIO up lose at most about 1e-12 of qdd unrefined, and 7e-11 in the round
  * trip GDCA(RNEA(u)) of CTC-like forces (16 rods; 2e-3 lost 3e-10 there). The thresholds are
- * measured (bench/NOTEBOOK.md). A loop model's slender bodies are not augmented (nslender is 0
- * there): its threshold and fraction were measured on open chains only (a loop model's singular
- * bodies are augmented as above). */
+ * measured (bench/NOTEBOOK.md). A loop model's slender bodies are augmented alike (the
+ * refinement's residual carries the closure): a spatial loop of 16 rods then matches the loop
+ * oracle to 2e-13 at every ratio from 2e-3 to 1e-10 in two steps (unaugmented, 5.6e-5 at 1e-10)
+ * and one of 256 to its thick rods' level, 4.7e-11, where unaugmented rods of 1e-6 missed the
+ * round trip by 3.5e3; the fraction measured again there (1e-4: three steps, 1e-6: no gain), and
+ * rods of 1e-2, unaugmented, lose 5.7e-13 of qdd and 2.5e-10 in the round trip of CTC forces
+ * (bench/NOTEBOOK.md, "Issue 18, the rest"). */
 #define CTC_SLENDER_RATIO 1e-2
 #define CTC_SLENDER_AUGMENT_REL 1e-5
 
@@ -303,7 +315,7 @@ typedef struct ctc_model {
                                      the chain's bodies with mass (>= 1) */
     int nsingular;                /* the singular bodies (see "singular bodies" above) */
     int nslender;                 /* the slender bodies (see "slender bodies" above; 0 in planar
-                                     form and in loop models) */
+                                     form) */
     unsigned char *body_singular; /* (n) 1: body k is singular; NULL when nsingular = 0 */
     ctc_body_spec *fwd_bodies;    /* (n) the bodies of the forward pass's handle equations:
                                      `bodies` itself (the same pointer) when nsingular = nslender

@@ -26,6 +26,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "data.h"
+#include "dense.h"
+#include "kinematics.h"
+#include "loop.h"
 #include "oracle.h"
 #include "spatial.h"
 
@@ -872,25 +876,26 @@ static void setup_mass_ratio(ctc_model *m)
     m->mass_ratio = fmax(mhi > 0 ? mhi / mlo : 1.0, thi > 0 ? thi / tlo : 1.0);
 }
 
-/* 1 when body k of a spatial open model (n == NULL: spatial form) is slender (model.h "slender
+/* 1 when body k of a spatial model (n == NULL: spatial form) is slender (model.h "slender
  * bodies"): not singular, smallest principal moment under CTC_SLENDER_RATIO times its largest */
 static int is_slender(const ctc_model *m, const double *moments, const double *n, int k)
 {
     const double *e = &moments[3 * k];
-    return n == NULL && !m->has_loop && !(m->body_singular != NULL && m->body_singular[k]) &&
+    return n == NULL && !(m->body_singular != NULL && m->body_singular[k]) &&
            e[0] < CTC_SLENDER_RATIO * e[2];
 }
 
 /* Marks the singular bodies of form `form` (model.h "singular bodies"; n: the plane normal in
- * planar form) and the slender ones (model.h "slender bodies": spatial open models only, each of
+ * planar form) and the slender ones (model.h "slender bodies": spatial models only, each of
  * their principal moments gets CTC_SLENDER_AUGMENT_REL times the largest) and makes fwd_bodies: a
  * singular body's principal moments each get CTC_SINGULAR_AUGMENT_REL times J_ref, the smallest
  * positive J_own(j) = m_j |c_j|^2 + tr(I_j) / 2 (its inertia about its own joint's centre, c_j from
  * the body's origin) over the body and its descendants, and a massless body's mass
- * CTC_SINGULAR_AUGMENT_REL times the smallest positive mass among them (1 kg m^2, 1 kg when there
- * is none: the mass-matrix check refuses such a subtree). The smallest of the subtree, not its sum,
- * bounds the augmentation's share of the joint-space inertia on a long chain of point masses too
- * (bench/NOTEBOOK.md, "Singular bodies"). */
+ * CTC_SINGULAR_AUGMENT_REL times the smallest positive mass among them; a subtree with none (a
+ * massless tip, which only a loop's closure can hold: the mass-matrix check refuses it on an open
+ * model) takes the whole model's smallest (1 kg m^2, 1 kg when the model has none). The smallest of
+ * the subtree, not its sum, bounds the augmentation's share of the joint-space inertia on a long
+ * chain of point masses too (bench/NOTEBOOK.md, "Singular bodies"). */
 static ctc_status setup_singular(ctc_model *m, const double *moments, const double *n, char *err,
                                  size_t errlen)
 {
@@ -948,10 +953,17 @@ static ctc_status setup_singular(ctc_model *m, const double *moments, const doub
         const double add = CTC_SLENDER_AUGMENT_REL * moments[3 * k + 2];
         for (int a = 0; a < 3; a++) m->fwd_bodies[k].inertia[4 * a] += add;
     }
+    double jall = INFINITY, mall = INFINITY; /* over the whole model */
+    for (int k = 0; k < nb; k++) {
+        if (m->body_parent[k] < 0) jall = fmin(jall, jref[k]), mall = fmin(mall, mref[k]);
+    }
+    if (!isfinite(jall)) jall = 1.0;
+    if (!isfinite(mall)) mall = 1.0;
     for (int k = 0; k < nb && m->nsingular > 0; k++) {
         if (!m->body_singular[k]) continue;
         ctc_body_spec *fb = &m->fwd_bodies[k];
-        const double js = isfinite(jref[k]) ? jref[k] : 1.0, ms = isfinite(mref[k]) ? mref[k] : 1.0;
+        const double js = isfinite(jref[k]) ? jref[k] : jall,
+                     ms = isfinite(mref[k]) ? mref[k] : mall;
         if (!(fb->mass > CTC_MASS_ZERO_REL * mhi)) fb->mass += CTC_SINGULAR_AUGMENT_REL * ms;
         for (int a = 0; a < 3; a++) fb->inertia[4 * a] += CTC_SINGULAR_AUGMENT_REL * js;
     }
@@ -959,10 +971,61 @@ static ctc_status setup_singular(ctc_model *m, const double *moments, const doub
     return CTC_OK;
 }
 
+/* A loop model's closure at q (nq): adds rho G_s^T G_s to mm (nv x nv), G the closure's Jacobian
+ * over the chain's coordinates (loop.h: G = -D_n^T J, zero columns outside the loop), each row
+ * scaled to a largest entry of 1 (G_s: the same null space), rho = the largest diagonal entry of
+ * mm. For M positive semidefinite, M + rho G^T G is positive definite exactly when M is on the
+ * closure's tangent space, ker G (x^T (M + rho G^T G) x = 0 asks M x = 0 and G x = 0), so the
+ * same LDL^T tests the loop's reduced mass matrix Z^T M Z (Z a basis of ker G) and still names a
+ * joint in coordinate order. */
+static ctc_status add_closure(const ctc_model *m, const double *q, double *mm, double rho,
+                              char *err, size_t errlen)
+{
+    const int nv = m->nv, dim = m->dim, nc = dim - m->jnt_nv[m->nbodies];
+    ctc_data *d = ctc_data_new(m);
+    double *g = calloc((size_t)nc * nv + (size_t)nv, sizeof(double));
+    if (d == NULL || g == NULL) {
+        ctc_data_free(d);
+        free(g);
+        return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    }
+    double *v = g + (size_t)nc * nv;
+    ctc_kinematics(m, d, q, v);
+    const double *D = d->jnt_D + dim * dim * m->nbodies;
+    for (int k = 0; k < m->nbodies; k++) {
+        for (int c = 0; m->jnt_loop[k] && c < m->jnt_nv[k]; c++) {
+            double tw[CTC_DENSE_MAX];
+            ctc_loop_coord_twist(m, d, k, c, tw);
+            for (int a = 0; a < nc; a++) {
+                double s = 0;
+                for (int i = 0; i < dim; i++) s += D[a * dim + i] * tw[i];
+                g[a * nv + m->jnt_vadr[k] + c] = s;
+            }
+        }
+    }
+    ctc_data_free(d);
+    for (int a = 0; a < nc; a++) {
+        double s = 0;
+        for (int i = 0; i < nv; i++) s = fmax(s, fabs(g[a * nv + i]));
+        for (int i = 0; s > 0 && i < nv; i++) g[a * nv + i] /= s;
+    }
+    for (int i = 0; i < nv; i++)
+        for (int j = 0; j < nv; j++) {
+            double s = 0;
+            for (int a = 0; a < nc; a++) s += g[a * nv + i] * g[a * nv + j];
+            mm[i * nv + j] += rho * s;
+        }
+    free(g);
+    return CTC_OK;
+}
+
 /* A model with a singular body: refuses it unless the joint-space mass matrix is positive
- * definite at a generic configuration (model.h "singular bodies"), by an LDL^T factorisation in
- * coordinate order: a pivot at or under CTC_MASS_MATRIX_PIVOT_REL times the largest diagonal
- * entry means the coordinate moves no mass or inertia that the coordinates before it do not. */
+ * definite at a generic configuration (model.h "singular bodies"), on a loop model on the
+ * closure's tangent space (add_closure), by an LDL^T factorisation in coordinate order: a pivot at
+ * or under CTC_MASS_MATRIX_PIVOT_REL times its own diagonal entry (an entry at rounding level,
+ * 1e-15 of the largest, counts as 0) means the coordinate
+ * moves no mass or inertia that the coordinates before it do not (and, on a loop, that the
+ * closure does not hold it). */
 static ctc_status check_mass_matrix(const ctc_model *m, char *err, size_t errlen)
 {
     const int nv = m->nv;
@@ -985,26 +1048,32 @@ static ctc_status check_mass_matrix(const ctc_model *m, char *err, size_t errlen
     ctc_oracle_mass_matrix(m, o, q, mm);
     ctc_oracle_free(o);
     for (int i = 0; i < nv; i++) dmax = fmax(dmax, mm[i * nv + i]);
+    ctc_status st = m->has_loop ? add_closure(m, q, mm, dmax, err, errlen) : CTC_OK;
 
-    /* LDL^T in place, lower triangle: mm[i][j] = L_ij d_j, mm[i][i] = d_i */
-    ctc_status st = CTC_OK;
+    /* LDL^T in place, lower triangle: mm[i][j] = L_ij d_j, mm[i][i] = d_i; each pivot relative
+       to its own diagonal entry (the share of coordinate i's inertia that the coordinates before
+       it leave), so that a long chain's tip, whose entries are far under the base's, is judged
+       alike (4096 point masses: the tip's entry is 6e-11 of the largest) */
     for (int i = 0; i < nv && st == CTC_OK; i++) {
+        const double diag = mm[i * nv + i];
         for (int j = 0; j <= i; j++) {
             double s = mm[i * nv + j];
             for (int l = 0; l < j; l++) s -= mm[i * nv + l] * mm[j * nv + l] / mm[l * nv + l];
             mm[i * nv + j] = s;
         }
-        const double rel = dmax > 0 ? mm[i * nv + i] / dmax : 0;
+        const double rel = diag > 1e-15 * dmax ? mm[i * nv + i] / diag : 0;
         if (!(rel > CTC_MASS_MATRIX_PIVOT_REL)) {
             int k = 0;
             while (k + 1 < m->nbodies && m->jnt_vadr[k + 1] <= i) k++;
-            st = ctc_fail(CTC_EINVAL, err, errlen,
-                          "body %d: the joint-space mass matrix is singular: joint %d (%s) moves "
-                          "no mass or inertia that the joints before it do not (relative pivot "
-                          "%.3g <= %g); body %d and the bodies beyond it need mass off the joint's "
-                          "axis or inertia about it",
-                          k, k, ctc_joint_type_name(m->joints[k].type), rel,
-                          CTC_MASS_MATRIX_PIVOT_REL, k);
+            st =
+                ctc_fail(CTC_EINVAL, err, errlen,
+                         "body %d: the %sjoint-space mass matrix is singular: joint %d (%s) moves "
+                         "no mass or inertia that the joints before it do not%s (relative pivot "
+                         "%.3g <= %g); body %d and the bodies beyond it need mass off the joint's "
+                         "axis or inertia about it",
+                         k, m->has_loop ? "loop's " : "", k, ctc_joint_type_name(m->joints[k].type),
+                         m->has_loop ? ", nor does the loop's closure hold it" : "", rel,
+                         CTC_MASS_MATRIX_PIVOT_REL, k);
         }
     }
     free(q);

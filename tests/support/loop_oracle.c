@@ -299,7 +299,12 @@ loop_oracle *loop_oracle_new(const ctc_chain_spec *spec)
     ctc_chain_spec open = *spec;
     open.loop = NULL;
     open.independent = NULL;
-    if (ctc_model_build(&open, &o->open, NULL, 0) != CTC_OK) goto fail;
+    /* the open chain's M and h; a massless tip that only the closure holds makes the open chain's
+       M singular, which its builder refuses, so then the loop model's chain (the same bodies and
+       coordinates: CRBA and RNEA ignore the closing joint) */
+    if (ctc_model_build(&open, &o->open, NULL, 0) != CTC_OK &&
+        ctc_model_build(spec, &o->open, NULL, 0) != CTC_OK)
+        goto fail;
     if ((o->rb = ctc_oracle_new(o->open)) == NULL) goto fail;
 
     int nv = o->dims.nv, big = nv + LO_MAX_ROWS;
