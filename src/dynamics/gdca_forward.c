@@ -484,6 +484,11 @@ int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d)
 
 void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, double *dq)
 {
+    if (m->dyn != NULL) { /* merged bodies (model.h): the reduced model's pass, the same vectors */
+        gdca_forward_correct(m->dyn, ctc_data_dyn_begin(m, d), r, dq);
+        ctc_data_dyn_end(m, d);
+        return;
+    }
     if (gdca_forward_order_seq(m, d)) {
         (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, r, dq, 1);
     } else {
@@ -526,6 +531,11 @@ static int refine_undo_if_grown(const ctc_model *m, ctc_data *d, double *qacc, c
 
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
 {
+    if (m->dyn != NULL) { /* merged bodies (model.h): the reduced model's pass, the same vectors */
+        ctc_gdca_forward(m->dyn, ctc_data_dyn_begin(m, d), f, qacc);
+        ctc_data_dyn_end(m, d);
+        return;
+    }
     if (m->has_loop) { /* dependent joints carry no driving force */
         double *fm = d->xbuf;
         memset(fm, 0, (size_t)m->nvx * sizeof *fm);

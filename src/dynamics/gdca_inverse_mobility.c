@@ -371,6 +371,11 @@ static CTC_SPECIALISE void disassemble_spatial_tree(void *a, int lo, int hi)
 
 void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u, double *f)
 {
+    if (m->dyn != NULL) { /* merged bodies (model.h): the reduced model's pass, the same vectors */
+        ctc_gdca_inverse_mobility(m->dyn, ctc_data_dyn_begin(m, d), u, f);
+        ctc_data_dyn_end(m, d);
+        return;
+    }
     mobility_args a = {m, d, u, f};
     const int planar = m->form == CTC_FORM_PLANAR;
     gdca_par_pass pass = {
