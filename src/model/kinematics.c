@@ -189,25 +189,26 @@ static void kinematics_dyn(const ctc_model *m, ctc_data *d)
 {
     const ctc_model *r = m->dyn;
     ctc_data *e = d->dyn;
-    const int dim = m->dim, planar = m->form == CTC_FORM_PLANAR;
     for (int j = 0; j < r->nbodies; j++) {
         const int k = m->dyn_body[j];
         memcpy(e->xpos + 3 * j, d->xpos + 3 * k, 3 * sizeof(double));
         memcpy(e->xrot + 9 * j, d->xrot + 9 * k, 9 * sizeof(double));
         memcpy(e->omega + 3 * j, d->omega + 3 * k, 3 * sizeof(double));
         memcpy(e->xvel + 3 * j, d->xvel + 3 * k, 3 * sizeof(double));
-        memcpy(e->jnt_P + 3 * dim * j, d->jnt_P + 3 * dim * k, 3 * (size_t)dim * sizeof(double));
-        memcpy(e->jnt_D + dim * dim * j, d->jnt_D + dim * dim * k,
-               (size_t)(dim * dim) * sizeof(double));
-        memcpy(e->jnt_beta + dim * j, d->jnt_beta + dim * k, (size_t)dim * sizeof(double));
         const double *xp = e->xpos + 3 * j, *xr = e->xrot + 9 * j;
-        double t[3];
-        if (planar) {
+        if (m->form == CTC_FORM_PLANAR) { /* the joint maps: 3 x 3 each */
+            memcpy(e->jnt_P + 9 * j, d->jnt_P + 9 * k, 9 * sizeof(double));
+            memcpy(e->jnt_D + 9 * j, d->jnt_D + 9 * k, 9 * sizeof(double));
+            memcpy(e->jnt_beta + 3 * j, d->jnt_beta + 3 * k, 3 * sizeof(double));
             const double *c = r->planar[j].com;
             e->xangle[j] = d->xangle[k];
             ctc_v3_set(e->xcom + 3 * j, xp[0] + xr[0] * c[0] + xr[1] * c[1],
                        xp[1] + xr[3] * c[0] + xr[4] * c[1], 0);
-        } else {
+        } else { /* P: 3 x 6, D: 6 x 6 */
+            double t[3];
+            memcpy(e->jnt_P + 18 * j, d->jnt_P + 18 * k, 18 * sizeof(double));
+            memcpy(e->jnt_D + 36 * j, d->jnt_D + 36 * k, 36 * sizeof(double));
+            memcpy(e->jnt_beta + 6 * j, d->jnt_beta + 6 * k, 6 * sizeof(double));
             ctc_m3_mulv(t, xr, r->bodies[j].com);
             ctc_v3_add(e->xcom + 3 * j, xp, t);
         }
