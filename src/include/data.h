@@ -143,8 +143,9 @@ typedef struct ctc_data {
     unsigned long long icomp_stamp;
 
     /* a model with merged bodies (model.h): the reduced model's data, which the dynamics passes
-       use (ctc_data_dyn_begin); its kinematics are copied from d's by ctc_kinematics. NULL when
-       m->dyn is NULL. Owned by d. */
+       use (ctc_data_dyn_begin); its kinematics are copied from d's by ctc_kinematics, its
+       settings and threads are d's, and its gates are reset with d's. NULL when m->dyn is NULL.
+       Owned by d. */
     struct ctc_data *dyn;
 } ctc_data;
 

@@ -150,6 +150,7 @@ ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t err
         d->pool_failed = 0;
         d->threads = nthreads;
         memset(d->gate, 0, sizeof d->gate);
+        if (d->dyn != NULL) memset(d->dyn->gate, 0, sizeof d->dyn->gate);
     }
     return CTC_OK;
 }
@@ -158,4 +159,5 @@ void ctc_data_share_pool(ctc_data *d, ctc_data *owner)
 {
     d->pool_owner = owner == d ? NULL : owner;
     memset(d->gate, 0, sizeof d->gate);
+    if (d->dyn != NULL) memset(d->dyn->gate, 0, sizeof d->dyn->gate);
 }
