@@ -185,7 +185,8 @@ typedef struct ctc_body_spec {
  * place. Models without a singular body skip all of this and are unchanged. A body on a fixed
  * joint (a massless frame, say) is merged into its parent's for the passes (see "merged
  * bodies"): nsingular, body_singular and fwd_bodies describe the model as given, m->dyn's what
- * the passes augment, and the mass-matrix check runs on the model as given. */
+ * the passes augment; the mass-matrix check runs on the model as given, unless merging leaves
+ * no singular body (every body then has a positive definite inertia, and so has M(q)). */
 #define CTC_MASS_ZERO_REL 1e-12
 #define CTC_INERTIA_ZERO_REL 1e-12
 #define CTC_SINGULAR_AUGMENT_REL 1e-6

@@ -974,6 +974,9 @@ static ctc_status check_mass_matrix(const ctc_model *m, char *err, size_t errlen
 {
     const int nv = m->nv;
     if (m->nsingular == 0 || nv == 0) return CTC_OK;
+    /* every singular body merged into one with mass and inertia (model.h "merged bodies"): each
+       body the passes see has a positive definite inertia, so M(q) is positive definite */
+    if (m->dyn != NULL && m->dyn->nsingular == 0) return CTC_OK;
     ctc_oracle *o = ctc_oracle_new(m);
     double *q = malloc(((size_t)m->nq + (size_t)nv * nv) * sizeof(double));
     if (o == NULL || q == NULL) {
@@ -1104,36 +1107,39 @@ static int dyn_targets(const ctc_model *m, int *target, double *off)
     return merged > 0 && merged < n ? n - merged : 0;
 }
 
-/* The composite of the bodies merged into target t (t itself and every k with target[k] = t) in
- * t's frame: masses added, the centre of mass their weighted mean, the inertias moved to it by
- * the parallel-axis theorem, I = sum_k I_k + m_k (|r_k|^2 1 - r_k r_k^T), r_k = off_k + c_k - c.
- * Without mass the centre of mass is t's own and the inertias add as lumped ones. */
-static void dyn_composite(const ctc_model *m, const int *target, const double *off, int t,
-                          ctc_body_spec *out)
+/* The composites (nd) of the bodies merged into each target t (t itself and every k with
+ * target[k] = t), db[index[t]], in t's frame: masses added, the centre of mass their weighted
+ * mean, the inertias moved to it by the parallel-axis theorem, I = sum_k I_k + m_k (|r_k|^2 1 -
+ * r_k r_k^T), r_k = off_k + c_k - c. Without mass the centre of mass is t's own and the inertias
+ * add as lumped ones. Two passes over the bodies. */
+static void dyn_composites(const ctc_model *m, const int *target, const int *index,
+                           const double *off, ctc_body_spec *db, int nd)
 {
-    double mass = 0, mc[3] = {0, 0, 0};
-    for (int k = t; k < m->nbodies; k++) {
-        if (target[k] != t) continue;
+    memset(db, 0, (size_t)nd * sizeof *db);
+    for (int k = 0; k < m->nbodies; k++) { /* masses, and mass-weighted centres in com */
+        if (target[k] < 0) continue;
         const ctc_body_spec *b = &m->bodies[k];
-        mass += b->mass;
-        for (int a = 0; a < 3; a++) mc[a] += b->mass * (off[3 * k + a] + b->com[a]);
+        ctc_body_spec *c = &db[index[target[k]]];
+        c->mass += b->mass;
+        for (int a = 0; a < 3; a++) c->com[a] += b->mass * (off[3 * k + a] + b->com[a]);
     }
-    memset(out, 0, sizeof *out);
-    out->mass = mass;
-    if (mass > 0) {
-        ctc_v3_scale(out->com, mc, 1.0 / mass);
-    } else {
-        ctc_v3_copy(out->com, m->bodies[t].com);
-    }
-    for (int k = t; k < m->nbodies; k++) {
-        if (target[k] != t) continue;
+    for (int k = 0; k < m->nbodies; k++) { /* a target comes before its merged bodies */
+        if (target[k] < 0) continue;
         const ctc_body_spec *b = &m->bodies[k];
+        ctc_body_spec *c = &db[index[target[k]]];
+        if (target[k] == k) {
+            if (c->mass > 0) {
+                ctc_v3_scale(c->com, c->com, 1.0 / c->mass);
+            } else {
+                ctc_v3_copy(c->com, b->com);
+            }
+        }
         double r[3];
-        for (int a = 0; a < 3; a++) r[a] = off[3 * k + a] + b->com[a] - out->com[a];
+        for (int a = 0; a < 3; a++) r[a] = off[3 * k + a] + b->com[a] - c->com[a];
         const double rr = ctc_v3_dot(r, r);
         for (int a = 0; a < 3; a++) {
             for (int e = 0; e < 3; e++) {
-                out->inertia[3 * a + e] +=
+                c->inertia[3 * a + e] +=
                     b->inertia[3 * a + e] + b->mass * ((a == e ? rr : 0.0) - r[a] * r[e]);
             }
         }
@@ -1182,7 +1188,6 @@ static ctc_status setup_dyn(ctc_model *m, const ctc_chain_spec *spec, char *err,
         const int par = m->body_parent[k];
         index[k] = j;
         m->dyn_body[j] = k;
-        dyn_composite(m, target, off, k, &db[j]);
         dj[j] = m->joints[k];
         if (par >= 0) {
             for (int a = 0; a < 3; a++) dj[j].location[a] += off[3 * par + a];
@@ -1191,6 +1196,7 @@ static ctc_status setup_dyn(ctc_model *m, const ctc_chain_spec *spec, char *err,
         dind[j] = m->jnt_indep[k];
         j++;
     }
+    dyn_composites(m, target, index, off, db, nd);
     for (int k = 0; k < n; k++) {
         m->body_dyn[k] = target[k] < 0 ? -1 : index[target[k]];
         ctc_v3_copy(&m->body_dyn_off[3 * k], &off[3 * k]);
@@ -1253,8 +1259,8 @@ static ctc_status model_build(const ctc_chain_spec *spec, int reduced, ctc_model
     if ((st = setup_form(m, spec->form, moments, err, errlen)) != CTC_OK) goto fail;
     if ((st = build_tree(m, err, errlen)) != CTC_OK) goto fail;
     if ((st = setup_independent(m, err, errlen)) != CTC_OK) goto fail;
-    if (!reduced && (st = check_mass_matrix(m, err, errlen)) != CTC_OK) goto fail;
     if (!reduced && (st = setup_dyn(m, spec, err, errlen)) != CTC_OK) goto fail;
+    if (!reduced && (st = check_mass_matrix(m, err, errlen)) != CTC_OK) goto fail;
     free(moments);
     *out = m;
     return CTC_OK;
