@@ -512,6 +512,11 @@ int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d)
 
 void gdca_forward_correct(const ctc_model *m, ctc_data *d, const double *r, double *dq)
 {
+    if (m->dyn != NULL) { /* merged bodies (model.h): the reduced model's pass, the same vectors */
+        gdca_forward_correct(m->dyn, ctc_data_dyn_begin(m, d), r, dq);
+        ctc_data_dyn_end(m, d);
+        return;
+    }
     if (gdca_forward_order_seq(m, d)) {
         (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, r, dq, GDCA_FWD_CORRECT);
     } else {
@@ -619,6 +624,11 @@ int gdca_forward_takes_ref(const ctc_model *m, const ctc_data *d)
 
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc)
 {
+    if (m->dyn != NULL) { /* merged bodies (model.h): the reduced model's pass, the same vectors */
+        ctc_gdca_forward(m->dyn, ctc_data_dyn_begin(m, d), f, qacc);
+        ctc_data_dyn_end(m, d);
+        return;
+    }
     /* the reference form with a_ref = 0: f_ref = N(q, v) by the composite inverse */
     if (gdca_forward_takes_ref(m, d)) {
         double *zero = d->fwd_res + m->nvx, *f_ref = d->fwd_res + 2 * m->nvx;
@@ -640,6 +650,11 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
 void ctc_gdca_forward_from(const ctc_model *m, ctc_data *d, const double *f, const double *a_ref,
                            const double *f_ref, double *qacc)
 {
+    if (m->dyn != NULL) { /* merged bodies: as above (f_ref's loads are the reduced model's) */
+        ctc_gdca_forward_from(m->dyn, ctc_data_dyn_begin(m, d), f, a_ref, f_ref, qacc);
+        ctc_data_dyn_end(m, d);
+        return;
+    }
     if (m->has_loop || d->opt.fwd_form == CTC_FWD_LITERAL) {
         ctc_gdca_forward(m, d, f, qacc);
         return;

@@ -533,6 +533,11 @@ void gdca_inverse_handle2_accel(const ctc_model *m, const ctc_data *d, int k, do
 
 void ctc_gdca_inverse(const ctc_model *m, ctc_data *d, const double *u, double *f)
 {
+    if (m->dyn != NULL) { /* merged bodies (model.h): the reduced model's pass, the same vectors */
+        ctc_gdca_inverse(m->dyn, ctc_data_dyn_begin(m, d), u, f);
+        ctc_data_dyn_end(m, d);
+        return;
+    }
     if (m->has_loop) { /* gdca_inverse_loop.h: the open chain's composite pass, then the loop */
         gdca_inverse_loop(m, d, u, f);
         return;

@@ -376,6 +376,11 @@ static CTC_SPECIALISE void disassemble_spatial_tree(void *a, int lo, int hi)
 
 void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u, double *f)
 {
+    if (m->dyn != NULL) { /* merged bodies (model.h): the reduced model's pass, the same vectors */
+        ctc_gdca_inverse_mobility(m->dyn, ctc_data_dyn_begin(m, d), u, f);
+        ctc_data_dyn_end(m, d);
+        return;
+    }
     /* augmented bodies (model.h "singular bodies", "slender bodies"): no literal form (gdca.h) */
     if (m->fwd_bodies != m->bodies && !(m->has_loop && m->nvx - m->nind != m->dim)) {
         ctc_gdca_inverse(m, d, u, f);

@@ -18,6 +18,7 @@
 
 int gdca_refine_steps(const ctc_model *m, const ctc_data *d)
 {
+    if (m->dyn != NULL) m = m->dyn; /* merged bodies (model.h): the passes run on the reduced */
     if (m->nsingular > 0 || m->nslender > 0) { /* it makes the augmented pass exact */
         return d->opt.fwd_refine > CTC_REFINE_SINGULAR_STEPS ? d->opt.fwd_refine
                                                              : CTC_REFINE_SINGULAR_STEPS;
@@ -29,6 +30,7 @@ int gdca_refine_steps(const ctc_model *m, const ctc_data *d)
 
 int gdca_refine_steps_ref(const ctc_model *m, const ctc_data *d)
 {
+    if (m->dyn != NULL) m = m->dyn;
     if (m->nsingular > 0 || m->nslender > 0) return gdca_refine_steps(m, d);
     if (d->opt.fwd_refine >= 0) return d->opt.fwd_refine;
     return m->mass_ratio >= CTC_REFINE_MASS_RATIO ? CTC_REFINE_MAX_STEPS : 0;

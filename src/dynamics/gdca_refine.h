@@ -106,6 +106,7 @@ int gdca_refine_steps(const ctc_model *m, const ctc_data *d);
  * d->opt.fwd_refine >= 0 asks for that many, since its bias-free pass is M^-1 itself up to
  * rounding relative to |f - f_ref|, with nothing to cancel. */
 int gdca_refine_steps_ref(const ctc_model *m, const ctc_data *d);
+/* (Both judge m->dyn, the model the passes run on, when m merges bodies: model.h.) */
 
 /* 1 if ctc_gdca_forward on m with d's settings takes the reference form with a_ref = 0: only
  * when d->opt.fwd_form = CTC_FWD_REFERENCE, and never on a loop model. With a_ref = 0 the

@@ -133,6 +133,11 @@ static CTC_MULTIVERSION void handles_spatial(const ctc_model *m, ctc_data *d)
 void ctc_handles(const ctc_model *m, ctc_data *d)
 {
     d->handles_stamp++; /* a new state: the composite inverse recomputes its records */
+    if (m->dyn != NULL) {
+        /* merged bodies (model.h): the records of the reduced model's bodies */
+        ctc_handles(m->dyn, ctc_data_dyn_begin(m, d));
+        return;
+    }
     if (m->form == CTC_FORM_PLANAR) {
         handles_planar(m, d);
     } else {

@@ -141,6 +141,12 @@ typedef struct ctc_data {
        recomputes only w, c and icomp_e (gdca_inverse.c) */
     unsigned long long handles_stamp;
     unsigned long long icomp_stamp;
+
+    /* a model with merged bodies (model.h): the reduced model's data, which the dynamics passes
+       use (ctc_data_dyn_begin); its kinematics are copied from d's by ctc_kinematics, its
+       settings and threads are d's, and its gates are reset with d's. NULL when m->dyn is NULL.
+       Owned by d. */
+    struct ctc_data *dyn;
 } ctc_data;
 
 /* Allocates a data block sized for m; NULL when out of memory. Free with ctc_data_free. */
@@ -169,6 +175,15 @@ ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t err
  * turn by one thread (a simulation's plant and its controller's model): one set of workers then
  * serves both. owner must stay alive while d uses it; NULL returns d to its own setting. */
 void ctc_data_share_pool(ctc_data *d, ctc_data *owner);
+
+/* For a model with merged bodies (m->dyn, model.h): d->dyn with d's settings (opt, baumgarte)
+ * and threads (d's workers, or those d shares) copied in, for a pass on m->dyn. */
+ctc_data *ctc_data_dyn_begin(const ctc_model *m, ctc_data *d);
+
+/* After a pass on m->dyn with ctc_data_dyn_begin: copies its results back into d in m's
+ * numbering: jnt_load and jnt_load_inv (0 on merged bodies' fixed joints), singular_joint,
+ * loop_cond, fwd_refine_done, fwd_refine_undone and fwd_split. */
+void ctc_data_dyn_end(const ctc_model *m, ctc_data *d);
 
 /* The record of assembly index a: a body's (a < n), or internal node a - n's of the forward
  * (inverse = 0) or the mobility-form inverse (inverse = 1) pass. */

@@ -13,6 +13,10 @@
  * (gdca_forward_order_seq): single bodies joined from the free tip and from the grounded base,
  * about half the arithmetic (gdca_forward_seq.h; a tree's paths from their tips only).
  *
+ * A model with merged bodies (model.h, fixed joints) is computed on its reduced model m->dyn with
+ * d->dyn (data.h ctc_data_dyn_begin): the same coordinate vectors in and out, d's settings and
+ * threads, and the results (joint loads, singular_joint, ...) copied back in m's numbering.
+ *
  * Call order for one state: ctc_kinematics(m, d, q, v), ctc_handles(m, d), then any number of
  * ctc_gdca_inverse and ctc_gdca_forward calls, which share the body-level records (Eq. 42-43).
  * The composite inverse keeps the parts of its records that depend on the state only (composite

@@ -21,8 +21,9 @@
 
 #include "data.h"
 
-/* Fills d->hr and d->hbody from the kinematics in d (ctc_kinematics first), and marks d as
- * holding a new state (d->handles_stamp), so that the composite inverse recomputes the parts of
+/* Fills d->hr and d->hbody from the kinematics in d (ctc_kinematics first; with merged bodies,
+ * model.h, the reduced model's records in d->dyn instead, from its kinematics there), and marks d
+ * as holding a new state (d->handles_stamp), so that the composite inverse recomputes the parts of
  * its records that it keeps between calls at one state (gdca.h). Allocates nothing. */
 void ctc_handles(const ctc_model *m, ctc_data *d);
 

@@ -26,7 +26,9 @@
 #include "data.h"
 
 /* Computes the kinematics of state q (nq, rad / m / quaternions) and v (nv, rad/s / m/s) into
- * d's kinematics and joint arrays (data.h). Assumes a validated model; allocates nothing. */
+ * d's kinematics and joint arrays (data.h), for every body of m; with merged bodies (model.h),
+ * also the reduced model's into d->dyn, copied from them. Assumes a validated model; allocates
+ * nothing. */
 void ctc_kinematics(const ctc_model *m, ctc_data *d, const double *q, const double *v);
 
 /* The world position x (m) and velocity xd (m/s) of the point p (m, in body k's frame, whose

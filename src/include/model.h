@@ -190,7 +190,11 @@ typedef struct ctc_body_spec {
  * it"). Its forward pass is augmented and refined alike (the refinement's residual carries the
  * closure, gdca_refine.h; a massless tip's augmentation takes the model's smallest inertia and
  * mass), and its CTC inverse inverts no body (gdca_inverse_loop.h). Models without a singular
- * body skip all of this and are unchanged. */
+ * body skip all of this and are unchanged. A body on a fixed joint (a massless frame, say) is
+ * merged into its parent's for the passes (see "merged bodies"): nsingular, body_singular and
+ * fwd_bodies describe the model as given, m->dyn's what the passes augment; the mass-matrix check
+ * runs on the model as given, unless merging leaves no singular body (every body then has a
+ * positive definite inertia, and so has M(q)). */
 #define CTC_MASS_ZERO_REL 1e-12
 #define CTC_INERTIA_ZERO_REL 1e-12
 #define CTC_SINGULAR_AUGMENT_REL 1e-6
@@ -222,6 +226,34 @@ typedef struct ctc_body_spec {
  * (bench/NOTEBOOK.md, "Issue 18, the rest"). */
 #define CTC_SLENDER_RATIO 1e-2
 #define CTC_SLENDER_AUGMENT_REL 1e-5
+
+/* ---- merged bodies: fixed joints in the dynamics ----
+ *
+ * A body on a fixed joint moves rigidly with its parent, so the dynamics passes (handles.h,
+ * gdca.h: forward, inverse, refinement, trees, loops, threads) do not treat it as a body of its
+ * own: they run on the reduced model m->dyn, in which each such body is merged into its parent's
+ * body (the parent itself, or the body the parent is merged into) as one rigid body: masses added,
+ * centres of mass averaged by mass, inertias moved to the composite's centre of mass by the
+ * parallel-axis theorem, all in the parent's frame (a fixed joint only translates: its child's
+ * axes are its parent's, offset by the joint's location; m->body_dyn_off sums the offsets). A body
+ * fixed to the ground is welded to the world and drops out. A massless frame (a URDF tool0, a
+ * sensor mount, a flange) is then no singular body (see "singular bodies") and needs no
+ * augmentation or refinement; a massive one saves its share of the passes' work.
+ * Nothing the user sees is renumbered: the model keeps every body and joint as given, the
+ * coordinates q, v, forces and accelerations are the same vectors in both (fixed joints have
+ * none, and the bodies keep their order), ctc_kinematics fills every body's pose and velocity
+ * (and the reduced model's in d->dyn, data.h), so recording, end effectors, body poses, wrenches
+ * (generalised forces from the full model's Jacobians, which act on the composite) and payloads
+ * (added to a body's mass before the build) work on the bodies as given, and the oracle
+ * (oracle.h) sees the bodies unmerged. The public passes take the model as given and run on
+ * m->dyn when it is not NULL; the joint loads (data.h jnt_load, jnt_load_inv) are then those of
+ * the joints that stay, and 0 on a merged body's fixed joint. The checks of the build ("singular
+ * bodies": the mass matrix) run on the model as given, so their messages name its bodies.
+ * A loop model keeps its bodies fixed to the ground, and its tip unless the tip merges into the
+ * last body that stays (model.c dyn_targets); a fixed joint on the loop's path merges as any
+ * other, and the closing joint's tip and the body it closes on map to their composites. A model
+ * without fixed joints (or where nothing merges) has m->dyn = NULL and is computed as before,
+ * bitwise. */
 
 typedef struct ctc_joint_spec {
     ctc_joint_type type;
@@ -387,6 +419,15 @@ typedef struct ctc_model {
     int *ind_coord;           /* (nind) its extended velocity index (jnt_vadr + offset) */
     unsigned char *inv_need;  /* (ntree) loop models: 1 if the inverse pass must disassemble
                                  node i to reach every independent joint's load (Fig. 4) */
+
+    /* merged bodies (see "merged bodies" above); all NULL when no body merges */
+    struct ctc_model *dyn; /* the reduced model the dynamics passes run on; owned by this one */
+    int *body_dyn;         /* (n) body k's body in dyn: its own, or its composite's; -1: welded
+                              to the world */
+    double *body_dyn_off;  /* (n x 3) m, body k's frame origin in the frame of body
+                              dyn_body[body_dyn[k]] (the world's when welded); the axes agree */
+    int *dyn_body;         /* (dyn->nbodies) the body of this model that body j of dyn is (its
+                              composite's first body) */
 } ctc_model;
 
 /* Builds and validates a model from spec. On success returns CTC_OK and *out owns a new model

@@ -1,6 +1,7 @@
 /*
  * data.c - allocation of the per-simulation state (data.h): every array sized once from the model,
- * and the thread setting of its GDCA passes.
+ * and the thread setting of its GDCA passes; with merged bodies (model.h), the reduced model's
+ * data beside it, and the hand-over of settings and results between the two.
  */
 #include "data.h"
 
@@ -59,12 +60,54 @@ ctc_data *ctc_data_new(const ctc_model *m)
         ctc_data_free(d);
         return NULL;
     }
+    if (m->dyn != NULL && (d->dyn = ctc_data_new(m->dyn)) == NULL) {
+        ctc_data_free(d);
+        return NULL;
+    }
     return d;
+}
+
+ctc_data *ctc_data_dyn_begin(const ctc_model *m, ctc_data *d)
+{
+    (void)m;
+    ctc_data *e = d->dyn;
+    e->opt = d->opt;
+    e->baumgarte[0] = d->baumgarte[0], e->baumgarte[1] = d->baumgarte[1];
+    e->pool_owner = d->pool_owner != NULL ? d->pool_owner : d;
+    return e;
+}
+
+/* the loads of joints (njoints x dim) of m from those of m->dyn */
+static void dyn_loads(const ctc_model *m, const double *from, double *to)
+{
+    const ctc_model *r = m->dyn;
+    const size_t dim = (size_t)m->dim;
+    memset(to, 0, (size_t)m->njoints * dim * sizeof *to);
+    for (int j = 0; j < r->nbodies; j++) {
+        memcpy(to + dim * (size_t)m->dyn_body[j], from + dim * (size_t)j, dim * sizeof *to);
+    }
+    if (m->has_loop) {
+        memcpy(to + dim * (size_t)m->nbodies, from + dim * (size_t)r->nbodies, dim * sizeof *to);
+    }
+}
+
+void ctc_data_dyn_end(const ctc_model *m, ctc_data *d)
+{
+    const ctc_data *e = d->dyn;
+    const int sj = e->singular_joint;
+    dyn_loads(m, e->jnt_load, d->jnt_load);
+    dyn_loads(m, e->jnt_load_inv, d->jnt_load_inv);
+    d->singular_joint = sj < 0 ? -1 : sj < m->dyn->nbodies ? m->dyn_body[sj] : m->nbodies;
+    d->loop_cond = e->loop_cond;
+    d->fwd_refine_done = e->fwd_refine_done;
+    d->fwd_refine_undone = e->fwd_refine_undone;
+    d->fwd_split = e->fwd_split;
 }
 
 void ctc_data_free(ctc_data *d)
 {
     if (d == NULL) return;
+    ctc_data_free(d->dyn);
     ctc_pool_free(d->pool);
     free(d->xpos);
     free(d->xrot);
@@ -107,6 +150,7 @@ ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t err
         d->pool_failed = 0;
         d->threads = nthreads;
         memset(d->gate, 0, sizeof d->gate);
+        if (d->dyn != NULL) memset(d->dyn->gate, 0, sizeof d->dyn->gate);
     }
     return CTC_OK;
 }
@@ -115,4 +159,5 @@ void ctc_data_share_pool(ctc_data *d, ctc_data *owner)
 {
     d->pool_owner = owner == d ? NULL : owner;
     memset(d->gate, 0, sizeof d->gate);
+    if (d->dyn != NULL) memset(d->dyn->gate, 0, sizeof d->dyn->gate);
 }

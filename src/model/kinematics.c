@@ -181,6 +181,41 @@ static CTC_MULTIVERSION void kinematics_spatial(const ctc_model *m, ctc_data *d,
     }
 }
 
+/* A model with merged bodies (model.h): the reduced model's kinematics in d->dyn from d's. A body
+ * that stays has the same pose, velocities and joint maps in both (world quantities; a merged
+ * parent moves as its composite does), and its composite's centre of mass is placed from the
+ * reduced model's body data as the passes above place it. */
+static void kinematics_dyn(const ctc_model *m, ctc_data *d)
+{
+    const ctc_model *r = m->dyn;
+    ctc_data *e = d->dyn;
+    for (int j = 0; j < r->nbodies; j++) {
+        const int k = m->dyn_body[j];
+        memcpy(e->xpos + 3 * j, d->xpos + 3 * k, 3 * sizeof(double));
+        memcpy(e->xrot + 9 * j, d->xrot + 9 * k, 9 * sizeof(double));
+        memcpy(e->omega + 3 * j, d->omega + 3 * k, 3 * sizeof(double));
+        memcpy(e->xvel + 3 * j, d->xvel + 3 * k, 3 * sizeof(double));
+        const double *xp = e->xpos + 3 * j, *xr = e->xrot + 9 * j;
+        if (m->form == CTC_FORM_PLANAR) { /* the joint maps: 3 x 3 each */
+            memcpy(e->jnt_P + 9 * j, d->jnt_P + 9 * k, 9 * sizeof(double));
+            memcpy(e->jnt_D + 9 * j, d->jnt_D + 9 * k, 9 * sizeof(double));
+            memcpy(e->jnt_beta + 3 * j, d->jnt_beta + 3 * k, 3 * sizeof(double));
+            const double *c = r->planar[j].com;
+            e->xangle[j] = d->xangle[k];
+            ctc_v3_set(e->xcom + 3 * j, xp[0] + xr[0] * c[0] + xr[1] * c[1],
+                       xp[1] + xr[3] * c[0] + xr[4] * c[1], 0);
+        } else { /* P: 3 x 6, D: 6 x 6 */
+            double t[3];
+            memcpy(e->jnt_P + 18 * j, d->jnt_P + 18 * k, 18 * sizeof(double));
+            memcpy(e->jnt_D + 36 * j, d->jnt_D + 36 * k, 36 * sizeof(double));
+            memcpy(e->jnt_beta + 6 * j, d->jnt_beta + 6 * k, 6 * sizeof(double));
+            ctc_m3_mulv(t, xr, r->bodies[j].com);
+            ctc_v3_add(e->xcom + 3 * j, xp, t);
+        }
+    }
+    if (r->has_loop) ctc_loop_kinematics(r, e);
+}
+
 void ctc_kinematics(const ctc_model *m, ctc_data *d, const double *q, const double *v)
 {
     if (m->form == CTC_FORM_PLANAR) {
@@ -189,6 +224,7 @@ void ctc_kinematics(const ctc_model *m, ctc_data *d, const double *q, const doub
         kinematics_spatial(m, d, q, v);
     }
     if (m->has_loop) ctc_loop_kinematics(m, d);
+    if (m->dyn != NULL) kinematics_dyn(m, d);
 }
 
 void ctc_kinematics_point(const ctc_model *m, const ctc_data *d, int k, const double p[3],

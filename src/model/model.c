@@ -16,7 +16,9 @@
  * plan joins each heavy path as a chain and rakes the light subtrees into their parents ("the
  * plan of a branched tree" below). A loop on a tree lies on the spine, the path from the ground to
  * the tip: its heavy children are forced along it and the root path's top node splits at the
- * loop's first joint, so the loop's bodies form one subtree as on a chain.
+ * loop's first joint, so the loop's bodies form one subtree as on a chain. Last, when bodies sit
+ * on fixed joints, it builds the reduced model of the dynamics passes, each such body merged into
+ * its parent's (model.h "merged bodies"; "merged bodies" below).
  */
 #include "model.h"
 
@@ -76,8 +78,11 @@ static void loop_closing_names(char *out, size_t len)
     }
 }
 
-/* Checks one body's numbers; writes its principal moments (ascending) into eig. */
-static ctc_status check_body(const ctc_body_spec *b, int k, double eig[3], char *err, size_t errlen)
+/* Checks one body's numbers; writes its principal moments (ascending) into eig. lumped: the body
+ * is a composite of merged bodies (model.h "merged bodies"), whose massless parts' lumped inertias
+ * need not satisfy the triangle inequality, so neither need it. */
+static ctc_status check_body(const ctc_body_spec *b, int k, int lumped, double eig[3], char *err,
+                             size_t errlen)
 {
     int bad;
     if (!isfinite(b->mass)) {
@@ -119,7 +124,7 @@ static ctc_status check_body(const ctc_body_spec *b, int k, double eig[3], char 
                         "body %d: inertia is not positive definite (principal moment %g kg m^2)", k,
                         eig[0]);
     }
-    if (b->mass > 0 && eig[0] + eig[1] < eig[2] * (1.0 - 1e-9)) {
+    if (b->mass > 0 && !lumped && eig[0] + eig[1] < eig[2] * (1.0 - 1e-9)) {
         return ctc_fail(CTC_EINVAL, err, errlen,
                         "body %d: inertia violates the triangle inequality (principal moments "
                         "%g + %g < %g kg m^2)",
@@ -827,13 +832,15 @@ static ctc_status setup_actuation(ctc_model *m, const unsigned char *independent
 
 /* validates each body and joint, makes inertias exactly symmetric, normalises axes and counts the
    coordinates; moments (n x 3) gets each body's principal moments, ascending */
-static ctc_status setup_bodies_and_joints(ctc_model *m, double *moments, char *err, size_t errlen)
+static ctc_status setup_bodies_and_joints(ctc_model *m, double *moments, int lumped, char *err,
+                                          size_t errlen)
 {
     const int n = m->nbodies;
     ctc_status st;
     for (int k = 0; k < m->njoints; k++) {
         if ((st = check_joint(&m->joints[k], k, err, errlen)) != CTC_OK) return st;
-        if (k < n && (st = check_body(&m->bodies[k], k, &moments[3 * k], err, errlen)) != CTC_OK) {
+        if (k < n &&
+            (st = check_body(&m->bodies[k], k, lumped, &moments[3 * k], err, errlen)) != CTC_OK) {
             return st;
         }
         if (k < n) {
@@ -1030,6 +1037,9 @@ static ctc_status check_mass_matrix(const ctc_model *m, char *err, size_t errlen
 {
     const int nv = m->nv;
     if (m->nsingular == 0 || nv == 0) return CTC_OK;
+    /* every singular body merged into one with mass and inertia (model.h "merged bodies"): each
+       body the passes see has a positive definite inertia, so M(q) is positive definite */
+    if (m->dyn != NULL && m->dyn->nsingular == 0) return CTC_OK;
     ctc_oracle *o = ctc_oracle_new(m);
     double *q = malloc(((size_t)m->nq + (size_t)nv * nv) * sizeof(double));
     if (o == NULL || q == NULL) {
@@ -1125,7 +1135,175 @@ static ctc_status setup_form(ctc_model *m, ctc_form requested, const double *mom
     return CTC_OK;
 }
 
-ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *err, size_t errlen)
+static ctc_status model_build(const ctc_chain_spec *spec, int reduced, ctc_model **out, char *err,
+                              size_t errlen);
+
+/* ---- merged bodies (model.h) ----
+ *
+ * Which bodies merge: body k on a fixed joint goes into its parent's target (the parent itself,
+ * or the body the parent went into), or is welded to the world when its parent is the ground.
+ * Fixed joints only translate (model.h: a body's axes are parallel to its parent's at zero
+ * coordinates, and a fixed joint has none), so every frame merged into a target is parallel to
+ * the target's and differs by the offset off[k], the sum of the fixed joints' locations on the
+ * way. A loop model keeps what its conventions need (model.h loop fields): bodies fixed to the
+ * ground stay (one body on the ground for a tree's spine), and the tip stays unless it merges
+ * into the last body that stays, which is then the reduced model's tip. Fills target (n: the
+ * target's index, -1 welded) and off (n x 3); returns the number of bodies that stay, or 0 when
+ * no body merges (or none would stay) and the model is its own dynamics. */
+static int dyn_targets(const ctc_model *m, int *target, double *off)
+{
+    const int n = m->nbodies;
+    int merged = 0, last = -1;
+    for (int k = 0; k < n; k++) {
+        const int par = m->body_parent[k];
+        const ctc_joint_spec *j = &m->joints[k];
+        int merge = j->type == CTC_JOINT_FIXED && !(m->has_loop && par < 0);
+        if (merge && m->has_loop && k == n - 1) merge = target[par] == last && last >= 0;
+        if (merge && par >= 0) {
+            target[k] = target[par];
+            for (int a = 0; a < 3; a++) off[3 * k + a] = off[3 * par + a] + j->location[a];
+        } else if (merge) {
+            target[k] = -1;
+            ctc_v3_copy(&off[3 * k], j->location);
+        } else {
+            target[k] = k;
+            ctc_v3_set(&off[3 * k], 0, 0, 0);
+            last = k;
+        }
+        merged += merge;
+    }
+    if (m->has_loop && m->loop_body >= 0 && target[m->loop_body] == target[n - 1]) return 0;
+    return merged > 0 && merged < n ? n - merged : 0;
+}
+
+/* The composites (nd) of the bodies merged into each target t (t itself and every k with
+ * target[k] = t), db[index[t]], in t's frame: masses added, the centre of mass their weighted
+ * mean, the inertias moved to it by the parallel-axis theorem, I = sum_k I_k + m_k (|r_k|^2 1 -
+ * r_k r_k^T), r_k = off_k + c_k - c. Without mass the centre of mass is t's own and the inertias
+ * add as lumped ones. Two passes over the bodies. */
+static void dyn_composites(const ctc_model *m, const int *target, const int *index,
+                           const double *off, ctc_body_spec *db, int nd)
+{
+    memset(db, 0, (size_t)nd * sizeof *db);
+    for (int k = 0; k < m->nbodies; k++) { /* masses, and mass-weighted centres in com */
+        if (target[k] < 0) continue;
+        const ctc_body_spec *b = &m->bodies[k];
+        ctc_body_spec *c = &db[index[target[k]]];
+        c->mass += b->mass;
+        for (int a = 0; a < 3; a++) c->com[a] += b->mass * (off[3 * k + a] + b->com[a]);
+    }
+    for (int k = 0; k < m->nbodies; k++) { /* a target comes before its merged bodies */
+        if (target[k] < 0) continue;
+        const ctc_body_spec *b = &m->bodies[k];
+        ctc_body_spec *c = &db[index[target[k]]];
+        if (target[k] == k) {
+            if (c->mass > 0) {
+                ctc_v3_scale(c->com, c->com, 1.0 / c->mass);
+            } else {
+                ctc_v3_copy(c->com, b->com);
+            }
+        }
+        double r[3];
+        for (int a = 0; a < 3; a++) r[a] = off[3 * k + a] + b->com[a] - c->com[a];
+        const double rr = ctc_v3_dot(r, r);
+        for (int a = 0; a < 3; a++) {
+            for (int e = 0; e < 3; e++) {
+                c->inertia[3 * a + e] +=
+                    b->inertia[3 * a + e] + b->mass * ((a == e ? rr : 0.0) - r[a] * r[e]);
+            }
+        }
+    }
+}
+
+/* Builds m->dyn, the reduced model of the dynamics passes, when a body merges (dyn_targets), and
+ * the maps between the two numberings (model.h "merged bodies"). The reduced spec: one composite
+ * body per target, in the bodies' order; each joint that stays keeps its type and axis, its
+ * location moved into its new parent's frame by the offset of its old parent; a loop's closing
+ * joint moves by the tip's offset and its anchor on a body by that body's; the form is m's. */
+static ctc_status setup_dyn(ctc_model *m, const ctc_chain_spec *spec, char *err, size_t errlen)
+{
+    const int n = m->nbodies;
+    int *target = malloc((size_t)n * 2 * sizeof(int));
+    double *off = malloc((size_t)n * 3 * sizeof(double));
+    if (target == NULL || off == NULL) {
+        free(target);
+        free(off);
+        return ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+    }
+    const int nd = dyn_targets(m, target, off);
+    if (nd == 0) {
+        free(target);
+        free(off);
+        return CTC_OK;
+    }
+    int *index = target + n; /* a target's body in the reduced model */
+    ctc_body_spec *db = malloc((size_t)nd * sizeof *db);
+    ctc_joint_spec *dj = malloc((size_t)nd * sizeof *dj);
+    int *dpar = malloc((size_t)nd * sizeof *dpar);
+    unsigned char *dind = malloc((size_t)nd + 1);
+    m->body_dyn = malloc((size_t)n * sizeof(int));
+    m->body_dyn_off = malloc((size_t)n * 3 * sizeof(double));
+    m->dyn_body = malloc((size_t)nd * sizeof(int));
+    ctc_status st = CTC_OK;
+    if (db == NULL || dj == NULL || dpar == NULL || dind == NULL || m->body_dyn == NULL ||
+        m->body_dyn_off == NULL || m->dyn_body == NULL) {
+        st = ctc_fail(CTC_ENOMEM, err, errlen, "out of memory");
+        goto done;
+    }
+    int j = 0;
+    for (int k = 0; k < n; k++) {
+        index[k] = -1;
+        if (target[k] != k) continue;
+        const int par = m->body_parent[k];
+        index[k] = j;
+        m->dyn_body[j] = k;
+        dj[j] = m->joints[k];
+        if (par >= 0) {
+            for (int a = 0; a < 3; a++) dj[j].location[a] += off[3 * par + a];
+        }
+        dpar[j] = par < 0 || target[par] < 0 ? -1 : index[target[par]];
+        dind[j] = m->jnt_indep[k];
+        j++;
+    }
+    dyn_composites(m, target, index, off, db, nd);
+    for (int k = 0; k < n; k++) {
+        m->body_dyn[k] = target[k] < 0 ? -1 : index[target[k]];
+        ctc_v3_copy(&m->body_dyn_off[3 * k], &off[3 * k]);
+    }
+    ctc_loop_spec loop;
+    ctc_chain_spec ds = {.nbodies = nd,
+                         .bodies = db,
+                         .joints = dj,
+                         .parent = dpar,
+                         .form = m->form,
+                         .independent = m->has_loop ? dind : NULL};
+    ctc_v3_copy(ds.gravity, spec->gravity);
+    if (m->has_loop) {
+        loop = *spec->loop;
+        for (int a = 0; a < 3; a++) loop.joint.location[a] += off[3 * (n - 1) + a];
+        if (loop.on_body) {
+            for (int a = 0; a < 3; a++) loop.anchor[a] += off[3 * loop.body + a];
+            loop.body = m->body_dyn[loop.body];
+        }
+        dind[nd] = m->jnt_indep[n];
+        ds.loop = &loop;
+    }
+    st = model_build(&ds, 1, &m->dyn, err, errlen);
+
+done:
+    free(db);
+    free(dj);
+    free(dpar);
+    free(dind);
+    free(target);
+    free(off);
+    return st;
+}
+
+/* ctc_model_build; reduced: spec is the reduced model of a built one (setup_dyn), whose checks
+   that model has passed (the mass matrix's) and which merges nothing further */
+static ctc_status model_build(const ctc_chain_spec *spec, int reduced, ctc_model **out, char *err,
+                              size_t errlen)
 {
     ctc_status st;
     *out = NULL;
@@ -1145,12 +1323,13 @@ ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *er
     build_topology(m);
     if (m->has_loop && (st = setup_loop(m, spec->loop, err, errlen)) != CTC_OK) goto fail;
     if ((st = setup_actuation(m, spec->independent, err, errlen)) != CTC_OK) goto fail;
-    if ((st = setup_bodies_and_joints(m, moments, err, errlen)) != CTC_OK) goto fail;
+    if ((st = setup_bodies_and_joints(m, moments, reduced, err, errlen)) != CTC_OK) goto fail;
     setup_mass_ratio(m);
     if ((st = setup_form(m, spec->form, moments, err, errlen)) != CTC_OK) goto fail;
     if ((st = build_tree(m, err, errlen)) != CTC_OK) goto fail;
     if ((st = setup_independent(m, err, errlen)) != CTC_OK) goto fail;
-    if ((st = check_mass_matrix(m, err, errlen)) != CTC_OK) goto fail;
+    if (!reduced && (st = setup_dyn(m, spec, err, errlen)) != CTC_OK) goto fail;
+    if (!reduced && (st = check_mass_matrix(m, err, errlen)) != CTC_OK) goto fail;
     free(moments);
     *out = m;
     return CTC_OK;
@@ -1161,9 +1340,18 @@ fail:
     return st;
 }
 
+ctc_status ctc_model_build(const ctc_chain_spec *spec, ctc_model **out, char *err, size_t errlen)
+{
+    return model_build(spec, 0, out, err, errlen);
+}
+
 void ctc_model_free(ctc_model *m)
 {
     if (m == NULL) return;
+    ctc_model_free(m->dyn);
+    free(m->body_dyn);
+    free(m->body_dyn_off);
+    free(m->dyn_body);
     if (m->fwd_bodies != m->bodies) free(m->fwd_bodies);
     free(m->body_singular);
     free(m->bodies);
