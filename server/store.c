@@ -96,6 +96,7 @@ _Static_assert(sizeof(double) == 8 && DBL_MANT_DIG == 53 && FLT_RADIX == 2,
 
 #define STORE_BUSY_MS 5000         /* how long a connection waits for another's lock */
 #define STORE_ROOM_BYTES (1 << 20) /* free bytes that make a full database writable again */
+#define STORE_WAL_RETRY_MS 10      /* the pause between tries to switch a new file to WAL */
 
 /* migrations[v] takes the schema from version v to v + 1 (run in one transaction) */
 static const char *const migrations[STORE_SCHEMA_VERSION] = {
@@ -844,7 +845,15 @@ int store_open(const char *path, store **out, char *err, size_t errlen)
     }
     store_set_busy_timeout(s, STORE_BUSY_MS);
     /* the first read of the file: a file that is not SQLite's fails here */
-    int wal = query_one(s->db, "PRAGMA journal_mode = WAL", NULL, mode, sizeof mode);
+    /* Switching a new database to WAL takes its exclusive lock for a moment, and a connection
+       that asks meanwhile (several processes opening a new file at once) gets SQLITE_BUSY without
+       its busy handler being called: try again, within the busy timeout */
+    int wal;
+    for (int waited_ms = 0;; waited_ms += STORE_WAL_RETRY_MS) {
+        wal = query_one(s->db, "PRAGMA journal_mode = WAL", NULL, mode, sizeof mode);
+        if ((wal & 0xff) != SQLITE_BUSY || waited_ms >= s->busy_ms) break;
+        sqlite3_sleep(STORE_WAL_RETRY_MS);
+    }
     if ((wal & 0xff) == SQLITE_READONLY || (wal & 0xff) == SQLITE_CANTOPEN) {
         /* the file is writable but WAL mode cannot create its two files beside it */
         set_err(err, errlen,
