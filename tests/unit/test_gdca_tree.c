@@ -463,8 +463,11 @@ static ctc_sim_result *tree_run(int threads)
     return r;
 }
 
-/* Two and three threads record bitwise the same samples of a CTC run on a tree (the plan on
-   both); one thread (the forward pass's sequential tip runs) the same to rounding */
+/* One, two and three threads record the same samples of a CTC run on a tree to rounding. Not
+   bitwise: each run's gates (pool.h) choose between the sequential order and the split plan by
+   their own timings, so two runs may take different orders at some evaluations; that each order
+   on threads gives bitwise its serial results is test_gdca_parallel's
+   gated_passes_give_bitwise_the_serial_results_on_1_to_4_threads. */
 Test(gdca_tree, a_simulation_on_threads_records_the_same_samples)
 {
     ctc_sim_result *one = tree_run(0), *two = tree_run(2), *three = tree_run(3);
@@ -472,12 +475,12 @@ Test(gdca_tree, a_simulation_on_threads_records_the_same_samples)
     cr_assert_eq(one->nsamples, two->nsamples);
     for (int ch = 0; ch < CTC_NCHANNELS; ch++) {
         if (!two->ch[ch]) continue;
-        size_t count = (size_t)two->nsamples * (size_t)two->width[ch];
-        cr_expect_eq(memcmp(two->ch[ch], three->ch[ch], count * sizeof(double)), 0, "channel %s",
-                     ctc_channel_name((ctc_channel)ch));
         double big, diff;
         fixture_channel_diff(one, two, (ctc_channel)ch, &diff, &big);
         cr_expect(diff <= 1e-8 * big, "channel %s: 1 and 2 threads differ by %.3g of %.3g",
+                  ctc_channel_name((ctc_channel)ch), diff, big);
+        fixture_channel_diff(two, three, (ctc_channel)ch, &diff, &big);
+        cr_expect(diff <= 1e-8 * big, "channel %s: 2 and 3 threads differ by %.3g of %.3g",
                   ctc_channel_name((ctc_channel)ch), diff, big);
     }
     ctc_sim_result_free(one);
