@@ -559,19 +559,24 @@ static int refine_undo_if_grown(const ctc_model *m, ctc_data *d, double *qacc, c
 
 /* One pass in mode `mode` (gdca_forward_joint.h) in the order of the setting, or where the tree
  * on threads may pay, of the gate's timings; records the way taken in d->fwd_split for the
- * correction */
-static void forward_pass(const ctc_model *m, ctc_data *d, const double *f, double *qacc, int mode)
+ * correction. Returns 1 when the pass took the sequential order (gdca_forward_order_seq: the
+ * setting, or no split taken), 0 for the plan. */
+static int forward_pass(const ctc_model *m, ctc_data *d, const double *f, double *qacc, int mode)
 {
     const int candidate = gdca_forward_tree_candidate(m, d);
     ctc_pool_gate *g = candidate && !d->opt.par_split ? &d->gate[CTC_GATE_FWD_ORDER] : NULL;
     d->fwd_split = candidate && (g == NULL || ctc_pool_gate_way(g));
     const double t0 = g != NULL ? ctc_pool_clock() : 0;
-    if (gdca_forward_order_seq(m, d)) {
+    /* gdca_forward_order_seq, with d->fwd_split (which implies candidate) just set */
+    const int seq = !m->has_loop && d->opt.fwd_order != CTC_ORDER_TREE &&
+                    (d->opt.fwd_order == CTC_ORDER_SEQ || !d->fwd_split);
+    if (seq) {
         (m->chain ? gdca_forward_seq : gdca_forward_seq_tree)(m, d, f, qacc, mode);
     } else {
         forward_plan(m, d, f, qacc, mode);
     }
     if (g != NULL) ctc_pool_gate_record(g, d->fwd_split, ctc_pool_clock() - t0);
+    return seq;
 }
 
 /* The refinement (gdca_refine.h) of qacc under the forces f, at most `steps` steps: r = f -
@@ -583,10 +588,11 @@ static void forward_refine(const ctc_model *m, ctc_data *d, const double *f, dou
 {
     const int guard = !m->has_loop && m->nbodies >= CTC_REFINE_CHECK_MIN_BODIES;
     double *r = d->fwd_res, *dq = d->fwd_res + m->nvx, *dq_last = d->fwd_res + 2 * m->nvx;
-    double rlast = INFINITY;
-    gdca_refine_rule rule = {.augmented = m->nsingular > 0 || m->nslender > 0};
     d->fwd_refine_done = 0;
     d->fwd_refine_undone = 0;
+    if (steps <= 0) return;
+    double rlast = INFINITY;
+    gdca_refine_rule rule = {.augmented = m->nsingular > 0 || m->nslender > 0};
     for (int s = 0; s < steps && d->singular_joint < 0; s++) {
         gdca_refine_residual(m, d, f, qacc, r);
         if (guard && refine_undo_if_grown(m, d, qacc, r, &rlast)) return;
@@ -610,10 +616,11 @@ static void forward_reference(const ctc_model *m, ctc_data *d, const double *f, 
     double *r = d->fwd_res;
     const int nv = m->nv;
     for (int i = 0; i < nv; i++) r[i] = f[i] - f_ref[i];
-    forward_pass(m, d, r, qacc, GDCA_FWD_BIASFREE);
+    const int seq = forward_pass(m, d, r, qacc, GDCA_FWD_BIASFREE);
     for (int i = 0; a_ref != NULL && i < nv; i++) qacc[i] += a_ref[i];
+    /* the sequential passes added the reference's loads in their own sweep */
     const size_t nl = (size_t)m->nbodies * (size_t)m->dim;
-    for (size_t i = 0; i < nl; i++) d->jnt_load[i] += d->jnt_load_inv[i];
+    for (size_t i = 0; !seq && i < nl; i++) d->jnt_load[i] += d->jnt_load_inv[i];
     forward_refine(m, d, f, qacc, gdca_refine_steps_ref(m, d));
 }
 

@@ -19,7 +19,8 @@
  *                      reused, the joint loads added to d->jnt_load;
  *   GDCA_FWD_BIASFREE: the reference form's pass (gdca.h ctc_gdca_forward_from): bias-free as
  *                      the correction, but forming the factors and matrices itself, the joint
- *                      loads written.
+ *                      loads written (the sequential passes write them plus d->jnt_load_inv,
+ *                      the reference's, in the same sweep; gdca_forward_seq.h).
  * So a mode is bias-free when it is not GDCA_FWD_FULL and forms its factors when it is not
  * GDCA_FWD_CORRECT. */
 enum { GDCA_FWD_FULL = 0, GDCA_FWD_CORRECT = 1, GDCA_FWD_BIASFREE = 2 };

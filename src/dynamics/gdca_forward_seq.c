@@ -255,7 +255,9 @@ static inline void seq_pass(const seq_args *a, const int dim, const int correct)
         if (t < r) seq_base_disassemble(a, r - 1 - t, dim, correct);
     }
     for (int i = 0; i < dim * n; i++) {
-        d->jnt_load[i] = correct == GDCA_FWD_CORRECT ? d->jnt_load[i] + d->tload[i] : d->tload[i];
+        d->jnt_load[i] = correct == GDCA_FWD_CORRECT    ? d->jnt_load[i] + d->tload[i]
+                         : correct == GDCA_FWD_BIASFREE ? d->tload[i] + d->jnt_load_inv[i]
+                                                        : d->tload[i];
     }
 }
 

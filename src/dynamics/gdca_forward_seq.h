@@ -35,16 +35,18 @@ int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d);
  * bias-free correction (GDCA_FWD_CORRECT; gdca_refine.h), which reuses the factors and records of
  * the full pass just made at this state, or the reference form's bias-free pass
  * (GDCA_FWD_BIASFREE; gdca.h ctc_gdca_forward_from), which forms them. Serial. Fills
- * d->jnt_load (GDCA_FWD_CORRECT: adds to it), d->singular_joint, d->fwd_E, d->fwd_z, the forward
+ * d->jnt_load (GDCA_FWD_CORRECT: adds to it; GDCA_FWD_BIASFREE: the pass's loads plus
+ * d->jnt_load_inv, the reference's), d->singular_joint, d->fwd_E, d->fwd_z, the forward
  * node records (S_i: h11, h13 and K in the h22 slot; B_k: h22, h23 and K in the h11 slot) and
  * d->tload. qacc may not alias f. */
 void gdca_forward_seq(const ctc_model *m, ctc_data *d, const double *f, double *qacc, int mode);
 
 /* The same on a branched tree (model.h chain = 0; gdca_forward_tseq.c): each heavy path in the
  * tip run, its light subtrees raked in as they are met. Serial. Fills d->jnt_load
- * (GDCA_FWD_CORRECT: adds to it), d->singular_joint (the lowest singular joint), d->fwd_E,
- * d->fwd_z, d->rake, the forward records (2n slots: S_k's h11, h13 and its heavy joint's K at slot
- * k, the raked R_k at n + k) and d->tload. qacc may not alias f. */
+ * (GDCA_FWD_CORRECT: adds to it; GDCA_FWD_BIASFREE: plus d->jnt_load_inv), d->singular_joint (the
+ * lowest singular joint), d->fwd_E, d->fwd_z, d->rake, the forward records (2n slots: S_k's h11,
+ * h13 and its heavy joint's K at slot k, the raked R_k at n + k) and d->tload. qacc may not alias
+ * f. */
 void gdca_forward_seq_tree(const ctc_model *m, ctc_data *d, const double *f, double *qacc,
                            int mode);
 

@@ -223,7 +223,9 @@ static inline void tseq_pass(const tseq_args *a, const int dim, const int correc
     d->singular_joint = singular;
     for (int k = 0; k < n; k++) tseq_disassemble(a, k, dim, correct);
     for (int i = 0; i < dim * n; i++) {
-        d->jnt_load[i] = correct == GDCA_FWD_CORRECT ? d->jnt_load[i] + d->tload[i] : d->tload[i];
+        d->jnt_load[i] = correct == GDCA_FWD_CORRECT    ? d->jnt_load[i] + d->tload[i]
+                         : correct == GDCA_FWD_BIASFREE ? d->tload[i] + d->jnt_load_inv[i]
+                                                        : d->tload[i];
     }
 }
 

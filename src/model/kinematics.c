@@ -5,6 +5,11 @@
  * the origin with the world's axes, for p = -1), which the loop has already visited since p < k.
  * A body's origin velocity is the velocity of the coincident point of its parent plus the
  * relative velocity along a sliding axis: v_k = v_p + w_p x (x_k - x_p) + u qd.
+ *
+ * Each joint writes the entries of its motion map P and constraint map D (planar: and of its bias
+ * beta) that its type can make non-zero, at every call; the others are zero from ctc_data_new
+ * (calloc) and nothing else writes a body's joint maps (a joint's type is the constant model's;
+ * the loop's closing joint, at index nbodies, is loop.c's), so the pass does not clear them.
  */
 #include "kinematics.h"
 
@@ -38,9 +43,6 @@ static CTC_MULTIVERSION void kinematics_planar(const ctc_model *m, ctc_data *d, 
                        pp[1] + sp * b->loc[0] + cp * b->loc[1]};
         double u[2] = {cp * b->axis[0] - sp * b->axis[1], sp * b->axis[0] + cp * b->axis[1]};
         double w = wp, slide = 0;
-        memset(P, 0, 9 * sizeof(double));
-        memset(D, 0, 9 * sizeof(double));
-        beta[0] = beta[1] = beta[2] = 0;
 
         switch (type) {
         case CTC_JOINT_REVOLUTE:
@@ -109,8 +111,6 @@ static CTC_MULTIVERSION void kinematics_spatial(const ctc_model *m, ctc_data *d,
         ctc_m3_mulv(u, rp, j->axis);
         ctc_m3_mulv(n1, rp, &m->jnt_perp[6 * k]);
         ctc_m3_mulv(n2, rp, &m->jnt_perp[6 * k + 3]);
-        memset(P, 0, 18 * sizeof(double));
-        memset(D, 0, 36 * sizeof(double));
         memset(beta, 0, 6 * sizeof(double));
 
         switch (j->type) {
