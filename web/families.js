@@ -430,11 +430,11 @@ export async function familyView(root, ctx) {
       text: `Cancel the unfinished members of ${describe()}? Running ones stop at their next step; finished ones are kept.`,
       action: "Cancel members"});
     if (!ok || !ctx.alive()) return;
-    const todo = fam.table.rows.filter((r) => r.job && (r.status === "queued" || r.status === "running")).map((r) => r.job);
+    const active = fam.table.rows.filter((r) => r.job && (r.status === "queued" || r.status === "running")).map((r) => r.job);
     let done = 0, failed = 0, lastError = null;
     const worker = async () => {
-      while (todo.length) {
-        const job = todo.shift();
+      while (active.length) {
+        const job = active.shift();
         try { await cancelJob(job, ctx.signal); done++; } catch (e) {
           if (e.name === "AbortError") throw e;
           if (e.code !== "ALREADY_FINISHED") { failed++; lastError = e; }
