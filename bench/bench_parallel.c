@@ -27,9 +27,11 @@
  *             takes (gdca_forward_seq.h), and "vs seq" = that time / time on k threads: where
  *             the split tree beats it, the library may take the tree on threads. The split
  *             columns force the split (options.h par_split); a last table times one CTC
- *             evaluation with the library's defaults on each count, whose gates choose between
+ *             evaluation with the library's defaults on each count, whose gate chooses between
  *             one thread and the split by measured cost (pool.h ctc_pool_gate), against one
- *             thread, with the gates' choices and the pass depth against log2 n.
+ *             thread, with the gate's choice and the pass depth against log2 n; it is timed
+ *             once the gate has decided (a simulation's steady state), and prints how many
+ *             evaluations that took.
  *             The same speed-up table follows for Featherstone's autoTree (branching factors 2 and
  *             4, planar and spatial, n = 1024, 4096, 16384), whose plan (model.c) splits as the
  *             chains' tree does and whose sequential order is the tip runs (gdca_forward_tseq.c),
@@ -328,7 +330,7 @@ typedef struct chain_case {
                                   split (options.h par_split); d[nk + 1] serial in the
                                   sequential order (gdca_forward_seq.h); d[nk + 1 + i] on
                                   kthreads[i - 1] threads with the library's defaults (the
-                                  gates choose: pool.h ctc_pool_gate) */
+                                  gate chooses: data.h ctc_eval_gate) */
     double *q, *v, *u;
     double *f[2 * MAXK + 2], *a[2 * MAXK + 2];
 } chain_case;
@@ -483,9 +485,33 @@ typedef struct speed_row {
     int height;                 /* the depth of the split passes: the plan's height (model.h) */
     double t[2 * MAXK + 2][NP]; /* s per call: 1 thread, each count, 1 thread sequential, each
                                    count with the defaults (ctc only) */
-    int way[MAXK][2]; /* the defaults' choices on each count: the forward order's gate, the
-                         inverse's (-1 measuring, 0 alone, 1 split) */
+    int way[MAXK];              /* the defaults' choice on each count (gate_state) */
+    int settle[MAXK];           /* the CTC evaluations on each count until its gate had decided */
 } speed_row;
+
+/* the evaluation gate's state for the table: -2 never used (no pass had a split to weigh: the
+   chain is too short to cut), -1 measuring, 0 alone, 1 split */
+static int gate_state(const ctc_pool_gate *g)
+{
+    if (g->decided) return g->way;
+    return g->runs == 0 && g->nt[0] == 0 && g->nt[1] == 0 ? -2 : -1;
+}
+
+/* Runs CTC evaluations on the defaults' data of count k (kthreads[k]) until its evaluation gate
+ * (data.h ctc_eval_gate) is not measuring, so that the table times the library's steady state (a
+ * simulation evaluates thousands of right-hand sides; the gate decides after
+ * 2 CTC_POOL_GATE_SAMPLES + 2 of them, each recorded when the next one starts); returns the
+ * evaluations it took, at most SETTLE_MAX_CALLS */
+#define SETTLE_MAX_CALLS 200
+static int settle_gates(chain_case *c, int k)
+{
+    ctc_data *d = c->d[nk + 2 + k];
+    for (int calls = 0; calls < SETTLE_MAX_CALLS; calls++) {
+        if (calls > 1 && gate_state(&d->eval.gate) != -1) return calls;
+        run_speedup(c, (nk + 2 + k) * NP + P_CTC);
+    }
+    return SETTLE_MAX_CALLS;
+}
 
 static int bench_speedup(const char *label, test_chain *chain, int batches, speed_row *row)
 {
@@ -501,12 +527,11 @@ static int bench_speedup(const char *label, test_chain *chain, int batches, spee
     }
     for (int k = 1; k <= nk; k++)
         if (c->d[k]->pool) ctc_pool_set_wait(c->d[k]->pool, wait_spin, wait_block);
+    for (int k = 0; k < nk; k++) row->settle[k] = settle_gates(c, k);
     double med[(2 * MAXK + 2) * NP];
     measure(run_speedup, c, (2 + 2 * nk) * NP, batches, med);
     for (int k = 0; k < nk; k++) {
-        const ctc_data *d = c->d[nk + 2 + k];
-        const ctc_pool_gate *g[2] = {&d->gate[CTC_GATE_FWD_ORDER], &d->gate[CTC_GATE_INVERSE]};
-        for (int i = 0; i < 2; i++) row->way[k][i] = g[i]->decided ? g[i]->way : -1;
+        row->way[k] = gate_state(&c->d[nk + 2 + k]->eval.gate);
     }
     for (int k = nk + 2; k < 2 * nk + 2; k++) row->t[k][P_CTC] = med[k * NP + P_CTC];
     snprintf(row->label, sizeof row->label, "%s", label);
@@ -603,15 +628,15 @@ static void print_speedup(const speed_row *rows, int nrows, int trees)
 }
 
 /* the library's defaults on k threads against one thread (the sequential order): one CTC
-   evaluation, with the gates' choices and the pass depth (the plan's height) beside log2 n */
+   evaluation, with the gate's choice and the pass depth (the plan's height) beside log2 n */
 static void print_defaults(const speed_row *rows, int nrows)
 {
-    static const char *const way_names[] = {"measuring", "alone", "split"};
+    static const char *const way_names[] = {"unused", "measuring", "alone", "split"};
     printf("| chain   |     n | height | log2 n | ctc 1T seq (us) |");
     for (int k = 0; k < nk; k++)
-        printf(" %dT auto (us) | 1T / %dT | fwd, inv |", kthreads[k], kthreads[k]);
+        printf(" %dT auto (us) | 1T / %dT | way | settled |", kthreads[k], kthreads[k]);
     printf("\n| ------- | ----: | -----: | -----: | --------: |");
-    for (int k = 0; k < nk; k++) printf(" ------: | ----: | ---- |");
+    for (int k = 0; k < nk; k++) printf(" ------: | ----: | ---- | ---: |");
     printf("\n");
     for (int i = 0; i < nrows; i++) {
         const speed_row *r = &rows[i];
@@ -619,8 +644,8 @@ static void print_defaults(const speed_row *rows, int nrows)
                log2((double)r->n), 1e6 * r->t[nk + 1][P_CTC]);
         for (int k = 0; k < nk; k++) {
             double t = r->t[nk + 2 + k][P_CTC];
-            printf(" %7.1f | %5.2f | %s, %s |", 1e6 * t, r->t[nk + 1][P_CTC] / t,
-                   way_names[r->way[k][0] + 1], way_names[r->way[k][1] + 1]);
+            printf(" %7.1f | %5.2f | %s | %4d |", 1e6 * t, r->t[nk + 1][P_CTC] / t,
+                   way_names[r->way[k] + 2], r->settle[k]);
         }
         printf("\n");
     }
@@ -728,10 +753,12 @@ int main(int argc, char **argv)
             }
         }
         print_speedup(rows, nrows, 0);
-        printf("\nThe library's defaults on k threads (each pass's gate times it alone and split, "
-               "then takes the faster: pool.h) against 1 thread (the sequential order), one CTC "
-               "right-hand side; the gates' choices at the end (fwd: the forward order, inv: the "
-               "inverse), and the split passes' depth (the tree's height) beside log2 n:\n\n");
+        printf("\nThe library's defaults on k threads (the evaluation gate times whole "
+               "evaluations with every pass alone and with every pass split, then takes the "
+               "faster: data.h ctc_eval_gate) against 1 thread (the sequential order), one CTC "
+               "right-hand side, once the gate has decided (settled: the evaluations that took); "
+               "its way (unused: no pass had a split to weigh), and the split passes' depth (the "
+               "tree's height) beside log2 n:\n\n");
         print_defaults(rows, nrows);
     }
     if (strchr(parts, 't')) {

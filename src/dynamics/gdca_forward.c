@@ -70,8 +70,8 @@
 
 /* The least chain length from which an open chain's forward pass may take the balanced tree,
  * split over threads, instead of the sequential order on one thread (gdca_forward_seq.h), when
- * the data has two threads or more; from there the gate d->gate[CTC_GATE_FWD_ORDER] times both
- * ways and takes the faster (pool.h ctc_pool_gate). Half the length where a CTC evaluation on 2
+ * the data has two threads or more; from there the evaluation gate (data.h ctc_eval_gate) times
+ * both ways and takes the faster. Half the length where a CTC evaluation on 2
  * threads first gained over the sequential order on a loaded 2-core machine (bench/NOTEBOOK.md,
  * "Threads against the sequential order"), so that a quieter or wider machine can gain below it. */
 #define FORWARD_TREE_MIN_BODIES_PLANAR 2048
@@ -488,9 +488,8 @@ static void forward_plan(const ctc_model *m, ctc_data *d, const double *f, doubl
                           .root_takes_top = 1,
                           .min_bodies =
                               sp ? FORWARD_MIN_BODIES_SPATIAL : FORWARD_MIN_BODIES_PLANAR};
-    /* a loop model's pass is gated here; an open model's tree order was chosen by its gate */
-    if (m->has_loop)
-        pass.gate = correct == GDCA_FWD_CORRECT ? CTC_GATE_FWD_CORRECT : CTC_GATE_FWD_TREE;
+    /* a loop model's pass is gated here; an open model's tree order was chosen by the gate */
+    pass.gated = m->has_loop;
     gdca_par_run(m, d, &pass);
 }
 
@@ -557,17 +556,20 @@ static int refine_undo_if_grown(const ctc_model *m, ctc_data *d, double *qacc, c
     return 1;
 }
 
-/* One pass in mode `mode` (gdca_forward_joint.h) in the order of the setting, or where the tree
- * on threads may pay, of the gate's timings; records the way taken in d->fwd_split for the
- * correction. Returns 1 when the pass took the sequential order (gdca_forward_order_seq: the
- * setting, or no split taken), 0 for the plan. */
+/* The forward order of the next pass: where the tree on threads may pay, the evaluation's way
+ * (data.h ctc_eval_gate) chooses between it and the sequential order. Records it in
+ * d->fwd_split, for the pass and its correction. */
+static void forward_order(const ctc_model *m, ctc_data *d)
+{
+    d->fwd_split = gdca_forward_tree_candidate(m, d) && ctc_data_eval_split(d);
+}
+
+/* One pass in mode `mode` (gdca_forward_joint.h) in the order of the setting, or of
+ * d->fwd_split (forward_order). Returns 1 when the pass took the sequential order
+ * (gdca_forward_order_seq: the setting, or no split taken), 0 for the plan. */
 static int forward_pass(const ctc_model *m, ctc_data *d, const double *f, double *qacc, int mode)
 {
-    const int candidate = gdca_forward_tree_candidate(m, d);
-    ctc_pool_gate *g = candidate && !d->opt.par_split ? &d->gate[CTC_GATE_FWD_ORDER] : NULL;
-    d->fwd_split = candidate && (g == NULL || ctc_pool_gate_way(g));
-    const double t0 = g != NULL ? ctc_pool_clock() : 0;
-    /* gdca_forward_order_seq, with d->fwd_split (which implies candidate) just set */
+    /* gdca_forward_order_seq, with d->fwd_split (which implies candidate) set */
     const int seq = !m->has_loop && d->opt.fwd_order != CTC_ORDER_TREE &&
                     (d->opt.fwd_order == CTC_ORDER_SEQ || !d->fwd_split);
     if (seq) {
@@ -575,7 +577,6 @@ static int forward_pass(const ctc_model *m, ctc_data *d, const double *f, double
     } else {
         forward_plan(m, d, f, qacc, mode);
     }
-    if (g != NULL) ctc_pool_gate_record(g, d->fwd_split, ctc_pool_clock() - t0);
     return seq;
 }
 
@@ -616,12 +617,14 @@ static void forward_reference(const ctc_model *m, ctc_data *d, const double *f, 
     double *r = d->fwd_res;
     const int nv = m->nv;
     for (int i = 0; i < nv; i++) r[i] = f[i] - f_ref[i];
+    forward_order(m, d);
     const int seq = forward_pass(m, d, r, qacc, GDCA_FWD_BIASFREE);
     for (int i = 0; a_ref != NULL && i < nv; i++) qacc[i] += a_ref[i];
     /* the sequential passes added the reference's loads in their own sweep */
     const size_t nl = (size_t)m->nbodies * (size_t)m->dim;
     for (size_t i = 0; !seq && i < nl; i++) d->jnt_load[i] += d->jnt_load_inv[i];
     forward_refine(m, d, f, qacc, gdca_refine_steps_ref(m, d));
+    if (gdca_forward_tree_candidate(m, d)) ctc_data_eval_pass_done(d);
 }
 
 int gdca_forward_takes_ref(const ctc_model *m, const ctc_data *d)
@@ -650,8 +653,10 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         for (int i = 0; i < m->nind; i++) fm[m->ind_coord[i]] = f[m->ind_coord[i]];
         f = fm;
     }
+    forward_order(m, d);
     forward_pass(m, d, f, qacc, GDCA_FWD_FULL);
     forward_refine(m, d, f, qacc, gdca_refine_steps(m, d));
+    if (gdca_forward_tree_candidate(m, d)) ctc_data_eval_pass_done(d);
 }
 
 void ctc_gdca_forward_from(const ctc_model *m, ctc_data *d, const double *f, const double *a_ref,

@@ -9,7 +9,7 @@
  * the free end, so only its handle-1 equations are ever formed (gdca_forward_seq.c), and the
  * same from the grounded base. An open chain's forward pass takes it unless the pass is to split
  * over threads (gdca_forward_order_seq: two threads or more, a least length, and the measured
- * choice of the pass's gate); loop models,
+ * choice of the evaluation gate, data.h ctc_eval_gate); loop models,
  * whose root solves the loop's boundary equations together (gdca_loop.h), always take the tree.
  * A branched tree's sequential order is the tip run along every heavy path, its light subtrees
  * raked into their parents as they are met (gdca_forward_tseq.c).
@@ -22,10 +22,11 @@
 /* 1 if the forward pass of m with d's settings (options.h fwd_order, threads) may take the
  * balanced tree split over threads instead of the sequential order: an open model, fwd_order
  * CTC_ORDER_AUTO, two threads or more and a length from which the tree was measured to gain
- * (gdca_forward.c). Whether it does is then its gate's measured choice (data.h fwd_split). */
+ * (gdca_forward.c). Whether it does is then the evaluation gate's measured choice (data.h
+ * ctc_eval_gate, fwd_split). */
 int gdca_forward_tree_candidate(const ctc_model *m, const ctc_data *d);
 
-/* 1 if the forward pass of m with d's settings (options.h fwd_order) and the gate's choice of
+/* 1 if the forward pass of m with d's settings (options.h fwd_order) and the gate's choice for
  * the last ctc_gdca_forward (d->fwd_split) takes the sequential order, 0 for the balanced tree;
  * the refinement's correction asks it for the order of the pass it corrects */
 int gdca_forward_order_seq(const ctc_model *m, const ctc_data *d);

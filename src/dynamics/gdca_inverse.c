@@ -175,7 +175,8 @@ static inline double *record(const ctc_data *d, int a)
 /* When the composite inverse pass splits over threads (gdca_par.h): the least items (bodies,
  * nodes of one tree height) per chunk, and the least chain length from which a split is tried:
  * where the split pass first beat the serial one on 2 threads (bench/NOTEBOOK.md, "Parallel
- * assembly", "The thresholds"); from there the pass's gate measures whether it pays. */
+ * assembly", "The thresholds"); from there the evaluation gate measures whether it pays
+ * (data.h ctc_eval_gate). */
 #define INVERSE_GRAIN_PLANAR 16
 #define INVERSE_GRAIN_SPATIAL 4
 #define INVERSE_MIN_BODIES_PLANAR 1024
@@ -494,7 +495,7 @@ static void inverse_planar(const ctc_model *m, ctc_data *d, const double *u, dou
                           .disassemble = m->chain ? disassemble_planar : disassemble_planar_tree,
                           .grain = INVERSE_GRAIN_PLANAR,
                           .min_bodies = INVERSE_MIN_BODIES_PLANAR,
-                          .gate = keep ? CTC_GATE_INVERSE_REPEAT : CTC_GATE_INVERSE};
+                          .gated = 1};
     gdca_par_run(m, d, &pass);
 }
 
@@ -508,7 +509,7 @@ static void inverse_spatial(const ctc_model *m, ctc_data *d, const double *u, do
                           .disassemble = m->chain ? disassemble_spatial : disassemble_spatial_tree,
                           .grain = INVERSE_GRAIN_SPATIAL,
                           .min_bodies = INVERSE_MIN_BODIES_SPATIAL,
-                          .gate = keep ? CTC_GATE_INVERSE_REPEAT : CTC_GATE_INVERSE};
+                          .gated = 1};
     gdca_par_run(m, d, &pass);
 }
 

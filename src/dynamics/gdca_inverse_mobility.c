@@ -398,7 +398,7 @@ void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u,
         .grain = planar ? MOBILITY_GRAIN_PLANAR : MOBILITY_GRAIN_SPATIAL,
         .root_takes_top = 1,
         .min_bodies = planar ? MOBILITY_MIN_BODIES_PLANAR : MOBILITY_MIN_BODIES_SPATIAL,
-        .gate = CTC_GATE_MOBILITY,
+        .gated = 1,
     };
     gdca_par_run(m, d, &pass);
     if (m->has_loop && d->singular_joint >= 0) {

@@ -9,8 +9,9 @@
  * below wrote (the nodes of one height are stored left to right along the chain, and the left
  * half of one height has its children in the left half of the heights below). A run of
  * consecutive stages that do not split becomes one stage of one chunk, done by one thread in
- * stage order without waiting between them. A gated pass (gdca_par.h) times each run that could
- * split, on the caller's thread, from before the split's hand-off to after its last chunk.
+ * stage order without waiting between them. A gated pass (gdca_par.h) asks the data's evaluation
+ * gate which way to take, and marks where its run ended, so that the gate times the evaluation
+ * up to its last pass that could split (data.h ctc_eval_gate).
  */
 #include "gdca_par.h"
 
@@ -196,19 +197,48 @@ void gdca_par_run(const ctc_model *m, ctc_data *d, const gdca_par_pass *pass)
         int chunks = plan_pass(&r);
         ctc_pool *pool = chunks > 1 ? data_pool(d) : NULL;
         if (pool != NULL) {
-            const int forced = d->opt.par_grain > 0 || d->opt.par_split;
-            ctc_pool_gate *g = forced || pass->gate == CTC_GATE_NONE ? NULL : &d->gate[pass->gate];
-            const int split = g == NULL || ctc_pool_gate_way(g);
-            const double t0 = g != NULL ? ctc_pool_clock() : 0;
+            const int split = !pass->gated || ctc_data_eval_split(d);
             if (split) {
                 ctc_pool_job job = {r.ngroups, r.group_first, chunk_work, &r};
                 ctc_pool_run(pool, &job);
             } else {
                 run_serial(m, d, pass);
             }
-            if (g != NULL) ctc_pool_gate_record(g, split, ctc_pool_clock() - t0);
+            if (pass->gated) ctc_data_eval_pass_done(d);
             return;
         }
     }
     run_serial(m, d, pass);
+}
+
+/* gdca_par_bodies' job: chunk c is the bodies [n c / nchunks, n (c + 1) / nchunks) */
+typedef struct bodies_job {
+    void (*bodies)(void *ctx, int lo, int hi);
+    void *ctx;
+    long long n;
+    int nchunks;
+} bodies_job;
+
+static void bodies_work(void *arg, int c)
+{
+    const bodies_job *b = arg;
+    b->bodies(b->ctx, (int)(b->n * c / b->nchunks), (int)(b->n * (c + 1) / b->nchunks));
+}
+
+int gdca_par_bodies(const ctc_model *m, ctc_data *d, void (*bodies)(void *ctx, int lo, int hi),
+                    void *ctx, int min_bodies)
+{
+    const ctc_data *o = d->pool_owner ? d->pool_owner : d;
+    if (o->threads < 2 || m->nbodies < min_bodies || m->nbodies < o->threads) return 0;
+    ctc_pool *pool = ctc_data_eval_split(d) ? data_pool(d) : NULL;
+    if (pool != NULL) {
+        bodies_job b = {bodies, ctx, m->nbodies, o->threads};
+        const int first[2] = {0, b.nchunks};
+        const ctc_pool_job job = {1, first, bodies_work, &b};
+        ctc_pool_run(pool, &job);
+    } else {
+        bodies(ctx, 0, m->nbodies);
+    }
+    ctc_data_eval_pass_done(d);
+    return 1;
 }

@@ -20,12 +20,13 @@
  * done. A pass none of whose stages splits, a chain of fewer than min_bodies bodies, or a data
  * with threads = 1 runs without the pool on the caller's thread.
  *
- * A pass that could split runs split only where that is measured to pay: its gate (data.h
- * d->gate[pass->gate], pool.h ctc_pool_gate) times its first runs alone and split in turn, then
- * takes the faster way, so that threads never make a pass slower than one thread does (beyond
- * the few runs it measures). Both ways give bitwise the same results. A pass with gate
- * CTC_GATE_NONE, or a data with d->opt.par_grain > 0 or d->opt.par_split (a forced split, for
- * tests and benchmarks), splits whenever its plan does.
+ * A gated pass that could split runs split only where that is measured to pay: the data's
+ * evaluation gate (data.h ctc_eval_gate, pool.h ctc_pool_gate) times its first evaluations with
+ * every such pass alone and with every one split, in turn, then takes the faster way, so that
+ * threads never make an evaluation slower than one thread does (beyond the few it measures).
+ * Both ways give bitwise the same results. A pass that is not gated (its caller has decided), or
+ * a data with d->opt.par_grain > 0 or d->opt.par_split (a forced split, for tests and
+ * benchmarks), splits whenever its plan does.
  *
  * The pass's callbacks must write only what belongs to the items they are given (a node's own
  * record, its joint's solution, the loads of its two children; a body's record), so that the
@@ -59,9 +60,19 @@ typedef struct gdca_par_pass {
     int grain;      /* the least items per chunk: a stage of fewer than 2 grain items runs whole */
     int min_bodies; /* chains of fewer bodies run the whole pass serially: below it the pass is
                        too short for a second thread to pay (d->opt.par_grain > 0 overrides both) */
-    ctc_gate_site gate; /* the gate that decides whether the pass splits; CTC_GATE_NONE: it
-                           splits whenever the plan does (the caller has decided) */
+    int gated;      /* 1: the evaluation gate decides whether the pass splits (ctc_data_eval_split);
+                       0: it splits whenever the plan does (the caller has decided) */
 } gdca_par_pass;
+
+/* Runs bodies(ctx, lo, hi) over all of m's bodies, for per-body work whose bodies do not depend
+ * on one another (the handles), where d has threads and m at least min_bodies bodies (and as
+ * many as threads): where the evaluation's way is to split (ctc_data_eval_split), as contiguous
+ * ranges [n j / c, n (j + 1) / c) on d's pool, range j on the thread that takes chunk j of a
+ * pass's body stage (so a pass that follows finds its bodies in the same cores' caches), else
+ * in one call on the caller's thread. Returns 1 when it ran them, 0 (nothing run) where d or m
+ * is too small: the caller then runs them itself. The results do not depend on the way. */
+int gdca_par_bodies(const ctc_model *m, ctc_data *d, void (*bodies)(void *ctx, int lo, int hi),
+                    void *ctx, int min_bodies);
 
 /* Runs the pass on the threads d allows (data.h: ctc_data_set_threads), starting d's pool at the
  * first pass that splits a stage. Without a pool (threads = 1, or it could not be started) the

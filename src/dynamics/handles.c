@@ -13,7 +13,20 @@
 #include "handles.h"
 
 #include "clones.h"
+#include "gdca_par.h"
 #include "spatial.h"
+
+/* The least bodies from which the records are computed on the data's threads, where the
+ * evaluation splits (data.h ctc_eval_gate): those of the composite inverse that follows
+ * (gdca_inverse.c), so that the handles split only in evaluations whose passes split. */
+#define HANDLES_MIN_BODIES_PLANAR 1024
+#define HANDLES_MIN_BODIES_SPATIAL 256
+
+/* what a range of bodies needs (gdca_par_bodies) */
+typedef struct handles_args {
+    const ctc_model *m;
+    ctc_data *d;
+} handles_args;
 
 static void planar_block(double *h, const double ri[2], const double rj[2], double ij, double im)
 {
@@ -39,10 +52,14 @@ static inline const double *handle2(const ctc_model *m, const ctc_data *d, int k
                                                 : c;
 }
 
-static CTC_MULTIVERSION void handles_planar(const ctc_model *m, ctc_data *d)
+/* the records of bodies first..end-1 */
+static CTC_MULTIVERSION void handles_planar(void *ctx, int first, int end)
 {
+    const handles_args *args = ctx;
+    const ctc_model *m = args->m;
+    ctc_data *d = args->d;
     const double *g = m->plane_gravity;
-    for (int k = 0; k < m->nbodies; k++) {
+    for (int k = first; k < end; k++) {
         const ctc_planar_body *b = &m->planar[k];
         const double *c = d->xcom + 3 * k;
         const double *next = handle2(m, d, k, c);
@@ -79,9 +96,12 @@ static inline void spatial_block(double *h, const double iw[9], const double gi[
     }
 }
 
-static CTC_MULTIVERSION void handles_spatial(const ctc_model *m, ctc_data *d)
+static CTC_MULTIVERSION void handles_spatial(void *ctx, int first, int end)
 {
-    for (int k = 0; k < m->nbodies; k++) {
+    const handles_args *args = ctx;
+    const ctc_model *m = args->m;
+    ctc_data *d = args->d;
+    for (int k = first; k < end; k++) {
         const ctc_body_spec *body = &m->bodies[k];
         const double *rot = d->xrot + 9 * k, *w = d->omega + 3 * k, *c = d->xcom + 3 * k;
         const double *next = handle2(m, d, k, c);
@@ -138,9 +158,12 @@ void ctc_handles(const ctc_model *m, ctc_data *d)
         ctc_handles(m->dyn, ctc_data_dyn_begin(m, d));
         return;
     }
+    handles_args args = {m, d};
     if (m->form == CTC_FORM_PLANAR) {
-        handles_planar(m, d);
+        if (!gdca_par_bodies(m, d, handles_planar, &args, HANDLES_MIN_BODIES_PLANAR))
+            handles_planar(&args, 0, m->nbodies);
     } else {
-        handles_spatial(m, d);
+        if (!gdca_par_bodies(m, d, handles_spatial, &args, HANDLES_MIN_BODIES_SPATIAL))
+            handles_spatial(&args, 0, m->nbodies);
     }
 }

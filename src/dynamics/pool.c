@@ -339,7 +339,15 @@ void ctc_pool_gate_record(ctc_pool_gate *g, int way, double s)
 {
     g->runs++;
     if (g->decided) {
-        if (g->runs >= CTC_POOL_GATE_RECHECK) *g = (ctc_pool_gate){0};
+        if (g->runs >= CTC_POOL_GATE_RECHECK) {
+            *g = (ctc_pool_gate){0};
+        } else if (g->way == 1) {
+            /* the split's latest timings replace its oldest: once their median no longer pays
+               against the timings alone, measure again */
+            g->t[1][(g->runs - 1) % CTC_POOL_GATE_SAMPLES] = s;
+            if (!ctc_pool_gate_choose(g->t[0], g->nt[0], g->t[1], g->nt[1]))
+                *g = (ctc_pool_gate){0};
+        }
         return;
     }
     /* the first run of each way (runs 1 and 2) is a warm-up */

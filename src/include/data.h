@@ -22,21 +22,21 @@
 #include "options.h"
 #include "pool.h"
 
-/* The kinds of pass that a gate decides on (data.h gate; gdca_par.h gdca_par_pass.gate): none
- * (split whenever the plan splits), the forward pass's order on an open model (the sequential
- * order alone or the balanced tree split), a loop model's forward pass and its correction,
- * the composite inverse (a first pass at a state, and a repeat that keeps the composite
- * inertias: gdca_inverse.c) and the mobility-form inverse. */
-typedef enum ctc_gate_site {
-    CTC_GATE_NONE = 0,
-    CTC_GATE_FWD_ORDER,
-    CTC_GATE_FWD_TREE,
-    CTC_GATE_FWD_CORRECT,
-    CTC_GATE_INVERSE,
-    CTC_GATE_INVERSE_REPEAT,
-    CTC_GATE_MOBILITY,
-    CTC_NGATES
-} ctc_gate_site;
+/* Whether the passes of one evaluation split over threads, by measured cost (pool.h
+ * ctc_pool_gate; gdca_par.h): one gate for all of a data's passes, which times whole
+ * evaluations, from the ctc_kinematics that starts one at a new state to the end of its last
+ * pass that could split. A per-pass choice would miss what a split costs the passes around it: a
+ * split pass leaves its records in the other cores' caches, where the next serial pass (the
+ * kinematics, the handles, an inverse that runs alone) fetches them, and the tree order can take
+ * one more refinement step than the sequential one (bench/NOTEBOOK.md, "Threads on 16 cores"). */
+typedef struct ctc_eval_gate {
+    ctc_pool_gate gate;
+    int open;  /* 1: an evaluation is under way (ctc_kinematics started it) */
+    int split; /* its way: 1 split, 0 alone */
+    int gated; /* 1: a pass of it asked the way (so it is timed) */
+    double t0; /* s (ctc_pool_clock): its start */
+    double t1; /* s: the end of its last pass that asked the way */
+} ctc_eval_gate;
 
 typedef struct ctc_data {
     int dim;   /* 3 or 6, as the model's */
@@ -129,9 +129,11 @@ typedef struct ctc_data {
     int pool_failed;             /* 1: the pool could not start; serial until threads change */
     struct ctc_data *pool_owner; /* NULL, or the data whose threads and pool d uses
                                     (ctc_data_share_pool) */
-    /* whether each kind of pass runs alone or split, by its measured cost (pool.h
-       ctc_pool_gate; gdca_par.h): d's own gates, reset when the thread count changes */
-    ctc_pool_gate gate[CTC_NGATES];
+    /* whether an evaluation's passes run alone or split (ctc_eval_gate above): d's own gate,
+       reset when the thread count changes; a reduced model's data (dyn below) uses its
+       parent's, through eval_of (NULL: d->eval) */
+    ctc_eval_gate eval;
+    ctc_eval_gate *eval_of;
     int fwd_split; /* the way the last ctc_gdca_forward took on an open model: 1 the balanced
                       tree split over threads, 0 the sequential order (gdca_forward_seq.h) */
 
@@ -144,7 +146,7 @@ typedef struct ctc_data {
 
     /* a model with merged bodies (model.h): the reduced model's data, which the dynamics passes
        use (ctc_data_dyn_begin); its kinematics are copied from d's by ctc_kinematics, its
-       settings and threads are d's, and its gates are reset with d's. NULL when m->dyn is NULL.
+       settings, threads and evaluation gate are d's. NULL when m->dyn is NULL.
        Owned by d. */
     struct ctc_data *dyn;
 } ctc_data;
@@ -160,13 +162,13 @@ void ctc_data_free(ctc_data *d);
  * (pool.h). Heights too small to pay for the split still run on the calling thread (gdca_par.h).
  * The nthreads - 1 workers start at the first pass that uses them and belong to d: they stop when
  * d is freed or its count changes, so no two data share them unless ctc_data_share_pool says so.
- * Whether a pass splits is measured, pass by pass (gdca_par.h, pool.h ctc_pool_gate): where the
- * split would be slower, the pass runs on the calling thread. The results are bitwise the same
- * for every count, with one exception: an open chain's (or tree's) forward pass takes the
- * sequential order on one thread and, from a least length on (planar 2048, spatial 512 bodies;
- * chains' figures, used for trees too), on two threads or more whichever of it and the balanced
- * tree split (the plan) its gate measures faster (gdca_forward_seq.h, opt.fwd_order), so at
- * those lengths any two counts agree to rounding, evaluation by evaluation bitwise equal to one
+ * Whether the passes split is measured, evaluation by evaluation (ctc_eval_gate above): where
+ * the split would make an evaluation slower, its passes run on the calling thread. The results are
+ * bitwise the same for every count, with one exception: an open chain's (or tree's) forward pass
+ * takes the sequential order on one thread and, from a least length on (planar 2048, spatial 512
+ * bodies; chains' figures, used for trees too), on two threads or more whichever of it and the
+ * balanced tree split (the plan) the gate measures faster (gdca_forward_seq.h, opt.fwd_order), so
+ * at those lengths any two counts agree to rounding, evaluation by evaluation bitwise equal to one
  * of the two orders. Returns CTC_OK, or CTC_EINVAL with a message in err (errlen bytes; may be
  * NULL) when nthreads is out of range. */
 ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t errlen);
@@ -175,6 +177,19 @@ ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t err
  * turn by one thread (a simulation's plant and its controller's model): one set of workers then
  * serves both. owner must stay alive while d uses it; NULL returns d to its own setting. */
 void ctc_data_share_pool(ctc_data *d, ctc_data *owner);
+
+/* Starts an evaluation at a new state (ctc_kinematics calls it; with threads > 1 only): records
+ * the time of the last one in d's gate, where a pass of it asked the way, and takes the next
+ * one's way (pool.h ctc_pool_gate_way). */
+void ctc_data_eval_begin(ctc_data *d);
+
+/* Whether a pass that could split does, in the evaluation under way: 1 with opt.par_split or
+ * par_grain (a forced split), else the gate's way for it (0 before any ctc_kinematics); marks
+ * the evaluation as timed. */
+int ctc_data_eval_split(ctc_data *d);
+
+/* At the end of a pass that asked ctc_data_eval_split: the evaluation's time runs to here. */
+void ctc_data_eval_pass_done(ctc_data *d);
 
 /* For a model with merged bodies (m->dyn, model.h): d->dyn with d's settings (opt, baumgarte)
  * and threads (d's workers, or those d shares) copied in, for a pass on m->dyn. */

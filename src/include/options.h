@@ -17,7 +17,8 @@
 enum {
     CTC_ORDER_AUTO = 0, /* by rule and measure: on two threads or more from a least length on,
                            the balanced tree split or the sequential order, whichever the
-                           pass's gate times faster (gdca_forward_order_seq); else the
+                           evaluation gate times faster (data.h ctc_eval_gate,
+                           gdca_forward_order_seq); else the
                            sequential order */
     CTC_ORDER_TREE = 1, /* the balanced assembly tree, a branched tree's plan (gdca_forward.c) */
     CTC_ORDER_SEQ = 2   /* the sequential order (gdca_forward_seq.c, a branched tree's
@@ -45,10 +46,10 @@ typedef struct ctc_options {
     int par_grain;  /* the least items per chunk of a split stage of a pass (one tree height, or
                        the bodies; gdca_par.h), and no least chain length; 0 = the pass's
                        measured values */
-    int par_split;  /* 1: a pass whose plan splits runs split, without asking its gate whether
-                       that pays (tests and benchmarks time the split itself; on an open model
-                       with fwd_order AUTO the forward pass then takes the tree wherever it may);
-                       0 = by each pass's gate (gdca_par.h) */
+    int par_split;  /* 1: a pass whose plan splits runs split, without asking the evaluation
+                       gate whether that pays (tests and benchmarks time the split itself; on an
+                       open model with fwd_order AUTO the forward pass then takes the tree
+                       wherever it may); 0 = by the gate (data.h ctc_eval_gate, gdca_par.h) */
 } ctc_options;
 
 /* The defaults: every choice by the library's rule. */

@@ -39,8 +39,9 @@
  * rule: a split pays only where the work of a stage outweighs the hand-offs, which depends on
  * the machine, its load and the thread count. A gate (ctc_pool_gate) times the first runs of one
  * kind of job alone and split, alternately, then takes the faster way for the next
- * CTC_POOL_GATE_RECHECK runs before it measures again; ctc_pool_gate_choose is its decision
- * from the timings alone, so that it is tested without a clock.
+ * CTC_POOL_GATE_RECHECK runs (or until a split stops paying) before it measures again;
+ * ctc_pool_gate_choose is its decision from the timings alone, so that it is tested without a
+ * clock. The GDCA passes keep one gate per data, for whole evaluations (data.h ctc_eval_gate).
  */
 #ifndef CTC_POOL_H
 #define CTC_POOL_H
@@ -97,7 +98,9 @@ void ctc_pool_run(ctc_pool *p, const ctc_pool_job *job);
 
 /* A gate's timings per way before it decides: the first run of each way (a pool's start, cold
  * caches) is not counted. The split must be faster by CTC_POOL_GATE_MARGIN of the time alone
- * (medians) to be taken; after CTC_POOL_GATE_RECHECK decided runs the gate measures again. */
+ * (medians) to be taken, and stays taken only while the median of its latest
+ * CTC_POOL_GATE_SAMPLES timings is; after CTC_POOL_GATE_RECHECK decided runs the gate measures
+ * again. */
 #define CTC_POOL_GATE_SAMPLES 6
 #define CTC_POOL_GATE_MARGIN 0.05
 #define CTC_POOL_GATE_RECHECK 4096
@@ -123,7 +126,9 @@ int ctc_pool_gate_choose(const double *alone, int nalone, const double *split, i
 int ctc_pool_gate_way(const ctc_pool_gate *g);
 
 /* Records a run that took `way` and lasted s seconds; decides once both ways have
- * CTC_POOL_GATE_SAMPLES timings, and measures again after CTC_POOL_GATE_RECHECK decided runs. */
+ * CTC_POOL_GATE_SAMPLES timings, and measures again after CTC_POOL_GATE_RECHECK decided runs, or
+ * as soon as a split it decided on stops paying by its latest timings (a split's cost can change
+ * after the measurement: the workers' waiting, other programs on the cores). */
 void ctc_pool_gate_record(ctc_pool_gate *g, int way, double s);
 
 /* Seconds on the monotonic clock, to time a gate's runs. */

@@ -74,6 +74,7 @@ ctc_data *ctc_data_dyn_begin(const ctc_model *m, ctc_data *d)
     e->opt = d->opt;
     e->baumgarte[0] = d->baumgarte[0], e->baumgarte[1] = d->baumgarte[1];
     e->pool_owner = d->pool_owner != NULL ? d->pool_owner : d;
+    e->eval_of = &d->eval;
     return e;
 }
 
@@ -149,8 +150,7 @@ ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t err
         d->pool = NULL;
         d->pool_failed = 0;
         d->threads = nthreads;
-        memset(d->gate, 0, sizeof d->gate);
-        if (d->dyn != NULL) memset(d->dyn->gate, 0, sizeof d->dyn->gate);
+        d->eval = (ctc_eval_gate){0};
     }
     return CTC_OK;
 }
@@ -158,6 +158,32 @@ ctc_status ctc_data_set_threads(ctc_data *d, int nthreads, char *err, size_t err
 void ctc_data_share_pool(ctc_data *d, ctc_data *owner)
 {
     d->pool_owner = owner == d ? NULL : owner;
-    memset(d->gate, 0, sizeof d->gate);
-    if (d->dyn != NULL) memset(d->dyn->gate, 0, sizeof d->dyn->gate);
+    d->eval = (ctc_eval_gate){0};
+}
+
+void ctc_data_eval_begin(ctc_data *d)
+{
+    const ctc_data *o = d->pool_owner != NULL ? d->pool_owner : d;
+    if (o->threads < 2) return;
+    ctc_eval_gate *e = &d->eval;
+    if (e->open && e->gated) ctc_pool_gate_record(&e->gate, e->split, e->t1 - e->t0);
+    e->open = 1;
+    e->gated = 0;
+    e->split = ctc_pool_gate_way(&e->gate);
+    e->t0 = ctc_pool_clock();
+}
+
+int ctc_data_eval_split(ctc_data *d)
+{
+    if (d->opt.par_split || d->opt.par_grain > 0) return 1;
+    ctc_eval_gate *e = d->eval_of != NULL ? d->eval_of : &d->eval;
+    if (!e->open) return ctc_pool_gate_way(&e->gate);
+    e->gated = 1;
+    return e->split;
+}
+
+void ctc_data_eval_pass_done(ctc_data *d)
+{
+    ctc_eval_gate *e = d->eval_of != NULL ? d->eval_of : &d->eval;
+    if (e->gated) e->t1 = ctc_pool_clock();
 }

@@ -218,6 +218,7 @@ static void kinematics_dyn(const ctc_model *m, ctc_data *d)
 
 void ctc_kinematics(const ctc_model *m, ctc_data *d, const double *q, const double *v)
 {
+    ctc_data_eval_begin(d); /* a new state starts an evaluation (data.h ctc_eval_gate) */
     if (m->form == CTC_FORM_PLANAR) {
         kinematics_planar(m, d, q, v);
     } else {

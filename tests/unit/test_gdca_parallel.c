@@ -554,7 +554,7 @@ static ctc_model *order_model(int n, int spatial)
 
 /* By default (CTC_ORDER_AUTO) an open chain's forward pass takes the sequential order on one
  * thread at any length; on two threads or more it may take the tree from 2048 planar or 512
- * spatial bodies (gdca_forward.c), where its gate chooses by measured cost; before any pass the
+ * spatial bodies (gdca_forward.c), where the gate chooses by measured cost; before any pass the
  * order is the sequential one; a shared pool's owner's count decides; loop models take the tree
  * always; the setting overrides the rule for open chains. */
 Test(gdca_parallel, the_forward_pass_may_take_the_tree_on_threads_only_from_the_least_length)
@@ -639,17 +639,51 @@ Test(gdca_parallel, the_gate_alternates_then_keeps_the_faster_way_and_rechecks)
         cr_expect_eq(g.way, faster);
         for (int k = 1; k < CTC_POOL_GATE_RECHECK; k++) {
             cr_assert_eq(ctc_pool_gate_way(&g), faster);
-            ctc_pool_gate_record(&g, faster, 1.0); /* decided: timings are not looked at */
+            ctc_pool_gate_record(&g, faster, 1e-3 * (1 + k % 3 * 0.01)); /* as measured */
         }
         cr_expect(g.decided);
-        ctc_pool_gate_record(&g, faster, 1.0);
+        ctc_pool_gate_record(&g, faster, 1e-3);
         cr_expect(!g.decided, "measures again after the recheck count");
         cr_expect_eq(ctc_pool_gate_way(&g), 0);
     }
 }
 
-/* With the gates on (no forced split), a pass on 1 to 4 threads gives, run after run while its
- * gates measure and after they decide, bitwise the serial results: the composite inverse always,
+/* A split the gate decided on is watched: once the median of its latest timings no longer beats
+ * the timings alone by the margin, the gate measures again (and, the split now slower, decides
+ * alone); one slow run among fast ones does not move it. A decision alone is kept whatever its
+ * timings, until the recheck count. */
+Test(gdca_parallel, the_gate_drops_a_split_that_stops_paying)
+{
+    for (int faster = 0; faster < 2; faster++) {
+        ctc_pool_gate g = {0};
+        while (!g.decided) {
+            int way = ctc_pool_gate_way(&g);
+            ctc_pool_gate_record(&g, way, way == faster ? 1e-3 : 2e-3);
+        }
+        cr_assert_eq(g.way, faster);
+        ctc_pool_gate_record(&g, faster, 9e-3); /* one outlier */
+        cr_expect(g.decided && g.way == faster, "one slow run does not move it");
+        int runs = 0;
+        while (g.decided && runs < CTC_POOL_GATE_SAMPLES + 2) {
+            ctc_pool_gate_record(&g, faster, 4e-3); /* the decided way is now the slower */
+            runs++;
+        }
+        if (faster == 1) {
+            cr_expect(!g.decided, "a split that stopped paying is measured again");
+            cr_expect_leq(runs, CTC_POOL_GATE_SAMPLES / 2 + 1, "within half its samples");
+            while (!g.decided) {
+                int way = ctc_pool_gate_way(&g);
+                ctc_pool_gate_record(&g, way, way ? 4e-3 : 2e-3);
+            }
+            cr_expect_eq(g.way, 0, "then alone");
+        } else {
+            cr_expect(g.decided && g.way == 0, "alone is kept whatever its timings");
+        }
+    }
+}
+
+/* With the gate on (no forced split), a pass on 1 to 4 threads gives, run after run while the
+ * gate measures and after it decides, bitwise the serial results: the composite inverse always,
  * the forward pass those of one of its two orders (the sequential one of one thread, or the
  * balanced tree) - the gate may pick either. */
 Test(gdca_parallel, gated_passes_give_bitwise_the_serial_results_on_1_to_4_threads, .timeout = 120)
@@ -695,12 +729,66 @@ Test(gdca_parallel, gated_passes_give_bitwise_the_serial_results_on_1_to_4_threa
             }
         }
         for (int k = 1; k < 4; k++) {
-            cr_expect(dk[k]->gate[CTC_GATE_FWD_ORDER].decided, "the order's gate has decided");
-            cr_expect(dk[k]->gate[CTC_GATE_INVERSE].decided, "the inverse's gate has decided");
+            cr_expect(dk[k]->eval.gate.decided, "the evaluation gate has decided");
             ctc_data_free(dk[k]);
         }
         ctc_data_free(ds), ctc_data_free(dt);
         free(q), free(v), free(u), free(f1), free(fk), free(aseq), free(atree), free(ak);
+        ctc_model_free(m);
+    }
+}
+
+/* The gate weighs whole evaluations (data.h ctc_eval_gate): ctc_kinematics starts one, every
+ * gated pass in it takes its way (the forward order too), an evaluation with no pass that could
+ * split is not timed, a forced split does not ask, and a model with merged bodies (fixed joints)
+ * times its reduced model's passes in its own gate. */
+Test(gdca_parallel, the_gate_weighs_whole_evaluations_and_their_passes_share_its_way)
+{
+    for (int merged = 0; merged < 2; merged++) {
+        test_chain *c = test_chain_random_spatial(1024, 5, 1u << CTC_JOINT_REVOLUTE);
+        if (merged) { /* every 8th joint fixed: bodies merge into their parents (model.h) */
+            for (int k = 8; k < c->spec.nbodies; k += 8) c->joints[k].type = CTC_JOINT_FIXED;
+        }
+        ctc_model *m = build(&c->spec);
+        test_chain_free(c);
+        cr_assert_eq(m->dyn != NULL, merged);
+        const size_t nv = (size_t)m->nv;
+        double *q = calloc(nv, sizeof(double)), *v = calloc(nv, sizeof(double));
+        double *u = calloc(nv, sizeof(double)), *f = calloc(nv, sizeof(double));
+        double *a = calloc(nv, sizeof(double));
+        ctc_data *d = ctc_data_new(m);
+        cr_assert(q && v && u && f && a && d);
+        cr_assert_eq(ctc_data_set_threads(d, 2, NULL, 0), CTC_OK);
+        uint64_t rng = 5;
+        test_random_state(m, &rng, 1.0, q, v);
+        for (int e = 0; e < 3 * CTC_POOL_GATE_SAMPLES; e++) {
+            const long runs = d->eval.gate.runs;
+            const int decided = d->eval.gate.decided;
+            ctc_kinematics(m, d, q, v); /* a kinematics-only evaluation: not timed */
+            ctc_kinematics(m, d, q, v);
+            cr_expect_eq(d->eval.gate.runs, runs, "evaluation %d: only kinematics", e);
+            const int way = d->eval.split;
+            cr_expect_eq(way, ctc_pool_gate_way(&d->eval.gate));
+            ctc_handles(m, d);
+            ctc_gdca_inverse(m, d, u, f);
+            cr_expect_eq(d->eval.gated, 1, "evaluation %d: the inverse asked the way", e);
+            ctc_gdca_forward(m, d, f, a);
+            cr_expect_eq(d->fwd_split, way, "evaluation %d: the forward order is its way", e);
+            cr_expect(d->eval.t1 >= d->eval.t0);
+            ctc_kinematics(m, d, q, v); /* records it */
+            if (!decided) cr_expect_eq(d->eval.gate.runs, d->eval.gate.decided ? 0 : runs + 1);
+        }
+        cr_expect(d->eval.gate.decided, "decided after %d evaluations", 3 * CTC_POOL_GATE_SAMPLES);
+        /* a forced split neither asks nor marks */
+        d->opt.par_split = 1;
+        ctc_kinematics(m, d, q, v);
+        ctc_handles(m, d);
+        ctc_gdca_inverse(m, d, u, f);
+        ctc_gdca_forward(m, d, f, a);
+        cr_expect_eq(d->eval.gated, 0, "forced: not timed");
+        cr_expect_eq(d->fwd_split, 1, "forced: the tree split");
+        ctc_data_free(d);
+        free(q), free(v), free(u), free(f), free(a);
         ctc_model_free(m);
     }
 }
@@ -786,7 +874,7 @@ static double run_difference(const ctc_sim_result *a, const ctc_sim_result *b, c
 
 /* One, two and three threads record the same samples to the forward pass's accuracy on a chain
  * this long: the forward pass takes the sequential order on one thread and, on more, whichever
- * of it and the split tree its gate measures faster, evaluation by evaluation while the gate
+ * of it and the split tree the gate measures faster, evaluation by evaluation while the gate
  * measures; each order's accelerations are off the exact ones by up to about 2e-5 at n = 4096
  * (the round trip on uniform rods, bench/NOTEBOOK.md "Hard cases"), and the runs differ by up to
  * 3e-6 of the largest sample (qdot, tau, energy; q by 2e-7). (Bitwise equality of the split
