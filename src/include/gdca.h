@@ -59,7 +59,10 @@
  * d->opt.fwd_refine, d->fwd_refine_done). With d->opt.fwd_form = CTC_FWD_REFERENCE an open model
  * takes the reference form of ctc_gdca_forward_from with a_ref = 0 instead, its f_ref = N(q, v)
  * from one composite inverse. Overwrites d->jnt_load_inv where it refines or takes the reference
- * form. qacc may not alias f. */
+ * form. On a model with singular or slender bodies the refinement corrects qacc but not the
+ * constraint part of d->jnt_load, which keeps the augmented inertias' error (up to about 1e-4 of
+ * the largest load on rods of moment ratio 1e-12; test_gdca_forward): exact loads are those of
+ * ctc_gdca_inverse(m, d, qacc, ...) at the result, in d->jnt_load_inv. qacc may not alias f. */
 void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *qacc);
 
 /* Forward dynamics in the reference form: for any reference acceleration a_ref,
@@ -69,7 +72,8 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
  * are in f_ref and nothing cancels, so dq's error is relative to |f - f_ref|, not to the forces'
  * size; gdca_forward_joint.h). f_ref (nv; N m, N) must be what ctc_gdca_inverse(m, d, a_ref,
  * f_ref) returned on this d at this state, its d->jnt_load_inv untouched since: d->jnt_load is
- * the bias-free pass's loads plus those, the whole loads as ctc_gdca_forward gives them. a_ref
+ * the bias-free pass's loads plus those, the whole loads as ctc_gdca_forward gives them (with
+ * its caveat for singular or slender bodies). a_ref
  * (nv) may be NULL for 0. In a CTC step with an exact model, a_ref = u and f_ref = the
  * controller's iGDCA(u), so the pass costs one bias-free sweep (sim_rhs.c). A model with singular
  * or slender bodies solves with augmented inertias, and its result is refined as ctc_gdca_forward
