@@ -332,7 +332,8 @@ int ctc_pool_gate_choose(const double *alone, int nalone, const double *split, i
 int ctc_pool_gate_way(const ctc_pool_gate *g)
 {
     if (g->decided) return g->way;
-    return (int)(((g->runs + 1) >> 1) & 1); /* 0, 1, 1, 0, 0, 1, 1, ... */
+    const long block = g->runs / CTC_POOL_GATE_BLOCK; /* blocks alone, split, split, alone, ... */
+    return (int)(((block + 1) >> 1) & 1);
 }
 
 void ctc_pool_gate_record(ctc_pool_gate *g, int way, double s)
@@ -343,15 +344,19 @@ void ctc_pool_gate_record(ctc_pool_gate *g, int way, double s)
             *g = (ctc_pool_gate){0};
         } else if (g->way == 1) {
             /* the split's latest timings replace its oldest: once their median no longer pays
-               against the timings alone, measure again */
+               against the timings alone, alone until the recheck (measuring again at once
+               could take a split whose cost swings back and forth again and again) */
             g->t[1][(g->runs - 1) % CTC_POOL_GATE_SAMPLES] = s;
-            if (!ctc_pool_gate_choose(g->t[0], g->nt[0], g->t[1], g->nt[1]))
-                *g = (ctc_pool_gate){0};
+            if (!ctc_pool_gate_choose(g->t[0], g->nt[0], g->t[1], g->nt[1])) {
+                g->way = 0;
+                g->runs = 0;
+            }
         }
         return;
     }
-    /* the first run of each way (runs 1 and 2) is a warm-up */
-    if (g->runs > 2 && g->nt[way] < CTC_POOL_GATE_SAMPLES) g->t[way][g->nt[way]++] = s;
+    /* the first run of each block follows a change of way (or is the first): not timed */
+    if ((g->runs - 1) % CTC_POOL_GATE_BLOCK != 0 && g->nt[way] < CTC_POOL_GATE_SAMPLES)
+        g->t[way][g->nt[way]++] = s;
     if (g->nt[0] == CTC_POOL_GATE_SAMPLES && g->nt[1] == CTC_POOL_GATE_SAMPLES) {
         g->way = ctc_pool_gate_choose(g->t[0], g->nt[0], g->t[1], g->nt[1]);
         g->decided = 1;

@@ -39,7 +39,8 @@
  * rule: a split pays only where the work of a stage outweighs the hand-offs, which depends on
  * the machine, its load and the thread count. A gate (ctc_pool_gate) times the first runs of one
  * kind of job alone and split, alternately, then takes the faster way for the next
- * CTC_POOL_GATE_RECHECK runs (or until a split stops paying) before it measures again;
+ * CTC_POOL_GATE_RECHECK runs (alone from where a split it took stops paying) before it measures
+ * again;
  * ctc_pool_gate_choose is its decision from the timings alone, so that it is tested without a
  * clock. The GDCA passes keep one gate per data, for whole evaluations (data.h ctc_eval_gate).
  */
@@ -96,12 +97,16 @@ void ctc_pool_set_wait(ctc_pool *p, long spin_ns, long block_ns);
  * done (above). */
 void ctc_pool_run(ctc_pool *p, const ctc_pool_job *job);
 
-/* A gate's timings per way before it decides: the first run of each way (a pool's start, cold
- * caches) is not counted. The split must be faster by CTC_POOL_GATE_MARGIN of the time alone
+/* A gate's timings per way before it decides, taken in blocks of CTC_POOL_GATE_BLOCK runs of one
+ * way: the first run of each block, the one after a change of way, is not counted (a pool's
+ * start; a run alone that fetches what a split left in other cores' caches, or a split whose
+ * workers fetch what a run alone left in the caller's; each way's steady cost is what counts).
+ * The split must be faster by CTC_POOL_GATE_MARGIN of the time alone
  * (medians) to be taken, and stays taken only while the median of its latest
- * CTC_POOL_GATE_SAMPLES timings is; after CTC_POOL_GATE_RECHECK decided runs the gate measures
- * again. */
+ * CTC_POOL_GATE_SAMPLES timings is (else the gate runs alone); after CTC_POOL_GATE_RECHECK
+ * decided runs the gate measures again. */
 #define CTC_POOL_GATE_SAMPLES 6
+#define CTC_POOL_GATE_BLOCK 3
 #define CTC_POOL_GATE_MARGIN 0.05
 #define CTC_POOL_GATE_RECHECK 4096
 
@@ -120,15 +125,16 @@ typedef struct ctc_pool_gate {
  * their order. The arrays are not changed; at most CTC_POOL_GATE_SAMPLES of each are read. */
 int ctc_pool_gate_choose(const double *alone, int nalone, const double *split, int nsplit);
 
-/* The way the next run of the gate's job takes: 1 split, 0 alone. While measuring, the runs
- * alternate as alone, split, split, alone, alone, split, ... so that a job whose runs alternate
- * between two costs (a full pass and a cheaper repeat) is timed equally often in both ways. */
+/* The way the next run of the gate's job takes: 1 split, 0 alone. While measuring, the runs go
+ * in blocks of CTC_POOL_GATE_BLOCK, alone, split, split, alone, alone, split, ... (ABBA, so that
+ * a slow drift of the machine weighs on both ways alike). */
 int ctc_pool_gate_way(const ctc_pool_gate *g);
 
 /* Records a run that took `way` and lasted s seconds; decides once both ways have
- * CTC_POOL_GATE_SAMPLES timings, and measures again after CTC_POOL_GATE_RECHECK decided runs, or
- * as soon as a split it decided on stops paying by its latest timings (a split's cost can change
- * after the measurement: the workers' waiting, other programs on the cores). */
+ * CTC_POOL_GATE_SAMPLES timings, and measures again after CTC_POOL_GATE_RECHECK decided runs. A
+ * split it decided on that stops paying by its latest timings (a split's cost can change after
+ * the measurement: the workers' waiting, other programs on the cores) is dropped: the gate runs
+ * alone for the next CTC_POOL_GATE_RECHECK runs. */
 void ctc_pool_gate_record(ctc_pool_gate *g, int way, double s);
 
 /* Seconds on the monotonic clock, to time a gate's runs. */

@@ -620,21 +620,27 @@ Test(gdca_parallel, the_gate_decides_from_injected_timings_by_their_medians)
     cr_expect_eq(ctc_pool_gate_choose(a2, 2, s2, 2), 1, "even counts: the middle two's mean");
 }
 
-/* Fed timings by way (the clock left out), a gate warms each way up once, alternates the ways
- * as ABBA so that both get CTC_POOL_GATE_SAMPLES timings, takes the faster way, keeps it for
- * CTC_POOL_GATE_RECHECK runs and then measures again. */
+/* Fed timings by way (the clock left out), a gate alternates blocks of CTC_POOL_GATE_BLOCK runs
+ * of each way as ABBA, leaves the first run of each block out (here the faster way's first runs
+ * are made slow, as a run after a change of way can be), so that both ways get
+ * CTC_POOL_GATE_SAMPLES timings, takes the faster way, keeps it for CTC_POOL_GATE_RECHECK runs
+ * and then measures again. */
 Test(gdca_parallel, the_gate_alternates_then_keeps_the_faster_way_and_rechecks)
 {
+    enum { RUNS = 2 * CTC_POOL_GATE_SAMPLES / (CTC_POOL_GATE_BLOCK - 1) * CTC_POOL_GATE_BLOCK };
     for (int faster = 0; faster < 2; faster++) {
         ctc_pool_gate g = {0};
-        int count[2] = {0, 0}, runs = 0;
+        int count[2] = {0, 0}, runs = 0, last = -1;
         while (!g.decided) {
             int way = ctc_pool_gate_way(&g);
+            const int first = g.runs % CTC_POOL_GATE_BLOCK == 0;
+            cr_assert(first || way == last, "run %d: a block keeps its way", runs);
+            last = way;
             count[way]++;
-            ctc_pool_gate_record(&g, way, way == faster ? 1e-3 : 2e-3);
+            ctc_pool_gate_record(&g, way, way == faster ? (first ? 1.0 : 1e-3) : 2e-3);
             cr_assert(++runs < 100);
         }
-        cr_expect_eq(runs, 2 + 2 * CTC_POOL_GATE_SAMPLES, "one warm-up per way, then samples");
+        cr_expect_eq(runs, RUNS, "blocks of one way, their first runs left out");
         cr_expect_eq(count[0], count[1]);
         cr_expect_eq(g.way, faster);
         for (int k = 1; k < CTC_POOL_GATE_RECHECK; k++) {
@@ -649,8 +655,8 @@ Test(gdca_parallel, the_gate_alternates_then_keeps_the_faster_way_and_rechecks)
 }
 
 /* A split the gate decided on is watched: once the median of its latest timings no longer beats
- * the timings alone by the margin, the gate measures again (and, the split now slower, decides
- * alone); one slow run among fast ones does not move it. A decision alone is kept whatever its
+ * the timings alone by the margin, the gate runs alone until the recheck count, then measures
+ * again; one slow run among fast ones does not move it. A decision alone is kept whatever its
  * timings, until the recheck count. */
 Test(gdca_parallel, the_gate_drops_a_split_that_stops_paying)
 {
@@ -664,18 +670,19 @@ Test(gdca_parallel, the_gate_drops_a_split_that_stops_paying)
         ctc_pool_gate_record(&g, faster, 9e-3); /* one outlier */
         cr_expect(g.decided && g.way == faster, "one slow run does not move it");
         int runs = 0;
-        while (g.decided && runs < CTC_POOL_GATE_SAMPLES + 2) {
+        while (g.decided && g.way == faster && runs < CTC_POOL_GATE_SAMPLES + 2) {
             ctc_pool_gate_record(&g, faster, 4e-3); /* the decided way is now the slower */
             runs++;
         }
         if (faster == 1) {
-            cr_expect(!g.decided, "a split that stopped paying is measured again");
+            cr_expect(g.decided && g.way == 0, "a split that stopped paying is dropped");
             cr_expect_leq(runs, CTC_POOL_GATE_SAMPLES / 2 + 1, "within half its samples");
-            while (!g.decided) {
-                int way = ctc_pool_gate_way(&g);
-                ctc_pool_gate_record(&g, way, way ? 4e-3 : 2e-3);
+            for (int k = 1; k < CTC_POOL_GATE_RECHECK; k++) {
+                cr_assert_eq(ctc_pool_gate_way(&g), 0, "alone until the recheck");
+                ctc_pool_gate_record(&g, 0, 1e-3); /* alone's timings are not looked at */
             }
-            cr_expect_eq(g.way, 0, "then alone");
+            ctc_pool_gate_record(&g, 0, 1e-3);
+            cr_expect(!g.decided, "then it measures again");
         } else {
             cr_expect(g.decided && g.way == 0, "alone is kept whatever its timings");
         }
@@ -761,7 +768,7 @@ Test(gdca_parallel, the_gate_weighs_whole_evaluations_and_their_passes_share_its
         cr_assert_eq(ctc_data_set_threads(d, 2, NULL, 0), CTC_OK);
         uint64_t rng = 5;
         test_random_state(m, &rng, 1.0, q, v);
-        for (int e = 0; e < 3 * CTC_POOL_GATE_SAMPLES; e++) {
+        for (int e = 0; e < 4 * CTC_POOL_GATE_SAMPLES; e++) {
             const long runs = d->eval.gate.runs;
             const int decided = d->eval.gate.decided;
             ctc_kinematics(m, d, q, v); /* a kinematics-only evaluation: not timed */
@@ -778,7 +785,7 @@ Test(gdca_parallel, the_gate_weighs_whole_evaluations_and_their_passes_share_its
             ctc_kinematics(m, d, q, v); /* records it */
             if (!decided) cr_expect_eq(d->eval.gate.runs, d->eval.gate.decided ? 0 : runs + 1);
         }
-        cr_expect(d->eval.gate.decided, "decided after %d evaluations", 3 * CTC_POOL_GATE_SAMPLES);
+        cr_expect(d->eval.gate.decided, "decided after %d evaluations", 4 * CTC_POOL_GATE_SAMPLES);
         /* a forced split neither asks nor marks */
         d->opt.par_split = 1;
         ctc_kinematics(m, d, q, v);
