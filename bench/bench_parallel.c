@@ -499,9 +499,9 @@ static int gate_state(const ctc_pool_gate *g)
 
 /* Runs CTC evaluations on the defaults' data of count k (kthreads[k]) until its evaluation gate
  * (data.h ctc_eval_gate) is not measuring, so that the table times the library's steady state (a
- * simulation evaluates thousands of right-hand sides; the gate decides after
- * 2 CTC_POOL_GATE_SAMPLES + 2 of them, each recorded when the next one starts); returns the
- * evaluations it took, at most SETTLE_MAX_CALLS */
+ * simulation evaluates thousands of right-hand sides; the gate decides after its blocks give
+ * CTC_POOL_GATE_SAMPLES timings of each way, 18 evaluations, each recorded when the next one
+ * starts: pool.h); returns the evaluations it took, at most SETTLE_MAX_CALLS */
 #define SETTLE_MAX_CALLS 200
 static int settle_gates(chain_case *c, int k)
 {
