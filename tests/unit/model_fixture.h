@@ -19,6 +19,19 @@ static inline ctc_model *build(const ctc_chain_spec *spec)
     return m;
 }
 
+/* Asserts that ctc_model_build refuses spec with CTC_EINVAL, leaves the model NULL and says
+ * exactly message. */
+static inline void expect_build_error(const ctc_chain_spec *spec, const char *message)
+{
+    char err[512] = "";
+    ctc_model *m = (ctc_model *)0x1;
+    ctc_status st = ctc_model_build(spec, &m, err, sizeof err);
+    cr_assert_eq(st, CTC_EINVAL, "expected EINVAL for \"%s\", got %s", message,
+                 ctc_status_name(st));
+    cr_assert_null(m);
+    cr_assert_str_eq(err, message);
+}
+
 /* Rewires a built model's topology (model.h body_parent, body_child, body_sibling, ground_child)
  * to the tree given by parent (n, -1 <= parent[k] < k), so that a pass that walks the topology can
  * be checked on a branched tree before ctc_model_build accepts one. The children lists are

@@ -374,15 +374,6 @@ Test(merge, loops_with_fixed_bodies_on_the_path_match_the_loop_oracle)
     free(s);
 }
 
-static void expect_error(const ctc_chain_spec *spec, const char *message)
-{
-    char err[512] = "";
-    ctc_model *m = (ctc_model *)0x1;
-    cr_assert_eq(ctc_model_build(spec, &m, err, sizeof err), CTC_EINVAL, "expected: %s", message);
-    cr_assert_null(m);
-    cr_assert_str_eq(err, message);
-}
-
 /* Two 1 g links with a massless frame fixed at the tip: the frame merges, so nothing is singular
  * and the forward pass needs no refinement (unmerged, the frame's augmentation, 1e-6 kg and
  * 1e-6 kg m^2 where its subtree has no mass, left 1.9e-10 after six refinement steps). A massless
@@ -433,10 +424,11 @@ Test(merge, massless_frames_need_no_augmentation_and_a_massless_moving_tip_is_re
 
         /* body 1 massless: a massless tip on a revolute joint, the frame beyond it massless */
         memset(&b[1], 0, sizeof b[1]);
-        expect_error(&spec, "body 1: the joint-space mass matrix is singular: joint 1 (revolute) "
-                            "moves no mass or inertia that the joints before it do not (relative "
-                            "pivot 0 <= 1e-10); body 1 and the bodies beyond it need mass off the "
-                            "joint's axis or inertia about it");
+        expect_build_error(&spec,
+                           "body 1: the joint-space mass matrix is singular: joint 1 (revolute) "
+                           "moves no mass or inertia that the joints before it do not (relative "
+                           "pivot 0 <= 1e-10); body 1 and the bodies beyond it need mass off the "
+                           "joint's axis or inertia about it");
     }
 }
 
