@@ -57,6 +57,7 @@
 #include "gdca_rake.h"
 #include "gdca_refine.h"
 #include "gdca_tree.h"
+#include "handles.h"
 
 /* When the forward pass splits over threads (gdca_par.h): the least nodes per chunk of one tree
  * height, and the least chain length. Open chains take the tree on threads only from
@@ -647,7 +648,8 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         forward_reference(m, d, f, NULL, f_ref, qacc);
         return;
     }
-    if (m->has_loop) { /* dependent joints carry no driving force */
+    ctc_handles_bias(m, d); /* the full pass takes the bodies' bias terms */
+    if (m->has_loop) {      /* dependent joints carry no driving force */
         double *fm = d->xbuf;
         memset(fm, 0, (size_t)m->nvx * sizeof *fm);
         for (int i = 0; i < m->nind; i++) fm[m->ind_coord[i]] = f[m->ind_coord[i]];

@@ -46,6 +46,7 @@
 #include "gdca_par.h"
 #include "gdca_rake.h"
 #include "gdca_tree.h"
+#include "handles.h"
 
 /* the factor's column count of joint j: dim across an independent joint, dim - nv otherwise */
 static inline int inverse_nc(const ctc_model *m, int j, const int dim)
@@ -386,6 +387,7 @@ void ctc_gdca_inverse_mobility(const ctc_model *m, ctc_data *d, const double *u,
         ctc_gdca_inverse(m, d, u, f);
         return;
     }
+    ctc_handles_bias(m, d); /* the pass takes the bodies' bias terms */
     mobility_args a = {m, d, u, f};
     const int planar = m->form == CTC_FORM_PLANAR;
     gdca_par_pass pass = {

@@ -52,13 +52,12 @@ static inline const double *handle2(const ctc_model *m, const ctc_data *d, int k
                                                 : c;
 }
 
-/* the records of bodies first..end-1 */
+/* the handles and the matrices of the records of bodies first..end-1 */
 static CTC_MULTIVERSION void handles_planar(void *ctx, int first, int end)
 {
     const handles_args *args = ctx;
     const ctc_model *m = args->m;
     ctc_data *d = args->d;
-    const double *g = m->plane_gravity;
     for (int k = first; k < end; k++) {
         const ctc_planar_body *b = &m->planar[k];
         const double *c = d->xcom + 3 * k;
@@ -70,11 +69,24 @@ static CTC_MULTIVERSION void handles_planar(void *ctx, int first, int end)
         ctc_v3_set(hr + 3, r2[0], r2[1], 0);
 
         double *h = d->hbody + (size_t)k * d->hsize;
-        double ij = 1.0 / b->fwd_inertia, im = 1.0 / b->fwd_mass, w2 = d->omega[3 * k + 2];
-        w2 *= w2;
+        const double ij = 1.0 / b->fwd_inertia, im = 1.0 / b->fwd_mass;
         planar_block(h, r1, r1, ij, im);      /* h11 */
         planar_block(h + 9, r1, r2, ij, im);  /* h12 */
         planar_block(h + 18, r2, r2, ij, im); /* h22 */
+    }
+}
+
+/* h13 and h23 of bodies first..end-1 from their handles d->hr */
+static CTC_MULTIVERSION void handles_bias_planar(void *ctx, int first, int end)
+{
+    const handles_args *args = ctx;
+    const ctc_model *m = args->m;
+    ctc_data *d = args->d;
+    const double *g = m->plane_gravity;
+    for (int k = first; k < end; k++) {
+        const double *r1 = d->hr + 6 * k, *r2 = d->hr + 6 * k + 3;
+        double *h = d->hbody + (size_t)k * d->hsize, w2 = d->omega[3 * k + 2];
+        w2 *= w2;
         ctc_v3_set(h + 27, 0, g[0] - w2 * r1[0], g[1] - w2 * r1[1]);
         ctc_v3_set(h + 30, 0, g[0] - w2 * r2[0], g[1] - w2 * r2[1]);
     }
@@ -96,21 +108,21 @@ static inline void spatial_block(double *h, const double iw[9], const double gi[
     }
 }
 
+/* the handles and the matrices of the records of bodies first..end-1 */
 static CTC_MULTIVERSION void handles_spatial(void *ctx, int first, int end)
 {
     const handles_args *args = ctx;
     const ctc_model *m = args->m;
     ctc_data *d = args->d;
     for (int k = first; k < end; k++) {
-        const ctc_body_spec *body = &m->bodies[k];
-        const double *rot = d->xrot + 9 * k, *w = d->omega + 3 * k, *c = d->xcom + 3 * k;
+        const double *rot = d->xrot + 9 * k, *c = d->xcom + 3 * k;
         const double *next = handle2(m, d, k, c);
         double *r1 = d->hr + 6 * k, *r2 = d->hr + 6 * k + 3;
         ctc_v3_sub(r1, d->xpos + 3 * k, c);
         ctc_v3_sub(r2, next, c);
 
         /* inverse inertia in world axes; G_i = S_i I^-1, column j = (row j of I^-1) x r_i */
-        double iw[9], g1[9], g2[9], t[3];
+        double iw[9], g1[9], g2[9];
         ctc_m3_rotate_sym(iw, rot, &m->body_inertia_inv[9 * k]);
         for (int j = 0; j < 3; j++) {
             double c1[3], c2[3];
@@ -126,6 +138,22 @@ static CTC_MULTIVERSION void handles_spatial(void *ctx, int first, int end)
         spatial_block(h, iw, g1, g1, r1, im);      /* h11 */
         spatial_block(h + 36, iw, g1, g2, r2, im); /* h12 */
         spatial_block(h + 72, iw, g2, g2, r2, im); /* h22 */
+    }
+}
+
+/* h13 and h23 of bodies first..end-1 from their handles d->hr and the inverse inertia in world
+ * axes that h11 holds in its upper left block */
+static CTC_MULTIVERSION void handles_bias_spatial(void *ctx, int first, int end)
+{
+    const handles_args *args = ctx;
+    const ctc_model *m = args->m;
+    ctc_data *d = args->d;
+    for (int k = first; k < end; k++) {
+        const ctc_body_spec *body = &m->bodies[k];
+        const double *rot = d->xrot + 9 * k, *w = d->omega + 3 * k;
+        const double *r1 = d->hr + 6 * k, *r2 = d->hr + 6 * k + 3;
+        double *h = d->hbody + (size_t)k * d->hsize, iw[9], t[3];
+        for (int i = 0; i < 3; i++) ctc_v3_copy(iw + 3 * i, h + 6 * i);
 
         /* gyroscopic term: a0 = I^-1 (-w x I w), I w = R I_b R^T w */
         double wb[3], iwb[3], iww[3], gyro[3], a0[3];
@@ -150,6 +178,16 @@ static CTC_MULTIVERSION void handles_spatial(void *ctx, int first, int end)
     }
 }
 
+/* the records' part `bodies` (handles_planar or _spatial, or their biases) of every body, on the
+   data's threads where the evaluation splits */
+static void handles_run(const ctc_model *m, ctc_data *d, void (*bodies)(void *, int, int))
+{
+    handles_args args = {m, d};
+    const int least =
+        m->form == CTC_FORM_PLANAR ? HANDLES_MIN_BODIES_PLANAR : HANDLES_MIN_BODIES_SPATIAL;
+    if (!gdca_par_bodies(m, d, bodies, &args, least)) bodies(&args, 0, m->nbodies);
+}
+
 void ctc_handles(const ctc_model *m, ctc_data *d)
 {
     d->handles_stamp++; /* a new state: the composite inverse recomputes its records */
@@ -158,12 +196,16 @@ void ctc_handles(const ctc_model *m, ctc_data *d)
         ctc_handles(m->dyn, ctc_data_dyn_begin(m, d));
         return;
     }
-    handles_args args = {m, d};
-    if (m->form == CTC_FORM_PLANAR) {
-        if (!gdca_par_bodies(m, d, handles_planar, &args, HANDLES_MIN_BODIES_PLANAR))
-            handles_planar(&args, 0, m->nbodies);
-    } else {
-        if (!gdca_par_bodies(m, d, handles_spatial, &args, HANDLES_MIN_BODIES_SPATIAL))
-            handles_spatial(&args, 0, m->nbodies);
+    handles_run(m, d, m->form == CTC_FORM_PLANAR ? handles_planar : handles_spatial);
+}
+
+void ctc_handles_bias(const ctc_model *m, ctc_data *d)
+{
+    if (m->dyn != NULL) {
+        ctc_handles_bias(m->dyn, ctc_data_dyn_begin(m, d));
+        return;
     }
+    if (d->hbias_stamp == d->handles_stamp) return;
+    handles_run(m, d, m->form == CTC_FORM_PLANAR ? handles_bias_planar : handles_bias_spatial);
+    d->hbias_stamp = d->handles_stamp;
 }

@@ -140,9 +140,11 @@ typedef struct ctc_data {
     /* state stamps: ctc_handles increments handles_stamp (a new state); the composite inverse
        sets icomp_stamp to it once icomp holds the parts of its records that depend on the
        state only (the body records, the nodes' I and r12), and while the two match it
-       recomputes only w, c and icomp_e (gdca_inverse.c) */
+       recomputes only w, c and icomp_e (gdca_inverse.c); ctc_handles_bias sets hbias_stamp to
+       it once hbody holds the state's bias terms h13 and h23 (handles.h) */
     unsigned long long handles_stamp;
     unsigned long long icomp_stamp;
+    unsigned long long hbias_stamp;
 
     /* a model with merged bodies (model.h): the reduced model's data, which the dynamics passes
        use (ctc_data_dyn_begin); its kinematics are copied from d's by ctc_kinematics, its

@@ -21,10 +21,19 @@
 
 #include "data.h"
 
-/* Fills d->hr and d->hbody from the kinematics in d (ctc_kinematics first; with merged bodies,
- * model.h, the reduced model's records in d->dyn instead, from its kinematics there), and marks d
- * as holding a new state (d->handles_stamp), so that the composite inverse recomputes the parts of
- * its records that it keeps between calls at one state (gdca.h). Allocates nothing. */
+/* Fills d->hr and the matrices h11, h12, h22 of d->hbody from the kinematics in d
+ * (ctc_kinematics first; with merged bodies, model.h, the reduced model's records in d->dyn
+ * instead, from its kinematics there), and marks d as holding a new state (d->handles_stamp), so
+ * that the composite inverse recomputes the parts of its records that it keeps between calls at
+ * one state (gdca.h) and the bias terms are recomputed when asked for. Allocates nothing. */
 void ctc_handles(const ctc_model *m, ctc_data *d);
+
+/* Fills the bias terms h13 and h23 of d->hbody for the state of the last ctc_handles, unless they
+ * already hold them (d->hbias_stamp). Only the passes that take the bias terms from the records
+ * need them, and call this first: the literal forward pass (gdca.h ctc_gdca_forward, and its loop
+ * form) and the mobility-form inverse. The reference form's bias-free pass, its correction and
+ * the composite inverse do without, which saves a CTC right-hand side on a spatial chain about
+ * 9% of its instructions (bench/NOTEBOOK.md, "Spatial n = 2 and 4"). Allocates nothing. */
+void ctc_handles_bias(const ctc_model *m, ctc_data *d);
 
 #endif

@@ -48,7 +48,7 @@ ctc_data *ctc_data_new(const ctc_model *m)
     d->jnt_load = calloc(nj * dim, sizeof(double));
     d->jnt_load_inv = calloc(nj * dim, sizeof(double));
     d->loop_cond = 1;
-    d->handles_stamp = 1; /* icomp_stamp = 0: no records yet */
+    d->handles_stamp = 1; /* icomp_stamp = hbias_stamp = 0: no records yet */
     d->xbuf = calloc(2 * (size_t)m->nvx + (size_t)m->nq + 1, sizeof(double));
     if (d->xpos == NULL || d->xrot == NULL || d->xcom == NULL || d->omega == NULL ||
         d->xvel == NULL || d->jnt_P == NULL || d->jnt_D == NULL || d->jnt_beta == NULL ||

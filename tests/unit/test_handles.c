@@ -9,7 +9,8 @@
  * by Cramer's rule; the handle accelerations a_i = a_c + alpha x r_i + w x (w x r_i) must equal
  * A1 = h11 F1 + h12 F2 + h13 and A2 = h12^T F1 + h22 F2 + h23 read from the record (data.h).
  * A chain with fixed joints is checked on the bodies the passes see, the merged ones (model.h
- * "merged bodies").
+ * "merged bodies"). The passes that read the bias terms h13 and h23 ask for them
+ * (ctc_handles_bias): one test holds them to a fresh data's results at a second state.
  */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -17,6 +18,7 @@
 
 #include "chains.h"
 #include "data.h"
+#include "gdca.h"
 #include "handles.h"
 #include "kinematics.h"
 #include "model.h"
@@ -155,9 +157,16 @@ static void check_chain(const ctc_chain_spec *spec, uint64_t *rng, handle_errors
     double q[MAXQ], v[MAXV];
     cr_assert_leq(given->nq, MAXQ);
     cr_assert_leq(given->nv, MAXV);
+    /* a first state whose bias terms are filled, then the state checked: its ctc_handles must
+       have the bias terms recomputed (handles.h ctc_handles_bias) */
     test_random_state(given, rng, 3.0, q, v);
     ctc_kinematics(given, dgiven, q, v);
     ctc_handles(given, dgiven);
+    ctc_handles_bias(given, dgiven);
+    test_random_state(given, rng, 3.0, q, v);
+    ctc_kinematics(given, dgiven, q, v);
+    ctc_handles(given, dgiven);
+    ctc_handles_bias(given, dgiven);
     /* the records are the bodies' the passes see: with fixed joints, the merged ones (model.h
        "merged bodies"), whose kinematics ctc_kinematics also fills */
     const ctc_model *m = given->dyn != NULL ? given->dyn : given;
@@ -321,6 +330,7 @@ Test(handles, tip_handle_2_is_the_centre_of_mass)
     double q[3] = {0.3, -1.1, 2.0}, v[3] = {1.5, -2.0, 0.7};
     ctc_kinematics(m, d, q, v);
     ctc_handles(m, d);
+    ctc_handles_bias(m, d);
     const double *hr = d->hr + 6 * 2, *h = ctc_data_handles(m, d, 2, 0);
     for (int i = 0; i < 3; i++) cr_assert_eq(hr[3 + i], 0.0, "r2[%d] = %g", i, hr[3 + i]);
     double j = c->bodies[2].inertia[8], mass = c->bodies[2].mass;
@@ -337,4 +347,58 @@ Test(handles, tip_handle_2_is_the_centre_of_mass)
     ctc_data_free(d);
     ctc_model_free(m);
     test_chain_free(c);
+}
+
+/* One state of m in d and fresh, the bias terms filled in fresh only */
+static void set_state(const ctc_model *m, ctc_data *d, ctc_data *fresh, const test_loop *l,
+                      uint64_t *rng)
+{
+    double q[MAXQ], v[MAXV];
+    test_random_state(m, rng, 2.0, q, v);
+    if (l != NULL) memcpy(q, l->q0, (size_t)m->nq * sizeof *q); /* a closed pose */
+    for (int w = 0; w < 2; w++) {
+        ctc_kinematics(m, w ? fresh : d, q, v);
+        ctc_handles(m, w ? fresh : d);
+    }
+    ctc_handles_bias(m, fresh);
+}
+
+/* The passes that read the bias terms (the literal forward pass, also on a loop, and the
+   mobility-form inverse) ask for them: after a state whose bias terms were filled, each pass at
+   a new state gives bitwise what it gives from records filled at that state. */
+Test(handles, passes_take_the_bias_terms_of_the_current_state)
+{
+    uint64_t rng = 46;
+    for (int c = 0; c < 3; c++) {
+        test_chain *ch = c == 0   ? test_chain_random_spatial(7, 5, TEST_ALL_JOINTS)
+                         : c == 1 ? test_chain_random_planar(7, 6, 1, 0)
+                                  : NULL;
+        test_loop *l = c == 2 ? test_loop_spatial(8, 7) : NULL;
+        char err[256] = "";
+        ctc_model *m;
+        cr_assert_eq(ctc_model_build(l ? &l->spec : &ch->spec, &m, err, sizeof err), CTC_OK, "%s",
+                     err);
+        cr_assert_leq(m->nq, MAXQ);
+        cr_assert_leq(m->nvx, MAXV);
+        ctc_data *d = ctc_data_new(m), *fresh = ctc_data_new(m);
+        d->opt.fwd_form = fresh->opt.fwd_form = CTC_FWD_LITERAL;
+        double f[MAXV], a[MAXV], want[MAXV], got[MAXV];
+        for (int i = 0; i < m->nvx; i++) f[i] = test_uniform(&rng, -3, 3);
+        for (int i = 0; i < m->nvx; i++) a[i] = test_uniform(&rng, -3, 3);
+        set_state(m, d, fresh, l, &rng);
+        ctc_handles_bias(m, d); /* the first state's, which the passes must not read */
+        set_state(m, d, fresh, l, &rng);
+        ctc_gdca_forward(m, d, f, got);
+        ctc_gdca_forward(m, fresh, f, want);
+        cr_assert_arr_eq(got, want, (size_t)m->nvx * sizeof *got, "model %d: forward", c);
+        set_state(m, d, fresh, l, &rng);
+        ctc_gdca_inverse_mobility(m, d, a, got);
+        ctc_gdca_inverse_mobility(m, fresh, a, want);
+        cr_assert_arr_eq(got, want, (size_t)m->nv * sizeof *got, "model %d: mobility inverse", c);
+        ctc_data_free(d);
+        ctc_data_free(fresh);
+        ctc_model_free(m);
+        test_chain_free(ch);
+        test_loop_free(l);
+    }
 }
