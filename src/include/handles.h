@@ -33,7 +33,7 @@ void ctc_handles(const ctc_model *m, ctc_data *d);
  * need them, and call this first: the literal forward pass (gdca.h ctc_gdca_forward, and its loop
  * form) and the mobility-form inverse. The reference form's bias-free pass, its correction and
  * the composite inverse do without, which saves a CTC right-hand side on a spatial chain about
- * 9% of its instructions (bench/NOTEBOOK.md, "Spatial n = 2 and 4"). Allocates nothing. */
+ * 5% of its instructions (bench/NOTEBOOK.md, "Spatial n = 2 and 4"). Allocates nothing. */
 void ctc_handles_bias(const ctc_model *m, ctc_data *d);
 
 #endif
