@@ -20,7 +20,7 @@ FROM debian:bookworm AS build
 RUN apt-get update \
  && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
       gcc make libc6-dev libcjson-dev liblapacke-dev libsundials-dev libmicrohttpd-dev \
-      libsqlite3-dev libxml2-dev libpq-dev nodejs npm ca-certificates \
+      libsqlite3-dev libxml2-dev libpq-dev zlib1g-dev nodejs npm ca-certificates \
  && rm -rf /var/lib/apt/lists/*
 
 WORKDIR /src
@@ -61,7 +61,7 @@ FROM debian:bookworm-slim
 # the reference BLAS and LAPACK (and libgfortran)
 RUN apt-get update \
  && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
-      libcjson1 libmicrohttpd12 libsqlite3-0 libpq5 libsundials-cvode6 liblapacke libxml2 \
+      libcjson1 libmicrohttpd12 libsqlite3-0 libpq5 libsundials-cvode6 liblapacke libxml2 zlib1g \
  && rm -rf /var/lib/apt/lists/*
 
 # a fixed id, so a bind-mounted host directory can be chown'ed to 10001 ahead of time; /data is

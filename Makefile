@@ -70,7 +70,7 @@ endif
 # sets also need node (>= 18) and npm for uPlot and playwright-core: Debian's nodejs and npm are
 # installed when the machine has no node.
 RUN_PACKAGES := gcc make libc6-dev libcjson-dev liblapacke-dev libsundials-dev libmicrohttpd-dev \
-	libsqlite3-dev libxml2-dev libpq-dev ca-certificates
+	libsqlite3-dev libxml2-dev libpq-dev zlib1g-dev ca-certificates
 TEST_PACKAGES := libcriterion-dev clang-19 libclang-rt-19-dev chromium sqlite3 curl jq postgresql
 DEB_PACKAGES := $(RUN_PACKAGES) $(TEST_PACKAGES)
 # npm trusts the system's CA bundle too (a TLS-inspecting proxy whose CA is in the system store),
@@ -99,7 +99,9 @@ XML_LIBS := $(shell pkg-config --libs libxml-2.0 2>/dev/null || echo -lxml2)
 # libpq talks to PostgreSQL (server/store_pg.c, --db postgres://...)
 PQ_CFLAGS := $(shell pkg-config --cflags libpq 2>/dev/null || echo -I/usr/include/postgresql)
 PQ_LIBS := $(shell pkg-config --libs libpq 2>/dev/null || echo -lpq)
-SERVER_LDLIBS := -lmicrohttpd -lsqlite3 $(XML_LIBS) $(PQ_LIBS)
+# zlib compresses large replies for clients that accept gzip (server/http_gzip.c): the format's
+# reference implementation, already on every Debian system
+SERVER_LDLIBS := -lmicrohttpd -lsqlite3 $(XML_LIBS) $(PQ_LIBS) -lz
 # the served page: web/ plus uPlot's files from npm ci (nothing from node_modules is committed)
 WEB_OUT := build/web
 WEB_NPM := build/web-npm

@@ -17,8 +17,10 @@
  * disconnected. The last call runs the handler, which fills an http_reply; the reply becomes a
  * libmicrohttpd response from its buffer, its file descriptor or its stream function (a response
  * from a callback, of unknown size, sent chunked; libmicrohttpd frees it, and with it the
- * stream's argument, once done with it), with the headers every reply carries. http_stop stops
- * accepting, then gives the requests being answered a few seconds to finish.
+ * stream's argument, once done with it), with the headers every reply carries. A body from a
+ * buffer goes in gzip to a client that accepts it when it is HTTP_GZIP_MIN bytes or more
+ * (http_gzip.h), and every such reply says "Vary: Accept-Encoding". http_stop stops accepting,
+ * then gives the requests being answered a few seconds to finish.
  *
  * Paths are matched segment by segment; "{...}" in a pattern captures one non-empty segment.
  * HEAD is answered as GET (libmicrohttpd sends no body). Paths that no route matches go to the
@@ -66,6 +68,7 @@
 #include <microhttpd.h>
 
 #include "client_count.h"
+#include "http_gzip.h"
 
 #define HTTP_MAX_PARAMS 4
 /* bytes per connection for headers and the read buffer */
@@ -547,8 +550,8 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
 static enum MHD_Result send_reply(struct MHD_Connection *conn, const char *path, http_reply *rep)
 {
     struct MHD_Response *res;
-    int status = rep->status;
-    const char *type = rep->content_type;
+    int status = rep->status, vary = 0;
+    const char *type = rep->content_type, *encoding = NULL;
     if (rep->fd >= 0) {
         res = MHD_create_response_from_fd((size_t)rep->fd_size, rep->fd);
         if (res) rep->fd = -1; /* the response closes it */
@@ -573,6 +576,19 @@ static enum MHD_Result send_reply(struct MHD_Connection *conn, const char *path,
             type = "application/json";
         }
     } else if (rep->body) {
+        /* a large body in gzip when the client accepts it; every body says that it may vary */
+        char *gz;
+        size_t gz_len;
+        vary = 1;
+        if (rep->body_len >= HTTP_GZIP_MIN &&
+            http_accepts_gzip(
+                MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Accept-Encoding")) &&
+            http_gzip(rep->body, rep->body_len, &gz, &gz_len) == 0) {
+            free(rep->body);
+            rep->body = gz;
+            rep->body_len = gz_len;
+            encoding = "gzip";
+        }
         res = MHD_create_response_from_buffer(rep->body_len, rep->body, MHD_RESPMEM_MUST_FREE);
         if (res) rep->body = NULL; /* the response frees it */
     } else if (status == 204 || (status >= 300 && status < 400)) {
@@ -596,6 +612,10 @@ static enum MHD_Result send_reply(struct MHD_Connection *conn, const char *path,
 
     int ok = 1;
     if (type) ok &= MHD_add_response_header(res, MHD_HTTP_HEADER_CONTENT_TYPE, type) == MHD_YES;
+    if (encoding)
+        ok &= MHD_add_response_header(res, MHD_HTTP_HEADER_CONTENT_ENCODING, encoding) == MHD_YES;
+    if (vary)
+        ok &= MHD_add_response_header(res, MHD_HTTP_HEADER_VARY, "Accept-Encoding") == MHD_YES;
     ok &= MHD_add_response_header(res, "X-Content-Type-Options", "nosniff") == MHD_YES;
     if (is_api_path(path))
         ok &= MHD_add_response_header(res, MHD_HTTP_HEADER_CACHE_CONTROL, "no-cache") == MHD_YES;
