@@ -17,10 +17,11 @@
  * disconnected. The last call runs the handler, which fills an http_reply; the reply becomes a
  * libmicrohttpd response from its buffer, its file descriptor or its stream function (a response
  * from a callback, of unknown size, sent chunked; libmicrohttpd frees it, and with it the
- * stream's argument, once done with it), with the headers every reply carries. A body from a
- * buffer goes in gzip to a client that accepts it when it is HTTP_GZIP_MIN bytes or more
- * (http_gzip.h), and every such reply says "Vary: Accept-Encoding". http_stop stops accepting,
- * then gives the requests being answered a few seconds to finish.
+ * stream's argument, once done with it), with the headers every reply carries. A text reply
+ * (JSON, CSV, YAML) goes in gzip to a client that accepts it: a streamed one always, one from a
+ * buffer when it is HTTP_GZIP_MIN bytes or more (http_gzip.h); every text reply says "Vary:
+ * Accept-Encoding". http_stop stops accepting, then gives the requests being answered a few
+ * seconds to finish.
  *
  * Paths are matched segment by segment; "{...}" in a pattern captures one non-empty segment.
  * HEAD is answered as GET (libmicrohttpd sends no body). Paths that no route matches go to the
@@ -546,6 +547,12 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **con_cls,
     *con_cls = NULL;
 }
 
+/* 1 if the request's Accept-Encoding admits gzip */
+static int client_accepts_gzip(struct MHD_Connection *conn)
+{
+    return http_accepts_gzip(MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Accept-Encoding"));
+}
+
 /* Turns the reply into a response and queues it. */
 static enum MHD_Result send_reply(struct MHD_Connection *conn, const char *path, http_reply *rep)
 {
@@ -556,6 +563,19 @@ static enum MHD_Result send_reply(struct MHD_Connection *conn, const char *path,
         res = MHD_create_response_from_fd((size_t)rep->fd_size, rep->fd);
         if (res) rep->fd = -1; /* the response closes it */
     } else if (rep->stream) {
+        /* a text stream in gzip when the client accepts it: the gzip stream takes the body */
+        http_gzip_stream *g = NULL;
+        if (http_gzip_type(type)) {
+            vary = 1;
+            if (client_accepts_gzip(conn))
+                g = http_gzip_stream_new(rep->stream, rep->stream_free, rep->stream_arg);
+        }
+        if (g) {
+            rep->stream = http_gzip_stream_read;
+            rep->stream_free = http_gzip_stream_free;
+            rep->stream_arg = g;
+            encoding = "gzip";
+        }
         http_stream *h = malloc(sizeof *h);
         res = NULL;
         if (h) {
@@ -574,15 +594,16 @@ static enum MHD_Result send_reply(struct MHD_Connection *conn, const char *path,
             res = MHD_create_response_from_buffer(sizeof no_memory_body - 1, (void *)no_memory_body,
                                                   MHD_RESPMEM_PERSISTENT);
             type = "application/json";
+            encoding = NULL;
+            vary = 0;
         }
     } else if (rep->body) {
-        /* a large body in gzip when the client accepts it; every body says that it may vary */
+        /* a large text body in gzip when the client accepts it; every text body says that it
+           may vary */
         char *gz;
         size_t gz_len;
-        vary = 1;
-        if (rep->body_len >= HTTP_GZIP_MIN &&
-            http_accepts_gzip(
-                MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Accept-Encoding")) &&
+        vary = http_gzip_type(type);
+        if (vary && rep->body_len >= HTTP_GZIP_MIN && client_accepts_gzip(conn) &&
             http_gzip(rep->body, rep->body_len, &gz, &gz_len) == 0) {
             free(rep->body);
             rep->body = gz;

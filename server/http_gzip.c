@@ -20,6 +20,18 @@
 /* deflateInit2's windowBits for a gzip wrapper: 15 (a 32 KiB window) + 16 */
 #define GZIP_WINDOW_BITS (15 + 16)
 #define GZIP_MEM_LEVEL 8
+/* bytes of the body read at once by a stream */
+#define GZIP_STREAM_IN (64 * 1024)
+
+struct http_gzip_stream {
+    ptrdiff_t (*fn)(void *arg, char *buf, size_t max);
+    void (*free_fn)(void *arg);
+    void *arg;
+    z_stream z;
+    int in_end; /* the body's function said its end */
+    int done;   /* the member's trailer is written */
+    char in[GZIP_STREAM_IN];
+};
 
 /* 1 if the parameters after a coding's name (";q=0.5", ";q=0 ; x=y") give it weight 0 */
 static int weight_zero(const char *p, const char *end)
@@ -95,4 +107,73 @@ int http_gzip(const char *in, size_t len, char **out, size_t *out_len)
     deflateEnd(&z);
     if (rc != 0) free(buf);
     return rc;
+}
+
+int http_gzip_type(const char *content_type)
+{
+    if (content_type == NULL) return 0;
+    static const char *const text[] = {"application/json", "application/yaml", "text/"};
+    for (size_t i = 0; i < sizeof text / sizeof text[0]; i++) {
+        const size_t n = strlen(text[i]);
+        if (strncasecmp(content_type, text[i], n) != 0) continue;
+        const char next = content_type[n];
+        if (text[i][n - 1] == '/' || next == '\0' || next == ';' || next == ' ') return 1;
+    }
+    return 0;
+}
+
+http_gzip_stream *http_gzip_stream_new(ptrdiff_t (*fn)(void *arg, char *buf, size_t max),
+                                       void (*free_fn)(void *arg), void *arg)
+{
+    http_gzip_stream *g = calloc(1, sizeof *g);
+    if (g == NULL) return NULL;
+    if (deflateInit2(&g->z, Z_BEST_SPEED, Z_DEFLATED, GZIP_WINDOW_BITS, GZIP_MEM_LEVEL,
+                     Z_DEFAULT_STRATEGY) != Z_OK) {
+        free(g);
+        return NULL;
+    }
+    g->fn = fn;
+    g->free_fn = free_fn;
+    g->arg = arg;
+    return g;
+}
+
+ptrdiff_t http_gzip_stream_read(void *p, char *buf, size_t max)
+{
+    http_gzip_stream *g = p;
+    if (g->done) return 0;
+    if (max > UINT_MAX) max = UINT_MAX;
+    g->z.next_out = (Bytef *)buf;
+    g->z.avail_out = (uInt)max;
+    /* until buf is full or the member ends: deflate's output lags its input by up to its window,
+       so a piece of the body may give no bytes yet */
+    while (g->z.avail_out > 0) {
+        if (g->z.avail_in == 0 && !g->in_end) {
+            const ptrdiff_t n = g->fn(g->arg, g->in, sizeof g->in);
+            if (n < 0 || n > (ptrdiff_t)sizeof g->in) return -1;
+            if (n == 0) {
+                g->in_end = 1;
+            } else {
+                g->z.next_in = (const Bytef *)g->in;
+                g->z.avail_in = (uInt)n;
+            }
+        }
+        const int rc = deflate(&g->z, g->in_end ? Z_FINISH : Z_NO_FLUSH);
+        if (rc == Z_STREAM_END) {
+            g->done = 1;
+            break;
+        }
+        if (rc != Z_OK && rc != Z_BUF_ERROR) return -1;
+    }
+    const size_t n = max - g->z.avail_out;
+    return n > 0 ? (ptrdiff_t)n : 0; /* 0 only when the member ended with the last call */
+}
+
+void http_gzip_stream_free(void *p)
+{
+    http_gzip_stream *g = p;
+    if (g == NULL) return;
+    deflateEnd(&g->z);
+    if (g->free_fn) g->free_fn(g->arg);
+    free(g);
 }

@@ -5,9 +5,9 @@
  * Conventions. Bodies are JSON (POST needs Content-Type application/json, charset allowed, else
  * 415). Ids are positive integers (else 400 INVALID_ID, field "id"). Times are ISO 8601 UTC
  * strings with milliseconds ("2026-11-21T02:30:00.123Z") or null. Coordinates and joints are
- * numbered from 0, as in the job's arrays. A reply built in memory (JSON, CSV) of HTTP_GZIP_MIN
- * bytes or more goes in gzip to a client whose Accept-Encoding admits it, with "Vary:
- * Accept-Encoding" (http_gzip.h); streamed series go as they are. Errors are {"error": {"code",
+ * numbered from 0, as in the job's arrays. A text reply (JSON, CSV) goes in gzip to a client whose
+ * Accept-Encoding admits it when it is HTTP_GZIP_MIN bytes or more or streamed, and says "Vary:
+ * Accept-Encoding" (http_gzip.h); a float32 series goes as it is. Errors are {"error": {"code",
  * "message", "field"}} (field "" when none) with these statuses and codes:
  *   400 INVALID_JSON, MISSING_FIELD, UNKNOWN_FIELD, INVALID_FIELD, LIMIT_EXCEEDED (job_json.h),
  *       INVALID_ID, INVALID_QUERY (field = the query parameter), MISSING_HOST (an HTTP/1.1

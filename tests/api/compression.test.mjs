@@ -1,11 +1,12 @@
 /*
  * compression.test.mjs - replies in gzip (server/http_gzip.h) on the wire: node:http sends only
  * the headers given and hands back the raw bytes, which node:zlib inflates. A reply built in
- * memory (JSON, CSV) of 1 KiB or more goes in gzip to a client whose Accept-Encoding admits it,
- * and inflates to the very bytes a client that names no coding gets; every such reply says
- * "Vary: Accept-Encoding". Small replies, errors among them, clients that refuse gzip (q=0) or
- * name other codings only, and streamed series are sent as they are. fetch() names gzip itself,
- * so every other test of this suite reads gzip replies too.
+ * memory (JSON, CSV) of 1 KiB or more, and a streamed series as JSON or CSV, goes in gzip to a
+ * client whose Accept-Encoding admits it, and inflates to the very bytes a client that names no
+ * coding gets; every such reply says "Vary: Accept-Encoding". Small replies, errors among them,
+ * clients that refuse gzip (q=0) or name other codings only, and binary series (float32) are
+ * sent as they are. fetch() names gzip itself, so every other test of this suite reads gzip
+ * replies too.
  */
 import assert from 'node:assert/strict';
 import http from 'node:http';
@@ -83,7 +84,23 @@ test('HEAD says what GET would send', async () => {
     assert.equal(head.headers['content-length'], get.headers['content-length']);
 });
 
-test('sent as they are: refused or unnamed gzip, small replies, errors, streamed series', async () => {
+test('a streamed series as JSON or CSV goes in gzip too, and inflates to the plain stream', async () => {
+    for (const query of ['format=json', 'format=csv', 'format=csv&channels=q,tau&every=2', 'format=json&max_points=7']) {
+        const path = `/api/jobs/${jobId}/series?${query}`;
+        const plain = await fetchRaw(srv.port, path);
+        assert.equal(plain.status, 200, path);
+        assert.equal(plain.headers['content-encoding'], undefined, path);
+        assert.equal(plain.headers['content-length'], undefined, `${path}: streamed`);
+        assert.equal(plain.headers.vary, 'Accept-Encoding', path);
+        const gz = await fetchRaw(srv.port, path, { 'accept-encoding': 'gzip' });
+        assert.equal(gz.status, 200, path);
+        assert.equal(gz.headers['content-encoding'], 'gzip', path);
+        assert.equal(gz.headers['content-length'], undefined, `${path}: streamed`);
+        assert.ok(gunzipSync(gz.body).equals(plain.body), `${path}: inflates to other bytes`);
+    }
+});
+
+test('sent as they are: refused or unnamed gzip, small replies, errors, binary series', async () => {
     const path = `/api/families/${familyId}`;
     for (const accept of ['gzip;q=0', 'gzip;q=0.000, br', 'identity', 'br', 'deflate', '*;q=0', '']) {
         const r = await fetchRaw(srv.port, path, { 'accept-encoding': accept });
@@ -100,10 +117,12 @@ test('sent as they are: refused or unnamed gzip, small replies, errors, streamed
     assert.equal(missing.status, 404);
     assert.equal(missing.headers['content-encoding'], undefined);
     assert.equal(JSON.parse(missing.body.toString('utf8')).error.code, 'NOT_FOUND');
-    const series = await fetchRaw(srv.port, `/api/jobs/${jobId}/series?format=csv`, { 'accept-encoding': 'gzip' });
-    assert.equal(series.status, 200);
-    assert.equal(series.headers['content-encoding'], undefined);
-    assert.match(series.body.toString('utf8'), /^t,/);
+    const path32 = `/api/jobs/${jobId}/series?format=f32`;
+    const f32 = await fetchRaw(srv.port, path32, { 'accept-encoding': 'gzip' });
+    assert.equal(f32.status, 200);
+    assert.equal(f32.headers['content-encoding'], undefined);
+    assert.equal(f32.headers.vary, undefined);
+    assert.ok(f32.body.equals((await fetchRaw(srv.port, path32)).body));
 });
 
 test('fetch() reads the gzip replies as the plain ones', async () => {

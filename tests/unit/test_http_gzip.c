@@ -6,7 +6,10 @@
  * compression: what http_gzip makes is inflated by zlib's own gzip reader (a second
  * implementation of the format's reading side) back to the input, byte for byte, for JSON-like
  * text, runs of one byte and sizes from HTTP_GZIP_MIN to 4 MiB; a body that does not shrink
- * (random bytes) and an empty one are refused, leaving nothing to free.
+ * (random bytes) and an empty one are refused, leaving nothing to free. The streamed form: a
+ * body given in pieces of every size from 1 byte to past the stream's read, read back in pieces
+ * of every size from 1 byte, inflates to the body; an empty body is an empty member; a body whose
+ * function fails fails the stream; the body's argument is freed with the stream, once.
  */
 #include <criterion/criterion.h>
 #include <stdint.h>
@@ -145,5 +148,126 @@ Test(http_gzip, a_body_that_does_not_shrink_is_refused)
     cr_assert_eq(gz_len, 0);
     cr_assert_eq(http_gzip("", 0, &gz, &gz_len), -1);
     cr_assert_null(gz);
+    free(body);
+}
+
+Test(http_gzip, text_types_are_compressed_and_binary_ones_not)
+{
+    static const struct {
+        const char *type;
+        int text;
+    } cases[] = {
+        {"application/json", 1},
+        {"application/json; charset=utf-8", 1},
+        {"Application/JSON", 1},
+        {"text/csv; charset=utf-8", 1},
+        {"text/html", 1},
+        {"application/yaml", 1},
+        {"application/octet-stream", 0},
+        {"application/jsonl", 0},
+        {"image/png", 0},
+        {"", 0},
+        {NULL, 0},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        cr_expect_eq(http_gzip_type(cases[i].type), cases[i].text, "\"%s\"",
+                     cases[i].type ? cases[i].type : "(none)");
+    }
+}
+
+/* a body given in pieces: text[0..len) in pieces of `piece` bytes at most (0: as asked), or -1
+   once `fail_at` bytes have been given (fail_at < 0: never) */
+typedef struct piecewise {
+    const char *text;
+    size_t len, pos, piece;
+    long fail_at;
+    int freed;
+} piecewise;
+
+static ptrdiff_t piecewise_read(void *arg, char *buf, size_t max)
+{
+    piecewise *p = arg;
+    if (p->fail_at >= 0 && p->pos >= (size_t)p->fail_at) return -1;
+    size_t n = p->len - p->pos;
+    if (n > max) n = max;
+    if (p->piece > 0 && n > p->piece) n = p->piece;
+    memcpy(buf, p->text + p->pos, n);
+    p->pos += n;
+    return (ptrdiff_t)n;
+}
+
+static void piecewise_free(void *arg)
+{
+    ((piecewise *)arg)->freed++;
+}
+
+/* the whole member of a stream over p, read in pieces of at most `chunk` bytes (returns its
+   length; -1 if a read failed) into out (cap bytes) */
+static long read_all(http_gzip_stream *g, size_t chunk, char *out, size_t cap)
+{
+    size_t n = 0;
+    for (;;) {
+        cr_assert_lt(n + chunk, cap, "the member outgrew %zu bytes", cap);
+        const ptrdiff_t r = http_gzip_stream_read(g, out + n, chunk);
+        if (r < 0) return -1;
+        if (r == 0) break;
+        cr_assert_leq((size_t)r, chunk);
+        n += (size_t)r;
+    }
+    cr_assert_eq(http_gzip_stream_read(g, out, chunk), 0, "a read after the end gives 0");
+    return (long)n;
+}
+
+Test(http_gzip, a_streamed_body_read_in_any_pieces_inflates_back_to_it)
+{
+    const size_t lens[] = {0, 1, 5000, 300000};
+    const size_t pieces[] = {0, 1, 777, 65536, 70000};
+    const size_t chunks[] = {1, 10, 4096, 65536};
+    for (size_t a = 0; a < sizeof lens / sizeof lens[0]; a++) {
+        char *body = table_text(lens[a] + 1, 3 + a);
+        for (size_t b = 0; b < sizeof pieces / sizeof pieces[0]; b++) {
+            for (size_t c = 0; c < sizeof chunks / sizeof chunks[0]; c++) {
+                if (pieces[b] == 1 && lens[a] > 5000) continue; /* 300000 calls of 1 byte */
+                piecewise p = {body, lens[a], 0, pieces[b], -1, 0};
+                http_gzip_stream *g = http_gzip_stream_new(piecewise_read, piecewise_free, &p);
+                cr_assert_not_null(g);
+                const size_t cap = lens[a] + chunks[c] + 4096;
+                char *out = malloc(cap);
+                cr_assert_not_null(out);
+                const long n = read_all(g, chunks[c], out, cap);
+                cr_assert_geq(n, 20, "%zu bytes in pieces of %zu, read by %zu: %ld", lens[a],
+                              pieces[b], chunks[c], n);
+                cr_assert_eq(p.pos, lens[a], "the whole body was read");
+                char *back = gunzip(out, (size_t)n, lens[a]);
+                cr_assert_not_null(back,
+                                   "%zu bytes in pieces of %zu, read by %zu: not a gzip "
+                                   "member of the body's size",
+                                   lens[a], pieces[b], chunks[c]);
+                cr_assert_arr_eq(back, body, lens[a]);
+                free(back);
+                free(out);
+                cr_assert_eq(p.freed, 0);
+                http_gzip_stream_free(g);
+                cr_assert_eq(p.freed, 1, "the body's argument is freed with the stream, once");
+            }
+        }
+        free(body);
+    }
+    http_gzip_stream_free(NULL);
+}
+
+Test(http_gzip, a_body_that_fails_fails_the_stream)
+{
+    const size_t len = 200000;
+    char *body = table_text(len, 11);
+    piecewise p = {body, len, 0, 1000, 150000, 0};
+    http_gzip_stream *g = http_gzip_stream_new(piecewise_read, piecewise_free, &p);
+    cr_assert_not_null(g);
+    char *out = malloc(len + 8192);
+    cr_assert_not_null(out);
+    cr_assert_eq(read_all(g, 4096, out, len + 8192), -1);
+    http_gzip_stream_free(g);
+    cr_assert_eq(p.freed, 1);
+    free(out);
     free(body);
 }
