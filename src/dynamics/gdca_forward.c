@@ -559,10 +559,13 @@ static int refine_undo_if_grown(const ctc_model *m, ctc_data *d, double *qacc, c
 
 /* The forward order of the next pass: where the tree on threads may pay, the evaluation's way
  * (data.h ctc_eval_gate) chooses between it and the sequential order. Records it in
- * d->fwd_split, for the pass and its correction. */
-static void forward_order(const ctc_model *m, ctc_data *d)
+ * d->fwd_split, for the pass and its correction. Returns 1 when it asked the gate, so that the
+ * caller marks the end of the pass (ctc_data_eval_pass_done), else 0. */
+static int forward_order(const ctc_model *m, ctc_data *d)
 {
-    d->fwd_split = gdca_forward_tree_candidate(m, d) && ctc_data_eval_split(d);
+    const int candidate = gdca_forward_tree_candidate(m, d);
+    d->fwd_split = candidate && ctc_data_eval_split(d);
+    return candidate;
 }
 
 /* One pass in mode `mode` (gdca_forward_joint.h) in the order of the setting, or of
@@ -618,14 +621,14 @@ static void forward_reference(const ctc_model *m, ctc_data *d, const double *f, 
     double *r = d->fwd_res;
     const int nv = m->nv;
     for (int i = 0; i < nv; i++) r[i] = f[i] - f_ref[i];
-    forward_order(m, d);
+    const int gated = forward_order(m, d);
     const int seq = forward_pass(m, d, r, qacc, GDCA_FWD_BIASFREE);
     for (int i = 0; a_ref != NULL && i < nv; i++) qacc[i] += a_ref[i];
     /* the sequential passes added the reference's loads in their own sweep */
     const size_t nl = (size_t)m->nbodies * (size_t)m->dim;
     for (size_t i = 0; !seq && i < nl; i++) d->jnt_load[i] += d->jnt_load_inv[i];
     forward_refine(m, d, f, qacc, gdca_refine_steps_ref(m, d));
-    if (gdca_forward_tree_candidate(m, d)) ctc_data_eval_pass_done(d);
+    if (gated) ctc_data_eval_pass_done(d);
 }
 
 int gdca_forward_takes_ref(const ctc_model *m, const ctc_data *d)
@@ -655,10 +658,10 @@ void ctc_gdca_forward(const ctc_model *m, ctc_data *d, const double *f, double *
         for (int i = 0; i < m->nind; i++) fm[m->ind_coord[i]] = f[m->ind_coord[i]];
         f = fm;
     }
-    forward_order(m, d);
+    const int gated = forward_order(m, d);
     forward_pass(m, d, f, qacc, GDCA_FWD_FULL);
     forward_refine(m, d, f, qacc, gdca_refine_steps(m, d));
-    if (gdca_forward_tree_candidate(m, d)) ctc_data_eval_pass_done(d);
+    if (gated) ctc_data_eval_pass_done(d);
 }
 
 void ctc_gdca_forward_from(const ctc_model *m, ctc_data *d, const double *f, const double *a_ref,

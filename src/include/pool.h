@@ -40,9 +40,9 @@
  * the machine, its load and the thread count. A gate (ctc_pool_gate) times the first runs of one
  * kind of job alone and split, alternately, then takes the faster way for the next
  * CTC_POOL_GATE_RECHECK runs (alone from where a split it took stops paying) before it measures
- * again;
- * ctc_pool_gate_choose is its decision from the timings alone, so that it is tested without a
- * clock. The GDCA passes keep one gate per data, for whole evaluations (data.h ctc_eval_gate).
+ * again; ctc_pool_gate_choose is its decision from the timings alone, so that it is tested
+ * without a clock. The GDCA passes keep one gate per data, for whole evaluations (data.h
+ * ctc_eval_gate).
  */
 #ifndef CTC_POOL_H
 #define CTC_POOL_H
@@ -101,10 +101,9 @@ void ctc_pool_run(ctc_pool *p, const ctc_pool_job *job);
  * way: the first run of each block, the one after a change of way, is not counted (a pool's
  * start; a run alone that fetches what a split left in other cores' caches, or a split whose
  * workers fetch what a run alone left in the caller's; each way's steady cost is what counts).
- * The split must be faster by CTC_POOL_GATE_MARGIN of the time alone
- * (medians) to be taken, and stays taken only while the median of its latest
- * CTC_POOL_GATE_SAMPLES timings is (else the gate runs alone); after CTC_POOL_GATE_RECHECK
- * decided runs the gate measures again. */
+ * The split must be faster by CTC_POOL_GATE_MARGIN of the time alone (medians) to be taken, and
+ * stays taken only while the median of its latest CTC_POOL_GATE_SAMPLES timings is (else the
+ * gate runs alone); after CTC_POOL_GATE_RECHECK decided runs the gate measures again. */
 #define CTC_POOL_GATE_SAMPLES 6
 #define CTC_POOL_GATE_BLOCK 3
 #define CTC_POOL_GATE_MARGIN 0.05
